@@ -1,0 +1,58 @@
+"""What the arm can reach and how the paper scores a motion: rules shared by env, planner and validator.
+
+Pure functions on the scenario's geometry (metres), no simulator. The environment
+uses them to decide whether a pick, place or push is possible before it moves
+anything; the planner models the same rules as linear constraints; the plan
+validator checks plans against them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from fetchcarry_env.geometry import Heading, Point, Rect, heading_vector, segment_intersects_rect, to_robot_frame
+from fetchcarry_env.scenario import Posture
+
+HAND_HALF_SIZE = 0.02  # metres: the hand is a cube of 4 cm; a push puts its face on the clutter's rear face
+
+DELIVERY_BONUS = 10.0  # W1 of the paper's Eq. 1: reward per object delivered
+DIAGONAL_WEIGHT = 0.1  # W2 of the paper's Eq. 1: weight of |dx - dy| (favours diagonal moves)
+COLLISION_PENALTY = 1.0  # reward lost when the base stops at a contact
+INVALID_ACTION_PENALTY = 1.0  # reward lost for an impossible (masked or failed) action
+
+
+def travel_cost(start: Point, end: Point) -> float:
+    """The paper's motion cost of one base move (Eq. 1-3): ``|dx| + |dy| + W2 * ||dx| - |dy||``, metres."""
+    dx, dy = abs(end[0] - start[0]), abs(end[1] - start[1])
+    return dx + dy + DIAGONAL_WEIGHT * abs(dx - dy)
+
+
+def hand_offset(base: Point, heading: Heading, point: Point) -> tuple[float, float]:
+    """Robot-frame ``(forward, lateral)`` of ``point`` seen from the base at ``heading``, metres."""
+    return to_robot_frame(heading, point[0] - base[0], point[1] - base[1])
+
+
+def reaches(posture: Posture, base: Point, heading: Heading, point: Point, tol: float = 1e-3) -> bool:
+    """True when the hand, in ``posture``, can be put over ``point`` from the base pose."""
+    return posture.reaches(*hand_offset(base, heading, point), tol=tol)
+
+
+def push_contact(rect: Rect, direction: Heading) -> Point:
+    """Where the hand's centre goes to push ``rect`` along ``direction``: against the middle of its rear face."""
+    ux, uy = heading_vector(direction)
+    cx, cy = rect.center
+    half_along = (rect.max_x - rect.min_x) / 2 if ux else (rect.max_y - rect.min_y) / 2
+    back = half_along + HAND_HALF_SIZE
+    return (cx - ux * back, cy - uy * back)
+
+
+def push_headings(direction: Heading) -> tuple[Heading, ...]:
+    """Headings from which a stroke along ``direction`` is a forward or a lateral push (never backwards)."""
+    ux, uy = heading_vector(direction)
+    perpendicular = ("+y", "-y") if ux else ("+x", "-x")
+    return (direction, *perpendicular)
+
+
+def arm_line_clear(base: Point, hand: Point, blockers: Iterable[Rect]) -> bool:
+    """The paper's Eq. 19: the straight line from the base centre to the hand crosses no blocker."""
+    return not any(segment_intersects_rect(base, hand, rect, tol=1e-6) for rect in blockers)

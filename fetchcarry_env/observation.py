@@ -1,0 +1,246 @@
+"""The world state and its fixed-size observation.
+
+The observation holds the whole geometry (area, robot, postures, objects and their
+goals, clutter, tables, obstacles) in fixed-size arrays with presence flags, so that
+a planner can rebuild the scenario from an observation alone: :func:`decode` is the
+exact inverse of :func:`encode` up to ids, which come back as canonical names
+(``object_0``, ``clutter_0``, ...) in the same order.
+
+It follows the goal-env convention (Gymnasium-Robotics): a ``Dict`` with
+``observation``, ``achieved_goal`` (every object's centre ``(x, y, z)``) and
+``desired_goal`` (every goal's centre ``(x, y, z)``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from gymnasium import spaces
+
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect
+from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table
+
+Point3 = tuple[float, float, float]
+
+LIFT_HEIGHT = 0.05  # metres a picked object is lifted above where it stood
+DELIVERY_TOLERANCE = 0.01  # metres: an object within this of its goal (x, y and z) is delivered
+COORD_LIMIT = 100.0  # metres: bound of every coordinate in the observation space
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """Where the movable things are: the base, what the hand holds, objects and clutter.
+
+    ``objects`` maps each object id to its centre ``(x, y, z)`` in metres (z of the
+    cylinder's centre); ``clutter`` maps each clutter id to its centre ``(x, y)``.
+    """
+
+    base: Point
+    heading: Heading
+    holding: str | None
+    objects: dict[str, Point3] = field(default_factory=dict)
+    clutter: dict[str, Point] = field(default_factory=dict)
+
+    @classmethod
+    def initial(cls, scenario: Scenario) -> WorldState:
+        """The state a scenario starts in (objects standing at their starts)."""
+        return cls(
+            base=scenario.robot.start,
+            heading=scenario.robot.heading,
+            holding=None,
+            objects={o.id: standing_center(scenario, o, o.start) for o in scenario.objects},
+            clutter={c.id: c.rect.center for c in scenario.clutter},
+        )
+
+    def delivered(self, scenario: Scenario) -> list[str]:
+        """Ids of the objects standing at their goals (not held), within 1 cm."""
+        return [
+            o.id
+            for o in scenario.objects
+            if o.id != self.holding
+            and np.linalg.norm(np.subtract(self.objects[o.id], standing_center(scenario, o, o.goal)))
+            <= DELIVERY_TOLERANCE
+        ]
+
+
+def standing_center(scenario: Scenario, obj: DeliveryObject, xy: Point) -> Point3:
+    """Centre ``(x, y, z)`` of ``obj`` standing upright at ``xy`` on the table there."""
+    table = scenario.table_under(xy, obj.radius)
+    top = table.height if table is not None else 0.0
+    return (xy[0], xy[1], top + obj.height / 2)
+
+
+@dataclass(frozen=True)
+class Capacity:
+    """How many of each thing an observation has room for (absent slots are zero)."""
+
+    objects: int = 4
+    clutter: int = 8
+    tables: int = 6
+    obstacles: int = 12
+    postures: int = 4
+
+    def check(self, scenario: Scenario) -> None:
+        """Raise ``ValueError`` naming what does not fit."""
+        counts = {
+            "objects": len(scenario.objects),
+            "clutter": len(scenario.clutter),
+            "tables": len(scenario.tables),
+            "obstacles": len(scenario.obstacles),
+            "postures": len(scenario.robot.postures),
+        }
+        too_many = [f"{n} {k} (room for {getattr(self, k)})" for k, n in counts.items() if n > getattr(self, k)]
+        if too_many:
+            raise ValueError(f"scenario {scenario.name!r} does not fit the observation: " + ", ".join(too_many))
+
+
+# Per-slot feature widths of the flat observation vector.
+_AREA, _ROBOT, _POSTURE, _OBJECT, _CLUTTER, _TABLE, _OBSTACLE = 4, 7, 5, 11, 6, 6, 5
+
+
+def observation_size(capacity: Capacity) -> int:
+    return (
+        _AREA
+        + _ROBOT
+        + _POSTURE * capacity.postures
+        + _OBJECT * capacity.objects
+        + _CLUTTER * capacity.clutter
+        + _TABLE * capacity.tables
+        + _OBSTACLE * capacity.obstacles
+    )
+
+
+def observation_space(capacity: Capacity) -> spaces.Dict:
+    """The ``Dict`` observation space for a capacity."""
+
+    def box(n: int) -> spaces.Box:
+        return spaces.Box(-COORD_LIMIT, COORD_LIMIT, shape=(n,), dtype=np.float32)
+
+    return spaces.Dict(
+        {
+            "observation": box(observation_size(capacity)),
+            "achieved_goal": box(3 * capacity.objects),
+            "desired_goal": box(3 * capacity.objects),
+        }
+    )
+
+
+def encode(scenario: Scenario, state: WorldState, capacity: Capacity) -> dict[str, np.ndarray]:
+    """The observation of ``state`` in ``scenario`` (float32 arrays)."""
+    delivered = set(state.delivered(scenario))
+    parts: list[list[float]] = [[scenario.area.min_x, scenario.area.min_y, scenario.area.max_x, scenario.area.max_y]]
+    onehot = [0.0] * len(HEADINGS)
+    onehot[HEADINGS.index(state.heading)] = 1.0
+    parts.append([state.base[0], state.base[1], scenario.robot.radius, *onehot])
+    parts += _slots(([1.0, *p.forward, *p.lateral] for p in scenario.robot.postures), capacity.postures, _POSTURE)
+    achieved = np.zeros((capacity.objects, 3), dtype=np.float32)
+    desired = np.zeros((capacity.objects, 3), dtype=np.float32)
+    object_rows = []
+    for k, obj in enumerate(scenario.objects):
+        position = state.objects[obj.id]
+        goal = standing_center(scenario, obj, obj.goal)
+        achieved[k], desired[k] = position, goal
+        held, done = float(obj.id == state.holding), float(obj.id in delivered)
+        object_rows.append([1.0, *position, *goal, obj.radius, obj.height, held, done])
+    parts += _slots(object_rows, capacity.objects, _OBJECT)
+    clutter_rows = []
+    for item in scenario.clutter:
+        half_x, half_y = (s / 2 for s in item.rect.size)
+        r = Rect.around(state.clutter[item.id], half_x, half_y)
+        clutter_rows.append([1.0, r.min_x, r.min_y, r.max_x, r.max_y, item.height])
+    parts += _slots(clutter_rows, capacity.clutter, _CLUTTER)
+    parts += _slots(
+        ([1.0, t.rect.min_x, t.rect.min_y, t.rect.max_x, t.rect.max_y, t.height] for t in scenario.tables),
+        capacity.tables,
+        _TABLE,
+    )
+    parts += _slots(
+        ([1.0, o.rect.min_x, o.rect.min_y, o.rect.max_x, o.rect.max_y] for o in scenario.obstacles),
+        capacity.obstacles,
+        _OBSTACLE,
+    )
+    flat = np.fromiter((v for part in parts for v in part), dtype=np.float32)
+    return {"observation": flat, "achieved_goal": achieved.reshape(-1), "desired_goal": desired.reshape(-1)}
+
+
+def _slots(rows, capacity: int, width: int) -> list[list[float]]:
+    rows = list(rows)
+    return rows + [[0.0] * width] * (capacity - len(rows))
+
+
+def decode(observation: dict[str, np.ndarray] | np.ndarray, capacity: Capacity) -> tuple[Scenario, WorldState]:
+    """Rebuild the scenario and the state from an observation (the inverse of :func:`encode`).
+
+    The scenario's ``robot.start`` is the current base, each object's ``start`` is where
+    it stands now (a held object's is its goal, which the planner ignores), and clutter
+    stands where it is now. The result is not validated: it is a state, not a file.
+    """
+    flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, dtype=np.float64)
+    flat = flat.tolist()  # plain Python floats from here on
+    cursor = 0
+
+    def take(n: int) -> list[float]:
+        nonlocal cursor
+        chunk = flat[cursor : cursor + n]
+        cursor += n
+        return chunk
+
+    def rows(count: int, width: int) -> list[list[float]]:
+        chunk = take(count * width)
+        return [row for row in (chunk[k * width : (k + 1) * width] for k in range(count)) if row[0] > 0.5]
+
+    area = Rect(*take(_AREA))
+    robot_row = take(_ROBOT)
+    base, radius, heading = (robot_row[0], robot_row[1]), robot_row[2], HEADINGS[int(np.argmax(robot_row[3:]))]
+    postures = tuple(
+        Posture(f"posture_{k}", (r[1], r[2]), (r[3], r[4])) for k, r in enumerate(rows(capacity.postures, _POSTURE))
+    )
+    object_rows = rows(capacity.objects, _OBJECT)
+    clutter_rows = rows(capacity.clutter, _CLUTTER)
+    tables = tuple(Table(f"table_{k}", Rect(*r[1:5]), r[5]) for k, r in enumerate(rows(capacity.tables, _TABLE)))
+    obstacles = tuple(
+        Obstacle(f"obstacle_{k}", Rect(*r[1:5])) for k, r in enumerate(rows(capacity.obstacles, _OBSTACLE))
+    )
+
+    objects, positions, holding = [], {}, None
+    for k, r in enumerate(object_rows):
+        object_id = f"object_{k}"
+        position, goal = (r[1], r[2], r[3]), (r[4], r[5])
+        held = r[9] > 0.5
+        if held:
+            holding = object_id
+        start = goal if held else (r[1], r[2])
+        objects.append(DeliveryObject(object_id, start, goal, r[7], r[8]))
+        positions[object_id] = position
+    clutter = tuple(Clutter(f"clutter_{k}", Rect(*r[1:5]), r[5]) for k, r in enumerate(clutter_rows))
+    scenario = Scenario(
+        name="observed",
+        area=area,
+        robot=Robot(start=base, heading=heading, radius=radius, postures=postures),
+        tables=tables,
+        obstacles=obstacles,
+        objects=tuple(objects),
+        clutter=clutter,
+    )
+    state = WorldState(
+        base=base,
+        heading=heading,
+        holding=holding,
+        objects=positions,
+        clutter={c.id: c.rect.center for c in clutter},
+    )
+    return scenario, state
+
+
+def with_state(scenario: Scenario, state: WorldState) -> Scenario:
+    """``scenario`` re-posed at ``state``: the robot starts at the base, objects and clutter where they are."""
+    objects = tuple(
+        replace(o, start=o.goal if o.id == state.holding else state.objects[o.id][:2]) for o in scenario.objects
+    )
+    clutter = tuple(
+        replace(c, rect=Rect.around(state.clutter[c.id], c.rect.size[0] / 2, c.rect.size[1] / 2))
+        for c in scenario.clutter
+    )
+    robot = replace(scenario.robot, start=state.base, heading=state.heading)
+    return replace(scenario, robot=robot, objects=objects, clutter=clutter)

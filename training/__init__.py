@@ -1,0 +1,1 @@
+"""training: expert datasets, learned baselines, the benchmark harness and the command line."""
