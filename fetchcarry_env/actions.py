@@ -61,8 +61,8 @@ class Lattice:
         """The lattice covering ``extent`` from its min corner, ``resolution`` metres apart."""
         if resolution <= 0:
             raise ValueError(f"lattice resolution must be positive, got {resolution}")
-        nx = int(math.floor((extent.max_x - extent.min_x) / resolution + 1e-9)) + 1
-        ny = int(math.floor((extent.max_y - extent.min_y) / resolution + 1e-9)) + 1
+        nx = math.floor((extent.max_x - extent.min_x) / resolution + 1e-9) + 1
+        ny = math.floor((extent.max_y - extent.min_y) / resolution + 1e-9) + 1
         return cls((extent.min_x, extent.min_y), resolution, (nx, ny))
 
     def point(self, i: int, j: int) -> Point:

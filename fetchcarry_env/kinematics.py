@@ -48,7 +48,7 @@ def push_contact(rect: Rect, direction: Heading) -> Point:
 
 def push_headings(direction: Heading) -> tuple[Heading, ...]:
     """Headings from which a stroke along ``direction`` is a forward or a lateral push (never backwards)."""
-    ux, uy = heading_vector(direction)
+    ux, _uy = heading_vector(direction)
     perpendicular = ("+y", "-y") if ux else ("+x", "-x")
     return (direction, *perpendicular)
 
