@@ -8,6 +8,7 @@ validator checks plans against them.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 
 from fetchcarry_env.geometry import Heading, Point, Rect, heading_vector, segment_intersects_rect, to_robot_frame
@@ -56,3 +57,37 @@ def push_headings(direction: Heading) -> tuple[Heading, ...]:
 def arm_line_clear(base: Point, hand: Point, blockers: Iterable[Rect]) -> bool:
     """The paper's Eq. 19: the straight line from the base centre to the hand crosses no blocker."""
     return not any(segment_intersects_rect(base, hand, rect, tol=1e-6) for rect in blockers)
+
+
+PUSH_CLEARANCE = 0.01  # metres: a pushed piece ends at least this far from the goal disc it covered
+
+
+def push_stroke(rect: Rect, direction: Heading, covered: Iterable[tuple[Point, float]], resolution: float) -> float:
+    """Stroke length (metres) that moves ``rect`` along ``direction`` off every covered disc ``(center, radius)``.
+
+    The smallest whole multiple of ``resolution`` after which the rectangle keeps
+    ``PUSH_CLEARANCE`` from each disc, measured along the stroke (the paper's B, per piece
+    and direction). Whole multiples keep pushes exactly on the action lattice.
+    """
+    ux, uy = heading_vector(direction)
+    needed = 0.0
+    for (cx, cy), radius in covered:
+        if ux:  # distance the trailing face must travel past the disc's far side
+            trailing = rect.min_x if ux > 0 else -rect.max_x
+            needed = max(needed, ux * cx + radius + PUSH_CLEARANCE - trailing)
+        else:
+            trailing = rect.min_y if uy > 0 else -rect.max_y
+            needed = max(needed, uy * cy + radius + PUSH_CLEARANCE - trailing)
+    return math.ceil(needed / resolution - 1e-9) * resolution
+
+
+def swept_rect(rect: Rect, direction: Heading, stroke: float) -> Rect:
+    """The floor the rectangle covers while it slides ``stroke`` metres along ``direction``."""
+    ux, uy = heading_vector(direction)
+    moved = rect.translate(ux * stroke, uy * stroke)
+    return Rect(
+        min(rect.min_x, moved.min_x),
+        min(rect.min_y, moved.min_y),
+        max(rect.max_x, moved.max_x),
+        max(rect.max_y, moved.max_y),
+    )

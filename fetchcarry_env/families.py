@@ -1,0 +1,317 @@
+"""Seeded scenario families: the paper's layouts and variations of them.
+
+Every family draws from the ``numpy.random.Generator`` it is given (the env passes its
+``np_random``, seeded by ``reset(seed=...)``), so a seed gives the same scenario bit for
+bit. A family only returns scenarios that pass every rule of ``spec/scenario.md`` and
+whose every object and goal the robot can reach from at least one side
+(:mod:`fetchcarry_env.reachability`); a layout that fails is drawn again.
+
+=========  ==============================================================================
+family     what it draws
+=========  ==============================================================================
+basic      the paper's V-B: a source and a goal table, one 0.4 m obstacle at random,
+           with the tables, the object and the start jittered
+push       V-C: clutter standing on the goal, plus long bars and small blocks around it
+           that limit the push directions (the paper's Table I patterns A-E, Fig. 3)
+corridor   IV-F: two rooms joined by an L-shaped or straight corridor; the rest of the
+           room is obstacles
+multi      2 to 4 objects between two or three tables (``multi-2`` ... ``multi-4``: fixed)
+mixed      one of basic, push, corridor and multi, uniformly
+=========  ==============================================================================
+
+All families share one extent, so that ``mixed`` and a fixed action lattice work.
+Units are metres.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, heading_vector, to_world_frame
+from fetchcarry_env.kinematics import push_contact, push_headings, push_stroke, reaches, swept_rect
+from fetchcarry_env.reachability import FreeSpace, unreachable_targets
+from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table, check_rules
+
+EXTENT = Rect(-1.0, -1.0, 6.0, 6.0)  # metres: the floor every family's room lies in
+TABLE_HEIGHT = 0.70  # metres
+PUSH_RESOLUTION = 0.05  # metres: the default lattice; strokes are checked on it
+MAX_ATTEMPTS = 200  # layouts drawn before a family gives up (never reached in tests)
+
+Sampler = Callable[[np.random.Generator], Scenario]
+
+
+@dataclass(frozen=True)
+class Family:
+    """A named scenario generator and the floor extent its scenarios lie in."""
+
+    name: str
+    description: str
+    extent: Rect
+    draw: Sampler
+
+    def sample(self, rng: np.random.Generator) -> Scenario:
+        """A valid, workable scenario drawn from ``rng``."""
+        for _ in range(MAX_ATTEMPTS):
+            scenario = self.draw(rng)
+            if not check_rules(scenario) and not unreachable_targets(scenario) and _pushes_possible(scenario):
+                return scenario
+        raise RuntimeError(f"family {self.name!r} drew no workable scenario in {MAX_ATTEMPTS} attempts")
+
+
+# ---------------------------------------------------------------------- helpers
+def _square(center: Point, size: float) -> Rect:
+    return Rect.around(center, size / 2, size / 2)
+
+
+def _uniform(rng: np.random.Generator, low: float, high: float) -> float:
+    return float(rng.uniform(low, high))
+
+
+def _point_near(rng: np.random.Generator, center: Point, spread: float) -> Point:
+    return (center[0] + _uniform(rng, -spread, spread), center[1] + _uniform(rng, -spread, spread))
+
+
+def _robot(rng: np.random.Generator, start: Point) -> Robot:
+    return Robot(start=start, heading=HEADINGS[int(rng.integers(4))])
+
+
+def _name(family: str, rng: np.random.Generator) -> str:
+    return f"{family}-{int(rng.integers(1_000_000)):06d}"
+
+
+def _pushes_possible(scenario: Scenario) -> bool:
+    """Every piece of clutter on a goal can be pushed off it in at least one direction."""
+    space: FreeSpace | None = None
+    for item in scenario.clutter:
+        covered = [(o.goal, o.radius) for o in scenario.objects if item.rect.overlaps_disc(o.goal, o.radius)]
+        if not covered:
+            continue
+        space = space or FreeSpace(scenario)
+        if not any(_push_works(scenario, space, item, direction, covered) for direction in HEADINGS):
+            return False
+    return True
+
+
+def _push_works(
+    scenario: Scenario, space: FreeSpace, item: Clutter, direction: Heading, covered: list[tuple[Point, float]]
+) -> bool:
+    """The paper's s/o/q preprocessing as one test.
+
+    The push stays on the table, sweeps over nothing else, and some base pose reaches its contact.
+    """
+    stroke = push_stroke(item.rect, direction, covered, PUSH_RESOLUTION)
+    swept = swept_rect(item.rect, direction, stroke)
+    table = scenario.table_under_rect(item.rect)
+    if table is None or not table.rect.contains_rect(swept):
+        return False
+    others = [c.rect for c in scenario.clutter if c.id != item.id]
+    discs = [(o.start, o.radius) for o in scenario.objects] + [(o.goal, o.radius) for o in scenario.objects]
+    if any(swept.overlaps_rect(r) for r in others):
+        return False
+    if any(swept.overlaps_disc(c, r) and not item.rect.overlaps_disc(c, r) for c, r in discs):
+        return False
+    contact = push_contact(item.rect, direction)
+    ux, uy = heading_vector(direction)
+    for heading in push_headings(direction):
+        for posture in scenario.robot.postures:
+            for base in _bases_reaching(contact, heading, posture):
+                end = (base[0] + ux * stroke, base[1] + uy * stroke)
+                if space.reachable(base) and space.reachable(end) and reaches(posture, base, heading, contact):
+                    return True
+    return False
+
+
+def _bases_reaching(point: Point, heading: Heading, posture: Posture) -> list[Point]:
+    """Base positions from which ``posture`` at ``heading`` puts the hand on ``point`` (narrowed ranges)."""
+    lateral = (posture.lateral[0] + posture.lateral[1]) / 2
+    out = []
+    for forward in np.linspace(posture.forward[0] + 0.03, posture.forward[1] - 0.03, 4):
+        dx, dy = to_world_frame(heading, float(forward), lateral)
+        out.append((point[0] - dx, point[1] - dy))
+    return out
+
+
+def _free_spot(
+    rng: np.random.Generator, table: Rect, radius: float, margin: float, taken: list[tuple[Point, float]]
+) -> Point:
+    """A point on ``table`` near an edge (within reach from that side), clear of ``taken`` discs."""
+    inner = table.inflate(-(radius + margin))
+    for _ in range(50):
+        p = (_uniform(rng, inner.min_x, inner.max_x), _uniform(rng, inner.min_y, inner.max_y))
+        if not any(discs_overlap(p, radius + 0.02, c, r) for c, r in taken):
+            return p
+    return inner.center
+
+
+# ---------------------------------------------------------------------- basic (V-B)
+def draw_basic(rng: np.random.Generator, obstacle: bool = True) -> Scenario:
+    """The paper's V-B layout, jittered: tables at about (2, 2) and (4, 4), start about (0, 0)."""
+    source_center = _point_near(rng, (2.0, 2.0), 0.4)
+    goal_center = _point_near(rng, (4.0, 4.0), 0.4)
+    source = Table("table_src", _square(source_center, 0.6), TABLE_HEIGHT)
+    goal = Table("table_goal", _square(goal_center, 0.6), TABLE_HEIGHT)
+    start = _point_near(rng, (0.0, 0.0), 0.3)
+    obj = DeliveryObject("bottle", _point_near(rng, source_center, 0.15), _point_near(rng, goal_center, 0.15))
+    obstacles = ()
+    if obstacle:
+        for _ in range(50):
+            box = _square((_uniform(rng, 0.2, 5.0), _uniform(rng, 0.2, 5.0)), 0.4)
+            clear = all(not box.overlaps_rect(t.rect.inflate(0.3)) for t in (source, goal))
+            if clear and box.distance_to_point(start) > 0.5:
+                obstacles = (Obstacle("box_1", box),)
+                break
+    return Scenario(
+        name=_name("basic", rng),
+        area=EXTENT,
+        robot=_robot(rng, start),
+        tables=(source, goal),
+        obstacles=obstacles,
+        objects=(obj,),
+    )
+
+
+# ---------------------------------------------------------------------- push (V-C)
+PUSH_PATTERNS: dict[str, tuple[int, int]] = {"A": (1, 0), "B": (0, 1), "C": (2, 0), "D": (0, 2), "E": (1, 1)}
+"""The paper's Table I: how many long bars (Obs 1) and small blocks (Obs 2) stand by the pushed piece."""
+
+
+def draw_push(rng: np.random.Generator, pattern: str | None = None) -> Scenario:
+    """V-C: a block on the goal, with the neighbours of a Table I pattern around it on the goal table."""
+    pattern = pattern or "ABCDE"[int(rng.integers(5))]
+    bars, blocks = PUSH_PATTERNS[pattern]
+    base = draw_basic(rng, obstacle=bool(rng.integers(2)))
+    goal_table = Table("table_goal", _square(base.tables[1].rect.center, 0.8), TABLE_HEIGHT)
+    cx, cy = goal_table.rect.center
+    goal = _point_near(rng, (cx, cy), 0.08)
+    obj = DeliveryObject("bottle", base.objects[0].start, goal)
+    size = _uniform(rng, 0.10, 0.16)
+    clutter = [Clutter("block", _square(_point_near(rng, goal, 0.02), size), 0.10)]
+    sides = [int(s) for s in rng.permutation(4)]  # which side of the block each neighbour stands on
+    for k in range(bars + blocks):
+        side = sides[k % 4]
+        long_bar = k < bars
+        clutter.append(
+            _neighbour(rng, clutter[0].rect, side, long_bar, f"bar_{k + 1}" if long_bar else f"small_{k + 1}")
+        )
+    return Scenario(
+        name=_name(f"push{pattern}", rng),
+        area=base.area,
+        robot=base.robot,
+        tables=(base.tables[0], goal_table),
+        obstacles=base.obstacles,
+        objects=(obj,),
+        clutter=tuple(clutter),
+    )
+
+
+def _neighbour(rng: np.random.Generator, block: Rect, side: int, long_bar: bool, item_id: str) -> Clutter:
+    """A bar (0.36 x 0.05 m) or a small block (0.06 m) standing a few cm off one side of ``block``."""
+    gap = _uniform(rng, 0.03, 0.08)
+    length, width = (0.36, 0.05) if long_bar else (0.06, 0.06)
+    cx, cy = block.center
+    offset = _uniform(rng, -0.05, 0.05)
+    if side in (0, 2):  # +x / -x side: a bar standing along y
+        x = block.max_x + gap + width / 2 if side == 0 else block.min_x - gap - width / 2
+        rect = Rect.around((x, cy + offset), width / 2, length / 2)
+    else:
+        y = block.max_y + gap + width / 2 if side == 1 else block.min_y - gap - width / 2
+        rect = Rect.around((cx + offset, y), length / 2, width / 2)
+    return Clutter(item_id, rect, 0.10 if long_bar else 0.08)
+
+
+# ---------------------------------------------------------------------- corridor (IV-F)
+def draw_corridor(rng: np.random.Generator, shape: str | None = None) -> Scenario:
+    """Two rooms joined by an L-shaped or a straight corridor; everything else is obstacles."""
+    shape = shape or ("L", "straight")[int(rng.integers(2))]
+    width = _uniform(rng, 0.75, 1.0)
+    low = _uniform(rng, -0.5, 1.9 - width)  # bottom edge of the horizontal leg
+    start = _point_near(rng, (-0.2, -0.2), 0.2)
+    source = Table("table_src", _square(_point_near(rng, (0.9, 1.0), 0.15), 0.6), TABLE_HEIGHT)
+    if shape == "L":
+        leg = _uniform(rng, 3.3, 5.2 - width)  # left edge of the vertical leg
+        obstacles = [
+            Rect(-1.0, 2.0, 3.0, 6.0),  # above room A
+            Rect(2.0, low + width, leg, 2.0),  # inner corner, below the top block
+            Rect(3.0, 2.0, leg, 3.0),  # between the top block and room B
+            Rect(leg + width, low, 6.0, 3.0),  # right of the vertical leg
+        ]
+        if low > -1.0:
+            obstacles.append(Rect(2.0, -1.0, 6.0, low))  # below the horizontal leg
+        goal_center = _point_near(rng, (4.6, 5.0), 0.2)
+    else:
+        obstacles = [Rect(2.0, low + width, 4.0, 6.0)]
+        if low > -1.0:
+            obstacles.append(Rect(2.0, -1.0, 4.0, low))
+        goal_center = _point_near(rng, (5.0, 1.0), 0.2)
+    goal = Table("table_goal", _square(goal_center, 0.6), TABLE_HEIGHT)
+    obj = DeliveryObject("bottle", _point_near(rng, source.rect.center, 0.15), _point_near(rng, goal_center, 0.15))
+    return Scenario(
+        name=_name(f"corridor{shape}", rng),
+        area=EXTENT,
+        robot=_robot(rng, start),
+        tables=(source, goal),
+        obstacles=tuple(Obstacle(f"wall_{k + 1}", r) for k, r in enumerate(obstacles) if r.is_proper),
+        objects=(obj,),
+    )
+
+
+# ---------------------------------------------------------------------- multi
+def draw_multi(rng: np.random.Generator, count: int | None = None) -> Scenario:
+    """2 to 4 objects spread over two or three tables, each to be carried to another table."""
+    count = count or int(rng.integers(2, 5))
+    centers = [(2.0, 2.0), (4.0, 4.0), (4.0, 1.0)][: 2 + int(rng.integers(2))]
+    tables = [
+        Table(f"table_{k + 1}", _square(_point_near(rng, c, 0.3), 0.7), TABLE_HEIGHT) for k, c in enumerate(centers)
+    ]
+    taken: dict[int, list[tuple[Point, float]]] = {k: [] for k in range(len(tables))}
+    objects = []
+    for k in range(count):
+        src = int(rng.integers(len(tables)))
+        dst = (src + 1 + int(rng.integers(len(tables) - 1))) % len(tables)
+        start = _free_spot(rng, tables[src].rect, 0.035, 0.02, taken[src])
+        taken[src].append((start, 0.035))
+        goal = _free_spot(rng, tables[dst].rect, 0.035, 0.02, taken[dst])
+        taken[dst].append((goal, 0.035))
+        objects.append(DeliveryObject(f"object_{k + 1}", start, goal))
+    return Scenario(
+        name=_name(f"multi{count}", rng),
+        area=EXTENT,
+        robot=_robot(rng, _point_near(rng, (0.0, 0.0), 0.3)),
+        tables=tuple(tables),
+        objects=tuple(objects),
+    )
+
+
+# ---------------------------------------------------------------------- registry
+def draw_mixed(rng: np.random.Generator) -> Scenario:
+    """One of basic, push, corridor and multi, uniformly."""
+    return (draw_basic, draw_push, draw_corridor, draw_multi)[int(rng.integers(4))](rng)
+
+
+FAMILIES: dict[str, Family] = {
+    family.name: family
+    for family in (
+        Family("basic", "V-B: one object, two tables, one random obstacle", EXTENT, draw_basic),
+        Family("push", "V-C: clutter on the goal to push aside, Table I neighbours", EXTENT, draw_push),
+        Family("corridor", "IV-F: rooms joined by an L-shaped or straight corridor", EXTENT, draw_corridor),
+        Family("multi", "2 to 4 objects over two or three tables", EXTENT, draw_multi),
+        *(
+            Family(f"multi-{n}", f"{n} objects over two or three tables", EXTENT, lambda rng, n=n: draw_multi(rng, n))
+            for n in (2, 3, 4)
+        ),
+        Family("mixed", "basic, push, corridor or multi, uniformly", EXTENT, draw_mixed),
+    )
+}
+FAMILY_NAMES: tuple[str, ...] = tuple(FAMILIES)
+DEFAULT_FAMILY = "push"
+
+
+def get_family(name: str) -> Family:
+    """The family called ``name``; ``ValueError`` lists the known names otherwise."""
+    try:
+        return FAMILIES[name]
+    except KeyError:
+        raise ValueError(f"unknown scenario family {name!r}; known: {', '.join(FAMILY_NAMES)}") from None
