@@ -1,0 +1,259 @@
+"""A plan drawn from above, like the paper's figures: the base path phase by phase.
+
+:func:`plot_plan` draws the scenario (tables, obstacles, clutter where it started and
+where it was pushed to, objects and their goals), then the plan: every base move as
+an arrow (travel with an empty hand, carrying, push strokes), the base disc and its
+heading at every phase with the phase number, the arm line of every pick and place,
+and a list of the steps beside the map. The title carries the status and the
+objective. Headless (Agg); see :mod:`fetchcarry_env.drawing` for the shared pieces.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, FancyArrowPatch, Patch
+
+from expert.plan import Phase, Plan
+from fetchcarry_env import drawing
+from fetchcarry_env.geometry import Point, Rect
+from fetchcarry_env.scenario import Scenario
+
+# Colours of the plan's own marks (the scene's colours are drawing.PALETTE).
+TRAVEL = "#505050"  # a move with an empty hand
+CARRY = "#2a6fdb"  # a move holding an object
+PUSH = "#d62728"  # a push stroke
+PICK = "#2ca02c"
+PLACE = "#9467bd"
+
+SIDE_WIDTH_IN = 3.6  # inches of the column beside the map (steps and the close-up)
+MAX_LISTED_STEPS = 30  # longer plans list their first steps only
+CLOSE_UP_MARGIN = 0.45  # metres shown around the close-up's content
+LABEL_SIZE_IN = 0.2  # inches: phase numbers closer than this on the page share one label
+LABEL_OFFSET = 0.75  # phase numbers sit this many base radii left of and above the base centre
+
+
+def plot_plan(scenario: Scenario, plan: Plan, path: str | Path, *, width_in: float = 7.0, dpi: int = 120) -> Path:
+    """Draw ``plan`` for ``scenario`` from above and save it (PNG, SVG, PDF: by the suffix of ``path``).
+
+    Left: the whole area with the plan. Right: the list of steps and a close-up of
+    where objects are placed and clutter pushed. A plan without phases (no plan found)
+    draws the scenario with the status in the title. Returns the path written.
+    """
+    path = Path(path)
+    height_in = drawing.map_height_in(scenario, width_in) + 1.6
+    figure = Figure(figsize=(width_in + SIDE_WIDTH_IN, height_in), layout="constrained")
+    FigureCanvasAgg(figure)
+    grid = figure.add_gridspec(2, 2, width_ratios=[width_in, SIDE_WIDTH_IN], height_ratios=[1.0, 1.0])
+    map_axes = figure.add_subplot(grid[:, 0])
+    steps_axes = figure.add_subplot(grid[0, 1])
+    close_axes = figure.add_subplot(grid[1, 1])
+
+    view = scenario.area.inflate(drawing.MARGIN)
+    drawing.frame_map(map_axes, view)
+    _draw_plan(map_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * view.size[0] / width_in)
+    map_axes.legend(
+        handles=_legend_handles(scenario),
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.08),
+        ncol=4,
+        fontsize=7,
+        frameon=False,
+    )
+    map_axes.set_title(_title(scenario, plan), fontsize=10)
+    _list_steps(steps_axes, plan)
+    close_view = _close_up_view(scenario, plan)
+    drawing.frame_map(close_axes, close_view)
+    _draw_plan(close_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * close_view.size[0] / SIDE_WIDTH_IN)
+    close_axes.set_title("close-up: places and pushes", fontsize=9)
+    figure.savefig(path, dpi=dpi)
+    return path
+
+
+def _draw_plan(axes: Axes, scenario: Scenario, plan: Plan, *, label_merge_m: float) -> None:
+    """The scene and every mark of the plan on one map."""
+    phases = plan.phases
+    drawing.draw_scenario(axes, scenario, show_robot=not phases, show_clutter=False)
+    _draw_clutter(axes, scenario, phases)
+    for phase in phases:
+        _draw_pose(axes, scenario, phase)
+    for k in range(1, len(phases)):
+        _draw_step(axes, phases[k - 1], phases[k])
+    _number_phases(axes, phases, label_merge_m, LABEL_OFFSET * scenario.robot.radius)
+
+
+def _close_up_view(scenario: Scenario, plan: Plan) -> Rect:
+    """The region around the goal tables and the bases of every place and push (and where pushes start)."""
+    boxes = [t.rect for obj in scenario.objects if (t := scenario.table_under(obj.goal, obj.radius)) is not None]
+    for k, phase in enumerate(plan.phases):
+        if phase.action in ("place", "push"):
+            boxes.append(Rect.around(phase.base, 0.0, 0.0))
+            if phase.action == "push":
+                boxes.append(Rect.around(plan.phases[k - 1].base, 0.0, 0.0))
+    if not boxes:
+        return scenario.area.inflate(drawing.MARGIN)
+    box = Rect(
+        min(b.min_x for b in boxes),
+        min(b.min_y for b in boxes),
+        max(b.max_x for b in boxes),
+        max(b.max_y for b in boxes),
+    ).inflate(CLOSE_UP_MARGIN)
+    # Square it, so the close-up fills its panel.
+    half = max(box.size) / 2
+    return Rect.around(box.center, half, half)
+
+
+def _draw_clutter(axes: Axes, scenario: Scenario, phases: tuple[Phase, ...]) -> None:
+    """Clutter where it ends, with a dashed outline where it started if it was pushed."""
+    last = phases[-1] if phases else None
+    for item in scenario.clutter:
+        end = last.clutter.get(item.id, item.rect.center) if last else item.rect.center
+        moved = abs(end[0] - item.rect.center[0]) > 1e-9 or abs(end[1] - item.rect.center[1]) > 1e-9
+        if moved:
+            drawing.draw_clutter(axes, item, item.rect.center, ghost=True)
+        drawing.draw_clutter(axes, item, end)
+
+
+def _draw_step(axes: Axes, before: Phase, after: Phase) -> None:
+    """The base move into ``after`` and what the arm does at its end."""
+    if after.action == "push":
+        _arrow(axes, before.base, after.base, PUSH, width=3.0)
+        if after.target in before.clutter and after.target in after.clutter:
+            _arrow(axes, before.clutter[after.target], after.clutter[after.target], PUSH, width=1.5, style="->")
+        return
+    colour = CARRY if before.holding is not None else TRAVEL
+    _arrow(axes, before.base, after.base, colour, width=1.6)
+    if after.action in ("pick", "place") and after.target is not None:
+        state = before if after.action == "pick" else after
+        target = state.objects.get(after.target)
+        if target is not None:
+            _arm(axes, after.base, target, PICK if after.action == "pick" else PLACE, after.action)
+
+
+def _draw_pose(axes: Axes, scenario: Scenario, phase: Phase) -> None:
+    """The base disc (faint) and its heading."""
+    radius = scenario.robot.radius
+    edge = drawing.PALETTE.robot_edge
+    axes.add_patch(
+        Circle(phase.base, radius, facecolor=drawing.PALETTE.robot, edgecolor=edge, alpha=0.15, zorder=drawing.Z_ROBOT)
+    )
+    axes.add_patch(Circle(phase.base, radius, facecolor="none", edgecolor=edge, linewidth=0.8, zorder=drawing.Z_ROBOT))
+    drawing.draw_heading(axes, phase.base, phase.heading, radius, color=edge, zorder=drawing.Z_ROBOT + 0.1)
+
+
+def _number_phases(axes: Axes, phases: tuple[Phase, ...], merge_m: float, offset_m: float) -> None:
+    """Phase numbers beside the bases (up-left on the rim, off the path through the centre).
+
+    Phases whose bases lie within ``merge_m`` metres share one label ("3,7").
+    """
+    groups: list[tuple[Point, list[int]]] = []
+    for k, phase in enumerate(phases):
+        for at, members in groups:
+            if math.dist(at, phase.base) < merge_m:
+                members.append(k)
+                break
+        else:
+            groups.append((phase.base, [k]))
+    for at, members in groups:
+        axes.text(
+            at[0] - offset_m,
+            at[1] + offset_m,
+            ",".join(str(k) for k in members),
+            ha="center",
+            va="center",
+            fontsize=7,
+            weight="bold",
+            zorder=drawing.Z_TEXT + 1,
+            clip_on=True,
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": drawing.PALETTE.robot_edge},
+        )
+
+
+def _arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:
+    if abs(start[0] - end[0]) < 1e-9 and abs(start[1] - end[1]) < 1e-9:
+        return  # turned in place: nothing to draw
+    axes.add_patch(
+        FancyArrowPatch(
+            tuple(start),
+            tuple(end),
+            arrowstyle=style,
+            mutation_scale=14,
+            color=colour,
+            linewidth=width,
+            shrinkA=0,
+            shrinkB=0,
+            zorder=drawing.Z_ROBOT + 0.5,
+        )
+    )
+
+
+def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str) -> None:
+    """The arm line of a pick or place and a marker at the hand (triangle up: pick, down: place)."""
+    axes.plot([base[0], hand[0]], [base[1], hand[1]], color=colour, linestyle=":", linewidth=1.8, zorder=drawing.Z_TEXT)
+    marker = "^" if action == "pick" else "v"
+    axes.plot(
+        [hand[0]],
+        [hand[1]],
+        marker=marker,
+        markersize=9,
+        color=colour,
+        markeredgecolor="black",
+        linestyle="none",
+        zorder=drawing.Z_TEXT,
+    )
+
+
+def _legend_handles(scenario: Scenario) -> list:
+    palette = drawing.PALETTE
+    handles = [
+        Line2D([], [], color=TRAVEL, linewidth=1.6, marker=">", label="move, hand empty"),
+        Line2D([], [], color=CARRY, linewidth=1.6, marker=">", label="move, carrying"),
+        Line2D([], [], color=PUSH, linewidth=3.0, marker=">", label="push stroke"),
+        Line2D([], [], color=PICK, linestyle=":", marker="^", markeredgecolor="black", label="pick (arm line)"),
+        Line2D([], [], color=PLACE, linestyle=":", marker="v", markeredgecolor="black", label="place (arm line)"),
+        Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label="base at phase k, heading"),
+        Patch(facecolor=palette.table, edgecolor=palette.table_edge, label="table"),
+        Line2D([], [], color=palette.object, marker="o", linestyle="none", label="object (start)"),
+        Line2D([], [], color=palette.goal, marker="x", linestyle="--", label="goal"),
+    ]
+    if scenario.obstacles:
+        handles.append(Patch(facecolor=palette.obstacle, edgecolor=palette.wall, hatch="//", label="obstacle"))
+    if scenario.clutter:
+        handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter (end)"))
+        handles.append(Patch(facecolor="none", edgecolor=palette.clutter_edge, linestyle="--", label="clutter (start)"))
+    return handles
+
+
+def _title(scenario: Scenario, plan: Plan) -> str:
+    objective = "n/a" if plan.objective is None else f"{plan.objective:.3f}"
+    steps = max(len(plan.phases) - 1, 0)
+    total_s = plan.stats.get("total_s")
+    timing = f", {total_s:.2f} s" if isinstance(total_s, int | float) else ""
+    return f"{scenario.name}: {plan.status}, objective {objective}, {steps} steps{timing}"
+
+
+def _list_steps(axes: Axes, plan: Plan) -> None:
+    """The phases as a text table: number, action, target, posture, base and heading."""
+    axes.set_axis_off()
+    if not plan.phases:
+        axes.text(0.0, 1.0, f"no plan ({plan.status})", va="top", fontsize=9, transform=axes.transAxes)
+        return
+    rows = [
+        "steps (phase 0 is the start)",
+        "",
+        f"{'k':>2} {'action':<6} {'target':<10} {'posture':<10} {'base [m]':<14} hd",
+    ]
+    for k, phase in enumerate(plan.phases[:MAX_LISTED_STEPS]):
+        base = f"{phase.base[0]:5.2f}, {phase.base[1]:5.2f}"
+        rows.append(
+            f"{k:>2} {phase.action:<6} {(phase.target or '-')[:10]:<10} {(phase.posture or '-')[:10]:<10} "
+            f"{base:<14} {phase.heading}"
+        )
+    if len(plan.phases) > MAX_LISTED_STEPS:
+        rows.append(f"   ... and {len(plan.phases) - MAX_LISTED_STEPS} more phases")
+    axes.text(0.0, 1.0, "\n".join(rows), va="top", ha="left", family="monospace", fontsize=7, transform=axes.transAxes)

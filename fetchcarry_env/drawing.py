@@ -1,0 +1,264 @@
+"""Top-down pictures of a scenario and a world state, in plain matplotlib.
+
+Used by the plan plot (``expert/plot.py``) and by the environment's episode pictures.
+Headless: figures are made with the Agg canvas directly (no ``pyplot``, no global
+figure state, no display), and nothing here imports PyBullet.
+
+A *state* is anything with ``base``, ``heading``, ``holding``, ``objects`` (id ->
+centre, ``(x, y)`` or ``(x, y, z)``) and ``clutter`` (id -> centre ``(x, y)``): a
+:class:`~fetchcarry_env.observation.WorldState` or a plan's phase. Without a state the
+scenario is drawn as it starts.
+
+Units are metres; one axis unit is one metre.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, FancyArrowPatch, Rectangle
+
+from fetchcarry_env.geometry import Heading, Point, Rect, heading_vector
+from fetchcarry_env.scenario import Clutter, DeliveryObject, Scenario
+
+
+class StateLike(Protocol):
+    """What :func:`draw_scenario` needs of a state (WorldState and plan phases have it)."""
+
+    base: Point
+    heading: Heading
+    holding: str | None
+    objects: Mapping[str, Sequence[float]]
+    clutter: Mapping[str, Sequence[float]]
+
+
+@dataclass(frozen=True)
+class Palette:
+    """Colours of the top-down pictures (matplotlib colour strings)."""
+
+    outside: str = "#d0d0d0"  # beyond the area
+    floor: str = "#fbfbf8"
+    wall: str = "#404040"
+    table: str = "#e3c59a"
+    table_edge: str = "#9c7a4b"
+    obstacle: str = "#6b6b6b"
+    clutter: str = "#e07b39"
+    clutter_edge: str = "#8a4217"
+    object: str = "#2a6fdb"
+    goal: str = "#2a6fdb"
+    robot: str = "#3aa655"
+    robot_edge: str = "#1e6b33"
+
+
+PALETTE = Palette()
+
+# z-orders: floor < furniture < clutter < goals < objects < robot < annotations
+Z_FLOOR, Z_FURNITURE, Z_CLUTTER, Z_GOAL, Z_OBJECT, Z_ROBOT, Z_TEXT = 0, 1, 2, 3, 4, 5, 8
+
+MARGIN = 0.3  # metres of the outside shown around the area
+
+
+def new_figure(scenario: Scenario, width_in: float = 7.0) -> tuple[Figure, Axes]:
+    """A headless figure with one equal-aspect axes framing the scenario's area (``width_in`` inches wide)."""
+    figure = Figure(figsize=(width_in, map_height_in(scenario, width_in) + 0.6), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    frame_map(axes, scenario.area.inflate(MARGIN))
+    return figure, axes
+
+
+def map_height_in(scenario: Scenario, width_in: float) -> float:
+    """Height (inches) of a map of the area with its margin that is ``width_in`` wide."""
+    width_m, height_m = scenario.area.inflate(MARGIN).size
+    return max(2.5, width_in * height_m / width_m)
+
+
+def frame_map(axes: Axes, view: Rect) -> None:
+    """Make ``axes`` an equal-aspect map (metres) of the rectangle ``view``."""
+    axes.set_xlim(view.min_x, view.max_x)
+    axes.set_ylim(view.min_y, view.max_y)
+    axes.set_aspect("equal")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_facecolor(PALETTE.outside)
+
+
+def draw_scenario(
+    axes: Axes,
+    scenario: Scenario,
+    state: StateLike | None = None,
+    *,
+    show_robot: bool = True,
+    show_goals: bool = True,
+    show_clutter: bool = True,
+    show_labels: bool = True,
+) -> None:
+    """Draw the area, tables, obstacles, clutter, objects, goals and the robot, from above.
+
+    Positions of objects, clutter and the robot come from ``state``, else from the
+    scenario's start. A held object is drawn with a thick outline.
+    """
+    draw_area(axes, scenario.area)
+    for table in scenario.tables:
+        draw_rect(axes, table.rect, face=PALETTE.table, edge=PALETTE.table_edge, zorder=Z_FURNITURE)
+        if show_labels:
+            _label(axes, (table.rect.center[0], table.rect.min_y - 0.02), table.id, va="top", color=PALETTE.table_edge)
+    for obstacle in scenario.obstacles:
+        draw_rect(axes, obstacle.rect, face=PALETTE.obstacle, edge=PALETTE.wall, zorder=Z_FURNITURE, hatch="//")
+    if show_goals:
+        for obj in scenario.objects:
+            draw_goal(axes, obj)
+    if show_clutter:
+        for item in scenario.clutter:
+            center = state.clutter.get(item.id, item.rect.center) if state else item.rect.center
+            draw_clutter(axes, item, center, label=show_labels)
+    for obj in scenario.objects:
+        center = state.objects.get(obj.id, obj.start) if state else obj.start
+        held = state is not None and state.holding == obj.id
+        draw_object(axes, obj, center, held=held, label=show_labels)
+    if show_robot:
+        base, heading = (state.base, state.heading) if state else (scenario.robot.start, scenario.robot.heading)
+        draw_robot(axes, base, heading, scenario.robot.radius)
+
+
+def draw_area(axes: Axes, area: Rect) -> None:
+    """The floor of the room: a light rectangle with a dark border."""
+    draw_rect(axes, area, face=PALETTE.floor, edge=PALETTE.wall, zorder=Z_FLOOR, linewidth=1.5)
+
+
+def draw_rect(
+    axes: Axes,
+    rect: Rect,
+    *,
+    face: str,
+    edge: str,
+    zorder: float,
+    linewidth: float = 1.0,
+    linestyle: str = "-",
+    alpha: float = 1.0,
+    hatch: str | None = None,
+    label: str | None = None,
+) -> Rectangle:
+    """An axis-aligned rectangle patch."""
+    width, height = rect.size
+    patch = Rectangle(
+        rect.min,
+        width,
+        height,
+        facecolor=face,
+        edgecolor=edge,
+        linewidth=linewidth,
+        linestyle=linestyle,
+        alpha=alpha,
+        hatch=hatch,
+        zorder=zorder,
+        label=label,
+    )
+    axes.add_patch(patch)
+    return patch
+
+
+def draw_clutter(
+    axes: Axes, item: Clutter, center: Sequence[float], *, ghost: bool = False, label: bool = True
+) -> None:
+    """A piece of clutter centred at ``center``; ``ghost`` draws a dashed outline (where it was)."""
+    width, depth = item.rect.size
+    rect = Rect.around((float(center[0]), float(center[1])), width / 2, depth / 2)
+    if ghost:
+        draw_rect(axes, rect, face="none", edge=PALETTE.clutter_edge, zorder=Z_CLUTTER, linestyle="--")
+        return
+    draw_rect(axes, rect, face=PALETTE.clutter, edge=PALETTE.clutter_edge, zorder=Z_CLUTTER, alpha=0.9)
+    if label:
+        _label(axes, rect.center, item.id, color="white", weight="bold")
+
+
+def draw_object(
+    axes: Axes, obj: DeliveryObject, center: Sequence[float], *, held: bool = False, label: bool = True
+) -> None:
+    """A delivery object (a disc of its radius) centred at ``center``; held ones get a thick outline."""
+    axes.add_patch(
+        Circle(
+            (float(center[0]), float(center[1])),
+            obj.radius,
+            facecolor=PALETTE.object,
+            edgecolor="black" if held else PALETTE.object,
+            linewidth=2.0 if held else 0.5,
+            zorder=Z_OBJECT,
+        )
+    )
+    if label:
+        _label(axes, (float(center[0]), float(center[1]) + obj.radius + 0.02), obj.id, va="bottom")
+
+
+def draw_goal(axes: Axes, obj: DeliveryObject) -> None:
+    """An object's goal: a dashed ring of the object's size with a cross in it."""
+    x, y = obj.goal
+    axes.add_patch(
+        Circle(
+            (x, y), obj.radius, facecolor="none", edgecolor=PALETTE.goal, linestyle="--", linewidth=1.2, zorder=Z_GOAL
+        )
+    )
+    axes.plot([x], [y], marker="x", color=PALETTE.goal, markersize=5, zorder=Z_GOAL)
+
+
+def draw_robot(
+    axes: Axes,
+    base: Point,
+    heading: Heading,
+    radius: float,
+    *,
+    alpha: float = 0.8,
+    face: str | None = None,
+    edge: str | None = None,
+    zorder: float = Z_ROBOT,
+) -> None:
+    """The round base at ``base`` with an arrow from its centre to its rim along ``heading``."""
+    face = PALETTE.robot if face is None else face
+    edge = PALETTE.robot_edge if edge is None else edge
+    axes.add_patch(Circle(base, radius, facecolor=face, edgecolor=edge, alpha=alpha, linewidth=1.2, zorder=zorder))
+    draw_heading(axes, base, heading, radius, color=edge, zorder=zorder + 0.1)
+
+
+def draw_heading(axes: Axes, base: Point, heading: Heading, length: float, *, color: str, zorder: float) -> None:
+    """An arrow of ``length`` metres from ``base`` along ``heading``."""
+    hx, hy = heading_vector(heading)
+    axes.add_patch(
+        FancyArrowPatch(
+            base,
+            (base[0] + hx * length, base[1] + hy * length),
+            arrowstyle="-|>",
+            mutation_scale=10,
+            color=color,
+            linewidth=1.5,
+            zorder=zorder,
+        )
+    )
+
+
+def render_rgb(
+    scenario: Scenario, state: StateLike | None = None, *, width_px: int = 640, title: str = ""
+) -> np.ndarray:
+    """The top-down picture as an ``(height, width, 3)`` uint8 array (for ``render_mode="rgb_array"``)."""
+    dpi = 100
+    figure, axes = new_figure(scenario, width_in=width_px / dpi)
+    figure.set_dpi(dpi)
+    draw_scenario(axes, scenario, state)
+    if title:
+        axes.set_title(title, fontsize=9)
+    canvas = figure.canvas
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+
+def _label(
+    axes: Axes, at: Point, text: str, *, va: str = "center", color: str = "black", weight: str = "normal"
+) -> None:
+    axes.text(
+        at[0], at[1], text, ha="center", va=va, fontsize=7, color=color, weight=weight, zorder=Z_TEXT, clip_on=True
+    )
