@@ -16,6 +16,7 @@ import json
 import sys
 from collections.abc import Sequence
 
+from expert.plan import PlanFormatError
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import ScenarioError
 
@@ -49,7 +50,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.handler(args) or 0)
-    except ScenarioError as error:
+    except (ScenarioError, PlanFormatError) as error:
         print(f"fetchcarry: {error}", file=sys.stderr)
     except (UsageError, FileNotFoundError, IsADirectoryError, PermissionError) as error:
         print(f"fetchcarry: {error}", file=sys.stderr)

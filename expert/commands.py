@@ -1,0 +1,256 @@
+"""The expert's commands: ``fetchcarry plan`` and ``fetchcarry validate``.
+
+Registered into ``training/cli.py`` by :func:`register`. Exit statuses follow
+``spec/interfaces.md``: ``plan`` 0 when a plan was found and 1 when none
+(infeasible, time limit); ``validate`` 0 for a valid plan and 1 for an invalid one;
+2 for bad input (raised here as ``UsageError``, ``ScenarioError`` or
+``PlanFormatError`` and turned into one short message by the CLI's ``main``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from expert.plan import Plan, PlanFormatError
+from expert.validate import validate_plan
+from fetchcarry_env.errors import UsageError
+from fetchcarry_env.scenario import Scenario, ScenarioError
+
+DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
+MAX_SUMMARY_PHASES = 30  # phases listed in the one-screen summary
+MAX_SUMMARY_VIOLATIONS = 5  # validator messages repeated in the plan summary
+
+PLAN_SUFFIX = ".plan.json"
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
+    _register_plan(commands)
+    _register_validate(commands)
+
+
+# ---------------------------------------------------------------------- plan
+def _register_plan(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "plan",
+        help="plan a scenario with the MILP expert and write the plan JSON",
+        description="Plan SCENARIO (a fetchcarry-scenario/1 file) with the paper's MILP on SCIP, print a "
+        "one-screen summary (status, objective, the phases, timings) and write the plan as "
+        "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
+        "records the status (infeasible, time_limit) and the timings. The command also checks the "
+        "plan with the validator and warns on stderr if it breaks spec/plan.md.",
+        epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
+    )
+    parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="PLAN",
+        help=f"where to write the plan JSON (default: <scenario file stem>{PLAN_SUFFIX} in the current directory)",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=_positive_float,
+        default=DEFAULT_TIME_LIMIT,
+        metavar="S",
+        help=f"seconds for the whole planning call, model building included (default {DEFAULT_TIME_LIMIT:g})",
+    )
+    parser.add_argument(
+        "--max-phases",
+        type=_positive_int,
+        default=None,
+        metavar="N",
+        help="the largest number of phases to try (default: the planner's own bound)",
+    )
+    parser.add_argument("--plot", metavar="PNG", help="also draw the plan from above into this image file")
+    parser.add_argument("--json", action="store_true", help="print the summary as one JSON object instead of a table")
+    parser.set_defaults(handler=run_plan)
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    """``fetchcarry plan``: 0 a plan was found, 1 none."""
+    scenario_path = Path(args.scenario)
+    scenario = load_scenario(scenario_path)
+    output = Path(args.output) if args.output else Path.cwd() / (scenario_path.stem + PLAN_SUFFIX)
+    _check_writable(output, "plan output")
+    plot_path = Path(args.plot) if args.plot else None
+    if plot_path is not None:
+        _check_writable(plot_path, "plot")
+
+    from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
+
+    result = run_planner(scenario, time_limit=args.time_limit, max_phases=args.max_phases)
+    result.save(output)
+    violations = validate_plan(scenario, result) if result.found else []
+    if plot_path is not None:
+        from expert.plot import plot_plan  # matplotlib only when a picture is asked for
+
+        plot_plan(scenario, result, plot_path)
+
+    if args.json:
+        print(json.dumps(_plan_summary_json(scenario_path, result, output, plot_path, violations), indent=2))
+    else:
+        print(_plan_summary_text(scenario_path, result, output, plot_path))
+    if violations:
+        shown = "\n".join(f"  - {v}" for v in violations[:MAX_SUMMARY_VIOLATIONS])
+        more = len(violations) - MAX_SUMMARY_VIOLATIONS
+        tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
+        print(f"fetchcarry: warning: the plan breaks spec/plan.md:\n{shown}{tail}", file=sys.stderr)
+    return 0 if result.found else 1
+
+
+def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None) -> str:
+    objective = "-" if plan.objective is None else f"{plan.objective:.3f}"
+    lines = [
+        f"scenario   {plan.scenario} ({scenario_path})",
+        f"status     {plan.status}    objective {objective}",
+        f"phases     {len(plan.phases)}" + _phases_tried(plan),
+        f"timings    {_timings(plan)}",
+    ]
+    if plan.phases:
+        lines += ["", _phase_table(plan)]
+    lines += ["", f"plan written to {output}"]
+    if plot_path is not None:
+        lines.append(f"plot written to {plot_path}")
+    return "\n".join(lines)
+
+
+def _phase_table(plan: Plan) -> str:
+    rows = [f"{'k':>3}  {'action':<6}  {'target':<12}  {'posture':<12}  {'base [m]':<16}  {'hd':<3}  holding"]
+    for k, phase in enumerate(plan.phases[:MAX_SUMMARY_PHASES]):
+        base = f"{phase.base[0]:6.2f}, {phase.base[1]:6.2f}"
+        rows.append(
+            f"{k:>3}  {phase.action:<6}  {phase.target or '-':<12}  {phase.posture or '-':<12}  {base:<16}  "
+            f"{phase.heading:<3}  {phase.holding or '-'}"
+        )
+    if len(plan.phases) > MAX_SUMMARY_PHASES:
+        rows.append(f"  ... and {len(plan.phases) - MAX_SUMMARY_PHASES} more phases (see the plan file)")
+    return "\n".join(rows)
+
+
+def _phases_tried(plan: Plan) -> str:
+    tried = plan.stats.get("phases_tried")
+    if isinstance(tried, list) and tried:
+        return " (phase counts tried: " + ", ".join(str(n) for n in tried) + ")"
+    return ""
+
+
+def _timings(plan: Plan) -> str:
+    parts = [
+        f"{label} {plan.stats[key]:.3f} s"
+        for key, label in (("build_s", "build"), ("solve_s", "solve"), ("total_s", "total"))
+        if isinstance(plan.stats.get(key), int | float)
+    ]
+    return ", ".join(parts) if parts else "-"
+
+
+def _plan_summary_json(
+    scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None, violations: list[str]
+) -> dict[str, Any]:
+    return {
+        "scenario": plan.scenario,
+        "scenario_path": str(scenario_path),
+        "status": plan.status,
+        "found": plan.found,
+        "objective": plan.objective,
+        "phases": [phase.to_dict() for phase in plan.phases],
+        "stats": plan.stats,
+        "plan_path": str(output),
+        "plot_path": None if plot_path is None else str(plot_path),
+        "violations": violations,
+    }
+
+
+# ---------------------------------------------------------------------- validate
+def _register_validate(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "validate",
+        help="check a plan against spec/plan.md and list every violation",
+        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of spec/plan.md "
+        "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
+        "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
+        "an empty hand, a forward or lateral stroke and the contact within reach). Every violation is "
+        "listed, one line each, naming the rule, the phase and the ids.",
+        epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
+        "that breaks spec/scenario.md, a plan file that is not fetchcarry-plan/1).",
+    )
+    parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
+    parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")
+    parser.add_argument(
+        "--json", action="store_true", help='print {"valid": ..., "violations": [...]} as JSON instead of text'
+    )
+    parser.set_defaults(handler=run_validate)
+
+
+def run_validate(args: argparse.Namespace) -> int:
+    """``fetchcarry validate``: 0 valid, 1 invalid."""
+    scenario = load_scenario(Path(args.scenario))
+    plan = load_plan(Path(args.plan))
+    violations = validate_plan(scenario, plan)
+    if args.json:
+        report = {"scenario": args.scenario, "plan": args.plan, "valid": not violations, "violations": violations}
+        print(json.dumps(report, indent=2))
+    elif violations:
+        print(f"{args.plan}: INVALID for {args.scenario}: {len(violations)} violation(s)")
+        print("\n".join(f"  - {v}" for v in violations))
+    else:
+        steps = len(plan.phases) - 1
+        print(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
+    return 1 if violations else 0
+
+
+# ---------------------------------------------------------------------- input
+def load_scenario(path: Path) -> Scenario:
+    """Read a scenario file; a missing or unreadable file is a ``UsageError``, a bad one a ``ScenarioError``."""
+    _check_readable(path, "scenario file")
+    try:
+        return Scenario.load(path)
+    except UnicodeDecodeError:
+        raise ScenarioError(["not a text file (expected JSON)"], str(path)) from None
+
+
+def load_plan(path: Path) -> Plan:
+    """Read a plan file; a missing file is a ``UsageError``, a malformed one a ``PlanFormatError``."""
+    _check_readable(path, "plan file")
+    try:
+        return Plan.load(path)
+    except UnicodeDecodeError:
+        raise PlanFormatError(f"{path}: not a text file (expected JSON)") from None
+
+
+def _check_readable(path: Path, what: str) -> None:
+    if not path.exists():
+        raise UsageError(f"{what} not found: {path}")
+    if path.is_dir():
+        raise UsageError(f"{what} is a directory, not a file: {path}")
+
+
+def _check_writable(path: Path, what: str) -> None:
+    if path.is_dir():
+        raise UsageError(f"{what} {path} is a directory; give a file name")
+    if not path.parent.is_dir():
+        raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {text!r}")
+    return value
