@@ -1,0 +1,271 @@
+"""Minari datasets of fetchcarry episodes: assembly from the staging, summary, exact replay.
+
+A dataset is an ordinary Minari 0.5 dataset (``minari.load_dataset(id)`` reads it,
+``recover_environment()`` rebuilds the env from the stored env spec). Besides the
+observations, actions, rewards and flags, each episode stores:
+
+- its ``seed`` (Minari's episode seed) and its ``scenario`` (the ``fetchcarry-scenario/1``
+  JSON) in the episode metadata, so it replays exactly, as ManiSkill stores its reset
+  arguments; and the episode's figures (``outcome``, ``success``, ``delivered``,
+  ``planning_s``, ``plans``, ``replans``, ``planner_failures``, ``objective``, ...);
+- per-step infos (:data:`training.rollout.INFO_KEYS`): the seconds the planner took
+  before each step, whether it planned or replanned, whether the action was the
+  fallback, refused, or stopped at a contact, and how many objects are delivered.
+
+Read the episode metadata with ``dataset.storage.get_episode_metadata([k])``.
+
+The dataset is built in the staging folder and moved into place with one rename, so
+a dataset id either does not exist or holds a whole dataset.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fetchcarry_env.errors import UsageError
+from training.generate import GenerationConfig, make_env
+from training.rollout import EpisodeRecord
+from training.staging import Staging, datasets_root
+
+AUTHOR = "fetchcarry"
+CODE_URL = "https://github.com/fetchcarry/fetchcarry"
+ALGORITHMS = {"expert": "fetchcarry MILP expert (SCIP), ExpertPolicy", "random": "RandomMaskedPolicy"}
+REPLAY_TOLERANCE = 1e-5  # observation units (metres): replayed observations must agree this closely
+
+
+def validate_dataset_id(dataset_id: str) -> None:
+    """Raise :class:`UsageError` unless ``dataset_id`` is a Minari id (``namespace/name-vN``)."""
+    from minari.dataset.minari_dataset import parse_dataset_id
+
+    try:
+        parse_dataset_id(dataset_id)
+    except ValueError:
+        raise UsageError(
+            f"dataset id {dataset_id!r} is not a Minari id: use (namespace/)name-v<version>, "
+            "e.g. fetchcarry/push-expert-v0"
+        ) from None
+
+
+def dataset_path(dataset_id: str) -> Path:
+    return datasets_root() / dataset_id
+
+
+def dataset_exists(dataset_id: str) -> bool:
+    return dataset_path(dataset_id).exists()
+
+
+def delete_dataset(dataset_id: str) -> None:
+    shutil.rmtree(dataset_path(dataset_id))
+
+
+def assemble(config: GenerationConfig, staging: Staging) -> None:
+    """Write the Minari dataset ``config.dataset_id`` from its staged episodes ``0 .. episodes-1``."""
+    import minari
+    from minari.dataset.minari_storage import MinariStorage
+    from minari.namespace import create_namespace, list_local_namespaces
+
+    building = staging.path / "assembling"
+    if building.exists():
+        shutil.rmtree(building)  # what an interrupted assembly left
+    building.mkdir()
+    env = make_env(config.source)
+    try:
+        storage = MinariStorage.new(
+            building / "data",
+            observation_space=env.observation_space,
+            action_space=env.action_space,
+            env_spec=env.spec,
+        )
+    finally:
+        env.close()
+    storage.update_metadata(
+        {
+            "dataset_id": config.dataset_id,
+            "minari_version": minari.__version__,
+            "algorithm_name": ALGORITHMS[config.source.policy],
+            "author": {AUTHOR},
+            "code_permalink": CODE_URL,
+            "description": _description(config),
+            "fetchcarry_generation": config.manifest(),
+        }
+    )
+    episodes = range(config.episodes)
+    storage.update_episodes(_buffers(staging, episodes))
+    storage.update_episode_metadata((_episode_metadata(staging.read(k)) for k in episodes), episodes)
+
+    namespace = config.dataset_id.rsplit("/", 1)[0] if "/" in config.dataset_id else None
+    if namespace is not None and namespace not in list_local_namespaces():
+        create_namespace(namespace)
+    final = dataset_path(config.dataset_id)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    os.rename(building, final)
+
+
+def _description(config: GenerationConfig) -> str:
+    source = config.source
+    return (
+        f"{config.episodes} episodes of {source.env_id} ({source.label}) by the {source.policy} policy; "
+        f"episode k uses seed {source.seed} + k. Episode metadata holds the seed, the scenario JSON and the "
+        "episode's figures; per-step infos hold the planner's figures."
+    )
+
+
+def _buffers(staging: Staging, episodes: range) -> Iterator[Any]:
+    from minari.data_collector import EpisodeBuffer
+
+    for k in episodes:
+        record = staging.read(k)
+        yield EpisodeBuffer(
+            id=k,
+            seed=record.seed,
+            observations=record.observations,
+            actions=record.actions,
+            rewards=record.rewards,
+            terminations=record.terminations,
+            truncations=record.truncations,
+            infos=record.infos,
+        )
+
+
+def _episode_metadata(record: EpisodeRecord) -> dict[str, Any]:
+    """HDF5 attributes of an episode: the scenario JSON and the figures (``None`` becomes NaN)."""
+    metadata: dict[str, Any] = {"scenario": json.dumps(record.scenario)}
+    for key, value in record.figures.to_dict().items():
+        if key == "seed":
+            continue  # Minari stores the seed itself
+        key = "scenario_name" if key == "scenario" else key
+        metadata[key] = float("nan") if value is None else value
+    return metadata
+
+
+# -- reading ---------------------------------------------------------------------------------
+
+
+def load(dataset_id: str):
+    """``minari.load_dataset(dataset_id)`` with a clear error when it is not there."""
+    import minari
+
+    import fetchcarry_env  # noqa: F401  (the env must be registered to recover it)
+
+    validate_dataset_id(dataset_id)
+    if not (dataset_path(dataset_id) / "data").exists():
+        raise UsageError(f"no dataset {dataset_id!r} under {datasets_root()} (set MINARI_DATASETS_PATH?)")
+    return minari.load_dataset(dataset_id)
+
+
+def episode_metadata(dataset, episode: int) -> dict[str, Any]:
+    """Episode ``episode``'s metadata: ``seed``, ``scenario`` (a dict) and its figures."""
+    if not 0 <= episode < dataset.total_episodes:
+        raise UsageError(f"episode {episode} out of range: the dataset has {dataset.total_episodes} episodes")
+    metadata = next(iter(dataset.storage.get_episode_metadata([episode])))
+    metadata = {k: _plain(v) for k, v in metadata.items()}
+    metadata["scenario"] = json.loads(metadata["scenario"])
+    return metadata
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, bytes):
+        return value.decode()
+    return value
+
+
+def info(dataset_id: str) -> dict[str, Any]:
+    """A summary of a dataset: size, env, policy, outcomes and the planner's figures."""
+    dataset = load(dataset_id)
+    metadata = dataset.storage.metadata
+    episodes = [episode_metadata(dataset, k) for k in range(dataset.total_episodes)]
+    spec = dataset.spec.env_spec
+    kwargs = dict(spec.kwargs) if spec is not None else {}
+    scenario = kwargs.get("scenario")
+    steps = np.array([e["steps"] for e in episodes])
+    planning = np.array([e["planning_s"] for e in episodes])
+    return {
+        "dataset_id": dataset_id,
+        "path": str(dataset_path(dataset_id)),
+        "env_id": spec.id if spec is not None else None,
+        "family": kwargs.get("family"),
+        "scenario": scenario["name"] if isinstance(scenario, dict) else None,
+        "algorithm": metadata.get("algorithm_name"),
+        "generation": metadata.get("fetchcarry_generation"),
+        "episodes": dataset.total_episodes,
+        "steps": dataset.total_steps,
+        "seeds": [min(e["seed"] for e in episodes), max(e["seed"] for e in episodes)],
+        "success_rate": float(np.mean([bool(e["success"]) for e in episodes])),
+        "outcomes": dict(Counter(e["outcome"] for e in episodes)),
+        "mean_steps": float(steps.mean()),
+        "mean_planning_s": float(planning.mean()),
+        "max_planning_s": float(planning.max()),
+        "replans": int(sum(e["replans"] for e in episodes)),
+        "planner_failures": int(sum(e["planner_failures"] for e in episodes)),
+        "size_mb": float(metadata.get("dataset_size", 0.0)),
+    }
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """How a replay of a recorded episode compared with the recording."""
+
+    dataset_id: str
+    episode: int
+    seed: int
+    steps: int
+    same_scenario: bool  # the env drew the recorded scenario from the seed
+    max_observation_error: float  # largest absolute difference over every observation (metres)
+    first_divergence: int | None  # first state index whose observation differs beyond the tolerance
+    same_rewards: bool
+    same_final_state: bool
+    reproduced: bool  # all of the above agree
+
+    def to_dict(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return asdict(self)
+
+
+def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -> ReplayReport:
+    """Re-run episode ``episode`` in the recovered env from its seed and recorded actions; compare."""
+    dataset = load(dataset_id)
+    metadata = episode_metadata(dataset, episode)
+    data = dataset[episode]
+    env = dataset.recover_environment()
+    try:
+        observation, _ = env.reset(seed=metadata["seed"])
+        same_scenario = env.unwrapped.scenario.to_dict() == metadata["scenario"]
+        errors = [_observation_error(observation, data.observations, 0)]
+        rewards = []
+        for t, action in enumerate(data.actions):
+            observation, reward, _, _, _ = env.step(action)
+            errors.append(_observation_error(observation, data.observations, t + 1))
+            rewards.append(reward)
+    finally:
+        env.close()
+    diverged = [k for k, e in enumerate(errors) if e > tolerance]
+    same_rewards = bool(np.allclose(rewards, data.rewards, atol=1e-6))
+    same_final = errors[-1] <= tolerance
+    return ReplayReport(
+        dataset_id=dataset_id,
+        episode=episode,
+        seed=int(metadata["seed"]),
+        steps=len(data.actions),
+        same_scenario=same_scenario,
+        max_observation_error=float(max(errors)),
+        first_divergence=diverged[0] if diverged else None,
+        same_rewards=same_rewards,
+        same_final_state=same_final,
+        reproduced=same_scenario and not diverged and same_rewards,
+    )
+
+
+def _observation_error(observation: dict[str, np.ndarray], recorded: dict[str, np.ndarray], index: int) -> float:
+    return max(float(np.max(np.abs(np.asarray(observation[k]) - recorded[k][index]))) for k in recorded)

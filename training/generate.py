@@ -1,0 +1,303 @@
+"""Generate a Minari dataset of episodes, in parallel, resumable.
+
+Episode ``k`` of a dataset uses the seed ``seed + k``: the env draws its scenario from
+``reset(seed=seed + k)`` (a family) or uses the fixed scenario, so any episode replays
+exactly from its seed. Each episode runs in a fresh env (so that an episode does not
+depend on the ones before it in the same worker) and comes back to this process,
+which stages it at once (:mod:`training.staging`); when all are staged the dataset is
+assembled (:mod:`training.datasets`) and the staging is removed.
+
+Backends: ``process`` (default) runs episodes on a local process pool (``workers``
+processes; one worker runs in this process); ``ray`` runs the same episode function
+as Ray tasks, on a local Ray instance or the cluster ``ray_address`` names (Ray is an
+optional extra: ``pip install ray``).
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from fetchcarry_env.errors import UsageError
+from training.rollout import EpisodeRecord, run_episode
+from training.staging import Staging
+
+ENV_ID = "FetchCarryPush-v0"
+POLICIES = ("expert", "random")
+BACKENDS = ("process", "ray")
+DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
+
+
+@dataclass(frozen=True)
+class EpisodeSource:
+    """Where episodes come from: the env (a family or one scenario), the policy and the seeds.
+
+    Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
+    """
+
+    family: str | None = None  # a scenario family name, or
+    scenario: dict[str, Any] | None = None  # one fixed scenario (fetchcarry-scenario/1 JSON)
+    seed: int = 0  # episode k uses seed + k
+    policy: str = "expert"
+    time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
+    env_id: str = ENV_ID
+
+    def __post_init__(self) -> None:
+        if (self.family is None) == (self.scenario is None):
+            raise UsageError("give exactly one of a family (--family) and a scenario (--scenario)")
+        if self.family is not None:
+            from fetchcarry_env.families import FAMILY_NAMES
+
+            if self.family not in FAMILY_NAMES:
+                raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
+        if self.policy not in POLICIES:
+            raise UsageError(f"--policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
+        if self.time_limit <= 0:
+            raise UsageError(f"--time-limit must be positive, got {self.time_limit}")
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
+        return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+
+    @property
+    def label(self) -> str:
+        return f"family {self.family}" if self.family is not None else f"scenario {self.scenario['name']}"
+
+    def episode_seed(self, index: int) -> int:
+        return self.seed + index
+
+
+@dataclass(frozen=True)
+class GenerationConfig:
+    """A dataset to make: its id, how many episodes, and where they come from."""
+
+    dataset_id: str
+    episodes: int
+    source: EpisodeSource
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise UsageError(f"--episodes must be at least 1, got {self.episodes}")
+
+    def manifest(self) -> dict[str, Any]:
+        """The options that identify the staged episodes (everything but how many there are)."""
+        return {"dataset_id": self.dataset_id, **asdict(self.source)}
+
+
+@dataclass(frozen=True)
+class GenerationReport:
+    """What a generation run did."""
+
+    dataset_id: str
+    episodes: int  # episodes in the dataset
+    resumed: int  # episodes found staged from an earlier run
+    generated: int  # episodes made by this run
+    workers: int
+    backend: str
+    wall_s: float  # seconds of this run, assembly included
+    figures: list[dict[str, Any]] = field(default_factory=list)  # EpisodeFigures of the episodes made now
+
+
+def make_env(source: EpisodeSource, render_mode: str | None = None):
+    """A fresh env for ``source``."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+
+    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs)
+
+
+def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
+    """The policy named by ``source.policy`` for ``env``."""
+    if source.policy == "expert":
+        from expert.policy import ExpertPolicy
+
+        return ExpertPolicy(env, time_limit=source.time_limit)
+    from training.policies import RandomMaskedPolicy
+
+    return RandomMaskedPolicy(env, seed=seed)
+
+
+def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
+    """Run episode ``index`` of ``source`` in a fresh env (the function every backend runs)."""
+    seed = source.episode_seed(index)
+    env = make_env(source)
+    try:
+        return run_episode(env, make_policy(source, env, seed), seed)
+    finally:
+        env.close()
+
+
+def generate(
+    config: GenerationConfig,
+    *,
+    workers: int = 1,
+    backend: str = "process",
+    overwrite: bool = False,
+    progress: bool = True,
+    ray_address: str | None = None,
+    on_episode: Callable[[int, EpisodeRecord], None] | None = None,
+) -> GenerationReport:
+    """Make (or finish) the dataset ``config.dataset_id`` and return what was done.
+
+    Raises :class:`UsageError` when the dataset exists (unless ``overwrite``) or when
+    a staging of the same id was made with other options. ``on_episode`` is called
+    after each episode is staged (tests use it to interrupt a run).
+    """
+    from training.datasets import assemble, dataset_exists, delete_dataset, validate_dataset_id
+
+    validate_dataset_id(config.dataset_id)
+    if workers < 1:
+        raise UsageError(f"--workers must be at least 1, got {workers}")
+    staging = Staging(config.dataset_id)
+    if dataset_exists(config.dataset_id):
+        if not overwrite:
+            raise UsageError(
+                f"dataset {config.dataset_id!r} already exists; choose another id or pass --overwrite to replace it"
+            )
+        delete_dataset(config.dataset_id)
+        staging.remove()
+    _check_staging(staging, config, overwrite)
+
+    started = time.perf_counter()
+    staging.start(config.manifest())
+    done = {k for k in staging.staged() if k < config.episodes}
+    missing = [k for k in range(config.episodes) if k not in done]
+    figures: list[dict[str, Any]] = []
+    with progress_bar(config.episodes, config.dataset_id, initial=len(done), enabled=progress) as bar:
+        for index, record in run_episodes(
+            config.source, missing, workers=workers, backend=backend, ray_address=ray_address
+        ):
+            staging.write(index, record)
+            figures.append(record.figures.to_dict())
+            bar.update(1)
+            bar.set_postfix_str(_postfix(figures), refresh=False)
+            if on_episode is not None:
+                on_episode(index, record)
+    assemble(config, staging)
+    staging.remove()
+    return GenerationReport(
+        dataset_id=config.dataset_id,
+        episodes=config.episodes,
+        resumed=len(done),
+        generated=len(missing),
+        workers=workers,
+        backend=backend,
+        wall_s=time.perf_counter() - started,
+        figures=figures,
+    )
+
+
+def _check_staging(staging: Staging, config: GenerationConfig, overwrite: bool) -> None:
+    manifest = staging.manifest()
+    if manifest is None or manifest == config.manifest():
+        return
+    if overwrite:
+        staging.remove()
+        return
+    differences = sorted(
+        k for k in set(manifest) | set(config.manifest()) if manifest.get(k) != config.manifest().get(k)
+    )
+    raise UsageError(
+        f"a partly generated {config.dataset_id!r} exists with other options ({', '.join(differences)} differ): "
+        "run the same command as before to resume it, or pass --overwrite to start again"
+    )
+
+
+def run_episodes(
+    source: EpisodeSource,
+    indices: list[int],
+    *,
+    workers: int = 1,
+    backend: str = "process",
+    ray_address: str | None = None,
+) -> Iterator[tuple[int, EpisodeRecord]]:
+    """Episodes ``indices`` of ``source`` as ``(index, record)``, as they finish (not in order when parallel)."""
+    if workers < 1:
+        raise UsageError(f"--workers must be at least 1, got {workers}")
+    if backend not in BACKENDS:
+        raise UsageError(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if not indices:
+        return
+    if backend == "ray":
+        yield from _run_ray(source, indices, workers, ray_address)
+    elif workers == 1:
+        for index in indices:
+            yield index, run_indexed_episode(source, index)
+    else:
+        yield from _run_pool(source, indices, workers)
+
+
+def _run_pool(source: EpisodeSource, indices: list[int], workers: int) -> Iterator[tuple[int, EpisodeRecord]]:
+    # spawn: the workers start clean (no simulator or solver state inherited from this process).
+    context = multiprocessing.get_context("spawn")
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    try:
+        pending = {pool.submit(run_indexed_episode, source, index): index for index in indices}
+        while pending:
+            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                yield pending.pop(future), future.result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _run_ray(
+    source: EpisodeSource, indices: list[int], workers: int, address: str | None
+) -> Iterator[tuple[int, EpisodeRecord]]:
+    try:
+        import ray
+    except ModuleNotFoundError:
+        raise UsageError("--backend ray needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        if address is None:
+            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+        else:
+            ray.init(address=address, include_dashboard=False, log_to_driver=False)
+    remote = ray.remote(num_cpus=1)(run_indexed_episode)
+    in_flight_limit = 2 * workers  # keep few episodes in flight: an interruption loses only those
+    queue = list(indices)
+    pending: dict[Any, int] = {}
+    try:
+        while queue or pending:
+            while queue and len(pending) < in_flight_limit:
+                index = queue.pop(0)
+                pending[remote.remote(source, index)] = index
+            finished, _ = ray.wait(list(pending), num_returns=1)
+            for ref in finished:
+                yield pending.pop(ref), ray.get(ref)
+    finally:
+        for ref in pending:
+            ray.cancel(ref)
+        if started_here:
+            ray.shutdown()
+
+
+def _postfix(figures: list[dict[str, Any]]) -> str:
+    successes = sum(f["success"] for f in figures)
+    return f"success {successes}/{len(figures)}"
+
+
+def progress_bar(total: int, description: str, *, initial: int = 0, enabled: bool = True):
+    """A tqdm bar over episodes (on stderr)."""
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        initial=initial,
+        desc=description,
+        unit="episode",
+        disable=not enabled,
+        dynamic_ncols=True,
+    )
+
+
+def report_json(report: GenerationReport) -> str:
+    return json.dumps(asdict(report), indent=2)

@@ -1,0 +1,102 @@
+"""Simple policies that speak stable-baselines3's ``predict`` protocol.
+
+:class:`RandomMaskedPolicy` samples each component of the ``MultiDiscrete`` phase
+action uniformly among the values the env's action mask allows (the same per-component
+masking as sb3-contrib's MaskablePPO). It is the baseline that drives the dataset
+pipeline when no planner is wanted, and a lower bound in benchmarks.
+
+Every policy here draws from its own ``numpy`` generator, seeded at construction and
+re-seedable with :meth:`RandomMaskedPolicy.reset`, so the same seed gives the same
+actions bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+
+class RandomMaskedPolicy:
+    """Uniformly random valid-looking actions: each component drawn among its unmasked values.
+
+    ``env`` is a Gymnasium env (wrapped or not) or a stable-baselines3 ``VecEnv`` whose
+    env exposes ``action_masks()`` (one flat bool vector of length ``sum(nvec)``).
+    ``predict`` also accepts the masks directly (``action_masks=``), as MaskablePPO does.
+    """
+
+    def __init__(self, env: Any, *, seed: int | None = None) -> None:
+        space = env.action_space
+        if not isinstance(space, spaces.MultiDiscrete):
+            raise TypeError(f"RandomMaskedPolicy needs a MultiDiscrete action space, got {space}")
+        self.env = env
+        self.nvec = np.asarray(space.nvec, dtype=np.int64).reshape(-1)
+        self._bounds = np.concatenate([[0], np.cumsum(self.nvec)])
+        self.rng = np.random.default_rng(seed)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Re-seed the generator (``None`` keeps the current stream)."""
+        if seed is not None:
+            self.rng = np.random.default_rng(seed)
+
+    def predict(
+        self,
+        observation: dict[str, np.ndarray] | np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = False,
+        action_masks: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, Any]:
+        """One action per observation (a batch gives a batch), and ``state`` unchanged.
+
+        ``deterministic`` is accepted for the protocol; a random policy is random either way
+        (reproducible through its seed).
+        """
+        batched = _is_batched(observation, self.env)
+        masks = self._masks(action_masks)
+        if masks.ndim == 1:
+            masks = masks[None, :]
+        actions = np.stack([self._sample(mask) for mask in masks])
+        return (actions if batched else actions[0]), state
+
+    def _masks(self, action_masks: np.ndarray | None) -> np.ndarray:
+        if action_masks is not None:
+            masks = np.asarray(action_masks, dtype=bool)
+        else:
+            masks = np.asarray(_env_action_masks(self.env), dtype=bool)
+        if masks.shape[-1] != self._bounds[-1]:
+            raise ValueError(f"action mask has length {masks.shape[-1]}, expected sum(nvec) = {self._bounds[-1]}")
+        return masks
+
+    def _sample(self, mask: np.ndarray) -> np.ndarray:
+        action = np.empty(len(self.nvec), dtype=np.int64)
+        for k in range(len(self.nvec)):
+            allowed = np.flatnonzero(mask[self._bounds[k] : self._bounds[k + 1]])
+            # A component with nothing allowed falls back to all values: the env will reject it.
+            action[k] = self.rng.choice(allowed) if allowed.size else self.rng.integers(self.nvec[k])
+        return action
+
+
+def _is_batched(observation: dict[str, np.ndarray] | np.ndarray, env: Any) -> bool:
+    """True when ``observation`` has a leading batch dimension over the env's observation space."""
+    space = env.observation_space
+    if isinstance(space, spaces.Dict) and isinstance(observation, dict):
+        key = next(iter(space.spaces))
+        return np.ndim(observation[key]) > len(space.spaces[key].shape)
+    if isinstance(space, gym.spaces.Box):
+        return np.ndim(observation) > len(space.shape)
+    return False
+
+
+def _env_action_masks(env: Any) -> np.ndarray:
+    """The env's ``action_masks()``: stacked over a ``VecEnv``, through wrappers for a Gymnasium env.
+
+    (sb3-contrib's ``get_action_masks`` does the same, but importing it imports torch.)
+    """
+    if hasattr(env, "env_method"):
+        return np.stack(env.env_method("action_masks"))
+    if hasattr(env, "get_wrapper_attr"):
+        return env.get_wrapper_attr("action_masks")()
+    return env.action_masks()
