@@ -1,0 +1,272 @@
+"""The plan validator: a valid hand-written plan passes, and each broken rule is named with its phase and ids.
+
+Every broken plan below is the valid hand-written plan of ``handmade.py`` with one
+fault put in; the test asserts the message a user would read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+from handmade import BOTTLE_START, with_phase
+
+from expert.plan import Phase, Plan
+from expert.validate import validate_plan
+from fetchcarry_env.scenario import Scenario
+
+
+def with_block(plan: Plan, from_k: int, center) -> Plan:
+    """``plan`` with the clutter ``block`` at ``center`` from phase ``from_k`` on."""
+    phases = [
+        replace(p, clutter={**p.clutter, "block": center}) if k >= from_k else p for k, p in enumerate(plan.phases)
+    ]
+    return replace(plan, phases=tuple(phases))
+
+
+def test_the_hand_written_plan_is_valid(spec_example, hand_plan):
+    assert validate_plan(spec_example, hand_plan) == []
+
+
+def test_positions_within_one_millimetre_are_accepted(spec_example, hand_plan):
+    nudged = with_phase(hand_plan, 7, objects={"bottle": (4.0008, 3.9995)})
+    assert validate_plan(spec_example, nudged) == []
+    off = with_phase(hand_plan, 7, objects={"bottle": (4.002, 4.0)})
+    assert any(
+        m.startswith("rule 6 (goal): in the last phase (7) object 'bottle'") for m in validate_plan(spec_example, off)
+    )
+
+
+def test_a_plan_without_phases_is_not_valid(spec_example):
+    plan = Plan(spec_example.name, "infeasible", None, (), {"total_s": 0.1})
+    assert validate_plan(spec_example, plan) == ["structure: the plan has no phases to check (status 'infeasible')"]
+
+
+# ---------------------------------------------------------------------- structure
+@pytest.mark.parametrize(
+    ("k", "changes", "message"),
+    [
+        (0, {"base": (0.1, 0.0)}, "structure: phase 0 base [0.100, 0.000] is not robot.start [0.000, 0.000]"),
+        (0, {"action": "move"}, "structure: phase 0 must be 'start', not 'move'"),
+        (0, {"heading": "-y"}, "structure: phase 0 heading '-y' is not the robot's heading '+x'"),
+        (
+            0,
+            {"objects": {"bottle": (2.0, 2.02)}},
+            "structure: phase 0 object 'bottle' is at [2.000, 2.020], not its start [2.000, 2.000]",
+        ),
+        (4, {"clutter": {}}, "structure: phase 4 lacks clutter 'block'"),
+        (
+            2,
+            {"objects": {"bottle": BOTTLE_START, "ghost": (1.0, 1.0)}},
+            "structure: phase 2 names unknown object 'ghost'",
+        ),
+        (
+            5,
+            {"posture": "reach_sideways"},
+            "structure: phase 5 pick posture 'reach_sideways' is not a posture of the robot",
+        ),
+        (5, {"target": "block"}, "structure: phase 5 pick target 'block' is not a object id of the scenario"),
+        (1, {"target": "bottle"}, "structure: phase 1 move must have no target and no posture"),
+        (3, {"action": "start"}, "structure: phase 3 is a second 'start'"),
+    ],
+)
+def test_structure_faults_are_named(spec_example, hand_plan, k, changes, message):
+    assert message in validate_plan(spec_example, with_phase(hand_plan, k, **changes))
+
+
+def test_a_plan_for_another_scenario_is_named(spec_example, hand_plan):
+    violations = validate_plan(spec_example, replace(hand_plan, scenario="other"))
+    assert violations == ["structure: the plan is for scenario 'other', not 'basic-area3-07'"]
+
+
+# ---------------------------------------------------------------------- rule 1
+def test_rule1_base_outside_the_area(spec_example, hand_plan):
+    plan = with_phase(hand_plan, 1, base=(4.0, -0.9))  # the disc reaches y = -1.12 < -1.0
+    assert validate_plan(spec_example, plan) == [
+        "rule 1 (area): phase 1 base disc at [4.000, -0.900] is not inside the area"
+    ]
+
+
+def test_rule1_a_move_that_grazes_a_table(spec_example, hand_plan):
+    # From (0, 0) to (3, 2) the base centre passes 0.139 m from table_src's corner (2.3, 1.7).
+    violations = validate_plan(spec_example, with_phase(hand_plan, 1, base=(3.0, 2.0)))
+    assert violations == [
+        "rule 1 (clearance): phase 1 move from [0.000, 0.000] to [3.000, 2.000] passes 0.139 m from table "
+        "'table_src', less than the base radius 0.220 m"
+    ]
+
+
+def test_rule1_a_move_across_a_table_and_past_an_obstacle(spec_example, hand_plan):
+    plan = replace(hand_plan, phases=hand_plan.phases[:1] + hand_plan.phases[2:])  # straight on to (4.0, 3.28)
+    violations = validate_plan(spec_example, plan)
+    clearance = [m for m in violations if m.startswith("rule 1 (clearance): phase 1 move from [0.000, 0.000]")]
+    assert len(clearance) == 2, violations
+    assert "passes 0.000 m from table 'table_src', less than the base radius 0.220 m" in clearance[0]
+    assert "obstacle 'box_1'" in clearance[1]
+
+
+# ---------------------------------------------------------------------- rule 2
+def test_rule2_holding_changes_outside_pick_and_place(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_phase(hand_plan, 6, holding=None))
+    assert (
+        "rule 2 (holding): phase 6 move changes holding from 'bottle' to None; only a pick or a place may"
+    ) in violations
+    assert "rule 2 (holding): phase 7 place 'bottle' while holding None, not 'bottle'" in violations
+
+
+def test_rule2_a_pick_that_holds_nothing(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_phase(hand_plan, 5, holding=None))
+    assert "rule 2 (holding): phase 5 pick 'bottle' ends holding None, not 'bottle'" in violations
+
+
+# ---------------------------------------------------------------------- rule 3
+def test_rule3_an_object_that_moves_by_itself(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_phase(hand_plan, 4, objects={"bottle": (2.05, 2.0)}))
+    assert (
+        "rule 3 (objects stay): phase 4 object 'bottle' moves from [2.000, 2.000] to [2.050, 2.000] "
+        "although it is not held"
+    ) in violations
+
+
+# ---------------------------------------------------------------------- rule 4
+def test_rule4_target_too_far_ahead(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_phase(hand_plan, 5, base=(2.8, 2.0)))
+    assert violations == [
+        "rule 4 (reach): phase 5 pick 'bottle' is 0.800 m ahead, outside posture 'reach_far' forward range "
+        "[0.550, 0.700]"
+    ]
+
+
+def test_rule4_target_off_to_the_side(spec_example, hand_plan):
+    # Facing -x, the robot's left is -y: the bottle at y = 2.0 is 0.1 m to the left of a base at y = 2.1.
+    violations = validate_plan(spec_example, with_phase(hand_plan, 5, base=(2.6, 2.1)))
+    assert violations == [
+        "rule 4 (reach): phase 5 pick 'bottle' is 0.100 m to the left (lateral 0.100), outside posture "
+        "'reach_far' lateral range [-0.050, 0.050]"
+    ]
+
+
+def test_rule4_placing_onto_clutter_across_the_arm_line(spec_example, hand_plan):
+    # Skip the push: the block still stands on the goal when the bottle is placed there.
+    phases = [p for k, p in enumerate(hand_plan.phases) if k not in (2, 3)]
+    plan = with_block(replace(hand_plan, phases=tuple(phases)), 0, (4.0, 4.0))
+    assert validate_plan(spec_example, plan) == [
+        "rule 4 (arm line): phase 5 place 'bottle': the arm line from [4.000, 3.400] to [4.000, 4.000] "
+        "crosses clutter 'block'",
+        "rule 4 (place): phase 5 place 'bottle' at [4.000, 4.000] overlaps clutter 'block'",
+    ]
+
+
+def test_rule4_placing_off_the_table(spec_example, hand_plan):
+    plan = with_phase(hand_plan, 7, base=(4.0, 3.0), objects={"bottle": (4.0, 3.6)})
+    violations = validate_plan(spec_example, plan)
+    assert "rule 4 (place): phase 7 place 'bottle' at [4.000, 3.600] does not stand fully on a table" in violations
+    assert (
+        "rule 4 (place): phase 7 place 'bottle' at [4.000, 3.600] is not at its goal [4.000, 4.000] "
+        "(docs/design.md: a place delivers)"
+    ) in violations
+
+
+# ---------------------------------------------------------------------- rule 5
+def test_rule5_clutter_that_moves_outside_a_push(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_block(hand_plan, 4, (4.0, 4.2)))
+    assert violations == [
+        "rule 5 (push): phase 4 clutter 'block' moves from [4.000, 4.150] to [4.000, 4.200] outside a push of it"
+    ]
+
+
+def test_rule5_a_diagonal_stroke(spec_example, hand_plan):
+    plan = with_block(with_phase(hand_plan, 3, base=(4.05, 3.43)), 3, (4.05, 4.15))
+    assert (
+        "rule 5 (push): phase 3 push 'block': the stroke [0.050, 0.150] is not axis-aligned (no diagonal or "
+        "empty pushes)"
+    ) in validate_plan(spec_example, plan)
+
+
+def test_rule5_clutter_that_moves_more_than_the_stroke(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_block(hand_plan, 3, (4.0, 4.2)))
+    assert violations == [
+        "rule 5 (push): phase 3 push 'block': the clutter moves by [0.000, 0.200], not by the base's stroke "
+        "[0.000, 0.150]"
+    ]
+
+
+def lateral_push_plan(hand_plan: Plan, stroke: float) -> Plan:
+    """The hand plan with a lateral push instead: facing +y, the base strokes ``stroke`` metres along +x."""
+    start = Phase((3.9, 3.4), "+y", "move", None, None, None, {"bottle": BOTTLE_START}, {"block": (4.0, 4.0)})
+    # The contact for +x is the middle of the block's west face less the hand: (3.88, 4.0), 0.60 m ahead.
+    push = replace(start, base=(3.9 + stroke, 3.4), action="push", target="block", posture="reach_far")
+    phases = (*hand_plan.phases[:2], start, push, *hand_plan.phases[4:])
+    return with_block(replace(hand_plan, phases=phases), 3, (4.0 + stroke, 4.0))
+
+
+def test_rule5_a_lateral_push_is_valid(spec_example, hand_plan):
+    assert validate_plan(spec_example, lateral_push_plan(hand_plan, 0.15)) == []
+
+
+def test_rule5_pushing_clutter_off_its_table(spec_example, hand_plan):
+    violations = validate_plan(spec_example, lateral_push_plan(hand_plan, 0.3))
+    assert violations == [
+        "rule 5 (push): phase 3 push 'block': the clutter ends at [4.300, 4.000], not fully on its table 'table_goal'"
+    ]
+
+
+def test_rule5_pushing_clutter_into_other_clutter(spec_example_dict, hand_plan):
+    spec_example_dict["clutter"].append({"id": "cube", "min": [3.95, 4.2], "max": [4.05, 4.28]})
+    scenario = Scenario.from_dict(spec_example_dict)
+    phases = tuple(replace(p, clutter={**p.clutter, "cube": (4.0, 4.24)}) for p in hand_plan.phases)
+    violations = validate_plan(scenario, replace(hand_plan, phases=phases))
+    assert violations == ["rule 5 (push): phase 3 push 'block': the clutter runs into clutter 'cube'"]
+
+
+def test_rule5_pushing_backwards(spec_example, hand_plan):
+    violations = validate_plan(spec_example, with_phase(hand_plan, 3, heading="-y"))
+    assert (
+        "rule 5 (push): phase 3 push 'block': heading '-y' pushes backwards along '+y' (docs/design.md)" in violations
+    )
+    assert (
+        "rule 5 (push): phase 3 push 'block': the push contact is -0.600 m ahead, outside posture 'reach_far' "
+        "forward range [0.550, 0.700]"
+    ) in violations
+
+
+def test_rule5_push_contact_out_of_reach(spec_example, hand_plan):
+    plan = with_phase(with_phase(hand_plan, 2, base=(4.0, 3.1)), 3, base=(4.0, 3.25))
+    assert validate_plan(spec_example, plan) == [
+        "rule 5 (push): phase 3 push 'block': the push contact is 0.780 m ahead, outside posture 'reach_far' "
+        "forward range [0.550, 0.700]"
+    ]
+
+
+def test_rule5_pushing_with_an_object_in_the_hand(spec_example, hand_plan):
+    p = hand_plan.phases
+    carry = {"holding": "bottle", "objects": {"bottle": (4.0, 2.6)}}
+    phases = (
+        p[0],
+        replace(p[4], base=(2.6, 0.0), clutter={"block": (4.0, 4.0)}),  # south of table_src
+        replace(p[5], clutter={"block": (4.0, 4.0)}),  # pick the bottle first
+        replace(p[2], **carry),
+        replace(p[3], **carry),
+        p[7],
+    )
+    violations = validate_plan(spec_example, replace(hand_plan, phases=phases))
+    assert violations == [
+        "rule 5 (push): phase 4 push 'block' with 'bottle' in the hand (docs/design.md: a push needs an empty hand)"
+    ]
+
+
+# ---------------------------------------------------------------------- rule 6
+def test_rule6_a_plan_that_stops_short(spec_example, hand_plan):
+    violations = validate_plan(spec_example, replace(hand_plan, phases=hand_plan.phases[:7]))
+    assert violations == [
+        "rule 6 (goal): in the last phase (6) object 'bottle' is at [4.000, 2.600], 1.400 m from its goal "
+        "[4.000, 4.000]",
+        "rule 6 (goal): in the last phase (6) the robot still holds 'bottle'",
+    ]
+
+
+def test_every_violation_is_listed(spec_example, hand_plan):
+    """Two independent faults give (at least) both messages, in rule order."""
+    plan = with_phase(with_phase(hand_plan, 1, base=(4.0, -0.9)), 5, base=(2.8, 2.0))
+    violations = validate_plan(spec_example, plan)
+    assert [m.split(":")[0] for m in violations] == ["rule 1 (area)", "rule 4 (reach)"]
