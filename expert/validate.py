@@ -45,8 +45,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from expert.plan import Phase, Plan
-from fetchcarry_env.geometry import Point, Rect, discs_overlap, heading_of, segment_rect_distance
-from fetchcarry_env.kinematics import arm_line_clear, hand_offset, push_contact, push_headings
+from fetchcarry_env.geometry import Heading, Point, Rect, discs_overlap, heading_of, segment_rect_distance
+from fetchcarry_env.kinematics import arm_line_clear, hand_offset, push_contact, push_headings, swept_rect
 from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
 TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (spec/plan.md)
@@ -305,26 +305,28 @@ def _push(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
     moved = (end_rect.center[0] - start_rect.center[0], end_rect.center[1] - start_rect.center[1])
     if not _same(moved, stroke):
         out.append(f"{what}: the clutter moves by {_pt(moved)}, not by the base's stroke {_pt(stroke)}")
-    out.extend(_push_end(context, what, cid, before, after, start_rect, end_rect))
+    out.extend(_push_end(context, what, cid, before, after, start_rect, end_rect, direction))
     out.extend(_push_arm(context, what, before, after, start_rect, direction))
     return out
 
 
 def _push_end(
-    context: _Context, what: str, cid: str, before: Phase, after: Phase, start_rect: Rect, end_rect: Rect
+    context: _Context,
+    what: str,
+    cid: str,
+    before: Phase,
+    after: Phase,
+    start_rect: Rect,
+    end_rect: Rect,
+    direction: Heading,
 ) -> list[str]:
     scenario = context.scenario
     out = []
     table = next((t for t in scenario.tables if t.rect.contains_rect(start_rect, tol=TOL)), None)
     if table is not None and not table.rect.contains_rect(end_rect, tol=TOL):
         out.append(f"{what}: the clutter ends at {_pt(end_rect.center)}, not fully on its table {table.id!r}")
-    # The stroke is axis-aligned, so the region the clutter sweeps is the box around both footprints.
-    swept = Rect(
-        min(start_rect.min_x, end_rect.min_x),
-        min(start_rect.min_y, end_rect.min_y),
-        max(start_rect.max_x, end_rect.max_x),
-        max(start_rect.max_y, end_rect.max_y),
-    )
+    # Everything the clutter slides over on its way from where it stood to where it ends.
+    swept = swept_rect(start_rect, direction, math.dist(start_rect.center, end_rect.center))
     for other, rect in context.clutter_rects(after, excluding=cid).items():
         if swept.overlaps_rect(rect, tol=TOL):
             out.append(f"{what}: the clutter runs into clutter {other!r}")
@@ -338,7 +340,9 @@ def _push_end(
     return out
 
 
-def _push_arm(context: _Context, what: str, before: Phase, after: Phase, start_rect: Rect, direction: str) -> list[str]:
+def _push_arm(
+    context: _Context, what: str, before: Phase, after: Phase, start_rect: Rect, direction: Heading
+) -> list[str]:
     out = []
     if before.holding is not None:
         out.append(f"{what} with {before.holding!r} in the hand (docs/design.md: a push needs an empty hand)")
