@@ -1,0 +1,243 @@
+"""``fetchcarry plan`` and ``fetchcarry validate``: exit statuses 0/1/2 and messages, never a traceback.
+
+Run in-process through ``training.cli.main`` (fast); one test runs the installed
+console script in a subprocess.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from expert.plan import Plan
+from expert.validate import validate_plan
+from fetchcarry_env.scenario import Scenario
+from training.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    """``fetchcarry argv...`` in-process: (exit status, stdout, stderr); argparse's own exits included."""
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as exit_:
+        status = exit_.code
+    captured = capsys.readouterr()
+    assert "Traceback" not in captured.err
+    return status, captured.out, captured.err
+
+
+@pytest.fixture
+def plan_file(tmp_path, hand_plan) -> Path:
+    path = tmp_path / "hand.plan.json"
+    hand_plan.save(path)
+    return path
+
+
+@pytest.fixture
+def bad_inputs(tmp_path) -> dict[str, Path]:
+    """Files that are bad input for both commands, by what is wrong with them."""
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"format": "fetchcarry-scenario/1", "name": ')
+    invalid = json.loads(EXAMPLE.read_text())
+    invalid["objects"][0]["goal"] = [5.0, 5.0]  # on no table: rule 4 of spec/scenario.md
+    invalid["obstacles"][0]["id"] = "table_src"  # a duplicate id: rule 1
+    invalid_path = tmp_path / "invalid.json"
+    invalid_path.write_text(json.dumps(invalid))
+    binary = tmp_path / "binary.json"
+    binary.write_bytes(bytes(range(256)))
+    return {"missing": tmp_path / "nope.json", "broken": broken, "invalid": invalid_path, "binary": binary}
+
+
+# ---------------------------------------------------------------------- validate
+def test_validate_a_valid_plan(capsys, plan_file):
+    status, out, err = run(capsys, "validate", EXAMPLE, plan_file)
+    assert status == 0, err
+    assert "valid for" in out and "7 steps" in out
+
+
+def test_validate_lists_every_violation(capsys, tmp_path, hand_plan):
+    from handmade import with_phase
+
+    broken = with_phase(with_phase(hand_plan, 1, base=(4.0, -0.9)), 5, base=(2.8, 2.0))
+    path = tmp_path / "broken.plan.json"
+    broken.save(path)
+    status, out, _ = run(capsys, "validate", EXAMPLE, path)
+    assert status == 1
+    assert "INVALID" in out and "2 violation(s)" in out
+    assert "rule 1 (area): phase 1" in out and "rule 4 (reach): phase 5 pick 'bottle' is 0.800 m ahead" in out
+    status, out, _ = run(capsys, "validate", "--json", EXAMPLE, path)
+    report = json.loads(out)
+    assert status == 1 and report["valid"] is False and len(report["violations"]) == 2
+
+
+def test_validate_json_for_a_valid_plan(capsys, plan_file):
+    status, out, _ = run(capsys, "validate", EXAMPLE, plan_file, "--json")
+    assert status == 0 and json.loads(out) == {
+        "scenario": str(EXAMPLE),
+        "plan": str(plan_file),
+        "valid": True,
+        "violations": [],
+    }
+
+
+@pytest.mark.parametrize(
+    ("which", "message"),
+    [
+        ("missing", "scenario file not found: "),
+        ("broken", "not valid JSON"),
+        ("invalid", "rule 4 (on a table): object 'bottle' goal [5.0, 5.0] is not fully on a table"),
+        ("binary", "not a text file"),
+    ],
+)
+def test_validate_a_bad_scenario_is_exit_2(capsys, bad_inputs, plan_file, which, message):
+    status, out, err = run(capsys, "validate", bad_inputs[which], plan_file)
+    assert status == 2
+    assert message in err and err.startswith("fetchcarry: ") and out == ""
+
+
+def test_validate_an_invalid_scenario_lists_every_rule_it_breaks(capsys, bad_inputs, plan_file):
+    _, _, err = run(capsys, "validate", bad_inputs["invalid"], plan_file)
+    assert "rule 1 (unique ids): id 'table_src' is used more than once" in err
+    assert "rule 4 (on a table)" in err
+
+
+@pytest.mark.parametrize(
+    ("which", "message"),
+    [
+        ("missing", "plan file not found: "),
+        ("broken", "broken.json: not valid JSON"),
+        ("binary", "binary.json: not a text file"),
+    ],
+)
+def test_validate_a_bad_plan_file_is_exit_2(capsys, bad_inputs, which, message):
+    status, _, err = run(capsys, "validate", EXAMPLE, bad_inputs[which])
+    assert status == 2 and message in err
+
+
+def test_validate_a_plan_in_the_wrong_format_is_exit_2(capsys, tmp_path, hand_plan):
+    data = hand_plan.to_dict()
+    data["phases"][3]["heading"] = "north"
+    path = tmp_path / "wrong.plan.json"
+    path.write_text(json.dumps(data))
+    status, _, err = run(capsys, "validate", EXAMPLE, path)
+    assert status == 2 and "phases[3].heading must be one of +x, +y, -x, -y, got 'north'" in err
+
+
+def test_validate_a_directory_is_exit_2(capsys, tmp_path, plan_file):
+    status, _, err = run(capsys, "validate", tmp_path, plan_file)
+    assert status == 2 and "is a directory" in err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("validate", EXAMPLE, "x.json", "--strict"),
+        ("validate", EXAMPLE),
+        ("plan", EXAMPLE, "--time-limit", "soon"),
+        ("plan", EXAMPLE, "--time-limit", "-1"),
+        ("plan", EXAMPLE, "--max-phases", "0"),
+        ("plan", EXAMPLE, "--frobnicate"),
+    ],
+)
+def test_usage_errors_are_exit_2(capsys, argv):
+    status, out, err = run(capsys, *argv)
+    assert status == 2 and "usage: fetchcarry" in err and "error:" in err and out == ""
+
+
+# ---------------------------------------------------------------------- plan: bad input (before planning)
+@pytest.mark.parametrize(
+    ("which", "message"),
+    [
+        ("missing", "scenario file not found: "),
+        ("broken", "not valid JSON"),
+        ("invalid", "rule 1 (unique ids)"),
+    ],
+)
+def test_plan_bad_scenario_is_exit_2(capsys, tmp_path, bad_inputs, which, message):
+    output = tmp_path / "out.plan.json"
+    status, out, err = run(capsys, "plan", bad_inputs[which], "-o", output)
+    assert status == 2 and message in err and out == ""
+    assert not output.exists()
+
+
+def test_plan_into_a_missing_directory_is_exit_2(capsys, tmp_path):
+    status, _, err = run(capsys, "plan", EXAMPLE, "-o", tmp_path / "no" / "such" / "dir" / "p.json")
+    assert status == 2 and "does not exist" in err
+
+
+def test_help_explains_the_exit_statuses(capsys):
+    for command in ("plan", "validate"):
+        status, out, _ = run(capsys, command, "--help")
+        text = " ".join(out.split())  # argparse wraps lines at the terminal width
+        assert status == 0 and "Exit status: 0" in text and "2 bad input" in text
+
+
+# ---------------------------------------------------------------------- plan: with the planner
+def test_plan_finds_writes_and_draws_a_valid_plan(capsys, tmp_path):
+    output, picture = tmp_path / "p.plan.json", tmp_path / "p.png"
+    status, out, err = run(capsys, "plan", EXAMPLE, "-o", output, "--plot", picture, "--time-limit", "20")
+    assert status == 0, err
+    assert "warning" not in err  # the command validates its own plan
+    plan = Plan.load(output)
+    assert plan.status in ("optimal", "feasible") and plan.found
+    assert validate_plan(Scenario.load(EXAMPLE), plan) == []
+    assert f"status     {plan.status}" in out and f"plan written to {output}" in out
+    assert " push " in out and " place " in out  # the phase table
+    assert picture.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plan_json_summary_and_default_output(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    status, out, _ = run(capsys, "plan", EXAMPLE, "--json")
+    summary = json.loads(out)
+    default = tmp_path / "push_basic.plan.json"
+    assert status == 0 and summary["found"] and summary["plan_path"] == str(default)
+    assert summary["violations"] == [] and Plan.load(default).to_dict()["phases"] == summary["phases"]
+
+
+def infeasible_scenario(path: Path) -> Path:
+    """The spec example with the source table walled in: the robot cannot come within reach of the bottle."""
+    data = json.loads(EXAMPLE.read_text())
+    data["obstacles"] += [
+        {"id": "wall_s", "min": [1.3, 1.3], "max": [2.7, 1.4]},
+        {"id": "wall_n", "min": [1.3, 2.6], "max": [2.7, 2.7]},
+        {"id": "wall_w", "min": [1.3, 1.4], "max": [1.4, 2.6]},
+        {"id": "wall_e", "min": [2.6, 1.4], "max": [2.7, 2.6]},
+    ]
+    Scenario.from_dict(data)  # a valid scenario: the trouble is only that it has no plan
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_plan_an_infeasible_scenario_is_exit_1(capsys, tmp_path):
+    scenario = infeasible_scenario(tmp_path / "walled.json")
+    output = tmp_path / "walled.plan.json"
+    status, out, err = run(capsys, "plan", scenario, "-o", output, "--max-phases", "5", "--time-limit", "20")
+    assert status == 1, err
+    plan = Plan.load(output)
+    assert plan.status in ("infeasible", "time_limit") and not plan.phases
+    assert f"status     {plan.status}" in out
+
+
+# ---------------------------------------------------------------------- the console script
+def test_the_console_script_reports_bad_input_without_a_traceback(tmp_path, plan_file):
+    script = shutil.which("fetchcarry") or pytest.fail("the fetchcarry console script is not installed")
+    missing = subprocess.run(
+        [script, "validate", str(tmp_path / "nope.json"), str(plan_file)], capture_output=True, text=True, timeout=60
+    )
+    assert missing.returncode == 2 and "scenario file not found" in missing.stderr
+    assert "Traceback" not in missing.stderr
+    valid = subprocess.run(
+        [sys.executable, "-m", "training.cli", "validate", str(EXAMPLE), str(plan_file)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert valid.returncode == 0, valid.stderr
