@@ -1,0 +1,157 @@
+"""Lower bounds on the number of phases, so the iterative deepening need not prove small N infeasible.
+
+:func:`counting_bound` counts actions. Every object to deliver needs a pick and a
+place (a held object only a place), every covering piece of clutter one push, each in
+its own phase, plus phase 0:
+
+    N >= 1 + 2 * (objects to deliver) - (1 if one is held) + (pieces to push).
+
+And when no object is held, every object's goal is covered and the start is not a
+lattice point, the first action must be a push (a pick of an object whose goal is
+covered must wait for its push, and the hand is full from the pick to the place), but a
+push at phase 1 would start from the off-lattice start: phase 1 is a move, one more.
+"""
+
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass
+
+from expert.milp.grid import IndexBox, base_regions, point_in_region
+from expert.milp.problem import Problem
+
+
+def counting_bound(problem: Problem) -> int:
+    """The action-counting lower bound on N (phases, the start included); see the module docstring."""
+    holding = 1 if problem.holding is not None else 0
+    pushes = len(problem.pushes.pushable)
+    bound = 1 + 2 * len(problem.deliver) - holding + pushes
+    all_covered = all(problem.covers.get(i) for i in problem.deliver)
+    if pushes and not holding and all_covered and problem.start_index is None:
+        bound += 1
+    return bound
+
+
+def phase_lower_bound(problem: Problem) -> int:
+    """The best proven lower bound on N: the larger of the counting and the skeleton bounds."""
+    return max(3 if problem.deliver else 1, counting_bound(problem), skeleton_bound(problem))
+
+
+# ---------------------------------------------------------------------- the skeleton bound
+@dataclass(frozen=True)
+class _Action:
+    """An arm action of the skeleton and its poses: (entry, exit) base boxes.
+
+    Entry: where the phase's acting base may be (a push acts from base_{k-1}, the stroke's
+    start); exit: where the base is at the end of the action's phase.
+    """
+
+    kind: str
+    target: str
+    poses: tuple[tuple[IndexBox, IndexBox], ...]
+
+
+class _Free:
+    """One-move connectivity between base sets under Eq. 18 (tables and obstacles grown by the radius)."""
+
+    def __init__(self, problem: Problem) -> None:
+        scenario = problem.scenario
+        radius = scenario.robot.radius
+        self.start = scenario.robot.start
+        self.domain = problem.grid.domain
+        rects = [t.rect for t in scenario.tables] + [o.rect for o in scenario.obstacles]
+        self.blockers = []
+        for rect in rects:
+            planes = base_regions(problem.grid, rect, radius)
+            if any(self.domain.inside(p) for p in planes):
+                continue  # the rectangle lies outside the domain: no move can hit it
+            at_start = tuple(n for n in range(4) if point_in_region(self.start, rect, radius, n))
+            self.blockers.append((planes, at_start))
+        self._memo: dict = {}
+
+    def connectable(self, a: IndexBox | None, b: IndexBox) -> bool:
+        """True when one straight move can join a point of ``a`` (None: the exact start) to a point of ``b``."""
+        key = (a, b)
+        if key not in self._memo:
+            self._memo[key] = self._search(a, b, 0)
+        return self._memo[key]
+
+    def _search(self, a: IndexBox | None, b: IndexBox, depth: int) -> bool:
+        if b.empty or (a is not None and a.empty):
+            return False
+        if depth == len(self.blockers):
+            return True
+        planes, at_start = self.blockers[depth]
+        regions = at_start if a is None else range(4)
+        usable = [n for n in regions if b.meets(planes[n]) and (a is None or a.meets(planes[n]))]
+        if any(b.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
+            return self._search(a, b, depth + 1)
+        return any(self._search(None if a is None else a.clip(planes[n]), b.clip(planes[n]), depth + 1) for n in usable)
+
+
+def skeleton_bound(problem: Problem) -> int:
+    """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
+
+    Shortest path over the states (delivered, held, pushed, last pose) where each
+    action costs the phases it needs at least: 1 when the previous pose (or the start)
+    is joined to the action's pose by one straight move (Eq. 18), 2 otherwise; a push
+    costs 1 more unless the previous pose can already be the stroke's start (a push
+    acts from the previous phase's base). Poses are boxes of lattice points; taking
+    any point of a box on entry and any on exit only makes the bound weaker, never wrong.
+    """
+    actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
+    free = _Free(problem)
+    deliver = problem.deliver
+    covers = problem.covers
+    pushable = problem.pushes.pushable
+    start_state = (frozenset(), problem.holding, frozenset(), None)
+    best = {start_state: 0}
+    queue = [(0, 0, start_state)]
+    counter = 0
+    while queue:
+        spent, _, state = heapq.heappop(queue)
+        if spent > best.get(state, spent):
+            continue
+        delivered, held, pushed, where = state
+        if len(delivered) == len(deliver) and len(pushed) == len(pushable):
+            return 1 + spent
+        moves = []
+        if held is not None:
+            moves.append((("place", held), (delivered | {held}, None, pushed)))
+        else:
+            for object_id in deliver:
+                if object_id not in delivered and all(c in pushed for c in covers.get(object_id, ())):
+                    moves.append((("pick", object_id), (delivered, object_id, pushed)))
+            for clutter_id in pushable:
+                if clutter_id not in pushed:
+                    moves.append((("push", clutter_id), (delivered, None, pushed | {clutter_id})))
+        for key, (d, h, p) in moves:
+            action = actions[key]
+            for entry, exit_box in action.poses:
+                total = spent + _step_cost(free, problem, where, action.kind, entry)
+                nxt = (d, h, p, exit_box)
+                if total < best.get(nxt, total + 1):
+                    best[nxt] = total
+                    counter += 1
+                    heapq.heappush(queue, (total, counter, nxt))
+    return 1 + 2 * len(deliver)  # unreachable with a consistent problem; the counting bound takes over
+
+
+def _skeleton_actions(problem: Problem) -> list[_Action]:
+    groups: dict[tuple[str, str], dict] = {}
+    for option in problem.options:
+        exit_box = option.box.shifted(*option.push.cells) if option.push is not None else option.box
+        groups.setdefault((option.kind, option.target), {})[(option.box, exit_box)] = None
+    return [_Action(kind, target, tuple(poses)) for (kind, target), poses in groups.items()]
+
+
+def _step_cost(free: _Free, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
+    """Phases needed at least from base set ``where`` (None: the start) to the end of an action entered at ``entry``."""
+    if kind != "push":
+        return 1 if free.connectable(where, entry) else 2
+    if where is None:
+        if problem.start_index is not None and entry.contains(*problem.start_index):
+            return 1
+    elif not where.intersect(entry).empty:
+        return 1
+    return 2 if free.connectable(where, entry) else 3

@@ -1,0 +1,89 @@
+"""Assemble the paper's MILP for a number of phases, and the solver settings.
+
+:func:`build` creates a fresh SCIP model and adds the groups of equations in the
+paper's order; each group lives in its own module and cites its equations:
+
+==========================  =============================================
+module                      equations
+==========================  =============================================
+:mod:`.motion`              Eq. 1-3 (objective, motion)
+:mod:`.actions`             Eq. 4-7 (pick, place, carry, grasp)
+:mod:`.objects`             Eq. 8-13 (objects and hand, delivery)
+:mod:`.postures`            Eq. 14-17 (heading x posture at the actions)
+:mod:`.collision`           Eq. 18-19 (base and arm collisions)
+:mod:`.push`                IV-E, Eq. 20-26 (push-aside)
+:mod:`.area`                IV-F, Eq. 27 (area, corridors)
+==========================  =============================================
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from pyscipopt import SCIP_PARAMSETTING, Model
+
+from expert.milp.actions import add_action_constraints
+from expert.milp.collision import add_arm_constraints, add_collision_constraints
+from expert.milp.motion import add_motion_constraints, set_objective
+from expert.milp.objects import add_delivery_constraints
+from expert.milp.postures import add_posture_constraints
+from expert.milp.problem import Problem
+from expert.milp.push import add_push_constraints
+from expert.milp.variables import Milp, create_variables
+
+_SETTINGS = {
+    "default": SCIP_PARAMSETTING.DEFAULT,
+    "off": SCIP_PARAMSETTING.OFF,
+    "fast": SCIP_PARAMSETTING.FAST,
+    "aggressive": SCIP_PARAMSETTING.AGGRESSIVE,
+}
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """How SCIP is run. The defaults are the measured fastest that still prove optimality.
+
+    ``separating``/``presolving``/``heuristics``: ``default``, ``off``, ``fast`` or
+    ``aggressive`` (SCIP's parameter settings); ``params``: any further SCIP parameters
+    by name (``{"limits/gap": 0.01}``); ``seed``: SCIP's random seed shift.
+    """
+
+    separating: str = "off"
+    presolving: str = "default"
+    heuristics: str = "default"
+    params: dict[str, Any] = field(default_factory=dict)
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("separating", "presolving", "heuristics"):
+            if getattr(self, name) not in _SETTINGS:
+                raise ValueError(f"solver option {name}={getattr(self, name)!r}: use one of {', '.join(_SETTINGS)}")
+
+    def apply(self, model: Model) -> None:
+        model.hideOutput()
+        model.setSeparating(_SETTINGS[self.separating])
+        if self.presolving != "default":
+            model.setPresolve(_SETTINGS[self.presolving])
+        if self.heuristics != "default":
+            model.setHeuristics(_SETTINGS[self.heuristics])
+        model.setParam("randomization/randomseedshift", self.seed)
+        model.setParam("parallel/maxnthreads", 1)
+        for name, value in self.params.items():
+            model.setParam(name, value)
+
+
+def build(problem: Problem, n_phases: int, settings: SolverSettings | None = None) -> Milp:
+    """The MILP of ``problem`` with ``n_phases`` phases (phase 0, the start, included)."""
+    model = Model(f"fetchcarry_{problem.scenario.name}_{n_phases}")
+    (settings or SolverSettings()).apply(model)
+    milp = create_variables(problem, n_phases, model)
+    add_motion_constraints(milp)
+    add_action_constraints(milp)
+    add_delivery_constraints(milp)
+    add_posture_constraints(milp)
+    add_collision_constraints(milp)
+    add_arm_constraints(milp)
+    add_push_constraints(milp)
+    set_objective(milp)
+    return milp

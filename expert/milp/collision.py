@@ -1,0 +1,97 @@
+"""Collision avoidance (the paper's Eq. 18) and the arm line (Eq. 19).
+
+Eq. 18: every table and obstacle ``j`` is grown by the robot's radius and defines four
+overlapping regions ``R_{j,1..4}`` (Fig. 2: the half-planes right of, left of, above and
+below it). Both ends of every move lie in one common region of every such rectangle:
+
+    OR_n (p_{k-1} in R_{j,n}) AND (p_k in R_{j,n}),
+
+linearised with one binary ``r_{k,j,n}`` per move, rectangle and region,
+``sum_n r_{k,j,n} = 1`` and, per region, a big-M bound on both ends
+(``M`` = the distance from the bound to the far end of the base's domain, the tightest
+valid value). The segment then stays in a half-plane that the disc's centre must not
+leave, so the whole swept disc is clear. Pruned exactly:
+
+- regions that no lattice point of the domain (Eq. 27) lies in are dropped;
+- a rectangle with a region that holds the whole domain needs no constraint;
+- with one region left, the bounds are hard (no binary);
+- phase 0 is a constant (the exact start): only the regions that hold it count.
+
+Eq. 19 (the arm does not reach across an obstacle or clutter: the base and the hand
+in one common region of the rectangle) is applied to the pose options before the
+solve (:mod:`expert.milp.postures`), because the hand's point is known per option.
+Pushable clutter moves, so an option that it would block in some position gets, for
+every phase, ``sum_{o blocked by (c, p)} z_{o,k} <= 1 - [c stands at p during phase k]``
+(:func:`add_arm_constraints`), the position indicator being linear in the push binaries.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from expert.milp.grid import base_regions, point_in_region
+
+if TYPE_CHECKING:
+    from expert.milp.variables import Milp
+
+
+class Infeasible(Exception):
+    """Raised while building when the model is infeasible for a reason known without solving."""
+
+
+def add_collision_constraints(milp: Milp) -> None:
+    """Eq. 18 for every move and every table and obstacle (grown by the radius)."""
+    problem, model, grid = milp.problem, milp.model, milp.problem.grid
+    scenario = problem.scenario
+    radius = scenario.robot.radius
+    start = scenario.robot.start
+    domain = grid.domain
+    rects = [(t.id, t.rect) for t in scenario.tables] + [(o.id, o.rect) for o in scenario.obstacles]
+    for name, rect in rects:
+        planes = base_regions(grid, rect, radius)
+        usable = [n for n, plane in enumerate(planes) if domain.meets(plane)]
+        if any(domain.inside(planes[n]) for n in usable):
+            continue
+        at_start = [n for n in usable if point_in_region(start, rect, radius, n)]
+        for k in range(1, milp.n_phases):
+            regions = at_start if k == 1 else usable
+            if not regions:
+                raise Infeasible(f"the base at the start touches {name!r}")
+            ends = [(milp.u, milp.v)[p.axis] for p in planes]
+            if len(regions) == 1:
+                plane = planes[regions[0]]
+                coords = ends[regions[0]]
+                for e in (k - 1, k) if k > 1 else (k,):
+                    if plane.upper:
+                        model.addCons(coords[e] <= grid.rhs(plane), name=f"eq18_{name}_{k}_{e}")
+                    else:
+                        model.addCons(coords[e] >= grid.rhs(plane), name=f"eq18_{name}_{k}_{e}")
+                continue
+            chosen = [model.addVar(f"r_{name}_{k}_{n}", vtype="B") for n in regions]
+            model.addCons(sum(chosen) == 1, name=f"eq18_{name}_{k}")
+            for n, r in zip(regions, chosen, strict=True):
+                plane = planes[n]
+                coords = ends[n]
+                lo, hi = grid.var_bounds(plane.axis)
+                rhs = grid.rhs(plane)
+                for e in (k - 1, k) if k > 1 else (k,):
+                    if plane.upper:
+                        model.addCons(coords[e] <= rhs + (hi - rhs) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
+                    else:
+                        model.addCons(coords[e] >= rhs - (rhs - lo) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
+
+
+def add_arm_constraints(milp: Milp) -> None:
+    """Eq. 19 against pushable clutter, whose position depends on the pushes done so far."""
+    problem, model = milp.problem, milp.model
+    for k in range(1, milp.n_phases):
+        groups: dict[tuple[str, str], list] = {}
+        for o, z in milp.z[k].items():
+            for state in problem.options[o].forbidden:
+                groups.setdefault(state, []).append(z)
+        for (clutter_id, position), terms in groups.items():
+            if position == "start":
+                allowed = milp.pushed[clutter_id][k - 1]
+            else:
+                allowed = 1 - milp.pushed_towards(clutter_id, position)[k - 1]
+            model.addCons(sum(terms) <= allowed, name=f"eq19_{clutter_id}_{position}_{k}")

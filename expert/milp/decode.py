@@ -1,0 +1,109 @@
+"""From a solved MILP to plan phases on the lattice, and the paper's objective of a plan.
+
+Every base after the start is put on its lattice point (integer bases already are;
+continuous ones are rounded to the nearest point, which :mod:`expert.milp.grid`
+makes safe). A push's end is computed as the stroke's start plus the stroke, in
+lattice cells, so that it is exact. Headings: the option's at picks, places and
+pushes; a move keeps the previous heading (a round base needs no turn to travel).
+Objects follow :func:`expert.milp.objects.object_position`: a held object is where
+the hand is, at the robot-frame offset it was picked with.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+from expert.milp.problem import PoseOption, Problem
+from expert.plan import Phase
+from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_frame
+from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from fetchcarry_env.scenario import Scenario
+
+GOAL_TOL = 1e-3  # metres: an object this close to its goal (and not held) counts as delivered (delta = 1)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One solved phase after the start: its lattice point and the option chosen (None: a move)."""
+
+    cell: tuple[int, int]
+    option: PoseOption | None
+
+
+def read_steps(problem: Problem, milp, solution) -> list[Step]:
+    """The lattice point and option of every phase ``k >= 1`` of a solution."""
+    model = milp.model
+    steps: list[Step] = []
+    for k in range(1, milp.n_phases):
+        chosen = [o for o, z in milp.z[k].items() if model.getSolVal(solution, z) > 0.5]
+        option = problem.options[chosen[0]] if chosen else None
+        cell = (round(model.getSolVal(solution, milp.u[k])), round(model.getSolVal(solution, milp.v[k])))
+        if option is not None and option.push is not None:
+            before = steps[-1].cell if steps else problem.start_index
+            assert before is not None, "a push from the off-lattice start"
+            cell = (before[0] + option.push.cells[0], before[1] + option.push.cells[1])
+        steps.append(Step(cell, option))
+    return steps
+
+
+def phases_of(problem: Problem, steps: list[Step]) -> tuple[Phase, ...]:
+    """The plan's phases: phase 0 (the start) and one per step, with every object and clutter position."""
+    scenario = problem.scenario
+    robot = scenario.robot
+    objects = {o.id: o.start for o in scenario.objects}
+    clutter = {c.id: c.rect.center for c in scenario.clutter}
+    holding = problem.holding
+    heading: Heading = robot.heading
+    grip: Point | None = None
+    if holding is not None:
+        posture = robot.postures[0]
+        grip = posture.center
+        objects[holding] = _hand(robot.start, heading, grip)
+    phases = [Phase(robot.start, heading, "start", None, None, holding, dict(objects), dict(clutter))]
+    for step in steps:
+        base = problem.grid.point(*step.cell)
+        option = step.option
+        action, target, posture = "move", None, None
+        if option is not None:
+            action, target, posture, heading = option.kind, option.target, option.posture, option.heading
+            if option.kind == "pick":
+                holding = option.target
+                grip = to_robot_frame(heading, option.hand[0] - base[0], option.hand[1] - base[1])
+            elif option.kind == "place":
+                objects[option.target] = scenario.object(option.target).goal
+                holding, grip = None, None
+            else:
+                cx, cy = clutter[option.target]
+                dx, dy = option.push.cells
+                resolution = problem.grid.resolution
+                clutter[option.target] = (cx + dx * resolution, cy + dy * resolution)
+        if holding is not None and grip is not None:
+            objects[holding] = _hand(base, heading, grip)
+        phases.append(Phase(base, heading, action, target, posture, holding, dict(objects), dict(clutter)))
+    return tuple(phases)
+
+
+def _hand(base: Point, heading: Heading, grip: Point) -> Point:
+    dx, dy = to_world_frame(heading, grip[0], grip[1])
+    return (base[0] + dx, base[1] + dy)
+
+
+def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
+    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
+
+    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within 1 mm of its goal
+    at the end of phase ``k`` (phase 0 included, as in the paper, whose phases start at the
+    initial state). ``travel_cost`` is Eq. 2-3's ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres).
+    """
+    bonus = sum(
+        1
+        for phase in phases
+        for obj in scenario.objects
+        if phase.holding != obj.id
+        and obj.id in phase.objects
+        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
+    )
+    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
+    return -DELIVERY_BONUS * bonus + travel

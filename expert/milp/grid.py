@@ -1,0 +1,305 @@
+"""The action lattice seen by the MILP: base positions in lattice-index units, boxes and half-planes.
+
+The environment sends the base to lattice points ``origin + (i, j) * resolution``
+(:class:`fetchcarry_env.actions.Lattice`). The MILP keeps every base coordinate of a
+phase after the start in *index units* (``u = (x - origin_x) / resolution``), and
+every geometric condition on a base (reach, the free side of a table, the area) is
+rounded inwards to the lattice *exactly*: "``x <= U``" becomes "``i <= floor((U - origin) /
+resolution)``". A base that satisfies the rounded condition, snapped to its nearest
+lattice point, satisfies the exact one. This is ``docs/design.md``'s "inflate by half a
+cell" made exact: the half-cell margin is never more than needed (see
+``docs/formulation.md``, "Lattice agreement").
+
+In the MILP a rounded bound ``i <= a`` is written ``u <= a + 1/2 - EPS_CELL`` when the
+base coordinates are continuous (then rounding to the nearest point is unambiguous)
+and ``u <= a`` when they are integer (the default, so no snapping is needed at all).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.geometry import Point, Rect
+
+GEOM_TOL = 1e-7  # metres: a lattice point this close outside an exact bound still counts as inside
+EPS_CELL = 1e-3  # cells: keeps continuous coordinates this far from a rounding tie
+
+
+@dataclass(frozen=True)
+class HalfPlane:
+    """``index <= bound`` (``upper``) or ``index >= bound`` on ``axis`` (0: x, 1: y), in lattice indices."""
+
+    axis: int
+    upper: bool
+    bound: int
+
+    def shifted(self, cells: int) -> HalfPlane:
+        """The condition on ``p`` that ``p + cells`` (along this axis) satisfies this half-plane."""
+        return HalfPlane(self.axis, self.upper, self.bound - cells)
+
+    def tighter(self, other: HalfPlane) -> HalfPlane:
+        """The intersection of two half-planes of the same axis and sense."""
+        assert (self.axis, self.upper) == (other.axis, other.upper)
+        return HalfPlane(
+            self.axis, self.upper, min(self.bound, other.bound) if self.upper else max(self.bound, other.bound)
+        )
+
+    def holds(self, index: float) -> bool:
+        return index <= self.bound if self.upper else index >= self.bound
+
+
+@dataclass(frozen=True)
+class IndexBox:
+    """Lattice points ``i_lo <= i <= i_hi``, ``j_lo <= j <= j_hi`` (empty when a range is)."""
+
+    i_lo: int
+    i_hi: int
+    j_lo: int
+    j_hi: int
+
+    @property
+    def empty(self) -> bool:
+        return self.i_lo > self.i_hi or self.j_lo > self.j_hi
+
+    def lo(self, axis: int) -> int:
+        return self.i_lo if axis == 0 else self.j_lo
+
+    def hi(self, axis: int) -> int:
+        return self.i_hi if axis == 0 else self.j_hi
+
+    def intersect(self, other: IndexBox) -> IndexBox:
+        return IndexBox(
+            max(self.i_lo, other.i_lo),
+            min(self.i_hi, other.i_hi),
+            max(self.j_lo, other.j_lo),
+            min(self.j_hi, other.j_hi),
+        )
+
+    def clip(self, plane: HalfPlane) -> IndexBox:
+        """The part of the box inside ``plane``."""
+        i_lo, i_hi, j_lo, j_hi = self.i_lo, self.i_hi, self.j_lo, self.j_hi
+        if plane.axis == 0:
+            i_lo, i_hi = (i_lo, min(i_hi, plane.bound)) if plane.upper else (max(i_lo, plane.bound), i_hi)
+        else:
+            j_lo, j_hi = (j_lo, min(j_hi, plane.bound)) if plane.upper else (max(j_lo, plane.bound), j_hi)
+        return IndexBox(i_lo, i_hi, j_lo, j_hi)
+
+    def inside(self, plane: HalfPlane) -> bool:
+        """True when the whole (non-empty) box lies in ``plane``."""
+        return plane.holds(self.hi(plane.axis)) if plane.upper else plane.holds(self.lo(plane.axis))
+
+    def meets(self, plane: HalfPlane) -> bool:
+        """True when some point of the box lies in ``plane``."""
+        return not self.empty and not self.clip(plane).empty
+
+    def shifted(self, di: int, dj: int) -> IndexBox:
+        return IndexBox(self.i_lo + di, self.i_hi + di, self.j_lo + dj, self.j_hi + dj)
+
+    def contains(self, i: int, j: int) -> bool:
+        return self.i_lo <= i <= self.i_hi and self.j_lo <= j <= self.j_hi
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The lattice, the base domain (the area's Eq. 27 bounds) and how bounds are written in the MILP.
+
+    ``integral``: base coordinates are integer lattice indices (exact, no snapping) or
+    continuous ones snapped to the nearest point afterwards.
+    """
+
+    lattice: Lattice
+    domain: IndexBox
+    integral: bool = True
+
+    @classmethod
+    def for_area(cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True) -> Grid:
+        """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
+        probe = cls(lattice, IndexBox(0, -1, 0, -1), integral)
+        inner = area.inflate(-radius)
+        domain = IndexBox(
+            max(0, probe.index_at_least(0, inner.min_x)),
+            min(lattice.shape[0] - 1, probe.index_at_most(0, inner.max_x)),
+            max(0, probe.index_at_least(1, inner.min_y)),
+            min(lattice.shape[1] - 1, probe.index_at_most(1, inner.max_y)),
+        )
+        return cls(lattice, domain, integral)
+
+    @property
+    def resolution(self) -> float:
+        return self.lattice.resolution
+
+    # ------------------------------------------------------------ exact world -> index rounding
+    def index_of(self, axis: int, value: float) -> float:
+        """``value`` (metres) in index units along ``axis`` (not rounded)."""
+        return (value - self.lattice.origin[axis]) / self.lattice.resolution
+
+    def index_at_most(self, axis: int, value: float) -> int:
+        """The largest lattice index whose coordinate is ``<= value`` (metres)."""
+        return math.floor(self.index_of(axis, value + GEOM_TOL) + 1e-12)
+
+    def index_at_least(self, axis: int, value: float) -> int:
+        """The smallest lattice index whose coordinate is ``>= value`` (metres)."""
+        return math.ceil(self.index_of(axis, value - GEOM_TOL) - 1e-12)
+
+    def at_most(self, axis: int, value: float) -> HalfPlane:
+        """The half-plane of lattice points with coordinate ``<= value`` on ``axis``."""
+        return HalfPlane(axis, True, self.index_at_most(axis, value))
+
+    def at_least(self, axis: int, value: float) -> HalfPlane:
+        return HalfPlane(axis, False, self.index_at_least(axis, value))
+
+    def box_between(self, lo: Point, hi: Point) -> IndexBox:
+        """Lattice points inside the world box ``[lo, hi]`` (inclusive, metres)."""
+        return IndexBox(
+            self.index_at_least(0, lo[0]),
+            self.index_at_most(0, hi[0]),
+            self.index_at_least(1, lo[1]),
+            self.index_at_most(1, hi[1]),
+        )
+
+    def point(self, i: int, j: int) -> Point:
+        return self.lattice.point(i, j)
+
+    # ------------------------------------------------------------ how the MILP writes bounds
+    def upper(self, bound: int) -> float:
+        """Right-hand side, in index units, of the MILP bound for ``index <= bound``."""
+        return float(bound) if self.integral else bound + 0.5 - EPS_CELL
+
+    def lower(self, bound: int) -> float:
+        """Right-hand side, in index units, of the MILP bound for ``index >= bound``."""
+        return float(bound) if self.integral else bound - 0.5 + EPS_CELL
+
+    def rhs(self, plane: HalfPlane) -> float:
+        return self.upper(plane.bound) if plane.upper else self.lower(plane.bound)
+
+    def var_bounds(self, axis: int) -> tuple[float, float]:
+        """Bounds (index units) of a base coordinate variable: the domain on ``axis``."""
+        return self.lower(self.domain.lo(axis)), self.upper(self.domain.hi(axis))
+
+
+# ---------------------------------------------------------------------- rectangle regions
+def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]:
+    """The paper's four regions R_{j,1..4} of Fig. 2 around ``rect`` grown by ``margin``, for lattice bases.
+
+    Order: +x side (x >= max_x + margin), -x side, +y side, -y side.
+    """
+    return (
+        grid.at_least(0, rect.max_x + margin),
+        grid.at_most(0, rect.min_x - margin),
+        grid.at_least(1, rect.max_y + margin),
+        grid.at_most(1, rect.min_y - margin),
+    )
+
+
+def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:
+    """Exact test of an off-lattice point against region ``region`` (same order as :func:`base_regions`)."""
+    x, y = point
+    return (
+        x >= rect.max_x + margin - GEOM_TOL,
+        x <= rect.min_x - margin + GEOM_TOL,
+        y >= rect.max_y + margin - GEOM_TOL,
+        y <= rect.min_y - margin + GEOM_TOL,
+    )[region]
+
+
+# ---------------------------------------------------------------------- splitting boxes
+@dataclass(frozen=True)
+class Condition:
+    """A disjunction of half-planes the base must satisfy; ``tag`` None: always, else only in that state."""
+
+    planes: tuple[HalfPlane, ...]
+    tag: object = None
+
+
+def split_box(box: IndexBox, conditions: Iterable[Condition]) -> list[tuple[IndexBox, frozenset]]:
+    """Cut ``box`` into boxes on which every condition is either met everywhere or nowhere.
+
+    Cells that break an untagged condition are dropped; each remaining box comes with
+    the set of tags whose conditions it breaks (the states in which it may not be
+    used). Boxes with the same tag set are merged greedily into few rectangles.
+    """
+    if box.empty:
+        return []
+    partial: list[Condition] = []
+    always_broken: set = set()
+    for condition in conditions:
+        if any(box.inside(p) for p in condition.planes):
+            continue
+        if not any(box.meets(p) for p in condition.planes):
+            if condition.tag is None:
+                return []
+            always_broken.add(condition.tag)
+            continue
+        partial.append(condition)
+    if not partial:
+        return [(box, frozenset(always_broken))]
+    cuts = _cuts(box, partial)
+    groups: dict[frozenset, list[tuple[int, int]]] = {}
+    for xi, (i_lo, i_hi) in enumerate(cuts[0]):
+        for yi, (j_lo, j_hi) in enumerate(cuts[1]):
+            cell = IndexBox(i_lo, i_hi, j_lo, j_hi)
+            broken = set(always_broken)
+            keep = True
+            for condition in partial:
+                if not any(cell.inside(p) for p in condition.planes):
+                    if condition.tag is None:
+                        keep = False
+                        break
+                    broken.add(condition.tag)
+            if keep:
+                groups.setdefault(frozenset(broken), []).append((xi, yi))
+    out = []
+    for tags, cells in groups.items():
+        out.extend((merged, tags) for merged in _merge(cells, cuts))
+    return out
+
+
+def _cuts(box: IndexBox, conditions: Sequence[Condition]) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
+    """Per axis, the index intervals between every bound of the conditions' half-planes."""
+    out = []
+    for axis in (0, 1):
+        lo, hi = box.lo(axis), box.hi(axis)
+        starts = {lo}
+        for condition in conditions:
+            for plane in condition.planes:
+                if plane.axis != axis:
+                    continue
+                start = plane.bound + 1 if plane.upper else plane.bound
+                if lo < start <= hi:
+                    starts.add(start)
+        ordered = sorted(starts)
+        out.append([(s, (ordered[n + 1] - 1) if n + 1 < len(ordered) else hi) for n, s in enumerate(ordered)])
+    return out[0], out[1]
+
+
+def _merge(cells: list[tuple[int, int]], cuts: tuple[list, list]) -> list[IndexBox]:
+    """Greedy cover of grid cells by rectangles: vertical runs per column, then equal runs across columns."""
+    columns: dict[int, list[int]] = {}
+    for xi, yi in cells:
+        columns.setdefault(xi, []).append(yi)
+    strips: list[tuple[int, int, int]] = []  # (column, first row, last row)
+    for xi in sorted(columns):
+        rows = sorted(columns[xi])
+        first = previous = rows[0]
+        for yi in rows[1:]:
+            if yi != previous + 1:
+                strips.append((xi, first, previous))
+                first = yi
+            previous = yi
+        strips.append((xi, first, previous))
+    boxes: list[tuple[int, int, int, int]] = []  # (first column, last column, first row, last row)
+    open_runs: dict[tuple[int, int], int] = {}
+    for xi, first, last in strips:
+        key = (first, last)
+        index = open_runs.get(key)
+        if index is not None and boxes[index][1] == xi - 1:
+            c0, _c1, r0, r1 = boxes[index]
+            boxes[index] = (c0, xi, r0, r1)
+        else:
+            open_runs[key] = len(boxes)
+            boxes.append((xi, xi, first, last))
+    xs, ys = cuts
+    return [IndexBox(xs[c0][0], xs[c1][1], ys[r0][0], ys[r1][1]) for c0, c1, r0, r1 in boxes]

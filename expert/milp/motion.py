@@ -1,0 +1,38 @@
+"""The objective and the motion variables (the paper's Eq. 1-3).
+
+Eq. 1: ``min -W1 sum_i sum_k delta_{i,k} + sum_k (m^x_k + m^y_k) + W2 sum_k m^xy_k`` with
+``W1 = DELIVERY_BONUS`` and ``W2 = DIAGONAL_WEIGHT`` (``fetchcarry_env.kinematics``).
+Eq. 2: ``-m^x_k <= x_k - x_{k-1} <= m^x_k`` (and ``y``). Eq. 3: ``-m^xy_k <= m^x_k - m^y_k <= m^xy_k``.
+
+Distances are kept in lattice-index units and scaled by the resolution in the
+objective, so the objective is in metres. Objects already at their goal contribute
+the constant ``-W1`` per phase; the decoder adds it (the solver does not need it).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fetchcarry_env.kinematics import DELIVERY_BONUS, DIAGONAL_WEIGHT
+
+if TYPE_CHECKING:
+    from expert.milp.variables import Milp
+
+
+def add_motion_constraints(milp: Milp) -> None:
+    """Eq. 2-3 for every move ``k-1 -> k``."""
+    model = milp.model
+    for k in range(1, milp.n_phases):
+        for coords, moved, axis in ((milp.u, milp.mx, "x"), (milp.v, milp.my, "y")):
+            model.addCons(moved[k] >= coords[k] - coords[k - 1], name=f"eq2_{axis}_pos_{k}")
+            model.addCons(moved[k] >= coords[k - 1] - coords[k], name=f"eq2_{axis}_neg_{k}")
+        model.addCons(milp.mxy[k] >= milp.mx[k] - milp.my[k], name=f"eq3_pos_{k}")
+        model.addCons(milp.mxy[k] >= milp.my[k] - milp.mx[k], name=f"eq3_neg_{k}")
+
+
+def set_objective(milp: Milp) -> None:
+    """Eq. 1 (without the constant of objects already delivered)."""
+    resolution = milp.problem.grid.resolution
+    bonus = sum(milp.delta[i][k] for i in milp.problem.deliver for k in range(1, milp.n_phases))
+    travel = sum(milp.mx[k] + milp.my[k] + DIAGONAL_WEIGHT * milp.mxy[k] for k in range(1, milp.n_phases))
+    milp.model.setObjective(-DELIVERY_BONUS * bonus + resolution * travel, sense="minimize")

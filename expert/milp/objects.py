@@ -1,0 +1,60 @@
+"""Objects follow the hand; delivery (the paper's Eq. 8-13).
+
+Eq. 8-9 (object and hand coincide while picking, carrying and placing; an object not
+held stays put) hold *by construction*: the only pose options that involve object
+``i`` are picks at its start and places at its goal (:mod:`expert.milp.postures`), so
+its position is the affine expression
+
+    p_{i,k} = start_i * (1 - picked_{i,k}) + hand_k * gsp_{i,k} + goal_i * delta_{i,k},
+
+with ``picked = gsp + delta`` (see :func:`object_position`). Substituting Eq. 8-9
+into the model this way removes the object coordinates and their big-M rows; the
+decoder (:mod:`expert.milp.decode`) evaluates the expression for the plan.
+
+Eq. 10-13 (delivery):
+
+- Eq. 10 (``delta`` only at the goal) holds by construction: objects reach their goal
+  only by a place (``docs/design.md``: a place delivers).
+- Eq. 12 is written with equality, ``delta_{i,k} = delta_{i,k-1} + theta^{plc}_{i,k}``,
+  so ``delta`` is monotone (Eq. 13, left part) and Eq. 11 (``delta <= 1 - gsp``) follows:
+  ``delta + gsp = (picked so far) <= 1``.
+- Eq. 13, right part: ``delta_{i,N} = 1``, every object delivered in the last phase.
+
+Also here: an object standing on another's goal is picked before that goal is used.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from fetchcarry_env.geometry import Point
+
+if TYPE_CHECKING:
+    from expert.milp.variables import Milp
+
+
+def object_position(start: Point, goal: Point, hand: Point, picked: float, held: float, delivered: float) -> Point:
+    """Eq. 8-9 as an expression: where object ``i`` is, given its pick/hold/delivery state (0 or 1 each)."""
+    return (
+        start[0] * (1 - picked) + hand[0] * held + goal[0] * delivered,
+        start[1] * (1 - picked) + hand[1] * held + goal[1] * delivered,
+    )
+
+
+def add_delivery_constraints(milp: Milp) -> None:
+    """Eq. 10-13 and the order imposed by objects that stand on other objects' goals."""
+    model, n = milp.model, milp.n_phases
+    for object_id in milp.problem.deliver:
+        delta = milp.delta[object_id]
+        for k in range(1, n):
+            places = milp.action_sum("place", object_id, k)
+            model.addCons(
+                delta[k] == delta[k - 1] + (places if places is not None else 0), name=f"eq12_{object_id}_{k}"
+            )
+        model.addCons(delta[n - 1] == 1, name=f"eq13_delivered_{object_id}")
+    for goal_owner, standing in milp.problem.blocking_objects:
+        for k in range(2, n):
+            places = milp.action_sum("place", goal_owner, k)
+            if places is not None:
+                picked = milp.gsp[standing][k - 1] + milp.delta[standing][k - 1]
+                model.addCons(places <= picked, name=f"clear_goal_{goal_owner}_{standing}_{k}")

@@ -1,0 +1,213 @@
+"""Push-aside (the paper's IV-E): the preprocessing (s, o, q) and the stroke constraints (Eq. 20-26).
+
+Preprocessing (:func:`plan_pushes`), generalised to any number of clutter items on any
+goal and every axis direction. For each piece of clutter ``c`` that covers a goal
+(the paper's ``u_i = 1``) and each direction ``d``:
+
+- the stroke ``B`` is :func:`fetchcarry_env.kinematics.push_stroke`: the smallest whole
+  multiple of the lattice resolution that leaves 1 cm between the piece and every goal
+  disc it covered (the paper's constant B, per piece and direction);
+- the direction is *blocked* (the paper's ``o_{i,n} = 1``) when the floor the piece
+  sweeps (:func:`fetchcarry_env.kinematics.swept_rect`) leaves its table, or meets an
+  obstacle, a piece of clutter that is never pushed, an object's start or any goal.
+  The paper's ``s_{i,n}`` (a neighbour in region ``R_n`` of the piece) is the geometric
+  test behind it; we test the swept floor directly, which covers Fig. 3(c);
+- a neighbour that will itself be pushed does not block: the direction then waits for
+  that neighbour to go first (a *precedence*), and two strokes whose floors meet at
+  their ends are mutually exclusive.
+
+Which pushes the arm can do from where (forward or lateral, the paper's ``q`` of
+Fig. 3(d): the arm sweeping across a neighbour) is decided per pose option in
+:mod:`expert.milp.postures`: the base at both ends of the stroke and the hand at both
+ends must lie in one common region of every obstacle and other piece of clutter.
+
+Constraints (:func:`add_push_constraints`), with ``z`` the push options chosen at phase k:
+
+- Eq. 20, 25, 26 (stroke of length B, never diagonal): the base moves by exactly the
+  option's stroke vector in the push phase: ``u_k - u_{k-1} = sum_o di_o z_{o,k}``
+  (and ``v``) whenever a push is chosen, by a big-M pair; ``m^x_k >= sum_o |di_o| z_{o,k}``
+  (and ``m^y``) states the paper's ``m^x + m^y = B`` on the cost side.
+- Eq. 21-24 (no push towards a neighbour): the blocked directions have no option at
+  all, which is what Eq. 21-24 achieve by forcing the motion towards them to zero.
+- Each covering piece is pushed exactly once, before the pick of each object whose
+  goal it covers (the hand is full from that pick to the place).
+
+The paper's Eq. 20 multiplies two variables (``theta^plc * u_i``); ``u_i`` is data
+(known before the solve), so the product is linear. Eq. 25's stray ``theta_{d,t}`` is
+read as ``theta_{i,k}``. ``docs/formulation.md`` records both decisions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from expert.milp.grid import Grid
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector
+from fetchcarry_env.kinematics import push_contact, push_stroke, swept_rect
+from fetchcarry_env.scenario import Scenario
+
+if TYPE_CHECKING:
+    from expert.milp.variables import Milp
+
+
+@dataclass(frozen=True)
+class PushCandidate:
+    """One direction in which one piece of clutter can be pushed off the goals it covers."""
+
+    clutter: str
+    direction: Heading
+    stroke: float  # metres, the paper's B for this piece and direction
+    cells: tuple[int, int]  # the stroke in lattice cells (di, dj)
+    start: Rect  # the piece where it stands
+    end: Rect  # the piece after the stroke
+    swept: Rect  # the floor it slides over
+    contact: Point  # where the hand's centre goes (kinematics.push_contact)
+
+    @property
+    def key(self) -> tuple[str, str]:
+        return (self.clutter, self.direction)
+
+
+@dataclass(frozen=True)
+class PushPlan:
+    """The preprocessing's answer: what must be pushed, how it can be, and the rules between pushes."""
+
+    pushable: tuple[str, ...]  # clutter covering some goal: each is pushed exactly once
+    candidates: tuple[PushCandidate, ...]
+    blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (clutter, direction) -> why (o = 1)
+    exclusive: tuple[tuple[int, int], ...] = ()  # candidate pairs that cannot both be used
+    precedence: tuple[tuple[int, str], ...] = ()  # (candidate, clutter id): that clutter must be pushed first
+
+    def positions(self, clutter_id: str) -> dict[str, Rect]:
+        """Every place ``clutter_id`` can stand: ``"start"`` and each candidate direction."""
+        out = {}
+        for candidate in self.candidates:
+            if candidate.clutter == clutter_id:
+                out.setdefault("start", candidate.start)
+                out[candidate.direction] = candidate.end
+        return out
+
+
+def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...]], holding: str | None) -> PushPlan:
+    """The push preprocessing (the paper's s, o, q generalised); see the module docstring."""
+    pushable = tuple(sorted({c for ids in covers.values() for c in ids}))
+    if not pushable:
+        return PushPlan((), ())
+    objects = {o.id: o for o in scenario.objects}
+    discs = [(f"start of {o.id!r}", o.start, o.radius) for o in scenario.objects if o.id != holding]
+    discs += [(f"goal of {o.id!r}", o.goal, o.radius) for o in scenario.objects]
+    static_clutter = [c for c in scenario.clutter if c.id not in pushable]
+    candidates: list[PushCandidate] = []
+    blocked: dict[tuple[str, str], str] = {}
+    waits: list[tuple[int, str]] = []
+    for clutter_id in pushable:
+        item = scenario.clutter_item(clutter_id)
+        covered = [(objects[o].goal, objects[o].radius) for o, ids in covers.items() if clutter_id in ids]
+        table = scenario.table_under_rect(item.rect)
+        for direction in HEADINGS:
+            stroke = push_stroke(item.rect, direction, covered, grid.resolution)
+            ux, uy = heading_vector(direction)
+            end = item.rect.translate(ux * stroke, uy * stroke)
+            swept = swept_rect(item.rect, direction, stroke)
+            reason = _blocked_by(swept, end, item.rect, table.rect if table else None, scenario, static_clutter, discs)
+            if reason is not None:
+                blocked[(clutter_id, direction)] = reason
+                continue
+            cells = round(stroke / grid.resolution)
+            candidate = PushCandidate(
+                clutter=clutter_id,
+                direction=direction,
+                stroke=stroke,
+                cells=(ux * cells, uy * cells),
+                start=item.rect,
+                end=end,
+                swept=swept,
+                contact=push_contact(item.rect, direction),
+            )
+            for other in pushable:
+                if other != clutter_id and swept.overlaps_rect(scenario.clutter_item(other).rect):
+                    waits.append((len(candidates), other))
+            candidates.append(candidate)
+    exclusive = [
+        (a, b)
+        for a in range(len(candidates))
+        for b in range(a + 1, len(candidates))
+        if candidates[a].clutter != candidates[b].clutter
+        and (
+            candidates[a].swept.overlaps_rect(candidates[b].end) or candidates[b].swept.overlaps_rect(candidates[a].end)
+        )
+    ]
+    return PushPlan(pushable, tuple(candidates), blocked, tuple(exclusive), tuple(waits))
+
+
+def _blocked_by(
+    swept: Rect,
+    end: Rect,
+    start: Rect,
+    table: Rect | None,
+    scenario: Scenario,
+    static_clutter: list,
+    discs: list[tuple[str, Point, float]],
+) -> str | None:
+    """Why a stroke is impossible (the paper's o = 1), or None."""
+    if table is None or not table.contains_rect(swept, tol=1e-9):
+        return "the piece would leave its table"
+    for obstacle in scenario.obstacles:
+        if swept.overlaps_rect(obstacle.rect):
+            return f"the piece would run into obstacle {obstacle.id!r}"
+    for other in static_clutter:
+        if swept.overlaps_rect(other.rect):
+            return f"the piece would run into clutter {other.id!r}"
+    for name, center, radius in discs:
+        if end.overlaps_disc(center, radius) or (
+            swept.overlaps_disc(center, radius) and not start.overlaps_disc(center, radius)
+        ):
+            return f"the piece would run into the {name}"
+    return None
+
+
+# ---------------------------------------------------------------------- constraints
+def add_push_constraints(milp: Milp) -> None:
+    """Eq. 20-26 (stroke), once per piece, before the covered object's pick, exclusions and precedences."""
+    problem, model, n = milp.problem, milp.model, milp.n_phases
+    plan = problem.pushes
+    if not plan.pushable:
+        return
+    di_max = max(abs(c.cells[0]) + abs(c.cells[1]) for c in plan.candidates)
+    for k in range(1, n):
+        chosen = milp.push_options_at(k)
+        if not chosen:
+            continue
+        total = sum(z for _, z in chosen)
+        for axis, coords, moved in ((0, milp.u, milp.mx), (1, milp.v, milp.my)):
+            lo, hi = problem.grid.var_bounds(axis)
+            big_m = (hi - lo) + di_max
+            stroke = sum(problem.options[o].push.cells[axis] * z for o, z in chosen)
+            delta = coords[k] - coords[k - 1] - stroke
+            model.addCons(delta <= big_m * (1 - total), name=f"eq20_stroke_{axis}_{k}")
+            model.addCons(delta >= -big_m * (1 - total), name=f"eq25_no_diagonal_{axis}_{k}")
+            length = sum(abs(problem.options[o].push.cells[axis]) * z for o, z in chosen)
+            model.addCons(moved[k] >= length, name=f"eq20_length_{axis}_{k}")
+    for clutter_id in plan.pushable:
+        pushed = milp.pushed[clutter_id]
+        for k in range(1, n):
+            now = [z for o, z in milp.push_options_at(k) if problem.options[o].target == clutter_id]
+            model.addCons(pushed[k] == pushed[k - 1] + sum(now), name=f"pushed_{clutter_id}_{k}")
+        model.addCons(pushed[n - 1] == 1, name=f"push_once_{clutter_id}")
+        for object_id, ids in problem.covers.items():
+            if clutter_id not in ids or object_id == problem.holding:
+                continue
+            for k in range(1, n):
+                picks = milp.action_sum("pick", object_id, k)
+                if picks is not None:
+                    model.addCons(picks <= pushed[k - 1], name=f"push_before_pick_{clutter_id}_{object_id}_{k}")
+    uses = {index: milp.candidate_uses(index) for index in range(len(plan.candidates))}
+    for a, b in plan.exclusive:
+        if uses[a] is not None and uses[b] is not None:
+            model.addCons(uses[a] + uses[b] <= 1, name=f"push_exclusive_{a}_{b}")
+    for index, first in plan.precedence:
+        for k in range(1, n):
+            now = milp.candidate_at(index, k)
+            if now is not None:
+                model.addCons(now <= milp.pushed[first][k - 1], name=f"push_after_{first}_{index}_{k}")
