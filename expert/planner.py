@@ -12,17 +12,19 @@ Units are metres and seconds.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from typing import Any
 
 import pyscipopt
 
-from expert.milp.bounds import phase_lower_bound
+from expert.milp.bounds import counting_bound, skeleton
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
 from expert.milp.decode import phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
+from expert.milp.reach import unreachable_reason
 from expert.plan import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
@@ -91,7 +93,12 @@ def plan(
         phases = phases_of(problem, [])
         stats["phases_tried"].append(1)
         return finish("optimal", phases, plan_objective(scenario, phases))
-    first = phase_lower_bound(problem) if use_bound else _simple_bound(problem)
+    if use_bound:
+        relaxation = skeleton(problem)
+        problem = dataclasses.replace(problem, earliest=relaxation.earliest)
+        first = max(3, counting_bound(problem), relaxation.phases)
+    else:
+        first = max(3, counting_bound(problem))
     stats["lower_bound"] = first
     last = max_phases if max_phases is not None else first + EXTRA_PHASES
     stats["lower_bound_s"] = time.perf_counter() - started - stats["prepare_s"]
@@ -101,6 +108,11 @@ def plan(
         stats["phases_tried"].append(n_phases)
         outcome = _solve(problem, n_phases, settings, deadline, stats)
         if outcome == "infeasible":
+            if n_phases == first:
+                reason = unreachable_reason(problem)
+                if reason is not None:
+                    stats["reason"] = reason
+                    return finish("infeasible")
             continue
         if outcome == "time_limit":
             return finish("time_limit")
@@ -116,13 +128,6 @@ def solver_name() -> str:
     """``"SCIP <major>.<minor>.<tech>"`` of the SCIP inside pyscipopt."""
     model = pyscipopt.Model()
     return f"SCIP {model.getMajorVersion()}.{model.getMinorVersion()}.{model.getTechVersion()}"
-
-
-def _simple_bound(problem: Problem) -> int:
-    """The paper's start (3 phases), raised to 1 + 2 * (objects) + pushes (see ``bounds``)."""
-    from expert.milp.bounds import counting_bound
-
-    return max(3, counting_bound(problem))
 
 
 def _solve(problem: Problem, n_phases: int, settings: SolverSettings, deadline: float, stats: dict):

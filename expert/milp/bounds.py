@@ -34,7 +34,7 @@ def counting_bound(problem: Problem) -> int:
 
 def phase_lower_bound(problem: Problem) -> int:
     """The best proven lower bound on N: the larger of the counting and the skeleton bounds."""
-    return max(3 if problem.deliver else 1, counting_bound(problem), skeleton_bound(problem))
+    return max(3 if problem.deliver else 1, counting_bound(problem), skeleton(problem).phases)
 
 
 # ---------------------------------------------------------------------- the skeleton bound
@@ -89,7 +89,20 @@ class _Free:
         return any(self._search(None if a is None else a.clip(planes[n]), b.clip(planes[n]), depth + 1) for n in usable)
 
 
-def skeleton_bound(problem: Problem) -> int:
+@dataclass(frozen=True)
+class Skeleton:
+    """What the skeleton relaxation proves: a lower bound on N and the earliest phase of each delivery.
+
+    ``earliest[d]`` is the smallest phase by whose end ``d`` objects can be delivered
+    (``earliest[0] = 0``); the MILP uses it as the valid inequality
+    ``sum_i delta_{i,k} <= d - 1`` for ``k < earliest[d]`` (``expert.milp.objects``).
+    """
+
+    phases: int
+    earliest: tuple[int, ...]
+
+
+def skeleton(problem: Problem) -> Skeleton:
     """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
 
     Shortest path over the states (delivered, held, pushed, last pose) where each
@@ -108,13 +121,18 @@ def skeleton_bound(problem: Problem) -> int:
     best = {start_state: 0}
     queue = [(0, 0, start_state)]
     counter = 0
+    earliest: dict[int, int] = {0: 0}
+    finished: int | None = None
     while queue:
         spent, _, state = heapq.heappop(queue)
         if spent > best.get(state, spent):
             continue
         delivered, held, pushed, where = state
-        if len(delivered) == len(deliver) and len(pushed) == len(pushable):
-            return 1 + spent
+        earliest.setdefault(len(delivered), spent)
+        if finished is None and len(delivered) == len(deliver) and len(pushed) == len(pushable):
+            finished = 1 + spent
+        if finished is not None and len(earliest) == len(deliver) + 1:
+            break
         moves = []
         if held is not None:
             moves.append((("place", held), (delivered | {held}, None, pushed)))
@@ -134,7 +152,9 @@ def skeleton_bound(problem: Problem) -> int:
                     best[nxt] = total
                     counter += 1
                     heapq.heappush(queue, (total, counter, nxt))
-    return 1 + 2 * len(deliver)  # unreachable with a consistent problem; the counting bound takes over
+    if finished is None:  # unreachable with a consistent problem; the counting bound takes over
+        return Skeleton(1 + 2 * len(deliver), tuple(2 * d for d in range(len(deliver) + 1)))
+    return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(len(deliver) + 1)))
 
 
 def _skeleton_actions(problem: Problem) -> list[_Action]:

@@ -79,6 +79,26 @@ def add_collision_constraints(milp: Milp) -> None:
                         model.addCons(coords[e] <= rhs + (hi - rhs) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
                     else:
                         model.addCons(coords[e] >= rhs - (rhs - lo) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
+                    for group, terms in _poses_outside(milp, e, plane).items():
+                        model.addCons(r + sum(terms) <= 1, name=f"eq18_link_{name}_{k}_{n}_{e}_{group}")
+
+
+def _poses_outside(milp: Milp, e: int, plane) -> dict[str, list]:
+    """Per group of mutually exclusive options, those that put base_e outside ``plane`` (valid cuts on Eq. 18).
+
+    Groups: picks and places at phase e; pushes at e + 1 (they start at base_e); pushes
+    at e (they end at base_e). At most one option of a group is chosen.
+    """
+    options = milp.problem.options
+    out: dict[str, list] = {}
+    if e >= 1:
+        out["act"] = [z for o, z in milp.arm_options_at(e) if options[o].box.clip(plane).empty]
+        out["push_end"] = [
+            z for o, z in milp.push_options_at(e) if options[o].box.shifted(*options[o].push.cells).clip(plane).empty
+        ]
+    if e + 1 < milp.n_phases:
+        out["push_start"] = [z for o, z in milp.push_options_at(e + 1) if options[o].box.clip(plane).empty]
+    return {group: terms for group, terms in out.items() if terms}
 
 
 def add_arm_constraints(milp: Milp) -> None:

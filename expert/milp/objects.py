@@ -52,9 +52,34 @@ def add_delivery_constraints(milp: Milp) -> None:
                 delta[k] == delta[k - 1] + (places if places is not None else 0), name=f"eq12_{object_id}_{k}"
             )
         model.addCons(delta[n - 1] == 1, name=f"eq13_delivered_{object_id}")
+    add_delivery_timing(milp)
     for goal_owner, standing in milp.problem.blocking_objects:
         for k in range(2, n):
             places = milp.action_sum("place", goal_owner, k)
             if places is not None:
                 picked = milp.gsp[standing][k - 1] + milp.delta[standing][k - 1]
                 model.addCons(places <= picked, name=f"clear_goal_{goal_owner}_{standing}_{k}")
+
+
+def add_delivery_timing(milp: Milp) -> None:
+    """Valid inequalities on how many objects can be delivered by phase k (they tighten the LP of Eq. 1).
+
+    Early: ``sum_i delta_{i,k} <= d - 1`` while ``k < earliest[d]`` (the skeleton relaxation,
+    :class:`expert.milp.bounds.Skeleton`), and in any case ``2 * delivered - held0 + pushed <= k``
+    (each delivery needs its own pick and place phase). Late: what is left after phase
+    k needs its phases, ``2 * (undelivered) - (held at k) + (pushes left) <= N - 1 - k``.
+    """
+    problem, model, n = milp.problem, milp.model, milp.n_phases
+    objects = problem.deliver
+    count = len(objects)
+    held0 = 1 if problem.holding is not None else 0
+    for k in range(1, n):
+        delivered = sum(milp.delta[i][k] for i in objects)
+        pushed = sum(milp.pushed[c][k] for c in problem.pushes.pushable)
+        cap = max((d for d, t in enumerate(problem.earliest) if t <= k), default=count)
+        if cap < count:
+            model.addCons(delivered <= cap, name=f"earliest_delivery_{k}")
+        model.addCons(2 * delivered + pushed <= k + held0, name=f"actions_so_far_{k}")
+        held = sum(milp.gsp[i][k] for i in objects)
+        pushes_left = len(problem.pushes.pushable) - pushed
+        model.addCons(2 * (count - delivered) - held + pushes_left <= n - 1 - k, name=f"actions_left_{k}")

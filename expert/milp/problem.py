@@ -60,6 +60,7 @@ class Problem:
     options: tuple[PoseOption, ...]
     start_index: tuple[int, int] | None  # the start's lattice point if the start lies exactly on one
     infeasible: str | None = None  # why no plan can exist, when preprocessing already knows
+    earliest: tuple[int, ...] = ()  # earliest[d]: first phase by which d objects can be delivered (bounds.Skeleton)
     notes: dict = field(default_factory=dict)
 
     def options_of(self, kind: str, target: str | None = None) -> list[int]:

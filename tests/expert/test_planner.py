@@ -1,0 +1,322 @@
+"""plan(): optimal plans on cases solved by hand, push-aside situations of the paper's Fig. 3, statuses.
+
+Every plan produced here goes through :func:`planner_cases.check_plan`: the project's
+validator plus the planner's own promises (bases on the lattice, objective = Eq. 1).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from planner_cases import BLOCK, bar, check_plan, one_table, push_scene, two_tables
+
+from expert import bench_cases
+from expert.milp.problem import prepare
+from expert.planner import plan
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.geometry import Rect
+from fetchcarry_env.scenario import DeliveryObject
+
+
+def actions(result) -> list[tuple[str, str | None]]:
+    return [(p.action, p.target) for p in result.phases[1:]]
+
+
+def assert_bases(phases, expected) -> None:
+    assert np.allclose([p.base for p in phases], expected, atol=1e-9), [p.base for p in phases]
+
+
+# ---------------------------------------------------------------------- optimum known by hand
+def test_no_obstacle_optimum():
+    """Pick from the west at (1.5, 1.2), place from the west at (1.5, 1.8).
+
+    Every other pose is farther from the start (1.0, 1.2) (the south pose (2.0, 0.7)
+    alone costs 1.55 m). Travel: 0.5 + 0.1 * 0.5 then 0.6 + 0.1 * 0.6 = 1.21 m;
+    delivered in the last of 3 phases: -10. Eq. 1 = -8.79.
+    """
+    scenario = one_table()
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert result.status == "optimal"
+    assert actions(result) == [("pick", "cup"), ("place", "cup")]
+    assert_bases(result.phases[1:], [(1.5, 1.2), (1.5, 1.8)])
+    assert result.objective == pytest.approx(-8.79)
+    assert result.stats["phases_tried"] == [3]
+
+
+def test_obstacle_forces_a_detour():
+    """A wall [1.2, 1.4] x [0, 1.6] between the start and the table.
+
+    The west pick pose (1.5, 1.2) is inside the wall grown by the radius, so the cup is
+    picked from the east (2.5, 1.2). The start (x <= 1.0) and the east poses (x >= 2.4)
+    share no side of the table, nor of the wall below y = 1.8: the base goes up to
+    y >= 2.2 (above the grown table) twice, at (1.0, 2.2) and (2.4, 2.2). Travel:
+    1.1 + 1.54 + 1.19 + 0.66 = 4.49 m; delivered in the last of 5 phases: Eq. 1 = -5.51.
+    """
+    scenario = one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),))
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert result.status == "optimal"
+    assert actions(result) == [("move", None), ("move", None), ("pick", "cup"), ("place", "cup")]
+    assert_bases(result.phases[1:], [(1.0, 2.2), (2.4, 2.2), (2.5, 1.2), (2.5, 1.8)])
+    assert result.objective == pytest.approx(-5.51)
+
+
+def test_table_reachable_from_one_side_only():
+    """The table stands against the east wall with obstacles north and south of it: only the west side works."""
+    scenario = one_table(
+        area=Rect(0.0, 0.0, 2.2, 3.0),
+        obstacles=(Rect(1.8, 0.0, 2.2, 1.0), Rect(1.8, 2.0, 2.2, 3.0)),
+        start=(0.6, 2.6),
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    arm = [p for p in result.phases if p.action in ("pick", "place")]
+    assert [p.heading for p in arm] == ["+x", "+x"]
+    assert_bases(arm, [(1.5, 1.2), (1.5, 1.8)])
+
+
+def test_two_objects_order_matters():
+    """``a`` stands by the start and goes to the far table, ``b`` comes back: fetch ``a`` first.
+
+    Starting with ``b`` means crossing 3 m empty-handed first; with ``a`` every crossing carries something.
+    """
+    scenario = two_tables(
+        (DeliveryObject("b", (5.0, 1.2), (2.0, 1.8)), DeliveryObject("a", (2.0, 1.2), (5.0, 1.8))), "order"
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert result.status == "optimal"
+    picks = [p.target for p in result.phases if p.action == "pick"]
+    assert picks == ["a", "b"]
+
+
+def test_object_standing_on_another_goal_is_moved_first():
+    """``b`` stands where ``a`` must go, so ``b`` is picked (and placed) before ``a`` is placed."""
+    scenario = two_tables(
+        (DeliveryObject("a", (2.0, 1.2), (5.0, 1.8)), DeliveryObject("b", (5.0, 1.8), (2.0, 1.8))), "blocking"
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    steps = actions(result)
+    assert steps.index(("pick", "b")) < steps.index(("place", "a"))
+
+
+def test_l_corridor():
+    """IV-F: the free floor is an L; the base turns the corner between the pick and the place."""
+    scenario = bench_cases.corridor(np.random.default_rng(0))
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert result.status == "optimal"
+    pick = next(p for p in result.phases if p.action == "pick")
+    place = next(p for p in result.phases if p.action == "place")
+    corner = 6.0 - bench_cases.CORRIDOR_WIDTH  # the wall's east face: x = 5 (the lower leg is y < 1)
+    assert pick.base[1] < 1.0 and place.base[0] > corner
+    between = result.phases[result.phases.index(pick) + 1 : result.phases.index(place)]
+    assert any(p.base[0] > corner and p.base[1] < 1.0 for p in between), "no stop in the corner"
+
+
+# ---------------------------------------------------------------------- push-aside (Fig. 3)
+def push_phase(result):
+    pushes = [p for p in result.phases if p.action == "push"]
+    assert len(pushes) == 1
+    return pushes[0]
+
+
+def stroke_direction(result) -> str:
+    k = next(k for k, p in enumerate(result.phases) if p.action == "push")
+    dx = result.phases[k].base[0] - result.phases[k - 1].base[0]
+    dy = result.phases[k].base[1] - result.phases[k - 1].base[1]
+    assert min(abs(dx), abs(dy)) < 1e-9, "a diagonal stroke"
+    return ("+x" if dx > 0 else "-x") if abs(dx) > abs(dy) else ("+y" if dy > 0 else "-y")
+
+
+def test_fig3a_forward_push():
+    """Bars north and south, the goal by the table's west edge: only +x is left, pushed forward from the west.
+
+    A lateral push from the north or south would reach across a bar (Eq. 19).
+    """
+    scenario = push_scene(
+        "fig3a",
+        {"block": Rect(3.78, 3.93, 3.92, 4.07), "n": Rect(3.70, 4.12, 4.03, 4.17), "s": Rect(3.70, 3.83, 4.03, 3.88)},
+        goal_table=Rect(3.7, 3.7, 4.5, 4.3),
+        goal=(3.85, 4.0),
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert stroke_direction(result) == "+x"
+    assert push_phase(result).heading == "+x"
+
+
+def test_fig3b_lateral_push():
+    """A narrow table (a push along y drops the block), a block west, a wall west of the table.
+
+    The only stroke is +x, and the base cannot stand west: the push is lateral (heading +y or -y).
+    """
+    scenario = push_scene(
+        "fig3b",
+        {"block": BLOCK, "small": Rect(3.80, 3.97, 3.86, 4.03)},
+        goal_table=Rect(3.6, 3.85, 4.4, 4.15),
+        obstacles=(Rect(3.2, 3.5, 3.6, 4.5),),
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert stroke_direction(result) == "+x"
+    assert push_phase(result).heading in ("+y", "-y")
+
+
+def test_fig3c_no_push_into_a_neighbour():
+    """A small block just east of the block: a push along +x would hit it, so the plan pushes another way."""
+    scenario = push_scene("fig3c", {"block": BLOCK, "small": Rect(4.12, 3.97, 4.18, 4.03)})
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    assert "small" in problem.pushes.blocked[("block", "+x")]
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert stroke_direction(result) != "+x"
+
+
+@pytest.mark.parametrize(("below", "lateral_allowed"), [("diagonal", False), ("none", True)])
+def test_fig3d_lateral_push_that_sweeps_the_arm_across_a_neighbour(below, lateral_allowed):
+    """Only +x is free. A block diagonal to the south-east is not in the block's way, but a lateral push
+    from the south would sweep the arm across it (Fig. 3(d)): then only the forward push remains.
+    Without it (the -y stroke is then ruled out by the table's edge instead) the lateral push is allowed.
+    """
+    clutter = {"block": BLOCK, "n": bar("+y"), "w": Rect(3.82, 4.04, 3.88, 4.10)}
+    goal_table = Rect(3.7, 3.7, 4.3, 4.3)
+    if below == "diagonal":
+        clutter["se"] = Rect(4.03, 3.80, 4.09, 3.86)
+    else:
+        goal_table = Rect(3.7, 3.86, 4.3, 4.3)  # a -y stroke would leave the table
+    scenario = push_scene("fig3d", clutter, goal_table=goal_table)
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    headings = {o.heading for o in problem.options if o.kind == "push"}
+    assert {o.push.direction for o in problem.options if o.kind == "push"} == {"+x"}
+    assert ("+y" in headings) == lateral_allowed
+    result = plan(scenario)
+    check_plan(scenario, result)
+    if not lateral_allowed:
+        assert push_phase(result).heading == "+x"
+
+
+def test_two_pieces_on_one_goal_are_both_pushed():
+    """Generalisation beyond the paper: two blocks side by side on the goal, each pushed once."""
+    scenario = push_scene("two-pieces", {"west": Rect(3.90, 3.93, 3.99, 4.07), "east": Rect(4.01, 3.93, 4.10, 4.07)})
+    result = plan(scenario, time_limit=20.0)
+    check_plan(scenario, result)
+    assert sorted(p.target for p in result.phases if p.action == "push") == ["east", "west"]
+
+
+# ---------------------------------------------------------------------- statuses and options
+def test_unreachable_object_is_infeasible_before_any_solve():
+    scenario = one_table(
+        area=Rect(0.0, 0.0, 2.2, 3.0),
+        obstacles=(Rect(1.8, 0.0, 2.2, 1.0), Rect(1.8, 2.0, 2.2, 3.0), Rect(1.6, 0.0, 1.8, 3.0)),
+    )
+    result = plan(scenario)
+    assert result.status == "infeasible" and result.phases == () and result.objective is None
+    assert result.stats["phases_tried"] == []
+    assert "cup" in result.stats["reason"]
+
+
+def test_enclosed_robot_is_infeasible_after_one_solve():
+    """The start is walled in: the first MILP is infeasible and the reachability check proves every N is."""
+    walls = (Rect(0.4, 0.6, 0.6, 1.8), Rect(1.4, 0.6, 1.6, 1.8), Rect(0.4, 0.4, 1.6, 0.6), Rect(0.4, 1.8, 1.6, 2.0))
+    result = plan(one_table(obstacles=walls))
+    assert result.status == "infeasible"
+    assert len(result.stats["phases_tried"]) == 1
+    assert "cannot get to" in result.stats["reason"]
+
+
+def test_max_phases_below_need_is_infeasible():
+    result = plan(one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),)), max_phases=4)
+    assert result.status == "infeasible"
+    assert result.stats["phases_tried"] == [4]
+
+
+def test_time_limit_without_a_plan():
+    scenario = bench_cases.multi(3, np.random.default_rng(1))
+    result = plan(scenario, time_limit=1e-4)
+    assert result.status == "time_limit" and result.phases == ()
+    assert result.stats["total_s"] < 1.0
+
+
+def test_holding_an_object_places_it_first():
+    scenario = two_tables(
+        (DeliveryObject("a", (5.0, 1.8), (5.0, 1.8)), DeliveryObject("b", (2.0, 1.2), (2.0, 1.8))), "holding"
+    )
+    result = plan(scenario, holding="a")
+    check_plan(scenario, result, holding="a")
+    first_arm = next(p for p in result.phases[1:] if p.action != "move")
+    assert (first_arm.action, first_arm.target) == ("place", "a")
+    assert ("pick", "a") not in actions(result)
+
+
+def test_objects_already_at_their_goal_need_nothing():
+    scenario = two_tables(
+        (DeliveryObject("a", (5.0, 1.8), (5.0, 1.8)), DeliveryObject("b", (2.0, 1.2), (2.0, 1.8))), "one-done"
+    )
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert all(p.target != "a" for p in result.phases)
+    assert len(result.phases) == 3
+
+
+def test_env_lattice_is_used():
+    """A lattice over a larger extent, offset from the area's corner: every base lies on it.
+
+    (The fixed posture of the one-table cases needs lattice points exactly 0.5 m from the
+    cup, which this lattice has not: those cases are infeasible on it, as they should be.)
+    """
+    scenario = bench_cases.basic("I", np.random.default_rng(0))
+    lattice = Lattice.over(Rect(-1.52, -1.51, 7.0, 7.0), 0.04)
+    result = plan(scenario, lattice=lattice)
+    check_plan(scenario, result, lattice=lattice)
+    assert not Lattice.over(scenario.area, 0.05).on_lattice(result.phases[1].base)
+    assert plan(one_table(), lattice=lattice).status == "infeasible"
+
+
+@pytest.mark.parametrize("integral", [True, False])
+def test_continuous_and_integer_bases_agree(integral):
+    """Snapped continuous bases and integer bases give plans of the same (hand-known) value."""
+    scenario = one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),))
+    result = plan(scenario, integral=integral)
+    check_plan(scenario, result)
+    assert result.objective == pytest.approx(-5.51)
+
+
+def test_same_input_same_plan():
+    scenario = bench_cases.multi(2, np.random.default_rng(4))
+    first, second = plan(scenario), plan(scenario)
+    assert first.phases == second.phases and first.objective == second.objective
+
+
+def test_unknown_option_is_an_error():
+    with pytest.raises(TypeError, match="bogus"):
+        plan(one_table(), bogus=1)
+
+
+def test_bad_solver_setting_is_an_error():
+    with pytest.raises(ValueError, match="separating"):
+        plan(one_table(), separating="sometimes")
+
+
+def test_unknown_held_object_is_an_error():
+    with pytest.raises(ValueError, match="nothing"):
+        plan(one_table(), holding="nothing")
+
+
+def test_bench_cases_are_optimal_and_valid():
+    """One scenario of each benchmark case (V-B, V-C, L corridor, two objects)."""
+    rng = np.random.default_rng(2)
+    for scenario in (
+        bench_cases.basic("II", rng),
+        bench_cases.push("E", rng),
+        bench_cases.corridor(rng),
+        bench_cases.multi(2, rng),
+    ):
+        result = plan(scenario, time_limit=30.0)
+        check_plan(scenario, result)
+        assert result.status == "optimal", scenario.name
+        assert math.isclose(result.stats["gap"], 0.0, abs_tol=1e-9)
