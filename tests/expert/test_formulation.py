@@ -1,0 +1,239 @@
+"""The MILP's parts: lattice rounding, pose options, push preprocessing, bounds and the model itself."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+from planner_cases import BLOCK, bar, one_table, push_scene
+
+from expert import bench_cases
+from expert.milp.bounds import counting_bound, skeleton
+from expert.milp.build import build
+from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, split_box
+from expert.milp.problem import prepare
+from expert.planner import plan
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.geometry import Rect
+from fetchcarry_env.kinematics import arm_line_clear, push_contact, reaches
+from fetchcarry_env.scenario import DeliveryObject
+
+LATTICE_AREA = Rect(-1.0, -1.0, 6.0, 6.0)
+
+
+def problem_of(scenario, resolution=0.05):
+    return prepare(scenario, Lattice.over(scenario.area, resolution))
+
+
+def sample_scenarios():
+    rng = np.random.default_rng(5)
+    return [
+        bench_cases.basic("I", rng),
+        bench_cases.basic("III", rng),
+        bench_cases.push("C", rng),
+        bench_cases.push("E", rng),
+        bench_cases.corridor(rng),
+        bench_cases.multi(2, rng),
+    ]
+
+
+# ---------------------------------------------------------------------- lattice rounding
+def test_rounding_is_exact_and_inwards():
+    grid = Grid.for_area(Lattice.over(LATTICE_AREA, 0.05), LATTICE_AREA, 0.22)
+    assert grid.index_at_most(0, 0.0) == 20  # exactly on a point
+    assert grid.index_at_most(0, 0.049) == 20
+    assert grid.index_at_least(0, 0.001) == 21
+    assert grid.index_at_least(0, 1.45 - 1e-12) == 49  # float noise does not lose the point 1.45
+    # The domain keeps the whole disc inside the area (Eq. 27): 0.22 m from each edge, rounded inwards.
+    assert grid.domain == IndexBox(5, 135, 5, 135)
+    assert grid.point(5, 5) == pytest.approx((-0.75, -0.75))
+
+
+def test_continuous_bounds_round_to_the_same_points():
+    lattice = Lattice.over(LATTICE_AREA, 0.05)
+    integral = Grid.for_area(lattice, LATTICE_AREA, 0.22, integral=True)
+    continuous = Grid.for_area(lattice, LATTICE_AREA, 0.22, integral=False)
+    assert integral.upper(7) == 7 and integral.lower(7) == 7
+    assert round(continuous.upper(7)) == 7 and round(continuous.lower(7)) == 7
+    assert continuous.upper(7) > 7.4 and continuous.lower(7) < 6.6
+
+
+def test_split_box_cuts_where_a_condition_changes():
+    box = IndexBox(0, 9, 0, 9)
+    left = HalfPlane(0, True, 3)  # i <= 3
+    below = HalfPlane(1, True, 5)  # j <= 5
+    pieces = split_box(box, [Condition((left, below))])  # outside the quadrant i > 3 and j > 5
+    points = {
+        (i, j)
+        for piece, _ in pieces
+        for i in range(piece.i_lo, piece.i_hi + 1)
+        for j in range(piece.j_lo, piece.j_hi + 1)
+    }
+    expected = {(i, j) for i in range(10) for j in range(10) if i <= 3 or j <= 5}
+    assert points == expected
+    assert len(pieces) <= 2
+    tagged = split_box(box, [Condition((left,), tag="state")])
+    assert {tags for _, tags in tagged} == {frozenset(), frozenset({"state"})}
+    assert split_box(box, [Condition((HalfPlane(0, True, -1),))]) == []
+
+
+# ---------------------------------------------------------------------- pose options
+@pytest.mark.parametrize("scenario", sample_scenarios(), ids=lambda s: s.name)
+def test_every_point_of_every_option_is_a_valid_pose(scenario):
+    """Soundness of the preprocessing: reach (Eq. 14-17), base clearance (Eq. 18), arm line (Eq. 19)."""
+    problem = problem_of(scenario)
+    radius = scenario.robot.radius
+    blockers = [t.rect for t in scenario.tables] + [o.rect for o in scenario.obstacles]
+    static_clutter = [c.rect for c in scenario.clutter if c.id not in problem.pushes.pushable]
+    postures = {p.name: p for p in scenario.robot.postures}
+    assert problem.options
+    for option in problem.options:
+        assert not option.box.empty
+        posture = postures[option.posture]
+        cells = option.push.cells if option.push else (0, 0)
+        for i, j in itertools.product(
+            range(option.box.i_lo, option.box.i_hi + 1), range(option.box.j_lo, option.box.j_hi + 1)
+        ):
+            base = problem.grid.point(i, j)
+            end = problem.grid.point(i + cells[0], j + cells[1])
+            assert reaches(posture, base, option.heading, option.hand, tol=1e-6), (option, base)
+            for point in (base, end):
+                assert scenario.area.contains_disc(point, radius, tol=1e-6)
+                assert all(r.distance_to_point(point) >= radius - 1e-6 for r in blockers), (option, point)
+            hand_end = (option.hand[0] + end[0] - base[0], option.hand[1] + end[1] - base[1])
+            for a, b in ((base, option.hand), (end, hand_end)):
+                assert arm_line_clear(a, b, [o.rect for o in scenario.obstacles] + static_clutter), (option, a, b)
+
+
+def test_options_cover_every_reaching_pose_when_nothing_is_in_the_way():
+    """Completeness: without obstacles or clutter, a lattice point is in a pick box iff it reaches and is clear."""
+    scenario = bench_cases.basic("V", np.random.default_rng(0))
+    scenario = dataclasses.replace(scenario, obstacles=())
+    problem = problem_of(scenario)
+    obj = scenario.objects[0]
+    table = scenario.tables[0].rect
+    for heading in ("+x", "+y", "-x", "-y"):
+        for posture in scenario.robot.postures:
+            boxes = [
+                o.box
+                for o in problem.options
+                if o.kind == "pick" and o.heading == heading and o.posture == posture.name
+            ]
+            covered = {(i, j) for b in boxes for i in range(b.i_lo, b.i_hi + 1) for j in range(b.j_lo, b.j_hi + 1)}
+            wanted = set()
+            for i in range(10, 80):
+                for j in range(10, 80):
+                    base = problem.grid.point(i, j)
+                    if (
+                        reaches(posture, base, heading, obj.start, tol=1e-9)
+                        and table.distance_to_point(base) >= 0.22 - 1e-9
+                    ):
+                        wanted.add((i, j))
+            assert covered == wanted, (heading, posture.name)
+
+
+def test_arm_line_rules_out_options_behind_an_obstacle():
+    """A wall between the west pose and the cup: no pick from the west (Eq. 19)."""
+    scenario = one_table(area=Rect(0.0, 0.0, 4.0, 3.0))
+    plain = {o.heading for o in problem_of(scenario).options if o.kind == "pick"}
+    # A thin post right by the table's west edge, on the arm line y = 1.2 (the base stands 0.3 m away).
+    walled = one_table(obstacles=(Rect(1.70, 1.15, 1.75, 1.25),))
+    blocked = {o.heading for o in problem_of(walled).options if o.kind == "pick"}
+    assert "+x" in plain and "+x" not in blocked and blocked
+
+
+# ---------------------------------------------------------------------- push preprocessing
+def test_stroke_is_a_whole_number_of_cells_that_clears_the_goal():
+    scenario = push_scene("plain", {"block": BLOCK})
+    problem = problem_of(scenario)
+    obj = scenario.objects[0]
+    assert problem.covers == {"bottle": ("block",)}
+    assert {c.direction for c in problem.pushes.candidates} == {"+x", "+y", "-x", "-y"}
+    for candidate in problem.pushes.candidates:
+        assert candidate.stroke == pytest.approx(0.15)  # 0.07 + 0.035 + 0.01 = 0.115, rounded up to 0.15
+        assert abs(candidate.cells[0]) + abs(candidate.cells[1]) == 3
+        assert not candidate.end.overlaps_disc(obj.goal, obj.radius + 0.0099)
+        assert candidate.contact == push_contact(BLOCK, candidate.direction)
+
+
+def test_blocked_directions_say_why():
+    scenario = push_scene("fig3", {"block": BLOCK, "n": bar("+y"), "w": Rect(3.82, 4.04, 3.88, 4.10)})
+    scenario = dataclasses.replace(
+        scenario, tables=(scenario.tables[0], dataclasses.replace(scenario.tables[1], rect=Rect(3.7, 3.86, 4.3, 4.3)))
+    )
+    blocked = problem_of(scenario).pushes.blocked
+    assert "'n'" in blocked[("block", "+y")]
+    assert "'w'" in blocked[("block", "-x")]
+    assert "table" in blocked[("block", "-y")]
+    assert ("block", "+x") not in blocked
+
+
+def test_pushable_neighbours_give_precedence_and_exclusions():
+    """Two blocks side by side on the goal: pushing one towards the other waits for it; colliding ends exclude."""
+    scenario = push_scene("two", {"west": Rect(3.90, 3.93, 3.99, 4.07), "east": Rect(4.01, 3.93, 4.10, 4.07)})
+    plan_ = problem_of(scenario).pushes
+    assert plan_.pushable == ("east", "west")
+    index = {c.key: n for n, c in enumerate(plan_.candidates)}
+    assert (index[("west", "+x")], "east") in plan_.precedence
+    assert (index[("east", "-x")], "west") in plan_.precedence
+    # West pushed +x would slide into where east ends up after its own +x push.
+    assert tuple(sorted((index[("west", "+x")], index[("east", "+x")]))) in plan_.exclusive
+    assert tuple(sorted((index[("west", "+y")], index[("east", "+y")]))) not in plan_.exclusive
+
+
+# ---------------------------------------------------------------------- bounds
+def test_counting_bound():
+    assert counting_bound(problem_of(one_table())) == 3
+    assert counting_bound(problem_of(push_scene("p", {"block": BLOCK}))) == 4  # the start (0, 0) is a lattice point
+    off_lattice = dataclasses.replace(
+        push_scene("p", {"block": BLOCK}), robot=dataclasses.replace(push_scene("p", {}).robot, start=(0.01, 0.0))
+    )
+    assert counting_bound(problem_of(off_lattice)) == 5  # phase 1 cannot be the push
+
+
+@pytest.mark.parametrize("scenario", sample_scenarios()[:5], ids=lambda s: s.name)
+def test_lower_bound_is_valid(scenario):
+    """One phase fewer than the skeleton's bound is infeasible for the MILP itself."""
+    problem = problem_of(scenario)
+    bound = max(counting_bound(problem), skeleton(problem).phases)
+    milp = build(problem, bound - 1)
+    milp.model.optimize()
+    assert milp.model.getStatus() == "infeasible"
+
+
+def test_skeleton_proves_three_phases_too_few_for_the_paper_layout():
+    """The fact measured on SCIP (guides/facts.md): with tables at (2, 2) and (4, 4), 3 phases are infeasible."""
+    scenario = dataclasses.replace(bench_cases.basic("V", np.random.default_rng(0)), obstacles=())
+    assert skeleton(problem_of(scenario)).phases == 4
+
+
+def test_delivery_timing_cuts_keep_the_optimum():
+    scenario = bench_cases.multi(2, np.random.default_rng(3))
+    with_cuts = plan(scenario)
+    without = plan(scenario, lower_bound=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert with_cuts.objective == pytest.approx(without.objective)
+
+
+# ---------------------------------------------------------------------- model and decoding
+def test_milp_objective_is_the_plans_objective():
+    """With integer bases the MILP's optimum is Eq. 1 of the decoded plan exactly (no snapping)."""
+    scenario = bench_cases.multi(2, np.random.default_rng(6))
+    result = plan(scenario)
+    assert result.objective == pytest.approx(result.stats["milp_objective"])
+
+
+def test_objects_already_delivered_count_every_phase():
+    scenario = one_table()
+    done = DeliveryObject("done", (2.0, 1.5), (2.0, 1.5))
+    scenario = dataclasses.replace(scenario, objects=(*scenario.objects, done))
+    result = plan(scenario)
+    assert result.objective == pytest.approx(-8.79 - 10 * 3)  # 'done' is delivered in all 3 phases
+
+
+def test_model_names_its_groups_after_the_equations():
+    milp = build(problem_of(push_scene("p", {"block": BLOCK})), 6)
+    names = {c.name.split("_")[0] for c in milp.model.getConss()}
+    assert {"eq2", "eq3", "eq4", "eq12", "eq13", "eq18", "eq20", "eq25"} <= names
