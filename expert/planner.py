@@ -109,7 +109,9 @@ def plan(
         outcome = _solve(problem, n_phases, settings, deadline, stats)
         if outcome == "infeasible":
             if n_phases == first:
+                t_reach = time.perf_counter()
                 reason = unreachable_reason(problem)
+                stats["reach_s"] = time.perf_counter() - t_reach
                 if reason is not None:
                     stats["reason"] = reason
                     return finish("infeasible")
@@ -133,21 +135,26 @@ def solver_name() -> str:
 def _solve(problem: Problem, n_phases: int, settings: SolverSettings, deadline: float, stats: dict):
     """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, phases)``."""
     t0 = time.perf_counter()
+    record: dict[str, Any] = {"phases": n_phases}
+    stats.setdefault("solves", []).append(record)
     try:
         milp = build(problem, n_phases, settings)
     except Infeasible:
-        stats["build_s"] += time.perf_counter() - t0
+        record.update(status="infeasible", build_s=time.perf_counter() - t0, solve_s=0.0, nodes=0)
+        stats["build_s"] += record["build_s"]
         return "infeasible"
     t1 = time.perf_counter()
+    record["build_s"] = t1 - t0
     stats["build_s"] += t1 - t0
     remaining = deadline - t1 - RESERVE_S
     if remaining <= 0:
+        record.update(status="time_limit", solve_s=0.0, nodes=0)
         return "time_limit"
     model = milp.model
     model.setParam("limits/time", remaining)
     model.optimize()
-    stats["solve_s"] += time.perf_counter() - t1
-    stats.setdefault("nodes", []).append(model.getNNodes())
+    record.update(status=model.getStatus(), solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
+    stats["solve_s"] += record["solve_s"]
     status = model.getStatus()
     if status in ("infeasible", "inforunbd"):
         return "infeasible"

@@ -21,6 +21,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from pyscipopt import quicksum
+
 if TYPE_CHECKING:
     from expert.milp.variables import Milp
 
@@ -30,7 +32,7 @@ def add_action_constraints(milp: Milp) -> None:
     model = milp.model
     for k in range(1, milp.n_phases):
         if len(milp.z[k]) > 1:
-            model.addCons(sum(milp.z[k].values()) <= 1, name=f"one_action_{k}")
+            model.addCons(quicksum(milp.z[k].values()) <= 1, name=f"one_action_{k}")
         for object_id in milp.problem.deliver:
             picks = milp.action_sum("pick", object_id, k)
             places = milp.action_sum("place", object_id, k)
@@ -41,4 +43,4 @@ def add_action_constraints(milp: Milp) -> None:
         pushes = [z for _, z in milp.push_options_at(k)]
         held = [milp.gsp[i][k] for i in milp.problem.deliver]
         if len(held) + len(pushes) > 1:
-            model.addCons(sum(held) + sum(pushes) <= 1, name=f"eq7_one_in_hand_{k}")
+            model.addCons(quicksum(held) + quicksum(pushes) <= 1, name=f"eq7_one_in_hand_{k}")

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from pyscipopt import quicksum
+
 from expert.milp.grid import base_regions, point_in_region
 
 if TYPE_CHECKING:
@@ -68,7 +70,7 @@ def add_collision_constraints(milp: Milp) -> None:
                         model.addCons(coords[e] >= grid.rhs(plane), name=f"eq18_{name}_{k}_{e}")
                 continue
             chosen = [model.addVar(f"r_{name}_{k}_{n}", vtype="B") for n in regions]
-            model.addCons(sum(chosen) == 1, name=f"eq18_{name}_{k}")
+            model.addCons(quicksum(chosen) == 1, name=f"eq18_{name}_{k}")
             for n, r in zip(regions, chosen, strict=True):
                 plane = planes[n]
                 coords = ends[n]
@@ -80,7 +82,7 @@ def add_collision_constraints(milp: Milp) -> None:
                     else:
                         model.addCons(coords[e] >= rhs - (rhs - lo) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
                     for group, terms in _poses_outside(milp, e, plane).items():
-                        model.addCons(r + sum(terms) <= 1, name=f"eq18_link_{name}_{k}_{n}_{e}_{group}")
+                        model.addCons(r + quicksum(terms) <= 1, name=f"eq18_link_{name}_{k}_{n}_{e}_{group}")
 
 
 def _poses_outside(milp: Milp, e: int, plane) -> dict[str, list]:
@@ -92,12 +94,10 @@ def _poses_outside(milp: Milp, e: int, plane) -> dict[str, list]:
     options = milp.problem.options
     out: dict[str, list] = {}
     if e >= 1:
-        out["act"] = [z for o, z in milp.arm_options_at(e) if options[o].box.clip(plane).empty]
-        out["push_end"] = [
-            z for o, z in milp.push_options_at(e) if options[o].box.shifted(*options[o].push.cells).clip(plane).empty
-        ]
+        out["act"] = [z for o, z in milp.arm_options_at(e) if milp.misses(options[o].box, plane)]
+        out["push_end"] = [z for o, z in milp.push_options_at(e) if milp.misses(options[o].end_box, plane)]
     if e + 1 < milp.n_phases:
-        out["push_start"] = [z for o, z in milp.push_options_at(e + 1) if options[o].box.clip(plane).empty]
+        out["push_start"] = [z for o, z in milp.push_options_at(e + 1) if milp.misses(options[o].box, plane)]
     return {group: terms for group, terms in out.items() if terms}
 
 
@@ -114,4 +114,4 @@ def add_arm_constraints(milp: Milp) -> None:
                 allowed = milp.pushed[clutter_id][k - 1]
             else:
                 allowed = 1 - milp.pushed_towards(clutter_id, position)[k - 1]
-            model.addCons(sum(terms) <= allowed, name=f"eq19_{clutter_id}_{position}_{k}")
+            model.addCons(quicksum(terms) <= allowed, name=f"eq19_{clutter_id}_{position}_{k}")

@@ -5,13 +5,16 @@ Eq. 1: ``min -W1 sum_i sum_k delta_{i,k} + sum_k (m^x_k + m^y_k) + W2 sum_k m^xy
 Eq. 2: ``-m^x_k <= x_k - x_{k-1} <= m^x_k`` (and ``y``). Eq. 3: ``-m^xy_k <= m^x_k - m^y_k <= m^xy_k``.
 
 Distances are kept in lattice-index units and scaled by the resolution in the
-objective, so the objective is in metres. Objects already at their goal contribute
-the constant ``-W1`` per phase; the decoder adds it (the solver does not need it).
+objective, so the objective is in metres. Objects already at their goal contribute the constant ``-W1``
+per phase (phase 0 included), added as the objective's offset, so that the MILP's
+value is Eq. 1 of the decoded plan.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
+
+from pyscipopt import quicksum
 
 from fetchcarry_env.kinematics import DELIVERY_BONUS, DIAGONAL_WEIGHT
 
@@ -31,8 +34,9 @@ def add_motion_constraints(milp: Milp) -> None:
 
 
 def set_objective(milp: Milp) -> None:
-    """Eq. 1 (without the constant of objects already delivered)."""
+    """Eq. 1."""
     resolution = milp.problem.grid.resolution
-    bonus = sum(milp.delta[i][k] for i in milp.problem.deliver for k in range(1, milp.n_phases))
-    travel = sum(milp.mx[k] + milp.my[k] + DIAGONAL_WEIGHT * milp.mxy[k] for k in range(1, milp.n_phases))
-    milp.model.setObjective(-DELIVERY_BONUS * bonus + resolution * travel, sense="minimize")
+    already = -DELIVERY_BONUS * milp.n_phases * len(milp.problem.delivered)
+    bonus = quicksum(milp.delta[i][k] for i in milp.problem.deliver for k in range(1, milp.n_phases))
+    travel = quicksum(milp.mx[k] + milp.my[k] + DIAGONAL_WEIGHT * milp.mxy[k] for k in range(1, milp.n_phases))
+    milp.model.setObjective(-DELIVERY_BONUS * bonus + resolution * travel + already, sense="minimize")

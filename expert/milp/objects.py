@@ -27,6 +27,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from pyscipopt import quicksum
+
 from fetchcarry_env.geometry import Point
 
 if TYPE_CHECKING:
@@ -74,12 +76,12 @@ def add_delivery_timing(milp: Milp) -> None:
     count = len(objects)
     held0 = 1 if problem.holding is not None else 0
     for k in range(1, n):
-        delivered = sum(milp.delta[i][k] for i in objects)
-        pushed = sum(milp.pushed[c][k] for c in problem.pushes.pushable)
+        delivered = quicksum(milp.delta[i][k] for i in objects)
+        pushed = quicksum(milp.pushed[c][k] for c in problem.pushes.pushable)
         cap = max((d for d, t in enumerate(problem.earliest) if t <= k), default=count)
         if cap < count:
             model.addCons(delivered <= cap, name=f"earliest_delivery_{k}")
         model.addCons(2 * delivered + pushed <= k + held0, name=f"actions_so_far_{k}")
-        held = sum(milp.gsp[i][k] for i in objects)
+        held = quicksum(milp.gsp[i][k] for i in objects)
         pushes_left = len(problem.pushes.pushable) - pushed
         model.addCons(2 * (count - delivered) - held + pushes_left <= n - 1 - k, name=f"actions_left_{k}")

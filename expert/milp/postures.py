@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from pyscipopt import quicksum
+
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.problem import PoseOption
 from expert.milp.push import PushCandidate, PushPlan
@@ -172,7 +174,7 @@ def add_posture_constraints(milp: Milp) -> None:
                 continue
             for axis, coords in ((0, milp.u), (1, milp.v)):
                 var_lo, var_hi = grid.var_bounds(axis)
-                lower = sum((grid.lower(problem.options[o].box.lo(axis)) - var_lo) * z for o, z in group)
-                upper = sum((var_hi - grid.upper(problem.options[o].box.hi(axis))) * z for o, z in group)
+                lower = quicksum((grid.lower(problem.options[o].box.lo(axis)) - var_lo) * z for o, z in group)
+                upper = quicksum((var_hi - grid.upper(problem.options[o].box.hi(axis))) * z for o, z in group)
                 model.addCons(coords[acting] >= var_lo + lower, name=f"reach_lo_{axis}_{k}_{acting}")
                 model.addCons(coords[acting] <= var_hi - upper, name=f"reach_hi_{axis}_{k}_{acting}")

@@ -44,6 +44,11 @@ class PoseOption:
     forbidden: frozenset = frozenset()
     push: PushCandidate | None = None
 
+    @property
+    def end_box(self) -> IndexBox:
+        """Where the base is at the end of the option's phase (the box, moved by a push's stroke)."""
+        return self.box if self.push is None else self.box.shifted(*self.push.cells)
+
 
 @dataclass(frozen=True)
 class Problem:

@@ -42,6 +42,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from pyscipopt import quicksum
+
 from expert.milp.grid import Grid
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector
 from fetchcarry_env.kinematics import push_contact, push_stroke, swept_rect
@@ -179,21 +181,21 @@ def add_push_constraints(milp: Milp) -> None:
         chosen = milp.push_options_at(k)
         if not chosen:
             continue
-        total = sum(z for _, z in chosen)
+        total = quicksum(z for _, z in chosen)
         for axis, coords, moved in ((0, milp.u, milp.mx), (1, milp.v, milp.my)):
             lo, hi = problem.grid.var_bounds(axis)
             big_m = (hi - lo) + di_max
-            stroke = sum(problem.options[o].push.cells[axis] * z for o, z in chosen)
+            stroke = quicksum(problem.options[o].push.cells[axis] * z for o, z in chosen)
             delta = coords[k] - coords[k - 1] - stroke
             model.addCons(delta <= big_m * (1 - total), name=f"eq20_stroke_{axis}_{k}")
             model.addCons(delta >= -big_m * (1 - total), name=f"eq25_no_diagonal_{axis}_{k}")
-            length = sum(abs(problem.options[o].push.cells[axis]) * z for o, z in chosen)
+            length = quicksum(abs(problem.options[o].push.cells[axis]) * z for o, z in chosen)
             model.addCons(moved[k] >= length, name=f"eq20_length_{axis}_{k}")
     for clutter_id in plan.pushable:
         pushed = milp.pushed[clutter_id]
         for k in range(1, n):
             now = [z for o, z in milp.push_options_at(k) if problem.options[o].target == clutter_id]
-            model.addCons(pushed[k] == pushed[k - 1] + sum(now), name=f"pushed_{clutter_id}_{k}")
+            model.addCons(pushed[k] == pushed[k - 1] + quicksum(now), name=f"pushed_{clutter_id}_{k}")
         model.addCons(pushed[n - 1] == 1, name=f"push_once_{clutter_id}")
         for object_id, ids in problem.covers.items():
             if clutter_id not in ids or object_id == problem.holding:

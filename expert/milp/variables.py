@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyscipopt import Model
+from pyscipopt import Model, quicksum
 
 from expert.milp.problem import Problem
 
@@ -49,14 +49,26 @@ class Milp:
     delta: dict[str, list] = field(default_factory=dict)
     pushed: dict[str, list] = field(default_factory=dict)
     _pushed_dir: dict[tuple[str, str], list] = field(default_factory=dict)
+    _arm: list[list] = field(default_factory=list)
+    _push: list[list] = field(default_factory=list)
+    _misses: dict = field(default_factory=dict)
 
     # ------------------------------------------------------------ selections
     def arm_options_at(self, k: int) -> list[tuple[int, Any]]:
         """``(option, z)`` for the picks and places that phase ``k`` may do."""
-        return [(o, z) for o, z in self.z[k].items() if self.problem.options[o].kind != "push"]
+        return self._arm[k]
 
     def push_options_at(self, k: int) -> list[tuple[int, Any]]:
-        return [(o, z) for o, z in self.z[k].items() if self.problem.options[o].kind == "push"]
+        """``(option, z)`` for the pushes that phase ``k`` may do."""
+        return self._push[k]
+
+    def misses(self, box, plane) -> bool:
+        """True when no point of ``box`` lies in ``plane`` (cached: the same pairs recur every phase)."""
+        key = (box, plane)
+        hit = self._misses.get(key)
+        if hit is None:
+            hit = self._misses[key] = box.clip(plane).empty
+        return hit
 
     def action_sum(self, kind: str, target: str, k: int) -> Expr | None:
         """``theta_{i,k}^{kind}``: the sum of the options of ``kind`` on ``target`` at phase ``k`` (None if none)."""
@@ -65,17 +77,17 @@ class Milp:
             for o, z in self.z[k].items()
             if self.problem.options[o].kind == kind and self.problem.options[o].target == target
         ]
-        return sum(terms) if terms else None
+        return quicksum(terms) if terms else None
 
     def candidate_at(self, candidate: int, k: int) -> Expr | None:
         """Whether push candidate ``candidate`` (index in the push plan) is done at phase ``k``."""
         wanted = self.problem.pushes.candidates[candidate]
         terms = [z for o, z in self.z[k].items() if self.problem.options[o].push is wanted]
-        return sum(terms) if terms else None
+        return quicksum(terms) if terms else None
 
     def candidate_uses(self, candidate: int) -> Expr | None:
         terms = [t for k in range(1, self.n_phases) if (t := self.candidate_at(candidate, k)) is not None]
-        return sum(terms) if terms else None
+        return quicksum(terms) if terms else None
 
     def pushed_towards(self, clutter_id: str, direction: str) -> list:
         """Per phase, whether ``clutter_id`` has been pushed along ``direction`` by then (made on first use)."""
@@ -90,7 +102,7 @@ class Milp:
                     values.append(values[-1])
                     continue
                 var = self.model.addVar(f"pushed_{clutter_id}_{direction}_{k}", lb=0.0, ub=1.0)
-                self.model.addCons(var == values[-1] + sum(terms), name=f"pushed_{clutter_id}_{direction}_{k}")
+                self.model.addCons(var == values[-1] + quicksum(terms), name=f"pushed_{clutter_id}_{direction}_{k}")
                 values.append(var)
             self._pushed_dir[key] = values
         return self._pushed_dir[key]
@@ -114,9 +126,12 @@ def create_variables(problem: Problem, n_phases: int, model: Model) -> Milp:
         milp.my.append(model.addVar(f"m_y_{k}", lb=0.0))
         milp.mxy.append(model.addVar(f"m_xy_{k}", lb=0.0))
     milp.z = [{} for _ in range(n_phases)]
+    milp._arm = [[] for _ in range(n_phases)]
+    milp._push = [[] for _ in range(n_phases)]
     for o, option in enumerate(problem.options):
         for k in option_phases(problem, option, n_phases):
-            milp.z[k][o] = model.addVar(f"z_{option.kind}_{option.target}_{o}_{k}", vtype="B")
+            z = milp.z[k][o] = model.addVar(f"z_{option.kind}_{option.target}_{o}_{k}", vtype="B")
+            (milp._push if option.kind == "push" else milp._arm)[k].append((o, z))
     for object_id in problem.deliver:
         held = 1.0 if object_id == problem.holding else 0.0
         milp.gsp[object_id] = [held] + [

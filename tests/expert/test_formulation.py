@@ -231,6 +231,7 @@ def test_objects_already_delivered_count_every_phase():
     scenario = dataclasses.replace(scenario, objects=(*scenario.objects, done))
     result = plan(scenario)
     assert result.objective == pytest.approx(-8.79 - 10 * 3)  # 'done' is delivered in all 3 phases
+    assert result.stats["milp_objective"] == pytest.approx(result.objective)
 
 
 def test_model_names_its_groups_after_the_equations():
