@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from expert.plan import Phase, Plan, PlanFormatError
+from expert.plans import Phase, Plan, PlanFormatError
 
 _LAZY = {
     "plan": "expert.planner",

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from expert.plan import Plan, PlanFormatError
+from expert.plans import Plan, PlanFormatError
 from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError

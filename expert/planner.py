@@ -25,7 +25,7 @@ from expert.milp.collision import Infeasible
 from expert.milp.decode import phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
-from expert.plan import Plan
+from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
 

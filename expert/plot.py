@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, FancyArrowPatch, Patch
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 from fetchcarry_env import drawing
 from fetchcarry_env.geometry import Point, Rect
 from fetchcarry_env.scenario import Scenario

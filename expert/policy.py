@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.scenario import Scenario

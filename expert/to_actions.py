@@ -8,7 +8,7 @@ bases on the env's lattice, so the conversion is exact or refused.
 
 from __future__ import annotations
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.scenario import Scenario
 

@@ -44,7 +44,7 @@ import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 from fetchcarry_env.geometry import Heading, Point, Rect, discs_overlap, heading_of, segment_rect_distance
 from fetchcarry_env.kinematics import arm_line_clear, hand_offset, push_contact, push_headings, swept_rect
 from fetchcarry_env.scenario import Clutter, Posture, Scenario

@@ -16,7 +16,7 @@ import json
 import sys
 from collections.abc import Sequence
 
-from expert.plan import PlanFormatError
+from expert.plans import PlanFormatError
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import ScenarioError
 

@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass
 
 from expert.milp.problem import PoseOption, Problem
-from expert.plan import Phase
+from expert.plans import Phase
 from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_frame
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 from fetchcarry_env.scenario import Scenario

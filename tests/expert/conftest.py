@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from handmade import hand_plan_for
 
-from expert.plan import Plan
+from expert.plans import Plan
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 
 BOTTLE_START = (2.0, 2.0)
 BLOCK_START = (4.0, 4.0)

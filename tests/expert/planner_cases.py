@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from expert.milp.decode import plan_objective
-from expert.plan import Plan
+from expert.plans import Plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Rect

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from expert.plan import Plan
+from expert.plans import Plan
 from expert.validate import validate_plan
 from fetchcarry_env.scenario import Scenario
 from training.cli import main

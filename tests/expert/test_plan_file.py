@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from expert.plan import Plan, PlanFormatError
+from expert.plans import Plan, PlanFormatError
 
 SPEC_EXAMPLE = {  # spec/plan.md's example, verbatim
     "format": "fetchcarry-plan/1",

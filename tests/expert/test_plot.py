@@ -9,7 +9,7 @@ from matplotlib import colors
 from matplotlib.image import imread
 
 from expert import plot
-from expert.plan import Plan
+from expert.plans import Plan
 from expert.plot import plot_plan
 from fetchcarry_env import drawing
 from fetchcarry_env.observation import WorldState

@@ -11,7 +11,7 @@ from dataclasses import replace
 import pytest
 from handmade import BOTTLE_START, with_phase
 
-from expert.plan import Phase, Plan
+from expert.plans import Phase, Plan
 from expert.validate import validate_plan
 from fetchcarry_env.scenario import Scenario
 
