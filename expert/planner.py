@@ -19,7 +19,7 @@ from typing import Any
 
 import pyscipopt
 
-from expert.milp.bounds import counting_bound, skeleton
+from expert.milp.bounds import counting_bound, min_travel, skeleton
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
 from expert.milp.decode import phases_of, plan_objective, read_steps
@@ -95,7 +95,7 @@ def plan(
         return finish("optimal", phases, plan_objective(scenario, phases))
     if use_bound:
         relaxation = skeleton(problem)
-        problem = dataclasses.replace(problem, earliest=relaxation.earliest)
+        problem = dataclasses.replace(problem, earliest=relaxation.earliest, min_travel=min_travel(problem))
         first = max(3, counting_bound(problem), relaxation.phases)
     else:
         first = max(3, counting_bound(problem))

@@ -15,10 +15,12 @@ push at phase 1 would start from the off-lattice start: phase 1 is a move, one m
 from __future__ import annotations
 
 import heapq
+import math
 from dataclasses import dataclass
 
 from expert.milp.grid import IndexBox, base_regions, point_in_region
 from expert.milp.problem import Problem
+from fetchcarry_env.kinematics import travel_cost
 
 
 def counting_bound(problem: Problem) -> int:
@@ -115,7 +117,6 @@ def skeleton(problem: Problem) -> Skeleton:
     actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
     free = _Free(problem)
     deliver = problem.deliver
-    covers = problem.covers
     pushable = problem.pushes.pushable
     start_state = (frozenset(), problem.holding, frozenset(), None)
     best = {start_state: 0}
@@ -133,16 +134,7 @@ def skeleton(problem: Problem) -> Skeleton:
             finished = 1 + spent
         if finished is not None and len(earliest) == len(deliver) + 1:
             break
-        moves = []
-        if held is not None:
-            moves.append((("place", held), (delivered | {held}, None, pushed)))
-        else:
-            for object_id in deliver:
-                if object_id not in delivered and all(c in pushed for c in covers.get(object_id, ())):
-                    moves.append((("pick", object_id), (delivered, object_id, pushed)))
-            for clutter_id in pushable:
-                if clutter_id not in pushed:
-                    moves.append((("push", clutter_id), (delivered, None, pushed | {clutter_id})))
+        moves = _moves(problem, delivered, held, pushed)
         for key, (d, h, p) in moves:
             action = actions[key]
             for entry, exit_box in action.poses:
@@ -155,6 +147,76 @@ def skeleton(problem: Problem) -> Skeleton:
     if finished is None:  # unreachable with a consistent problem; the counting bound takes over
         return Skeleton(1 + 2 * len(deliver), tuple(2 * d for d in range(len(deliver) + 1)))
     return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(len(deliver) + 1)))
+
+
+def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
+    """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``."""
+    moves = []
+    if held is not None:
+        moves.append((("place", held), (delivered | {held}, None, pushed)))
+        return moves
+    for object_id in problem.deliver:
+        if object_id not in delivered and all(c in pushed for c in problem.covers.get(object_id, ())):
+            moves.append((("pick", object_id), (delivered, object_id, pushed)))
+    for clutter_id in problem.pushes.pushable:
+        if clutter_id not in pushed:
+            moves.append((("push", clutter_id), (delivered, None, pushed | {clutter_id})))
+    return moves
+
+
+def min_travel(problem: Problem) -> float:
+    """A lower bound (metres) on the travel term of Eq. 1 of any plan: the cheapest order of actions.
+
+    The same search as :func:`skeleton`, costing each step by ``travel_cost`` over the
+    gap between the previous pose box (or the start) and the next (``travel_cost`` is a
+    norm, so detours only add to it), plus a push's own stroke. The MILP states it as
+    the valid inequality ``travel >= min_travel`` (``expert.milp.motion``).
+    """
+    actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
+    grid = problem.grid
+    start = problem.scenario.robot.start
+    pushable = problem.pushes.pushable
+    start_state = (frozenset(), problem.holding, frozenset(), None)
+    best = {start_state: 0.0}
+    queue = [(0.0, 0, start_state)]
+    counter = 0
+    while queue:
+        spent, _, state = heapq.heappop(queue)
+        if spent > best.get(state, spent):
+            continue
+        delivered, held, pushed, where = state
+        if len(delivered) == len(problem.deliver) and len(pushed) == len(pushable):
+            return spent
+        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+            for entry, exit_box in actions[key].poses:
+                step = _gap_cost(grid, start, where, entry)
+                if key[0] == "push":
+                    step += _gap_cost(grid, start, entry, exit_box, touching=True)
+                nxt = (d, h, p, exit_box)
+                total = spent + step
+                if total < best.get(nxt, math.inf) - 1e-12:
+                    best[nxt] = total
+                    counter += 1
+                    heapq.heappush(queue, (total, counter, nxt))
+    return 0.0
+
+
+def _gap_cost(grid, start, a: IndexBox | None, b: IndexBox, touching: bool = False) -> float:
+    """``travel_cost`` of the shortest vector from box ``a`` (None: the exact start) to box ``b``, metres.
+
+    ``touching``: the exact displacement between two equal-sized boxes (a push's stroke).
+    """
+    res = grid.resolution
+    if touching:
+        dx, dy = (b.i_lo - a.i_lo) * res, (b.j_lo - a.j_lo) * res
+    elif a is None:
+        lo, hi = grid.point(b.i_lo, b.j_lo), grid.point(b.i_hi, b.j_hi)
+        dx = max(lo[0] - start[0], 0.0, start[0] - hi[0])
+        dy = max(lo[1] - start[1], 0.0, start[1] - hi[1])
+    else:
+        dx = max(b.i_lo - a.i_hi, 0, a.i_lo - b.i_hi) * res
+        dy = max(b.j_lo - a.j_hi, 0, a.j_lo - b.j_hi) * res
+    return travel_cost((0.0, 0.0), (dx, dy))
 
 
 def _skeleton_actions(problem: Problem) -> list[_Action]:

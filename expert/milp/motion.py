@@ -39,4 +39,6 @@ def set_objective(milp: Milp) -> None:
     already = -DELIVERY_BONUS * milp.n_phases * len(milp.problem.delivered)
     bonus = quicksum(milp.delta[i][k] for i in milp.problem.deliver for k in range(1, milp.n_phases))
     travel = quicksum(milp.mx[k] + milp.my[k] + DIAGONAL_WEIGHT * milp.mxy[k] for k in range(1, milp.n_phases))
+    if milp.problem.min_travel > 0:
+        milp.model.addCons(resolution * travel >= milp.problem.min_travel - 1e-6, name="travel_lower_bound")
     milp.model.setObjective(-DELIVERY_BONUS * bonus + resolution * travel + already, sense="minimize")

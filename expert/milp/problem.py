@@ -66,6 +66,7 @@ class Problem:
     start_index: tuple[int, int] | None  # the start's lattice point if the start lies exactly on one
     infeasible: str | None = None  # why no plan can exist, when preprocessing already knows
     earliest: tuple[int, ...] = ()  # earliest[d]: first phase by which d objects can be delivered (bounds.Skeleton)
+    min_travel: float = 0.0  # metres: a lower bound on the travel term of Eq. 1 (bounds.min_travel)
     notes: dict = field(default_factory=dict)
 
     def options_of(self, kind: str, target: str | None = None) -> list[int]:

@@ -40,16 +40,27 @@ def reachable_mask(problem: Problem) -> np.ndarray:
         free &= inside_any
         seed &= with_start
     reached = seed & free
+    runs = (_runs(free), _runs(free.T).T)
     while True:
-        grown = reached.copy()
-        grown[1:, :] |= reached[:-1, :]
-        grown[:-1, :] |= reached[1:, :]
-        grown[:, 1:] |= reached[:, :-1]
-        grown[:, :-1] |= reached[:, 1:]
-        grown &= free
+        grown = _spread(_spread(reached, runs[0]), runs[1])
         if np.array_equal(grown, reached):
             return reached
         reached = grown
+
+
+def _runs(free: np.ndarray) -> np.ndarray:
+    """Labels (1, 2, ...) of the runs of free cells along the last axis; 0 where not free."""
+    starts = free.copy()
+    starts[:, 1:] &= ~free[:, :-1]
+    return np.cumsum(starts.ravel()).reshape(free.shape) * free
+
+
+def _spread(reached: np.ndarray, runs: np.ndarray) -> np.ndarray:
+    """Every cell of a run that holds a reached cell (whole runs at once: few passes for a long corridor)."""
+    hit = np.zeros(int(runs.max()) + 1, dtype=bool)
+    hit[runs[reached]] = True
+    hit[0] = False
+    return hit[runs]
 
 
 def unreachable_reason(problem: Problem) -> str | None:

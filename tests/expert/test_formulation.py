@@ -10,14 +10,15 @@ import pytest
 from planner_cases import BLOCK, bar, one_table, push_scene
 
 from expert import bench_cases
-from expert.milp.bounds import counting_bound, skeleton
+from expert.milp.bounds import counting_bound, min_travel, skeleton
 from expert.milp.build import build
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, split_box
 from expert.milp.problem import prepare
+from expert.milp.reach import reachable_mask, unreachable_reason
 from expert.planner import plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Rect
-from fetchcarry_env.kinematics import arm_line_clear, push_contact, reaches
+from fetchcarry_env.kinematics import arm_line_clear, push_contact, reaches, travel_cost
 from fetchcarry_env.scenario import DeliveryObject
 
 LATTICE_AREA = Rect(-1.0, -1.0, 6.0, 6.0)
@@ -207,6 +208,30 @@ def test_skeleton_proves_three_phases_too_few_for_the_paper_layout():
     """The fact measured on SCIP (guides/facts.md): with tables at (2, 2) and (4, 4), 3 phases are infeasible."""
     scenario = dataclasses.replace(bench_cases.basic("V", np.random.default_rng(0)), obstacles=())
     assert skeleton(problem_of(scenario)).phases == 4
+
+
+@pytest.mark.parametrize("scenario", sample_scenarios(), ids=lambda s: s.name)
+def test_travel_bound_is_below_the_optimal_plans_travel(scenario):
+    problem = problem_of(scenario)
+    bound = min_travel(problem)
+    result = plan(scenario, time_limit=30.0)
+    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(result.phases))
+    assert 0.0 < bound <= travel + 1e-9
+    assert bound >= 0.7 * travel  # and it is not a trivial bound on these layouts
+
+
+def test_reachable_points_follow_the_corridor():
+    scenario = bench_cases.corridor(np.random.default_rng(0))
+    problem = problem_of(scenario)
+    mask = reachable_mask(problem)
+    domain = problem.grid.domain
+
+    def at(x, y):
+        return mask[problem.grid.index_at_most(0, x) - domain.i_lo, problem.grid.index_at_most(1, y) - domain.j_lo]
+
+    assert at(0.5, 0.5) and at(5.5, 0.5) and at(5.5, 5.5)  # start, corner, top of the upper leg
+    assert not at(2.5, 3.0)  # inside the wall
+    assert unreachable_reason(problem) is None
 
 
 def test_delivery_timing_cuts_keep_the_optimum():
