@@ -19,7 +19,7 @@ from typing import Any
 
 import pyscipopt
 
-from expert.milp.bounds import counting_bound, min_travel, skeleton
+from expert.milp.bounds import PairCosts, action_windows, counting_bound, min_objective, min_travel, skeleton
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
 from expert.milp.decode import phases_of, plan_objective, read_steps
@@ -93,6 +93,7 @@ def plan(
         phases = phases_of(problem, [])
         stats["phases_tried"].append(1)
         return finish("optimal", phases, plan_objective(scenario, phases))
+    pairs = PairCosts(problem) if use_bound else None
     if use_bound:
         relaxation = skeleton(problem)
         problem = dataclasses.replace(problem, earliest=relaxation.earliest, min_travel=min_travel(problem))
@@ -106,7 +107,7 @@ def plan(
         if time.perf_counter() >= deadline - RESERVE_S:
             return finish("time_limit")
         stats["phases_tried"].append(n_phases)
-        outcome = _solve(problem, n_phases, settings, deadline, stats)
+        outcome = _solve(problem, n_phases, settings, deadline, stats, pairs)
         if outcome == "infeasible":
             if n_phases == first:
                 t_reach = time.perf_counter()
@@ -132,13 +133,20 @@ def solver_name() -> str:
     return f"SCIP {model.getMajorVersion()}.{model.getMinorVersion()}.{model.getTechVersion()}"
 
 
-def _solve(problem: Problem, n_phases: int, settings: SolverSettings, deadline: float, stats: dict):
+def _solve(
+    problem: Problem, n_phases: int, settings: SolverSettings, deadline: float, stats: dict, pairs: PairCosts | None
+):
     """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, phases)``."""
     t0 = time.perf_counter()
     record: dict[str, Any] = {"phases": n_phases}
     stats.setdefault("solves", []).append(record)
+    bound = windows = None
+    if pairs is not None:
+        bound = min_objective(problem, n_phases, pairs)
+        windows = action_windows(problem, n_phases, pairs)
+        record["objective_bound"] = bound
     try:
-        milp = build(problem, n_phases, settings)
+        milp = build(problem, n_phases, settings, bound, windows)
     except Infeasible:
         record.update(status="infeasible", build_s=time.perf_counter() - t0, solve_s=0.0, nodes=0)
         stats["build_s"] += record["build_s"]

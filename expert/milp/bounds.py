@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from expert.milp.grid import IndexBox, base_regions, point_in_region
 from expert.milp.problem import Problem
-from fetchcarry_env.kinematics import travel_cost
+from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
 
 def counting_bound(problem: Problem) -> int:
@@ -199,6 +199,126 @@ def min_travel(problem: Problem) -> float:
                     counter += 1
                     heapq.heappush(queue, (total, counter, nxt))
     return 0.0
+
+
+def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None) -> float:
+    """A lower bound on Eq. 1 for plans with ``n_phases`` phases (the skeleton search, timed).
+
+    With ``t_i`` the phase of object ``i``'s delivery, Eq. 1 is
+    ``travel - W1 * sum_i (N - t_i)`` (``delta_{i,k} = 1`` from ``t_i`` on) plus the constant of
+    objects already delivered. The search walks the skeleton's states extended by the
+    phase reached, per pair of consecutive actions at the least phases and the least
+    travel of any of their pose pairs (both lower bounds), adds ``W1 * t`` at each place,
+    and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
+    Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
+    """
+    pair = pair or PairCosts(problem)
+    count = len(problem.deliver)
+    pushable = problem.pushes.pushable
+    start_state = (frozenset(), problem.holding, frozenset(), None, 0)
+    best = {start_state: 0.0}
+    queue = [(0.0, 0, start_state)]
+    counter = 0
+    constant = -DELIVERY_BONUS * (count * n_phases + len(problem.delivered) * n_phases)
+    while queue:
+        spent, _, state = heapq.heappop(queue)
+        if spent > best.get(state, spent):
+            continue
+        delivered, held, pushed, last, phase = state
+        if len(delivered) == count and len(pushed) == len(pushable):
+            return spent + constant
+        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+            phases, travel = pair(last, key)
+            reached = phase + phases
+            if reached > n_phases - 1:
+                continue
+            total = spent + travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0)
+            nxt = (d, h, p, key, reached)
+            if total < best.get(nxt, math.inf) - 1e-12:
+                best[nxt] = total
+                counter += 1
+                heapq.heappush(queue, (total, counter, nxt))
+    return -math.inf
+
+
+class PairCosts:
+    """Least phases and least travel between two consecutive actions, over all their pose pairs (cached)."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem = problem
+        self.actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
+        self.free = _Free(problem)
+        self.cache: dict = {}
+
+    def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
+        if (previous, key) not in self.cache:
+            problem, action = self.problem, self.actions[key]
+            grid, start = problem.grid, problem.scenario.robot.start
+            exits = [None] if previous is None else list(dict.fromkeys(e for _, e in self.actions[previous].poses))
+            phases = min(_step_cost(self.free, problem, w, action.kind, en) for w in exits for en, _ in action.poses)
+            travel = min(
+                _gap_cost(grid, start, w, en)
+                + (_gap_cost(grid, start, en, ex, touching=True) if action.kind == "push" else 0.0)
+                for w in exits
+                for en, ex in action.poses
+            )
+            self.cache[(previous, key)] = (phases, travel)
+        return self.cache[(previous, key)]
+
+
+def action_windows(
+    problem: Problem, n_phases: int, pair: PairCosts | None = None
+) -> dict[tuple[str, str], tuple[int, int]]:
+    """Per action ``(kind, target)``, the phases ``[first, last]`` at which any plan with ``n_phases`` can do it.
+
+    ``first``: the least phases from the start to the action over every order of actions
+    (the skeleton search at action level); ``last``: ``N - 1`` minus the least phases
+    still needed after it. Both use lower bounds on the phases between two actions, so
+    no plan does an action outside its window; the MILP creates no option binary there.
+    """
+    pair = pair or PairCosts(problem)
+    count, pushable = len(problem.deliver), len(problem.pushes.pushable)
+    start_state = (frozenset(), problem.holding, frozenset(), None)
+    arrival = {start_state: 0}
+    queue = [(0, 0, start_state)]
+    counter = 0
+    while queue:
+        phase, _, state = heapq.heappop(queue)
+        if phase > arrival.get(state, phase):
+            continue
+        delivered, held, pushed, last = state
+        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+            reached = phase + pair(last, key)[0]
+            nxt = (d, h, p, key)
+            if reached < arrival.get(nxt, n_phases + 1):
+                arrival[nxt] = reached
+                counter += 1
+                heapq.heappush(queue, (reached, counter, nxt))
+    remaining: dict = {}
+
+    def still_needed(state) -> int:
+        if state not in remaining:
+            delivered, held, pushed, last = state
+            if len(delivered) == count and len(pushed) == pushable:
+                remaining[state] = 0
+            else:
+                remaining[state] = min(
+                    (
+                        pair(last, key)[0] + still_needed((d, h, p, key))
+                        for key, (d, h, p) in _moves(problem, delivered, held, pushed)
+                    ),
+                    default=n_phases,
+                )
+        return remaining[state]
+
+    windows: dict[tuple[str, str], tuple[int, int]] = {}
+    for state, phase in arrival.items():
+        key = state[3]
+        if key is None:
+            continue
+        first, last = windows.get(key, (n_phases, -1))
+        windows[key] = (min(first, phase), max(last, n_phases - 1 - still_needed(state)))
+    return windows
 
 
 def _gap_cost(grid, start, a: IndexBox | None, b: IndexBox, touching: bool = False) -> float:

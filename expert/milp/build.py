@@ -78,11 +78,22 @@ class SolverSettings:
             model.setParam(name, value)
 
 
-def build(problem: Problem, n_phases: int, settings: SolverSettings | None = None) -> Milp:
-    """The MILP of ``problem`` with ``n_phases`` phases (phase 0, the start, included)."""
+def build(
+    problem: Problem,
+    n_phases: int,
+    settings: SolverSettings | None = None,
+    objective_bound: float | None = None,
+    windows: dict | None = None,
+) -> Milp:
+    """The MILP of ``problem`` with ``n_phases`` phases (phase 0, the start, included).
+
+    ``objective_bound``: a proven lower bound on Eq. 1 with this many phases
+    (:func:`expert.milp.bounds.min_objective`), added as a valid inequality.
+    ``windows``: the phases at which each action can happen (:func:`expert.milp.bounds.action_windows`).
+    """
     model = Model(f"fetchcarry_{problem.scenario.name}_{n_phases}")
     (settings or SolverSettings()).apply(model)
-    milp = create_variables(problem, n_phases, model)
+    milp = create_variables(problem, n_phases, model, windows)
     add_motion_constraints(milp)
     add_action_constraints(milp)
     add_delivery_constraints(milp)
@@ -90,5 +101,5 @@ def build(problem: Problem, n_phases: int, settings: SolverSettings | None = Non
     add_collision_constraints(milp)
     add_arm_constraints(milp)
     add_push_constraints(milp)
-    set_objective(milp)
+    set_objective(milp, objective_bound)
     return milp

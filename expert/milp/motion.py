@@ -33,12 +33,15 @@ def add_motion_constraints(milp: Milp) -> None:
         model.addCons(milp.mxy[k] >= milp.my[k] - milp.mx[k], name=f"eq3_neg_{k}")
 
 
-def set_objective(milp: Milp) -> None:
-    """Eq. 1."""
+def set_objective(milp: Milp, lower_bound: float | None = None) -> None:
+    """Eq. 1, with the valid inequalities ``travel >= min_travel`` and, if given, ``Eq. 1 >= lower_bound``."""
     resolution = milp.problem.grid.resolution
     already = -DELIVERY_BONUS * milp.n_phases * len(milp.problem.delivered)
     bonus = quicksum(milp.delta[i][k] for i in milp.problem.deliver for k in range(1, milp.n_phases))
     travel = quicksum(milp.mx[k] + milp.my[k] + DIAGONAL_WEIGHT * milp.mxy[k] for k in range(1, milp.n_phases))
     if milp.problem.min_travel > 0:
         milp.model.addCons(resolution * travel >= milp.problem.min_travel - 1e-6, name="travel_lower_bound")
-    milp.model.setObjective(-DELIVERY_BONUS * bonus + resolution * travel + already, sense="minimize")
+    objective = -DELIVERY_BONUS * bonus + resolution * travel + already
+    if lower_bound is not None and lower_bound > -1e9:
+        milp.model.addCons(objective >= lower_bound - 1e-6, name="objective_lower_bound")
+    milp.model.setObjective(objective, sense="minimize")

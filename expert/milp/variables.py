@@ -108,8 +108,12 @@ class Milp:
         return self._pushed_dir[key]
 
 
-def create_variables(problem: Problem, n_phases: int, model: Model) -> Milp:
-    """Add every variable of the formulation with ``n_phases`` phases to ``model``."""
+def create_variables(problem: Problem, n_phases: int, model: Model, windows: dict | None = None) -> Milp:
+    """Add every variable of the formulation with ``n_phases`` phases to ``model``.
+
+    ``windows``: per action ``(kind, target)``, the phases ``[first, last]`` at which it can
+    happen at all (:func:`expert.milp.bounds.action_windows`); no binary outside them.
+    """
     milp = Milp(model, problem, n_phases)
     grid = problem.grid
     start = problem.scenario.robot.start
@@ -129,7 +133,10 @@ def create_variables(problem: Problem, n_phases: int, model: Model) -> Milp:
     milp._arm = [[] for _ in range(n_phases)]
     milp._push = [[] for _ in range(n_phases)]
     for o, option in enumerate(problem.options):
+        first, last = (windows or {}).get((option.kind, option.target), (0, n_phases))
         for k in option_phases(problem, option, n_phases):
+            if not first <= k <= last:
+                continue
             z = milp.z[k][o] = model.addVar(f"z_{option.kind}_{option.target}_{o}_{k}", vtype="B")
             (milp._push if option.kind == "push" else milp._arm)[k].append((o, z))
     for object_id in problem.deliver:
