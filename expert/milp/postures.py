@@ -35,6 +35,7 @@ from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions,
 from expert.milp.problem import PoseOption
 from expert.milp.push import PushCandidate, PushPlan
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
+from fetchcarry_env.kinematics import push_headings
 from fetchcarry_env.scenario import Posture, Scenario
 
 if TYPE_CHECKING:
@@ -133,12 +134,13 @@ def _options(
     hand: Point,
     push: PushCandidate | None,
 ) -> list[PoseOption]:
+    """The options of one action: every heading and posture, each box cut by the static collision rules."""
     cells = push.cells if push else (0, 0)
     hands = (
         (hand, (hand[0] + push.stroke * _sign(cells[0]), hand[1] + push.stroke * _sign(cells[1]))) if push else (hand,)
     )
     domain = grid.domain.intersect(grid.domain.shifted(-cells[0], -cells[1]))
-    headings = _push_headings(push.direction) if push else HEADINGS
+    headings = push_headings(push.direction) if push else HEADINGS
     out = []
     for heading in headings:
         conditions = None
@@ -151,12 +153,6 @@ def _options(
             for piece, forbidden in split_box(box, conditions):
                 out.append(PoseOption(kind, target, heading, posture.name, piece, hand, forbidden, push))
     return out
-
-
-def _push_headings(direction: Heading) -> tuple[Heading, ...]:
-    from fetchcarry_env.kinematics import push_headings
-
-    return push_headings(direction)
 
 
 def _sign(value: int) -> int:

@@ -13,6 +13,7 @@ Units are metres, except lattice indices.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -110,7 +111,7 @@ def prepare(scenario: Scenario, lattice: Lattice, holding: str | None = None, in
     )
     reason = _structural_infeasibility(problem)
     if reason is not None:
-        problem = Problem(**{**problem.__dict__, "infeasible": reason})
+        problem = dataclasses.replace(problem, infeasible=reason)
     return problem
 
 
