@@ -31,6 +31,13 @@ from fetchcarry_env.scenario import Scenario
 
 DEFAULT_SEED = 2024
 DEFAULT_TIME_LIMIT = 60.0  # seconds per planning call: generous, so that statuses are about optimality
+BASELINE_OPTIONS = {
+    "separating": "default",
+    "heuristics": "default",
+    "lower_bound": False,
+    "params": {"presolving/maxrestarts": -1, "branching/relpscost/maxlookahead": 9},
+}
+"""``--baseline``: SCIP's default settings and the paper's deepening from N = 3, without our bounds and cuts."""
 
 
 @dataclass(frozen=True)
@@ -87,13 +94,13 @@ class Run:
     valid: bool = True
 
 
-def run_case(case: Case, seed: int, time_limit: float) -> list[Run]:
-    """Plan ``case.repeats`` scenarios drawn from one generator seeded with ``seed``."""
+def run_case(case: Case, seed: int, time_limit: float, options: dict | None = None) -> list[Run]:
+    """Plan ``case.repeats`` scenarios drawn from one generator seeded with ``seed`` (``options`` go to ``plan``)."""
     rng = np.random.default_rng(seed)
     runs = []
     for _ in range(case.repeats):
         scenario = case.draw(rng)
-        result = plan(scenario, time_limit=time_limit)
+        result = plan(scenario, time_limit=time_limit, **(options or {}))
         stats = result.stats
         solves = stats.get("solves", [])
         final = solves[-1]["solve_s"] if solves and result.found else 0.0
@@ -220,6 +227,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--only", nargs="+", metavar="GROUP", help="run only these groups (V-B V-C L '2 obj' '3 obj' '4 obj')"
     )
     parser.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, help="seconds per planning call")
+    parser.add_argument(
+        "--baseline",
+        action="store_true",
+        help="SCIP's default settings and the paper's deepening from N = 3, without the lower bounds and cuts",
+    )
     parser.add_argument("--json", action="store_true", help="print every run and the summaries as JSON")
 
 
@@ -238,20 +250,24 @@ def run(args: argparse.Namespace, out=sys.stdout) -> int:
     started = time.perf_counter()
     runs: list[Run] = []
     for case in rows:
-        runs.extend(run_case(case, args.seed, args.time_limit))
+        runs.extend(run_case(case, args.seed, args.time_limit, BASELINE_OPTIONS if args.baseline else None))
     wall = time.perf_counter() - started
     ok = all(r.status == "optimal" and r.valid for r in runs)
     if args.json:
         data = {
             "solver": solver_name(),
             "seed": args.seed,
+            "baseline": bool(args.baseline),
             "wall_s": wall,
             "cases": {c.name: {**summary([r for r in runs if r.case == c.name]), "paper": c.paper} for c in rows},
             "runs": [asdict(r) for r in runs],
         }
         print(json.dumps(data, indent=2), file=out)
         return 0 if ok else 1
-    print(f"planner benchmark: {solver_name()}, seed {args.seed}, {len(runs)} plans in {wall:.1f} s", file=out)
+    settings = "baseline: SCIP defaults, N from 3" if args.baseline else "tuned settings"
+    print(
+        f"planner benchmark: {solver_name()}, {settings}, seed {args.seed}, {len(runs)} plans in {wall:.1f} s", file=out
+    )
     print(file=out)
     print_tables(rows, runs, out)
     if not ok:

@@ -1,0 +1,44 @@
+"""The planner benchmark command: a tiny run prints the tables and every plan is optimal."""
+
+from __future__ import annotations
+
+import io
+import json
+from argparse import Namespace
+
+import pytest
+
+from expert import bench
+from fetchcarry_env.errors import UsageError
+
+
+def args(**changes) -> Namespace:
+    base = {"seed": 1, "scale": 0.05, "only": ["V-B", "L"], "time_limit": 30.0, "baseline": False, "json": False}
+    return Namespace(**{**base, **changes})
+
+
+def test_tiny_run_prints_paper_and_goal_tables():
+    out = io.StringIO()
+    assert bench.run(args(), out) == 0
+    text = out.getvalue()
+    for expected in ("V-B area III", "IV-F L corridor", "0.22 (0.20)", "median 20, p95 50", "where the time goes"):
+        assert expected in text
+    assert "not optimal" not in text
+
+
+def test_json_lists_every_run():
+    out = io.StringIO()
+    assert bench.run(args(json=True), out) == 0
+    data = json.loads(out.getvalue())
+    assert len(data["runs"]) == 6  # five V-B areas and the corridor, one scenario each
+    assert all(r["status"] == "optimal" and r["valid"] for r in data["runs"])
+    assert data["cases"]["V-B area I"]["paper"] == "0.05 (0.02)"
+
+
+def test_unknown_group_is_a_usage_error():
+    with pytest.raises(UsageError, match="nope"):
+        bench.run(args(only=["nope"]), io.StringIO())
+
+
+def test_main_parses_its_options():
+    assert bench.main(["--scale", "0.05", "--only", "L", "--seed", "3"]) == 0
