@@ -59,7 +59,7 @@ def plan(
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
     Returns:
-        a :class:`~expert.plan.Plan` with ``status`` ``optimal``, ``feasible``,
+        a :class:`~expert.plans.Plan` with ``status`` ``optimal``, ``feasible``,
         ``infeasible`` or ``time_limit`` and ``stats`` (solver, phases tried, seconds).
     """
     started = time.perf_counter()
