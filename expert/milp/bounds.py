@@ -53,6 +53,9 @@ class _Action:
     poses: tuple[tuple[IndexBox, IndexBox], ...]
 
 
+MAX_PIECES = 256  # boxes listed for the points one move away before the two-move test gives up (optimistically)
+
+
 class _Free:
     """One-move connectivity between base sets under Eq. 18 (tables and obstacles grown by the radius)."""
 
@@ -89,6 +92,45 @@ class _Free:
         if any(b.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
             return self._search(a, b, depth + 1)
         return any(self._search(None if a is None else a.clip(planes[n]), b.clip(planes[n]), depth + 1) for n in usable)
+
+    def connectable_in_two(self, a: IndexBox | None, b: IndexBox) -> bool:
+        """True when two straight moves can join ``a`` to ``b``: some lattice point is one move from both.
+
+        Optimistic (True) when the sets one move away are too fragmented to list, so the
+        bounds stay valid.
+        """
+        key = ("two", a, b)
+        if key not in self._memo:
+            from_a, from_b = self.one_move_from(a), self.one_move_from(b)
+            if from_a is None or from_b is None:
+                self._memo[key] = True
+            else:
+                self._memo[key] = any(not w.intersect(v).empty for w in from_a for v in from_b)
+        return self._memo[key]
+
+    def one_move_from(self, a: IndexBox | None) -> list[IndexBox] | None:
+        """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``)."""
+        key = ("from", a)
+        if key not in self._memo:
+            pieces: list[IndexBox] = []
+            complete = self._spread(a, self.domain, 0, pieces)
+            self._memo[key] = pieces if complete else None
+        return self._memo[key]
+
+    def _spread(self, a: IndexBox | None, w: IndexBox, depth: int, pieces: list[IndexBox]) -> bool:
+        if w.empty or (a is not None and a.empty):
+            return True
+        if depth == len(self.blockers):
+            pieces.append(w)
+            return len(pieces) <= MAX_PIECES
+        planes, at_start = self.blockers[depth]
+        regions = at_start if a is None else range(4)
+        usable = [n for n in regions if w.meets(planes[n]) and (a is None or a.meets(planes[n]))]
+        if any(w.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
+            return self._spread(a, w, depth + 1, pieces)
+        return all(
+            self._spread(None if a is None else a.clip(planes[n]), w.clip(planes[n]), depth + 1, pieces) for n in usable
+        )
 
 
 @dataclass(frozen=True)
@@ -349,11 +391,12 @@ def _skeleton_actions(problem: Problem) -> list[_Action]:
 
 def _step_cost(free: _Free, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
     """Phases needed at least from base set ``where`` (None: the start) to the end of an action entered at ``entry``."""
+    moves = 1 if free.connectable(where, entry) else 2 if free.connectable_in_two(where, entry) else 3
     if kind != "push":
-        return 1 if free.connectable(where, entry) else 2
+        return moves
     if where is None:
         if problem.start_index is not None and entry.contains(*problem.start_index):
             return 1
     elif not where.intersect(entry).empty:
         return 1
-    return 2 if free.connectable(where, entry) else 3
+    return moves + 1

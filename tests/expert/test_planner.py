@@ -230,9 +230,14 @@ def test_enclosed_robot_is_infeasible_after_one_solve():
 
 
 def test_max_phases_below_need_is_infeasible():
+    """The detour case needs 5 phases; the lower bound knows it, so max_phases=4 needs no solve."""
     result = plan(one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),)), max_phases=4)
     assert result.status == "infeasible"
-    assert result.stats["phases_tried"] == [4]
+    assert result.stats["phases_tried"] == []
+    assert "lower bound 5" in result.stats["reason"]
+    result = plan(one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),)), max_phases=4, lower_bound=False)
+    assert result.status == "infeasible"
+    assert result.stats["phases_tried"] == [3, 4]
 
 
 def test_time_limit_without_a_plan():
