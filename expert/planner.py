@@ -19,7 +19,15 @@ from typing import Any
 
 import pyscipopt
 
-from expert.milp.bounds import PairCosts, action_windows, counting_bound, min_objective, min_travel, skeleton
+from expert.milp.bounds import (
+    Connectivity,
+    PairCosts,
+    action_windows,
+    counting_bound,
+    min_objective,
+    min_travel,
+    skeleton,
+)
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
 from expert.milp.decode import phases_of, plan_objective, read_steps
@@ -93,9 +101,10 @@ def plan(
         phases = phases_of(problem, [])
         stats["phases_tried"].append(1)
         return finish("optimal", phases, plan_objective(scenario, phases))
-    pairs = PairCosts(problem) if use_bound else None
+    free = Connectivity(problem)
+    pairs = PairCosts(problem, free) if use_bound else None
     if use_bound:
-        relaxation = skeleton(problem)
+        relaxation = skeleton(problem, free)
         problem = dataclasses.replace(problem, earliest=relaxation.earliest, min_travel=min_travel(problem))
         first = max(3, counting_bound(problem), relaxation.phases)
     else:

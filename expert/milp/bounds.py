@@ -56,7 +56,7 @@ class _Action:
 MAX_PIECES = 256  # boxes listed for the points one move away before the two-move test gives up (optimistically)
 
 
-class _Free:
+class Connectivity:
     """One-move connectivity between base sets under Eq. 18 (tables and obstacles grown by the radius)."""
 
     def __init__(self, problem: Problem) -> None:
@@ -146,7 +146,7 @@ class Skeleton:
     earliest: tuple[int, ...]
 
 
-def skeleton(problem: Problem) -> Skeleton:
+def skeleton(problem: Problem, free: Connectivity | None = None) -> Skeleton:
     """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
 
     Shortest path over the states (delivered, held, pushed, last pose) where each
@@ -157,7 +157,7 @@ def skeleton(problem: Problem) -> Skeleton:
     any point of a box on entry and any on exit only makes the bound weaker, never wrong.
     """
     actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
-    free = _Free(problem)
+    free = free or Connectivity(problem)
     deliver = problem.deliver
     pushable = problem.pushes.pushable
     start_state = (frozenset(), problem.holding, frozenset(), None)
@@ -286,10 +286,10 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
 class PairCosts:
     """Least phases and least travel between two consecutive actions, over all their pose pairs (cached)."""
 
-    def __init__(self, problem: Problem) -> None:
+    def __init__(self, problem: Problem, free: Connectivity | None = None) -> None:
         self.problem = problem
         self.actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
-        self.free = _Free(problem)
+        self.free = free or Connectivity(problem)
         self.cache: dict = {}
 
     def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
@@ -389,7 +389,7 @@ def _skeleton_actions(problem: Problem) -> list[_Action]:
     return [_Action(kind, target, tuple(poses)) for (kind, target), poses in groups.items()]
 
 
-def _step_cost(free: _Free, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
+def _step_cost(free: Connectivity, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
     """Phases needed at least from base set ``where`` (None: the start) to the end of an action entered at ``entry``."""
     moves = 1 if free.connectable(where, entry) else 2 if free.connectable_in_two(where, entry) else 3
     if kind != "push":

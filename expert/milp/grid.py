@@ -93,7 +93,9 @@ class IndexBox:
 
     def meets(self, plane: HalfPlane) -> bool:
         """True when some point of the box lies in ``plane``."""
-        return not self.empty and not self.clip(plane).empty
+        if self.empty:
+            return False
+        return self.lo(plane.axis) <= plane.bound if plane.upper else self.hi(plane.axis) >= plane.bound
 
     def shifted(self, di: int, dj: int) -> IndexBox:
         return IndexBox(self.i_lo + di, self.i_hi + di, self.j_lo + dj, self.j_hi + dj)
