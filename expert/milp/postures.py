@@ -41,7 +41,7 @@ from fetchcarry_env.scenario import Posture, Scenario
 if TYPE_CHECKING:
     from expert.milp.variables import Milp
 
-HAND_TOL = 1e-7  # metres: a hand point on a region's boundary counts as inside
+HAND_TOL = 5e-7  # metres: a hand point this close to a region counts as inside (float32 observations)
 
 
 def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture) -> IndexBox:

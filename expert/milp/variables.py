@@ -119,8 +119,12 @@ def create_variables(problem: Problem, n_phases: int, model: Model, windows: dic
     start = problem.scenario.robot.start
     vtype = "I" if grid.integral else "C"
     (u_lo, u_hi), (v_lo, v_hi) = grid.var_bounds(0), grid.var_bounds(1)
-    milp.u.append(grid.index_of(0, start[0]))
-    milp.v.append(grid.index_of(1, start[1]))
+    if problem.start_index is not None:  # on a lattice point (up to float noise): use it exactly
+        milp.u.append(float(problem.start_index[0]))
+        milp.v.append(float(problem.start_index[1]))
+    else:
+        milp.u.append(grid.index_of(0, start[0]))
+        milp.v.append(grid.index_of(1, start[1]))
     for series in (milp.mx, milp.my, milp.mxy):
         series.append(None)
     for k in range(1, n_phases):

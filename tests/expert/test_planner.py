@@ -325,3 +325,37 @@ def test_bench_cases_are_optimal_and_valid():
         check_plan(scenario, result)
         assert result.status == "optimal", scenario.name
         assert math.isclose(result.stats["gap"], 0.0, abs_tol=1e-9)
+
+
+@pytest.mark.parametrize("k", [2, 3, 4, 5])
+def test_replanning_from_a_decoded_observation(k):
+    """The expert policy plans mid-episode from float32 observations: every state along a plan replans.
+
+    The state after phase k of a push plan goes through the observation codec (float32),
+    and the planner must find a plan from there, on the env's lattice, with what the
+    hand holds, whose remaining actions pass the validator.
+    """
+    from fetchcarry_env.observation import Capacity, WorldState, decode, encode, standing_center
+
+    scenario = bench_cases.push("A", np.random.default_rng(3))
+    first = plan(scenario)
+    phase = first.phases[k]
+    objects = {}
+    for obj in scenario.objects:
+        x, y, z = standing_center(scenario, obj, phase.objects[obj.id])
+        objects[obj.id] = (x, y, z + (0.05 if phase.holding == obj.id else 0.0))
+    if phase.holding is not None:  # a held object's height: over the table it was picked from
+        x, y = phase.objects[phase.holding]
+        objects[phase.holding] = (
+            x,
+            y,
+            standing_center(scenario, scenario.objects[0], scenario.objects[0].start)[2] + 0.05,
+        )
+    state = WorldState(phase.base, phase.heading, phase.holding, objects, dict(phase.clutter))
+    capacity = Capacity()
+    observed, observed_state = decode(encode(scenario, state, capacity), capacity)
+    lattice = Lattice.over(scenario.area, 0.05)
+    again = plan(observed, lattice=lattice, holding=observed_state.holding)
+    assert again.status == "optimal", again.stats
+    check_plan(observed, again, lattice=lattice, holding=observed_state.holding)
+    assert len(again.phases) <= len(first.phases) - k + 1
