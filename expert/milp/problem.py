@@ -17,6 +17,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from expert.milp.area import area_is_empty
 from expert.milp.grid import Grid, IndexBox
 from expert.milp.push import PushCandidate, PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
@@ -130,6 +131,8 @@ def _blocking_objects(scenario: Scenario, deliver: tuple[str, ...], holding: str
 def _structural_infeasibility(problem: Problem) -> str | None:
     """A reason no number of phases can help, or None (cheap checks only; the MILP decides the rest)."""
     scenario = problem.scenario
+    if area_is_empty(problem.grid):
+        return "no lattice point keeps the base disc inside the area (Eq. 27)"
     objects = {o.id: o for o in scenario.objects}
     for a in problem.deliver:
         for b in problem.deliver:

@@ -359,3 +359,8 @@ def test_replanning_from_a_decoded_observation(k):
     assert again.status == "optimal", again.stats
     check_plan(observed, again, lattice=lattice, holding=observed_state.holding)
     assert len(again.phases) <= len(first.phases) - k + 1
+
+
+def test_lattice_outside_the_area_is_infeasible():
+    result = plan(one_table(), lattice=Lattice.over(Rect(10.0, 10.0, 12.0, 12.0), 0.05))
+    assert result.status == "infeasible" and "Eq. 27" in result.stats["reason"]
