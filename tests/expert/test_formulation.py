@@ -234,11 +234,15 @@ def test_reachable_points_follow_the_corridor():
     assert unreachable_reason(problem) is None
 
 
-def test_delivery_timing_cuts_keep_the_optimum():
-    scenario = bench_cases.multi(2, np.random.default_rng(3))
-    with_cuts = plan(scenario)
-    without = plan(scenario, lower_bound=False)
+@pytest.mark.parametrize(
+    "scenario", [*sample_scenarios(), bench_cases.multi(3, np.random.default_rng(8))], ids=lambda s: s.name
+)
+def test_bounds_and_cuts_keep_the_optimum(scenario):
+    """The skeleton's N, the timing, travel and objective cuts and the phase windows cut off no optimum."""
+    with_cuts = plan(scenario, time_limit=60.0)
+    without = plan(scenario, time_limit=60.0, lower_bound=False)
     assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
     assert with_cuts.objective == pytest.approx(without.objective)
 
 
