@@ -1,4 +1,4 @@
-"""The expert's commands: ``fetchcarry plan`` and ``fetchcarry validate``.
+"""The expert's commands: ``fetchcarry plan``, ``fetchcarry validate`` and ``fetchcarry bench planner``.
 
 Registered into ``training/cli.py`` by :func:`register`. Exit statuses follow
 ``spec/interfaces.md``: ``plan`` 0 when a plan was found and 1 when none
@@ -28,9 +28,12 @@ PLAN_SUFFIX = ".plan.json"
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
+    """Add ``plan``, ``validate`` and ``bench planner`` to the ``fetchcarry`` parser."""
     _register_plan(commands)
     _register_validate(commands)
+    from expert import bench as planner_bench  # the planner benchmark's own options and handler
+
+    planner_bench.register(bench)
 
 
 # ---------------------------------------------------------------------- plan

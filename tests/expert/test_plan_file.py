@@ -147,3 +147,14 @@ def test_a_file_error_names_the_file_and_the_field(tmp_path):
     path.write_text(json.dumps(_set(("phases", 1, "heading"), "north")))
     with pytest.raises(PlanFormatError, match=r"bad\.plan\.json: phases\[1\]\.heading must be one of"):
         Plan.load(path)
+
+
+def test_a_produced_plan_round_trips(tmp_path, spec_example):
+    from expert.planner import plan
+
+    produced = plan(spec_example, time_limit=20.0)
+    assert produced.found
+    path = tmp_path / "produced.plan.json"
+    produced.save(path)
+    assert Plan.load(path) == produced
+    assert Plan.from_dict(json.loads(json.dumps(produced.to_dict()))) == produced
