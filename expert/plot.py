@@ -26,13 +26,15 @@ from fetchcarry_env.scenario import Scenario
 
 # Colours of the plan's own marks (the scene's colours are drawing.PALETTE).
 TRAVEL = "#505050"  # a move with an empty hand
-CARRY = "#2a6fdb"  # a move holding an object
+CARRY = drawing.PALETTE.object  # a move holding the first object (each object has its colour)
 PUSH = "#d62728"  # a push stroke
 PICK = "#2ca02c"
 PLACE = "#9467bd"
 
 SIDE_WIDTH_IN = 3.6  # inches of the column beside the map (steps and the close-up)
 MAX_LISTED_STEPS = 30  # longer plans list their first steps only
+STEP_ROW_IN = 0.125  # inches per row of the step list (7 pt monospace)
+MIN_CLOSE_UP_IN = 3.0  # inches of height kept for the close-up
 CLOSE_UP_MARGIN = 0.45  # metres shown around the close-up's content
 LABEL_SIZE_IN = 0.2  # inches: phase numbers closer than this on the page share one label
 LABEL_OFFSET = 0.75  # phase numbers sit this many base radii left of and above the base centre
@@ -46,25 +48,23 @@ def plot_plan(scenario: Scenario, plan: Plan, path: str | Path, *, width_in: flo
     draws the scenario with the status in the title. Returns the path written.
     """
     path = Path(path)
-    height_in = drawing.map_height_in(scenario, width_in) + 1.6
+    height_in = drawing.map_height_in(scenario, width_in) + 1.1  # title, axis labels and the legend
     figure = Figure(figsize=(width_in + SIDE_WIDTH_IN, height_in), layout="constrained")
     FigureCanvasAgg(figure)
-    grid = figure.add_gridspec(2, 2, width_ratios=[width_in, SIDE_WIDTH_IN], height_ratios=[1.0, 1.0])
+    listed = min(len(plan.phases), MAX_LISTED_STEPS) + 4  # text rows of the step list
+    steps_in = min(STEP_ROW_IN * listed + 0.2, height_in - MIN_CLOSE_UP_IN)
+    grid = figure.add_gridspec(
+        2, 2, width_ratios=[width_in, SIDE_WIDTH_IN], height_ratios=[steps_in, height_in - steps_in]
+    )
     map_axes = figure.add_subplot(grid[:, 0])
     steps_axes = figure.add_subplot(grid[0, 1])
     close_axes = figure.add_subplot(grid[1, 1])
+    close_axes.set_anchor("N")  # an equal-aspect map: keep it just under the step list
 
     view = scenario.area.inflate(drawing.MARGIN)
     drawing.frame_map(map_axes, view)
     _draw_plan(map_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * view.size[0] / width_in)
-    map_axes.legend(
-        handles=_legend_handles(scenario),
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.08),
-        ncol=4,
-        fontsize=7,
-        frameon=False,
-    )
+    figure.legend(handles=_legend_handles(scenario), loc="outside lower center", ncol=5, fontsize=7, frameon=False)
     map_axes.set_title(_title(scenario, plan), fontsize=10)
     _list_steps(steps_axes, plan)
     close_view = _close_up_view(scenario, plan)
@@ -83,7 +83,7 @@ def _draw_plan(axes: Axes, scenario: Scenario, plan: Plan, *, label_merge_m: flo
     for phase in phases:
         _draw_pose(axes, scenario, phase)
     for k in range(1, len(phases)):
-        _draw_step(axes, phases[k - 1], phases[k])
+        _draw_step(axes, scenario, phases[k - 1], phases[k])
     _number_phases(axes, phases, label_merge_m, LABEL_OFFSET * scenario.robot.radius)
 
 
@@ -119,20 +119,21 @@ def _draw_clutter(axes: Axes, scenario: Scenario, phases: tuple[Phase, ...]) -> 
         drawing.draw_clutter(axes, item, end)
 
 
-def _draw_step(axes: Axes, before: Phase, after: Phase) -> None:
+def _draw_step(axes: Axes, scenario: Scenario, before: Phase, after: Phase) -> None:
     """The base move into ``after`` and what the arm does at its end."""
     if after.action == "push":
         _arrow(axes, before.base, after.base, PUSH, width=3.0)
         if after.target in before.clutter and after.target in after.clutter:
             _arrow(axes, before.clutter[after.target], after.clutter[after.target], PUSH, width=1.5, style="->")
         return
-    colour = CARRY if before.holding is not None else TRAVEL
+    colour = TRAVEL if before.holding is None else drawing.object_colour(scenario, before.holding)
     _arrow(axes, before.base, after.base, colour, width=1.6)
     if after.action in ("pick", "place") and after.target is not None:
         state = before if after.action == "pick" else after
         target = state.objects.get(after.target)
         if target is not None:
-            _arm(axes, after.base, target, PICK if after.action == "pick" else PLACE, after.action)
+            colour = PICK if after.action == "pick" else PLACE
+            _arm(axes, after.base, target, colour, after.action, drawing.object_colour(scenario, after.target))
 
 
 def _draw_pose(axes: Axes, scenario: Scenario, phase: Phase) -> None:
@@ -192,17 +193,20 @@ def _arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, s
     )
 
 
-def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str) -> None:
-    """The arm line of a pick or place and a marker at the hand (triangle up: pick, down: place)."""
+def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str, object_colour: str) -> None:
+    """The arm line of a pick or place and a marker at the hand.
+
+    Triangle up: pick, down: place; the edge is the action's colour, the fill the object's.
+    """
     axes.plot([base[0], hand[0]], [base[1], hand[1]], color=colour, linestyle=":", linewidth=1.8, zorder=drawing.Z_TEXT)
-    marker = "^" if action == "pick" else "v"
     axes.plot(
         [hand[0]],
         [hand[1]],
-        marker=marker,
+        marker="^" if action == "pick" else "v",
         markersize=9,
-        color=colour,
-        markeredgecolor="black",
+        markerfacecolor=object_colour,
+        markeredgecolor=colour,
+        markeredgewidth=1.8,
         linestyle="none",
         zorder=drawing.Z_TEXT,
     )
@@ -212,15 +216,16 @@ def _legend_handles(scenario: Scenario) -> list:
     palette = drawing.PALETTE
     handles = [
         Line2D([], [], color=TRAVEL, linewidth=1.6, marker=">", label="move, hand empty"),
-        Line2D([], [], color=CARRY, linewidth=1.6, marker=">", label="move, carrying"),
+        Line2D([], [], color=CARRY, linewidth=1.6, marker=">", label="move, carrying (object's colour)"),
         Line2D([], [], color=PUSH, linewidth=3.0, marker=">", label="push stroke"),
-        Line2D([], [], color=PICK, linestyle=":", marker="^", markeredgecolor="black", label="pick (arm line)"),
-        Line2D([], [], color=PLACE, linestyle=":", marker="v", markeredgecolor="black", label="place (arm line)"),
+        Line2D([], [], color=PICK, linestyle=":", marker="^", markerfacecolor="white", label="pick (arm line)"),
+        Line2D([], [], color=PLACE, linestyle=":", marker="v", markerfacecolor="white", label="place (arm line)"),
         Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label="base at phase k, heading"),
         Patch(facecolor=palette.table, edgecolor=palette.table_edge, label="table"),
-        Line2D([], [], color=palette.object, marker="o", linestyle="none", label="object (start)"),
-        Line2D([], [], color=palette.goal, marker="x", linestyle="--", label="goal"),
     ]
+    for obj in scenario.objects:
+        colour = drawing.object_colour(scenario, obj.id)
+        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}: start, goal ring"))
     if scenario.obstacles:
         handles.append(Patch(facecolor=palette.obstacle, edgecolor=palette.wall, hatch="//", label="obstacle"))
     if scenario.clutter:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -50,8 +51,13 @@ class Palette:
     obstacle: str = "#6b6b6b"
     clutter: str = "#e07b39"
     clutter_edge: str = "#8a4217"
-    object: str = "#2a6fdb"
-    goal: str = "#2a6fdb"
+    objects: tuple[str, ...] = ("#2a6fdb", "#17becf", "#bcbd22", "#8c564b", "#e377c2", "#7f7f7f")  # one per object
+
+    @property
+    def object(self) -> str:
+        """The colour of the first (or only) object."""
+        return self.objects[0]
+
     robot: str = "#3aa655"
     robot_edge: str = "#1e6b33"
 
@@ -62,6 +68,14 @@ PALETTE = Palette()
 Z_FLOOR, Z_FURNITURE, Z_CLUTTER, Z_GOAL, Z_OBJECT, Z_ROBOT, Z_TEXT = 0, 1, 2, 3, 4, 5, 8
 
 MARGIN = 0.3  # metres of the outside shown around the area
+LABEL_HALO = [patheffects.withStroke(linewidth=2.0, foreground="white")]  # keeps labels legible on any fill
+
+
+def object_colour(scenario: Scenario, object_id: str) -> str:
+    """The colour of an object, its goal and its carrying moves: one per object, in scenario order."""
+    ids = [obj.id for obj in scenario.objects]
+    index = ids.index(object_id) if object_id in ids else 0
+    return PALETTE.objects[index % len(PALETTE.objects)]
 
 
 def new_figure(scenario: Scenario, width_in: float = 7.0) -> tuple[Figure, Axes]:
@@ -113,7 +127,7 @@ def draw_scenario(
         draw_rect(axes, obstacle.rect, face=PALETTE.obstacle, edge=PALETTE.wall, zorder=Z_FURNITURE, hatch="//")
     if show_goals:
         for obj in scenario.objects:
-            draw_goal(axes, obj)
+            draw_goal(axes, obj, colour=object_colour(scenario, obj.id))
     if show_clutter:
         for item in scenario.clutter:
             center = state.clutter.get(item.id, item.rect.center) if state else item.rect.center
@@ -121,7 +135,7 @@ def draw_scenario(
     for obj in scenario.objects:
         center = state.objects.get(obj.id, obj.start) if state else obj.start
         held = state is not None and state.holding == obj.id
-        draw_object(axes, obj, center, held=held, label=show_labels)
+        draw_object(axes, obj, center, colour=object_colour(scenario, obj.id), held=held, label=show_labels)
     if show_robot:
         base, heading = (state.base, state.heading) if state else (scenario.robot.start, scenario.robot.heading)
         draw_robot(axes, base, heading, scenario.robot.radius)
@@ -175,19 +189,25 @@ def draw_clutter(
         return
     draw_rect(axes, rect, face=PALETTE.clutter, edge=PALETTE.clutter_edge, zorder=Z_CLUTTER, alpha=0.9)
     if label:
-        _label(axes, rect.center, item.id, color="white", weight="bold")
+        _label(axes, rect.center, item.id, color=PALETTE.clutter_edge, weight="bold")
 
 
 def draw_object(
-    axes: Axes, obj: DeliveryObject, center: Sequence[float], *, held: bool = False, label: bool = True
+    axes: Axes,
+    obj: DeliveryObject,
+    center: Sequence[float],
+    *,
+    colour: str = PALETTE.object,
+    held: bool = False,
+    label: bool = True,
 ) -> None:
     """A delivery object (a disc of its radius) centred at ``center``; held ones get a thick outline."""
     axes.add_patch(
         Circle(
             (float(center[0]), float(center[1])),
             obj.radius,
-            facecolor=PALETTE.object,
-            edgecolor="black" if held else PALETTE.object,
+            facecolor=colour,
+            edgecolor="black" if held else colour,
             linewidth=2.0 if held else 0.5,
             zorder=Z_OBJECT,
         )
@@ -196,15 +216,13 @@ def draw_object(
         _label(axes, (float(center[0]), float(center[1]) + obj.radius + 0.02), obj.id, va="bottom")
 
 
-def draw_goal(axes: Axes, obj: DeliveryObject) -> None:
-    """An object's goal: a dashed ring of the object's size with a cross in it."""
+def draw_goal(axes: Axes, obj: DeliveryObject, *, colour: str = PALETTE.object) -> None:
+    """An object's goal: a dashed ring of the object's size, in the object's colour, with a cross in it."""
     x, y = obj.goal
     axes.add_patch(
-        Circle(
-            (x, y), obj.radius, facecolor="none", edgecolor=PALETTE.goal, linestyle="--", linewidth=1.2, zorder=Z_GOAL
-        )
+        Circle((x, y), obj.radius, facecolor="none", edgecolor=colour, linestyle="--", linewidth=1.2, zorder=Z_GOAL)
     )
-    axes.plot([x], [y], marker="x", color=PALETTE.goal, markersize=5, zorder=Z_GOAL)
+    axes.plot([x], [y], marker="x", color=colour, markersize=5, zorder=Z_GOAL)
 
 
 def draw_robot(
@@ -260,5 +278,15 @@ def _label(
     axes: Axes, at: Point, text: str, *, va: str = "center", color: str = "black", weight: str = "normal"
 ) -> None:
     axes.text(
-        at[0], at[1], text, ha="center", va=va, fontsize=7, color=color, weight=weight, zorder=Z_TEXT, clip_on=True
+        at[0],
+        at[1],
+        text,
+        ha="center",
+        va=va,
+        fontsize=7,
+        color=color,
+        weight=weight,
+        zorder=Z_TEXT,
+        clip_on=True,
+        path_effects=LABEL_HALO,
     )
