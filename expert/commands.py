@@ -83,6 +83,7 @@ def run_plan(args: argparse.Namespace) -> int:
     plot_path = Path(args.plot) if args.plot else None
     if plot_path is not None:
         _check_writable(plot_path, "plot")
+        _check_picture_format(plot_path)
 
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
@@ -237,6 +238,14 @@ def _check_writable(path: Path, what: str) -> None:
         raise UsageError(f"{what} {path} is a directory; give a file name")
     if not path.parent.is_dir():
         raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
+
+
+def _check_picture_format(path: Path) -> None:
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lower().lstrip(".") not in formats:
+        raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
 
 
 def _positive_float(text: str) -> float:

@@ -172,6 +172,12 @@ def test_plan_into_a_missing_directory_is_exit_2(capsys, tmp_path):
     assert status == 2 and "does not exist" in err
 
 
+def test_plot_into_an_unknown_picture_format_is_exit_2(capsys, tmp_path):
+    status, _, err = run(capsys, "plan", EXAMPLE, "-o", tmp_path / "p.json", "--plot", tmp_path / "plan.xyz")
+    assert status == 2 and "cannot draw into" in err and ".png" in err
+    assert not (tmp_path / "p.json").exists()  # refused before planning
+
+
 def test_help_explains_the_exit_statuses(capsys):
     for command in ("plan", "validate"):
         status, out, _ = run(capsys, command, "--help")

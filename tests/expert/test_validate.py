@@ -7,13 +7,19 @@ fault put in; the test asserts the message a user would read.
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 from handmade import BOTTLE_START, with_phase
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from expert.plans import Phase, Plan
+from expert.plans import PHASE_ACTIONS, STATUSES, Phase, Plan
 from expert.validate import validate_plan
+from fetchcarry_env.geometry import HEADINGS
 from fetchcarry_env.scenario import Scenario
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
 
 
 def with_block(plan: Plan, from_k: int, center) -> Plan:
@@ -270,3 +276,27 @@ def test_every_violation_is_listed(spec_example, hand_plan):
     plan = with_phase(with_phase(hand_plan, 1, base=(4.0, -0.9)), 5, base=(2.8, 2.0))
     violations = validate_plan(spec_example, plan)
     assert [m.split(":")[0] for m in violations] == ["rule 1 (area)", "rule 4 (reach)"]
+
+
+# ---------------------------------------------------------------------- robustness
+_coordinate = st.floats(min_value=-2.0, max_value=7.0, allow_nan=False)
+_point = st.tuples(_coordinate, _coordinate)
+_phase = st.builds(
+    Phase,
+    base=_point,
+    heading=st.sampled_from(HEADINGS),
+    action=st.sampled_from(PHASE_ACTIONS),
+    target=st.sampled_from([None, "bottle", "block", "ghost"]),
+    posture=st.sampled_from([None, "reach_far", "reach_near", "reach_up"]),
+    holding=st.sampled_from([None, "bottle", "block"]),
+    objects=st.dictionaries(st.sampled_from(["bottle", "ghost"]), _point, max_size=2),
+    clutter=st.dictionaries(st.sampled_from(["block", "ghost"]), _point, max_size=2),
+)
+
+
+@settings(max_examples=150, deadline=None, derandomize=True, database=None)
+@given(phases=st.lists(_phase, min_size=1, max_size=6), status=st.sampled_from(STATUSES))
+def test_any_well_formed_plan_gets_messages_not_an_exception(phases, status):
+    scenario = Scenario.load(EXAMPLE)
+    violations = validate_plan(scenario, Plan(scenario.name, status, None, tuple(phases)))
+    assert all(isinstance(m, str) and m.split(":")[0].startswith(("structure", "rule ")) for m in violations)
