@@ -37,6 +37,9 @@ CASES = {
 }
 
 
+PUSH_ASIDE = ("spec example (push aside)", "push")
+
+
 @pytest.mark.parametrize("case", list(CASES))
 def test_the_plan_delivers_every_object_in_the_env(case):
     scenario = CASES[case]()
@@ -47,7 +50,7 @@ def test_the_plan_delivers_every_object_in_the_env(case):
         result = plan(scenario, time_limit=TIME_LIMIT, lattice=lattice)
         assert result.found, (case, result.status)
         assert validate_plan(scenario, result) == []
-        if case.endswith("(push aside)"):
+        if case in PUSH_ASIDE:  # clutter stands on a goal: the plan must push it aside
             assert any(p.action == "push" for p in result.phases)
         actions = plan_to_actions(result, scenario, lattice)
         assert len(actions) == len(result.phases) - 1
