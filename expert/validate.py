@@ -62,11 +62,13 @@ class _Context:
     postures: dict[str, Posture]
     object_ids: frozenset[str]
     clutter: dict[str, Clutter]
+    holding: str | None = None
 
     @classmethod
-    def of(cls, scenario: Scenario, plan: Plan) -> _Context:
+    def of(cls, scenario: Scenario, plan: Plan, holding: str | None = None) -> _Context:
         return cls(
             scenario=scenario,
+            holding=holding,
             phases=plan.phases,
             postures={p.name: p for p in scenario.robot.postures},
             object_ids=frozenset(o.id for o in scenario.objects),
@@ -92,11 +94,16 @@ class _Context:
         return {cid: rect for cid, rect in rects.items() if rect is not None}
 
 
-def validate_plan(scenario: Scenario, plan: Plan) -> list[str]:
-    """Every way ``plan`` breaks ``spec/plan.md`` for ``scenario``, one message each; empty when valid."""
+def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None) -> list[str]:
+    """Every way ``plan`` breaks ``spec/plan.md`` for ``scenario``, one message each; empty when valid.
+
+    ``holding`` names an object already in the hand at the start, as in plans made
+    mid-episode with ``plan(..., holding=...)``; its ``start`` in the scenario is then
+    not where it is.
+    """
     if plan.status not in ("optimal", "feasible") or not plan.phases:
         return [f"structure: the plan has no phases to check (status {plan.status!r})"]
-    context = _Context.of(scenario, plan)
+    context = _Context.of(scenario, plan, holding)
     return [
         *_check_structure(context, plan),
         *_rule1_base(context),
@@ -132,11 +139,13 @@ def _check_start(context: _Context) -> list[str]:
         out.append(f"structure: phase 0 base {_pt(start.base)} is not robot.start {_pt(robot.start)}")
     if start.heading != robot.heading:
         out.append(f"structure: phase 0 heading {start.heading!r} is not the robot's heading {robot.heading!r}")
-    if start.holding is not None or start.target is not None or start.posture is not None:
-        out.append("structure: phase 0 must hold nothing and have no target or posture")
+    if start.target is not None or start.posture is not None:
+        out.append("structure: phase 0 must have no target or posture")
+    if start.holding != context.holding:
+        out.append(f"structure: phase 0 must hold {context.holding!r}, not {start.holding!r}")
     for obj in context.scenario.objects:
         at = start.objects.get(obj.id)
-        if at is not None and not _same(at, obj.start):
+        if at is not None and obj.id != context.holding and not _same(at, obj.start):
             out.append(f"structure: phase 0 object {obj.id!r} is at {_pt(at)}, not its start {_pt(obj.start)}")
     for item in context.scenario.clutter:
         at = start.clutter.get(item.id)
