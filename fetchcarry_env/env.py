@@ -1,0 +1,507 @@
+"""``FetchCarryPushEnv``: the Gymnasium contract of the fetch-and-carry world with push-aside.
+
+The environment composes three pieces and adds only the Gymnasium contract: the
+scenario (what the world is: :mod:`fetchcarry_env.scenario`, or a family of them:
+:mod:`fetchcarry_env.families`), the rules of what one phase may do
+(:mod:`fetchcarry_env.rules`) and the PyBullet world that moves things
+(:mod:`fetchcarry_env.sim`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec
+from fetchcarry_env.geometry import Rect, heading_vector
+from fetchcarry_env.kinematics import (
+    COLLISION_PENALTY,
+    DELIVERY_BONUS,
+    INVALID_ACTION_PENALTY,
+    hand_offset,
+    travel_cost,
+)
+from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
+from fetchcarry_env.rules import Phase, action_mask, check_action, move_stop
+from fetchcarry_env.scenario import Scenario, ScenarioError
+
+DEFAULT_FAMILY = "push"  # the family drawn from when neither a scenario nor a family is given
+DEFAULT_RESOLUTION = 0.05  # metres between lattice points
+DEFAULT_IMAGE_SIZE = (320, 240)  # pixels (width, height) of rgb_array frames
+ACTION_COMPONENTS = ("x cell", "y cell", "heading", "posture", "mode")
+
+ScenarioLike = Scenario | Mapping[str, Any] | str | Path
+
+
+class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
+    """Fetch-and-carry with push-aside (Tsuji et al.'s MILP TAMP problem), one phase per step.
+
+    ## Description
+
+    A mobile manipulator with a round base (an HSR) must carry every delivery object
+    (an upright cylinder standing on a table) to its goal on a table. A piece of
+    clutter (a box) may stand on a goal: the robot then pushes it aside first. Tables
+    and full-height obstacles (walls, shelves) block the base; obstacles and clutter
+    also block the arm's line from the base to the hand (the paper's Eq. 19).
+
+    One step is one phase of the paper's formulation: the base slides in a straight
+    line to a point of a lattice over the floor, turns to a heading, and the arm, in
+    one of the robot's postures, does nothing, picks, places or pushes. The world is
+    simulated in PyBullet: the base stops at the first contact with a table, an
+    obstacle or the edge of the area (an exact swept-disc test, nothing tunnels); a
+    picked object is attached to the hand; a placed object is released on the table
+    and settles; a push drives the hand through the stroke (1 cm per simulation step
+    at most) and PyBullet moves the clutter, which may shove a neighbour or jam.
+
+    The scenario is fixed (``scenario=``) or drawn at every reset from a family
+    (``family=``, by default ``"push"``). The whole geometry is in the observation,
+    so a planner can rebuild the problem from an observation alone
+    (:func:`fetchcarry_env.observation.decode`).
+
+    ## Action Space
+
+    ``MultiDiscrete([nx, ny, 4, n_postures, 4])``: ``[i, j, heading, posture, mode]``.
+
+    | index | meaning | values |
+    |-------|---------|--------|
+    | 0, 1 | lattice point ``origin + (i, j) * resolution`` the base goes to (push: stroke end) | ``i < nx``, ``j < ny`` |
+    | 2 | heading at the end of the phase | 0 ``+x``, 1 ``+y``, 2 ``-x``, 3 ``-y`` |
+    | 3 | arm posture (index into the scenario's ``robot.postures``) | ``0 <= k < n_postures`` (``capacity.postures``) |
+    | 4 | mode | 0 move, 1 pick, 2 place, 3 push |
+
+    The lattice covers the scenario's area (fixed scenario) or the family's extent, at
+    ``resolution`` metres (5 cm by default). Semantics (``fetchcarry_env/actions.py``):
+    pick takes the object within the posture's reach (nearest the middle of the
+    ranges); place puts the held object at its goal; push needs an empty hand, strokes
+    axis-aligned from where the base stands, with the heading along the stroke or at
+    right angles to it, against the piece of clutter whose rear face the posture
+    reaches. :meth:`action_masks` gives MaskablePPO's flat mask. An action outside the
+    space raises ``ValueError``; an impossible one does nothing (see Rewards).
+
+    ## Observation Space
+
+    A ``Dict`` in the goal-env convention, float32, every coordinate in metres in the
+    world frame; absent slots (fewer things than the capacity) are all zero:
+
+    | key | size | content |
+    |-----|------|---------|
+    | ``observation`` | 4 | area ``min_x, min_y, max_x, max_y`` (m) |
+    | | 7 | base ``x, y`` (m), base radius (m), heading one-hot (``+x, +y, -x, -y``) |
+    | | 5 per posture | present, ``forward`` low/high (m), ``lateral`` low/high (m) |
+    | | 11 per object | present, centre ``x, y, z``, goal centre ``x, y, z``, radius, height (m), held, delivered |
+    | | 6 per clutter | present, footprint ``min_x, min_y, max_x, max_y`` (m), height (m) |
+    | | 6 per table | present, ``min_x, min_y, max_x, max_y`` (m), height (m) |
+    | | 5 per obstacle | present, ``min_x, min_y, max_x, max_y`` (m) |
+    | ``achieved_goal`` | 3 per object | each object's centre ``x, y, z`` (m); a held one is lifted 5 cm |
+    | ``desired_goal`` | 3 per object | each goal's centre ``x, y, z`` (m), the object standing there |
+
+    The capacity (default 4 objects, 8 clutter, 6 tables, 12 obstacles, 4 postures)
+    fixes the sizes; every bound is +-100 m.
+
+    ## Rewards
+
+    The paper's objective (Eq. 1) seen one phase at a time: ``+10`` for each object
+    that becomes delivered (its centre within 1 cm of its goal's, not held; ``-10`` if
+    one stops being delivered), minus the travel cost of the base,
+    ``|dx| + |dy| + 0.1 * ||dx| - |dy||`` metres actually travelled (a push stroke
+    included), minus 1 when the base stops at a contact, minus 1 for an impossible
+    action (masked, or failing a check: nothing in reach, the arm line blocked, a goal
+    occupied...), which moves nothing. :meth:`compute_reward` gives the same value from
+    ``(achieved_goal, desired_goal, info)`` and works on batches (for HER).
+
+    ## Starting State
+
+    The scenario's start: the base at ``robot.start`` with ``robot.heading``, the hand
+    empty, objects standing at their starts, clutter where the scenario puts it. With a
+    family, the scenario is drawn from ``self.np_random`` at every reset, so
+    ``reset(seed=s)`` gives the same scenario and episode for the same ``s``.
+    ``reset(options={"scenario": ...})`` starts a given scenario instead (it must lie in
+    the lattice's extent and fit the capacity).
+
+    ## Episode End
+
+    ``terminated`` when every object stands at its goal and the hand is empty.
+    ``truncated`` after ``max_episode_steps`` phases (50 for ``FetchCarryPush-v0``, set
+    by the registration's ``TimeLimit``).
+
+    ``info`` (reset and step): ``is_success`` (bool), ``delivered`` (objects at their
+    goals), ``path_length`` (travel cost of the episode so far, metres),
+    ``collisions`` (contacts so far), ``invalid_action`` (a short reason, or None),
+    ``contact`` (the id of what the base touched this step, or None), ``travel`` and
+    ``penalty`` (this step's travel cost and penalties), ``previous_achieved_goal``
+    (for :meth:`compute_reward`) and ``push`` (after a push: the clutter's id, the
+    stroke asked and travelled in metres, whether it jammed).
+
+    ## Arguments
+
+    ```python
+    gym.make("FetchCarryPush-v0", scenario=None, family=None, resolution=0.05, capacity=None,
+             render_mode=None, camera="perspective", width=320, height=240)
+    ```
+
+    - ``scenario``: a :class:`~fetchcarry_env.scenario.Scenario`, a scenario mapping or
+      the path of a scenario file (``fetchcarry-scenario/1``); a scenario that breaks a
+      rule raises :class:`~fetchcarry_env.scenario.ScenarioError`.
+    - ``family``: the name of a scenario family (``basic``, ``push``, ``corridor``,
+      ``multi``, ``mixed``); give at most one of ``scenario`` and ``family``.
+    - ``resolution``: metres between lattice points.
+    - ``capacity``: a :class:`~fetchcarry_env.observation.Capacity` (slots in the observation).
+    - ``render_mode``: ``"rgb_array"`` (headless, PyBullet's tiny renderer) or
+      ``"human"`` (a PyBullet window; needs a display).
+    - ``camera``: ``"perspective"`` or ``"top_down"`` for ``rgb_array`` frames of
+      ``width`` x ``height`` pixels.
+
+    The unwrapped env exposes ``scenario``, ``state`` (a
+    :class:`~fetchcarry_env.observation.WorldState`), ``lattice``, ``capacity`` and
+    ``action_masks()``. Copies (``copy.deepcopy``, ``pickle``) are independent envs in
+    the same state that continue exactly as the original would.
+
+    ## Version History
+
+    - v0: first version.
+    """
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
+
+    def __init__(
+        self,
+        scenario: ScenarioLike | None = None,
+        family: str | None = None,
+        resolution: float = DEFAULT_RESOLUTION,
+        capacity: Capacity | None = None,
+        render_mode: str | None = None,
+        camera: str = "perspective",
+        width: int = DEFAULT_IMAGE_SIZE[0],
+        height: int = DEFAULT_IMAGE_SIZE[1],
+    ) -> None:
+        from fetchcarry_env.sim import CAMERAS, Simulation
+
+        if scenario is not None and family is not None:
+            raise ValueError("give a scenario or a family, not both")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
+        if camera not in CAMERAS:
+            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be positive, got {width} x {height}")
+        self._init_kwargs = {
+            "scenario": scenario,
+            "family": family,
+            "resolution": resolution,
+            "capacity": capacity,
+            "render_mode": render_mode,
+            "camera": camera,
+            "width": width,
+            "height": height,
+        }
+        self.capacity = capacity if capacity is not None else Capacity()
+        self._fixed: Scenario | None = None
+        self._family = None
+        if scenario is not None:
+            self._fixed = _as_scenario(scenario)
+            extent = self._fixed.area
+        else:
+            from fetchcarry_env.families import get_family
+
+            self._family = get_family(family if family is not None else DEFAULT_FAMILY)
+            extent = self._family.extent
+        self.lattice = Lattice.over(extent, resolution)
+        self._extent: Rect = extent
+        if self._fixed is not None:
+            self._check_fits(self._fixed)
+        self.render_mode = render_mode
+        self.camera = camera
+        self.image_size = (width, height)
+        self.action_space = spaces.MultiDiscrete(action_nvec(self.lattice, self.capacity.postures))
+        self.observation_space = observation_space(self.capacity)
+        if render_mode == "human":
+            from fetchcarry_env.sim.client import check_display
+
+            check_display()
+        self._sim = Simulation(gui=render_mode == "human")
+        self._scenario: Scenario | None = None
+        self._state: WorldState | None = None
+        self._sim_in_sync = False  # False after unpickling: the simulation is rebuilt on first use
+        self._pending_poses: dict | None = None
+        self._achieved: np.ndarray | None = None
+        self._path_length = 0.0
+        self._collisions = 0
+
+    # ------------------------------------------------------------------ public state
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario of the current episode."""
+        if self._scenario is None:
+            raise gym.error.ResetNeeded("call reset() before using the environment")
+        return self._scenario
+
+    @property
+    def state(self) -> WorldState:
+        """Where the base, the hand's object, the objects and the clutter are now."""
+        if self._state is None:
+            raise gym.error.ResetNeeded("call reset() before using the environment")
+        return self._state
+
+    # ------------------------------------------------------------------ Gymnasium API
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        super().reset(seed=seed)
+        options = options or {}
+        unknown = set(options) - {"scenario"}
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {sorted(unknown)}: the only option is 'scenario'")
+        if options.get("scenario") is not None:
+            scenario = _as_scenario(options["scenario"])
+            self._check_fits(scenario)
+        elif self._fixed is not None:
+            scenario = self._fixed
+        else:
+            scenario = self._family.sample(self.np_random)
+            self._check_fits(scenario)
+        self._scenario = scenario
+        self._state = WorldState.initial(scenario)
+        self._sim.reset(scenario, self._state)
+        self._sim_in_sync = True
+        self._path_length = 0.0
+        self._collisions = 0
+        observation = encode(scenario, self._state, self.capacity)
+        self._achieved = observation["achieved_goal"]
+        info = self._info(observation, travel=0.0, penalty=0.0, invalid=None, contact=None)
+        if self.render_mode == "human":
+            self.render()
+        return observation, info
+
+    def step(self, action: np.ndarray) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        decoded = self._decode(action)
+        scenario, state = self.scenario, self.state
+        self._sync_sim()
+        phase = check_action(scenario, state, self.lattice, decoded)
+        contact: str | None = None
+        push_report: dict[str, Any] | None = None
+        if isinstance(phase, str):
+            invalid, travel, penalty = phase, 0.0, INVALID_ACTION_PENALTY
+        elif phase.mode == Mode.PUSH:
+            invalid = None
+            contact, push_report = self._push(phase)
+        else:
+            invalid = None
+            contact = self._move_and_act(phase)
+        if invalid is None:
+            travel = travel_cost(state.base, self._state.base)
+            penalty = COLLISION_PENALTY if contact is not None else 0.0
+            self._path_length += travel
+            self._collisions += contact is not None
+        observation = encode(scenario, self._state, self.capacity)
+        info = self._info(observation, travel=travel, penalty=penalty, invalid=invalid, contact=contact)
+        if push_report is not None:
+            info["push"] = push_report
+        reward = float(self.compute_reward(observation["achieved_goal"], observation["desired_goal"], info))
+        self._achieved = observation["achieved_goal"]
+        terminated = bool(info["is_success"])
+        if self.render_mode == "human":
+            self.render()
+        return observation, reward, terminated, False, info
+
+    def compute_reward(
+        self, achieved_goal: np.ndarray, desired_goal: np.ndarray, info: Mapping[str, Any] | Sequence | np.ndarray
+    ) -> np.ndarray | float:
+        """The step reward from the goals and ``info`` (one transition, or a batch as HER passes it).
+
+        ``10 * (objects at their goals now - before)`` minus the step's travel cost and
+        penalties; ``info`` is one step's info dict, or a sequence (or object array) of them
+        for a batch of ``achieved_goal`` / ``desired_goal`` rows.
+        """
+        achieved = np.asarray(achieved_goal, dtype=np.float64)
+        desired = np.asarray(desired_goal, dtype=np.float64)
+        if isinstance(info, Mapping):
+            previous = np.asarray(info["previous_achieved_goal"], dtype=np.float64)
+            cost = float(info["travel"]) + float(info["penalty"])
+        else:
+            infos = list(np.asarray(info, dtype=object).reshape(-1))
+            previous = np.stack([np.asarray(i["previous_achieved_goal"], dtype=np.float64) for i in infos])
+            previous = previous.reshape(achieved.shape)
+            cost = np.array([float(i["travel"]) + float(i["penalty"]) for i in infos]).reshape(achieved.shape[:-1])
+        gained = _count_at_goal(achieved, desired) - _count_at_goal(previous, desired)
+        reward = DELIVERY_BONUS * gained - cost
+        return float(reward) if np.ndim(reward) == 0 else reward
+
+    def action_masks(self) -> np.ndarray:
+        """MaskablePPO's flat boolean mask over the action components (length ``sum(nvec)``)."""
+        return action_mask(self.scenario, self.state, self.lattice, self.capacity.postures)
+
+    def render(self) -> np.ndarray | None:
+        """An RGB frame (``rgb_array``), or None (``human``: the PyBullet window shows the world)."""
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode: pass render_mode='rgb_array' to gym.make")
+            return None
+        if self.render_mode == "human":
+            return None
+        self.scenario  # noqa: B018  (raises ResetNeeded before the first reset)
+        self._sync_sim()
+        return self._sim.render(self.camera, *self.image_size)
+
+    def close(self) -> None:
+        """Disconnect from PyBullet (safe to call twice)."""
+        self._sim.close()
+        self._sim_in_sync = False
+
+    # ------------------------------------------------------------------ copying
+    def __getstate__(self) -> dict[str, Any]:
+        if self.render_mode == "human":
+            raise TypeError("an env with render_mode='human' cannot be copied: PyBullet allows one window per process")
+        state = {k: v for k, v in self.__dict__.items() if k != "_sim"}
+        state["_pending_poses"] = self._sim.poses if self._sim_in_sync else self._pending_poses
+        state["_sim_in_sync"] = False
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        from fetchcarry_env.sim import Simulation
+
+        self.__dict__.update(state)
+        self._sim = Simulation(gui=False)
+
+    # ------------------------------------------------------------------ internals
+    def _move_and_act(self, phase: Phase) -> str | None:
+        """Execute a move, pick or place phase; return what the base touched, if anything."""
+        state = self._state
+        end, contact = move_stop(self._scenario, state.base, phase.base)
+        held = self._sim.move(end, phase.heading, state.holding)
+        objects = dict(state.objects)
+        if held is not None:
+            objects[state.holding] = held
+        self._state = state = replace(state, base=end, heading=phase.heading, objects=objects)
+        if contact is not None:
+            return contact
+        if phase.mode == Mode.PICK:
+            lifted = self._sim.pick(phase.target, end, phase.heading)
+            self._state = replace(state, holding=phase.target, objects={**objects, phase.target: lifted})
+        elif phase.mode == Mode.PLACE:
+            poses = self._sim.place(phase.target, end, phase.heading, phase.hand)
+            self._state = self._with_poses(replace(state, holding=None), poses)
+        return None
+
+    def _push(self, phase: Phase) -> tuple[str | None, dict[str, Any]]:
+        """Execute a push phase; return what the base touched (if anything) and a report of the stroke."""
+        state = self._state
+        end, contact = move_stop(self._scenario, state.base, phase.base)
+        length = math.dist(state.base, end)
+        report = {"clutter": phase.target, "stroke": phase.stroke, "travelled": 0.0, "stalled": False}
+        if length <= 0.0:
+            self._sim.move(state.base, phase.heading, None)
+            self._state = replace(state, heading=phase.heading)
+            return contact, report
+        offset = hand_offset(state.base, phase.heading, phase.hand)
+        outcome = self._sim.push(phase.target, state.base, phase.heading, offset, phase.direction, length)
+        ux, uy = heading_vector(phase.direction)
+        base = (state.base[0] + ux * outcome.travelled, state.base[1] + uy * outcome.travelled)
+        self._state = self._with_poses(replace(state, base=base, heading=phase.heading), self._sim.poses)
+        report.update(travelled=outcome.travelled, stalled=outcome.stalled)
+        return contact, report
+
+    def _with_poses(self, state: WorldState, poses: Mapping[str, tuple]) -> WorldState:
+        """``state`` with every item that is not held where the simulation has it."""
+        objects = dict(state.objects)
+        clutter = dict(state.clutter)
+        for name, (position, _orientation) in poses.items():
+            if name in clutter:
+                clutter[name] = (position[0], position[1])
+            elif name in objects and name != state.holding:
+                objects[name] = tuple(position)
+        return replace(state, objects=objects, clutter=clutter)
+
+    def _sync_sim(self) -> None:
+        """Rebuild the simulation after unpickling (or close), at the recorded poses."""
+        if self._sim_in_sync:
+            return
+        self._sim.reset(self.scenario, self.state)
+        if self._pending_poses is not None:
+            self._sim.restore(self.state, self._pending_poses)
+        self._sim_in_sync = True
+
+    def _decode(self, action: Any) -> Action:
+        """The action as an :class:`Action`; ``ValueError`` naming the component if it is outside the space."""
+        array = np.asarray(action)
+        nvec = self.action_space.nvec
+        if array.shape != nvec.shape:
+            raise ValueError(f"action must have shape {nvec.shape} ({', '.join(ACTION_COMPONENTS)}), got {array.shape}")
+        if not (np.issubdtype(array.dtype, np.integer) or np.all(np.equal(np.mod(array, 1), 0))):
+            raise ValueError(f"action must hold integers, got {array.tolist()}")
+        for name, value, size in zip(ACTION_COMPONENTS, array.tolist(), nvec.tolist(), strict=True):
+            if not 0 <= value < size:
+                raise ValueError(
+                    f"action {array.tolist()} is outside the action space {self.action_space}: "
+                    f"{name} = {value} is not in [0, {size})"
+                )
+        return Action.from_array(array)
+
+    def _check_fits(self, scenario: Scenario) -> None:
+        """Raise :class:`ScenarioError` if ``scenario`` does not fit the lattice's extent or the capacity."""
+        problems = []
+        if not self._extent.contains_rect(scenario.area, tol=1e-9):
+            problems.append(
+                f"env: the area {list(scenario.area.min)}-{list(scenario.area.max)} does not lie in the "
+                f"action lattice's extent {list(self._extent.min)}-{list(self._extent.max)}"
+            )
+        try:
+            self.capacity.check(scenario)
+        except ValueError as error:
+            problems.append(f"env: {error}")
+        if problems:
+            raise ScenarioError(problems, scenario.name)
+
+    def _info(
+        self,
+        observation: dict[str, np.ndarray],
+        *,
+        travel: float,
+        penalty: float,
+        invalid: str | None,
+        contact: str | None,
+    ) -> dict[str, Any]:
+        n_objects = len(self._scenario.objects)
+        at_goal = _at_goal(observation["achieved_goal"], observation["desired_goal"])[:n_objects]
+        delivered = int(at_goal.sum())
+        return {
+            "is_success": bool(delivered == n_objects and self._state.holding is None),
+            "delivered": delivered,
+            "path_length": self._path_length,
+            "collisions": self._collisions,
+            "invalid_action": invalid,
+            "contact": contact,
+            "travel": travel,
+            "penalty": penalty,
+            "previous_achieved_goal": (
+                self._achieved if self._achieved is not None else observation["achieved_goal"]
+            ).copy(),
+        }
+
+
+def _as_scenario(scenario: ScenarioLike) -> Scenario:
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, Mapping):
+        return Scenario.from_dict(scenario)
+    if isinstance(scenario, str | Path):
+        return Scenario.load(scenario)
+    raise TypeError(f"scenario must be a Scenario, a mapping or a path, got {type(scenario).__name__}")
+
+
+def _at_goal(achieved: np.ndarray, desired: np.ndarray) -> np.ndarray:
+    """Per object slot (last axis grouped by 3): True when within ``DELIVERY_TOLERANCE`` of its goal."""
+    a = np.asarray(achieved, dtype=np.float64)
+    d = np.asarray(desired, dtype=np.float64)
+    gap = np.linalg.norm((a - d).reshape(*a.shape[:-1], -1, 3), axis=-1)
+    return gap <= DELIVERY_TOLERANCE
+
+
+def _count_at_goal(achieved: np.ndarray, desired: np.ndarray) -> np.ndarray:
+    """How many object slots are at their goals (absent slots are zero in both and count alike)."""
+    return _at_goal(achieved, desired).sum(axis=-1)

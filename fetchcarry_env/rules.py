@@ -1,0 +1,230 @@
+"""Which phases are possible from a state: the environment's action checks, as pure geometry.
+
+The environment asks :func:`check_action` before it moves anything: the answer is
+either a :class:`Phase` (what to execute: where the base goes, what the arm takes,
+where the hand goes) or a short reason why the action is impossible, which the
+environment reports in ``info["invalid_action"]``. :func:`action_mask` is the part of
+these checks that can be said per action component (MaskablePPO's convention).
+:func:`move_stop` says where a base move ends: at the first contact with a table, an
+obstacle or the edge of the area (exact swept-disc test, nothing tunnels).
+
+The semantics are those of :mod:`fetchcarry_env.actions` and ``docs/design.md``; the
+MILP expert models the same rules. Units are metres.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fetchcarry_env.actions import Action, Lattice, Mode
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, first_contact, heading_of, heading_vector
+from fetchcarry_env.kinematics import HAND_HALF_SIZE, arm_line_clear, hand_offset, push_contact, push_headings
+from fetchcarry_env.observation import WorldState
+from fetchcarry_env.scenario import Posture, Scenario
+
+ALIGN_TOLERANCE = 1e-6  # metres: a stroke whose cross-axis component is below this is axis-aligned
+EDGE_DEPTH = 1.0  # metres: thickness of the strips outside the area that stop the base at its edge
+AREA_EDGE = "area edge"  # what a move that stops at the edge of the area reports it touched
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A possible phase, resolved: what the environment executes.
+
+    ``base`` is where the base is sent (for a push, where the stroke ends); ``target``
+    the object picked or placed or the clutter pushed; ``hand`` where the hand goes
+    (the object's centre, the goal, or the push contact); ``direction`` and ``stroke``
+    the push stroke's direction and length (metres).
+    """
+
+    mode: Mode
+    base: Point
+    heading: Heading
+    posture: Posture | None = None
+    target: str | None = None
+    hand: Point | None = None
+    direction: Heading | None = None
+    stroke: float = 0.0
+
+
+def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_postures: int) -> np.ndarray:
+    """The flat boolean mask of length ``nx + ny + 4 + max_postures + 4`` (MaskablePPO's convention).
+
+    False marks what no action with that component can do: lattice columns or rows where
+    the base disc does not fit in the area, postures the robot does not have, pick or
+    push with a full hand, place with an empty one. Every component keeps at least one
+    allowed value (MaskablePPO needs one).
+    """
+    radius = scenario.robot.radius
+    area = scenario.area
+    parts = []
+    for axis, (low, high) in enumerate(((area.min_x, area.max_x), (area.min_y, area.max_y))):
+        coords = lattice.axis_points(axis)
+        fits = (coords >= low + radius - 1e-9) & (coords <= high - radius + 1e-9)
+        if not fits.any():
+            fits[int(np.argmin(np.abs(coords - state.base[axis])))] = True
+        parts.append(fits)
+    parts.append(np.ones(len(HEADINGS), dtype=bool))
+    parts.append(np.arange(max_postures) < len(scenario.robot.postures))
+    empty = state.holding is None
+    modes = np.zeros(len(Mode), dtype=bool)
+    modes[[Mode.MOVE, Mode.PICK, Mode.PLACE, Mode.PUSH]] = [True, empty, not empty, empty]
+    parts.append(modes)
+    return np.concatenate(parts)
+
+
+def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action: Action) -> Phase | str:
+    """The phase ``action`` asks for, or a short reason why it is impossible from ``state``."""
+    target = lattice.point(*action.cell)
+    if not scenario.area.contains_disc(target, scenario.robot.radius, tol=1e-9):
+        return "cell outside the area"
+    if action.posture >= len(scenario.robot.postures):
+        return f"no posture {action.posture}"
+    posture = scenario.robot.postures[action.posture]
+    if action.mode == Mode.MOVE:
+        return Phase(Mode.MOVE, target, action.heading)
+    if action.mode == Mode.PICK:
+        return _check_pick(scenario, state, target, action.heading, posture)
+    if action.mode == Mode.PLACE:
+        return _check_place(scenario, state, target, action.heading, posture)
+    return _check_push(scenario, state, target, action.heading, posture)
+
+
+def move_stop(scenario: Scenario, start: Point, end: Point) -> tuple[Point, str | None]:
+    """Where a base sliding from ``start`` to ``end`` stops, and what it touched (None if nothing).
+
+    Tables, obstacles and the edge of the area stop it at the first contact
+    (:func:`fetchcarry_env.geometry.first_contact`, exact).
+    """
+    radius = scenario.robot.radius
+    t_stop, touched = 1.0, None
+    for name, rect in base_blockers(scenario):
+        t = first_contact(start, end, radius, (rect,))
+        if t < t_stop:
+            t_stop, touched = t, name
+    if touched is None:
+        return end, None
+    return (start[0] + t_stop * (end[0] - start[0]), start[1] + t_stop * (end[1] - start[1])), touched
+
+
+def base_blockers(scenario: Scenario) -> list[tuple[str, Rect]]:
+    """Everything the base may not touch, by id: tables, obstacles and four strips around the area."""
+    area = scenario.area
+    d = EDGE_DEPTH
+    edges = (
+        Rect(area.min_x - d, area.min_y - d, area.min_x, area.max_y + d),
+        Rect(area.max_x, area.min_y - d, area.max_x + d, area.max_y + d),
+        Rect(area.min_x - d, area.min_y - d, area.max_x + d, area.min_y),
+        Rect(area.min_x - d, area.max_y, area.max_x + d, area.max_y + d),
+    )
+    return [
+        *((t.id, t.rect) for t in scenario.tables),
+        *((o.id, o.rect) for o in scenario.obstacles),
+        *((AREA_EDGE, rect) for rect in edges),
+    ]
+
+
+def clutter_rect(scenario: Scenario, state: WorldState, clutter_id: str) -> Rect:
+    """The footprint of a piece of clutter where ``state`` has it (axis-aligned, metres)."""
+    size_x, size_y = scenario.clutter_item(clutter_id).rect.size
+    return Rect.around(state.clutter[clutter_id], size_x / 2, size_y / 2)
+
+
+def _arm_blocker(scenario: Scenario, state: WorldState, base: Point, hand: Point, ignore: str | None) -> str | None:
+    """The id of an obstacle or piece of clutter the arm line (Eq. 19) crosses, or None."""
+    blockers = [(o.id, o.rect) for o in scenario.obstacles]
+    blockers += [(c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != ignore]
+    for name, rect in blockers:
+        if not arm_line_clear(base, hand, (rect,)):
+            return name
+    return None
+
+
+def _check_pick(scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture) -> Phase | str:
+    if state.holding is not None:
+        return "pick with a full hand"
+    best, best_distance = None, math.inf
+    for obj in scenario.objects:
+        position = state.objects[obj.id][:2]
+        offset = hand_offset(base, heading, position)
+        if posture.reaches(*offset):
+            distance = math.dist(offset, posture.center)
+            if distance < best_distance:
+                best, best_distance = obj.id, distance
+    if best is None:
+        return "nothing to pick within reach"
+    hand = state.objects[best][:2]
+    blocker = _arm_blocker(scenario, state, base, hand, ignore=None)
+    if blocker is not None:
+        return f"arm line crosses {blocker!r}"
+    return Phase(Mode.PICK, base, heading, posture, best, hand)
+
+
+def _check_place(scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture) -> Phase | str:
+    if state.holding is None:
+        return "place with an empty hand"
+    obj = scenario.object(state.holding)
+    if not posture.reaches(*hand_offset(base, heading, obj.goal)):
+        return f"goal of {obj.id!r} out of reach"
+    for other in scenario.objects:
+        if other.id != obj.id and math.dist(state.objects[other.id][:2], obj.goal) < other.radius + obj.radius - 1e-9:
+            return f"goal of {obj.id!r} occupied by {other.id!r}"
+    for item in scenario.clutter:
+        if clutter_rect(scenario, state, item.id).overlaps_disc(obj.goal, obj.radius):
+            return f"goal of {obj.id!r} occupied by {item.id!r}"
+    blocker = _arm_blocker(scenario, state, base, obj.goal, ignore=None)
+    if blocker is not None:
+        return f"arm line crosses {blocker!r}"
+    return Phase(Mode.PLACE, base, heading, posture, obj.id, obj.goal)
+
+
+def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Heading, posture: Posture) -> Phase | str:
+    if state.holding is not None:
+        return "push with a full hand"
+    start = state.base
+    dx, dy = end[0] - start[0], end[1] - start[1]
+    if abs(dx) <= ALIGN_TOLERANCE:
+        dx = 0.0
+    if abs(dy) <= ALIGN_TOLERANCE:
+        dy = 0.0
+    if dx == 0.0 and dy == 0.0:
+        return "push stroke of zero length"
+    direction = heading_of((dx, dy))
+    if direction is None:
+        return "push stroke not axis-aligned"
+    if heading not in push_headings(direction):
+        return f"heading {heading} cannot push along {direction}"
+    best, best_distance = None, math.inf
+    for item in scenario.clutter:
+        contact = push_contact(clutter_rect(scenario, state, item.id), direction)
+        offset = hand_offset(start, heading, contact)
+        if posture.reaches(*offset):
+            distance = math.dist(offset, posture.center)
+            if distance < best_distance:
+                best, best_distance = item.id, distance
+    if best is None:
+        return "no clutter to push within reach"
+    rect = clutter_rect(scenario, state, best)
+    table = scenario.table_under_rect(rect)
+    length = abs(dx) + abs(dy)
+    ux, uy = heading_vector(direction)
+    if table is None:
+        return f"clutter {best!r} is not on a table"
+    if not table.rect.contains_rect(rect.translate(ux * length, uy * length), tol=1e-6):
+        return f"push would take {best!r} off {table.id!r}"
+    contact = push_contact(rect, direction)
+    hand_box = Rect.around(contact, HAND_HALF_SIZE, HAND_HALF_SIZE)
+    for item in scenario.clutter:
+        if item.id != best and clutter_rect(scenario, state, item.id).overlaps_rect(hand_box, tol=1e-6):
+            return f"no room for the hand behind {best!r}: {item.id!r} is there"
+    for obj in scenario.objects:
+        if obj.id != state.holding and hand_box.overlaps_disc(state.objects[obj.id][:2], obj.radius, tol=1e-6):
+            return f"no room for the hand behind {best!r}: {obj.id!r} is there"
+    blocker = _arm_blocker(scenario, state, start, contact, ignore=best)
+    if blocker is not None:
+        return f"arm line crosses {blocker!r}"
+    stroke_end = (start[0] + ux * length, start[1] + uy * length)
+    return Phase(Mode.PUSH, stroke_end, heading, posture, best, contact, direction, length)

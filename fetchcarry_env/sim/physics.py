@@ -1,0 +1,38 @@
+"""Physical parameters of the simulated world, with units; set explicitly on every body that moves."""
+
+from __future__ import annotations
+
+TIME_STEP = 1.0 / 240.0  # seconds simulated per stepSimulation call
+GRAVITY = 9.81  # m/s^2
+SOLVER_ITERATIONS = 50  # constraint-solver iterations per step (PyBullet's default, stated)
+
+FRICTION = 0.5  # lateral (Coulomb) friction of table tops, clutter, objects and the hand
+SPINNING_FRICTION = 0.001  # N*m per N: resists cylinders spinning on their base
+ROLLING_FRICTION = 0.0001  # N*m per N: resists cylinders rolling once toppled
+RESTITUTION = 0.0  # nothing bounces
+LINEAR_DAMPING = 0.1  # 1/s: velocity decay of objects and clutter (PyBullet's default is 0.04)
+ANGULAR_DAMPING = 0.1  # 1/s
+
+OBJECT_MASS = 0.3  # kg: a bottle
+CLUTTER_MASS = 1.0  # kg: a box standing in the way
+
+FLOOR_THICKNESS = 0.02  # metres: the floor slab below z = 0
+OBSTACLE_HEIGHT = 1.2  # metres: walls and shelves are "full height", taller than any table
+BASE_HEIGHT = 0.35  # metres: the round mobile base
+ARM_CLEARANCE = 0.10  # metres between the arm and the highest top of anything standing on a table
+
+PUSH_SPEED = 0.5  # m/s: cruise speed of the hand along a push stroke
+PUSH_ACCELERATION = 2.5  # m/s^2: below FRICTION * GRAVITY, so the clutter stops with the hand
+PUSH_MIN_SPEED = 0.02  # m/s: the hand never creeps slower than this near the end of a stroke
+MAX_HAND_STEP = 0.01  # metres: the most the hand moves in one simulation step (the issue's limit)
+PUSH_SETTLE_STEPS = 24  # steps (0.1 s) the world runs after a stroke with the hand in place
+PLACE_SETTLE_STEPS = 12  # steps (0.05 s) the world runs after a placed object is released
+STALL_DEPTH = 0.005  # metres: a hand this far into the pushed clutter means it is jammed: the stroke stops
+
+# Collision groups (PyBullet's AND filter mode: two shapes touch when each one's group is in the other's mask).
+GROUP_STATIC = 1  # floor, tables, obstacles
+GROUP_ITEM = 2  # objects and clutter
+GROUP_ROBOT = 4  # base, lift, arm: visual only for the physics (the base is kept off tables geometrically)
+GROUP_HAND = 8  # the hand: touches items during a push stroke only
+MASK_ITEM = GROUP_STATIC | GROUP_ITEM | GROUP_HAND
+MASK_NONE = 0

@@ -1,0 +1,146 @@
+"""The HSR-like mobile manipulator, authored here with ``createMultiBody``.
+
+A round base of the scenario's radius carries a lift (prismatic, z), a horizontal arm
+that sits above everything standing on the tables and slides forward (prismatic, the
+robot's x) and sideways (prismatic, the robot's y), and a wrist that drops the hand
+(prismatic, z). The hand is a cube of half-size :data:`~fetchcarry_env.kinematics.HAND_HALF_SIZE`.
+
+Every link has mass 0: the robot is kinematic, posed by resetting its base pose and its
+joint positions. Only the hand takes part in contacts, and only during a push stroke
+(:meth:`RobotBody.set_hand_contact`); the base is kept off tables and obstacles by the
+exact swept-disc test of :func:`fetchcarry_env.geometry.first_contact` before it moves.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pybullet
+
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, heading_yaw
+from fetchcarry_env.kinematics import HAND_HALF_SIZE
+from fetchcarry_env.sim import physics
+from fetchcarry_env.sim.client import QuietClient
+
+BASE_COLOR = (0.92, 0.92, 0.92, 1.0)
+LINK_COLOR = (0.18, 0.18, 0.20, 1.0)
+HAND_COLOR = (1.0, 0.55, 0.0, 1.0)
+MAST_HALF_SIZE = 0.04  # metres: the lift column's cross-section half-size
+ARM_HALF_WIDTH = 0.025  # metres: the arm's cross-section half-size
+ARM_VISUAL_LENGTH = 0.5  # metres: the arm drawn behind the wrist (it slides out of the lift)
+WRIST_RADIUS = 0.012  # metres
+
+LIFT, FORWARD, LATERAL, WRIST = 0, 1, 2, 3  # joint (and link) indices; the hand is the wrist link
+
+
+@dataclass(frozen=True)
+class HandPose:
+    """Where the hand is relative to the base: robot-frame ``forward``/``lateral`` and world height ``z`` (metres)."""
+
+    forward: float
+    lateral: float
+    z: float
+
+
+class RobotBody:
+    """The robot's multibody in one PyBullet world, posed kinematically."""
+
+    def __init__(self, client: QuietClient, radius: float, arm_height: float, lowest_hand: float) -> None:
+        """Build the robot for a base ``radius``, with the arm at ``arm_height`` and a wrist that reaches
+        down to ``lowest_hand`` (world heights, metres)."""
+        self._client = client
+        self.radius = radius
+        self.arm_height = arm_height
+        wrist_length = max(arm_height - lowest_hand, 2 * HAND_HALF_SIZE)
+        half_base = physics.BASE_HEIGHT / 2
+        mast_length = arm_height - physics.BASE_HEIGHT
+        base_collision = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=physics.BASE_HEIGHT)
+        base_visual = client.createVisualShape(
+            pybullet.GEOM_CYLINDER, radius=radius, length=physics.BASE_HEIGHT, rgbaColor=BASE_COLOR
+        )
+        # The lift link's frame is at the arm's height; its column is drawn down to the base.
+        mast_visual = client.createVisualShape(
+            pybullet.GEOM_BOX,
+            halfExtents=[MAST_HALF_SIZE, MAST_HALF_SIZE, mast_length / 2],
+            visualFramePosition=[0, 0, -mast_length / 2],
+            rgbaColor=LINK_COLOR,
+        )
+        # The forward link's frame is at the wrist; the arm is drawn behind it.
+        arm_visual = client.createVisualShape(
+            pybullet.GEOM_BOX,
+            halfExtents=[ARM_VISUAL_LENGTH / 2, ARM_HALF_WIDTH, ARM_HALF_WIDTH],
+            visualFramePosition=[-ARM_VISUAL_LENGTH / 2, 0, 0],
+            rgbaColor=LINK_COLOR,
+        )
+        # The wrist link's frame is the hand's centre; the wrist rod is drawn above it.
+        hand_collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[HAND_HALF_SIZE] * 3)
+        hand_visual = client.createVisualShapeArray(
+            shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_CYLINDER],
+            halfExtents=[[HAND_HALF_SIZE] * 3, [0, 0, 0]],
+            radii=[0, WRIST_RADIUS],
+            lengths=[0, wrist_length],
+            rgbaColors=[HAND_COLOR, LINK_COLOR],
+            visualFramePositions=[[0, 0, 0], [0, 0, HAND_HALF_SIZE + wrist_length / 2]],
+        )
+        self.body = client.createMultiBody(
+            baseMass=0.0,
+            baseCollisionShapeIndex=base_collision,
+            baseVisualShapeIndex=base_visual,
+            basePosition=[0.0, 0.0, half_base],
+            linkMasses=[0.0] * 4,
+            linkCollisionShapeIndices=[-1, -1, -1, hand_collision],
+            linkVisualShapeIndices=[mast_visual, arm_visual, -1, hand_visual],
+            linkPositions=[[0, 0, half_base], [0, 0, 0], [0, 0, 0], [0, 0, 0]],
+            linkOrientations=[[0, 0, 0, 1]] * 4,
+            linkInertialFramePositions=[[0, 0, 0]] * 4,
+            linkInertialFrameOrientations=[[0, 0, 0, 1]] * 4,
+            linkParentIndices=[0, 1, 2, 3],
+            linkJointTypes=[pybullet.JOINT_PRISMATIC] * 4,
+            linkJointAxis=[[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+        )
+        for link in (-1, LIFT, FORWARD, LATERAL):
+            client.setCollisionFilterGroupMask(self.body, link, physics.GROUP_ROBOT, physics.MASK_NONE)
+        client.changeDynamics(self.body, WRIST, lateralFriction=physics.FRICTION, restitution=physics.RESTITUTION)
+        self.set_hand_contact(False)
+        client.resetJointState(self.body, LIFT, arm_height - physics.BASE_HEIGHT)
+        self.hand = HandPose(0.0, 0.0, arm_height)
+        self.pose: tuple[Point, Heading] = ((0.0, 0.0), "+x")
+        self._yaw_quaternion = {h: client.getQuaternionFromEuler([0.0, 0.0, heading_yaw(h)]) for h in HEADINGS}
+
+    def set_hand_contact(self, enabled: bool) -> None:
+        """Let the hand touch objects and clutter (during a push stroke) or nothing."""
+        mask = physics.GROUP_ITEM if enabled else physics.MASK_NONE
+        self._client.setCollisionFilterGroupMask(self.body, WRIST, physics.GROUP_HAND, mask)
+
+    def set_base(self, base: Point, heading: Heading) -> None:
+        """Put the base centre at ``base`` facing ``heading`` (the arm follows)."""
+        self._client.resetBasePositionAndOrientation(
+            self.body, (base[0], base[1], physics.BASE_HEIGHT / 2), self._yaw_quaternion[heading]
+        )
+        self.pose = (base, heading)
+
+    def set_hand(self, hand: HandPose) -> None:
+        """Put the hand at a robot-frame offset and world height (the arm stays at its height)."""
+        self._client.resetJointState(self.body, FORWARD, hand.forward)
+        self._client.resetJointState(self.body, LATERAL, hand.lateral)
+        self._client.resetJointState(self.body, WRIST, hand.z - self.arm_height)
+        self.hand = hand
+
+    def drive_hand(self, forward: float, lateral: float, forward_speed: float, lateral_speed: float) -> None:
+        """Move the hand in the robot frame with the given joint speeds (m/s), keeping its height.
+
+        PyBullet takes the joint speeds into the contact solver, so a hand driven this way
+        pushes like a moving kinematic body (a teleported one only pushes out of overlap).
+        """
+        self._client.resetJointState(self.body, FORWARD, forward, targetVelocity=forward_speed)
+        self._client.resetJointState(self.body, LATERAL, lateral, targetVelocity=lateral_speed)
+        self.hand = HandPose(forward, lateral, self.hand.z)
+
+    def hand_position(self) -> tuple[float, float, float]:
+        """World position (metres) of the hand's centre, as PyBullet has it."""
+        return tuple(self._client.getLinkState(self.body, WRIST, computeForwardKinematics=True)[4])
+
+    def base_position(self) -> Point:
+        """World ``(x, y)`` (metres) of the base centre, as PyBullet has it."""
+        position, _ = self._client.getBasePositionAndOrientation(self.body)
+        return (position[0], position[1])

@@ -1,0 +1,381 @@
+"""The PyBullet world of one environment: builds a scenario's bodies and runs the phase primitives.
+
+:class:`Simulation` owns one private physics server (made lazily, closed by
+:meth:`Simulation.close`), keeps the bodies of the current layout across resets and
+rebuilds them only when the layout changes (``Scenario.layout_key``). It knows nothing
+about actions, masks or rewards: the environment decides what is possible (with the
+pure rules of :mod:`fetchcarry_env.rules`) and calls a primitive, which moves the
+bodies and reports where things ended up.
+
+Between phases the world is at rest. Each primitive that runs the physics (place,
+push) starts from the recorded poses with zero velocities and fresh contacts, so its
+outcome is a function of those poses alone: a copy of an environment, or a replay
+from the same state, gives bit-for-bit the same result.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fetchcarry_env.geometry import Heading, Point, heading_vector, to_robot_frame, to_world_frame
+from fetchcarry_env.kinematics import HAND_HALF_SIZE
+from fetchcarry_env.observation import LIFT_HEIGHT, Point3, WorldState
+from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.sim import physics
+from fetchcarry_env.sim.bodies import IDENTITY, LayoutBodies, build_layout, set_item_dynamics, table_top
+from fetchcarry_env.sim.camera import Camera, render_image
+from fetchcarry_env.sim.client import QuietClient, connect
+from fetchcarry_env.sim.robot import HandPose, RobotBody
+
+Quaternion = tuple[float, float, float, float]
+Pose = tuple[Point3, Quaternion]
+"""A body's position (metres) and orientation (quaternion x, y, z, w)."""
+
+PARKING_DISTANCE = 1000.0  # metres: where bodies are parked for a moment to drop their cached contacts
+PARKING_SPACING = 10.0  # metres between parked bodies
+HAND_LIFT = 0.001  # metres between the table top and the hand's underside when pushing low clutter
+
+
+@dataclass(frozen=True)
+class PushOutcome:
+    """What a push stroke did: how far the hand (and the base) went, and whether the clutter jammed."""
+
+    travelled: float  # metres along the stroke, at most the length asked for
+    stalled: bool  # True when the pushed clutter stopped moving with the hand (jammed)
+    simulation_steps: int  # stepSimulation calls the stroke and its settling took
+
+
+class Simulation:
+    """One PyBullet world for one environment: bodies of the current layout and the phase primitives."""
+
+    def __init__(self, gui: bool = False) -> None:
+        self._gui = gui
+        self._client: QuietClient | None = None
+        self._layout_key: tuple | None = None
+        self._bodies: LayoutBodies | None = None
+        self._robot: RobotBody | None = None
+        self._scenario: Scenario | None = None
+        self._poses: dict[str, Pose] = {}
+        self._held: str | None = None
+        self.builds = 0  # how many times bodies were (re)built, for tests and the benchmark
+
+    # ------------------------------------------------------------------ lifecycle
+    @property
+    def client(self) -> QuietClient:
+        """The physics client, connected on first use."""
+        if self._client is None or not self._client.connected:
+            self._client = connect(self._gui)
+            self._layout_key = None
+        return self._client
+
+    def close(self) -> None:
+        """Disconnect from the physics server (safe to call twice; the next use reconnects)."""
+        if self._client is not None:
+            self._client.close()
+        self._client = None
+        self._layout_key = None
+        self._bodies = None
+        self._robot = None
+
+    def __getstate__(self):
+        raise TypeError(
+            "a Simulation owns a PyBullet server and cannot be pickled or copied; "
+            "copy the environment instead (it rebuilds its simulation from the recorded poses)"
+        )
+
+    # ------------------------------------------------------------------ scenario and state
+    def reset(self, scenario: Scenario, state: WorldState) -> None:
+        """Show ``scenario`` at ``state``: rebuild the bodies if the layout changed, then pose everything."""
+        client = self.client
+        if self._layout_key != scenario.layout_key:
+            self._build(scenario)
+        self._scenario = scenario
+        bodies = self._layout
+        for obj in scenario.objects:
+            marker = (obj.goal[0], obj.goal[1], table_top(scenario, obj.goal))
+            client.resetBasePositionAndOrientation(bodies.goal_markers[obj.id], marker, IDENTITY)
+        self.restore(state, self.standing_poses(scenario, state))
+
+    def standing_poses(self, scenario: Scenario, state: WorldState) -> dict[str, Pose]:
+        """Upright poses of every item not held, as ``state`` places them (clutter on its table)."""
+        poses: dict[str, Pose] = {}
+        for obj in scenario.objects:
+            if obj.id != state.holding:
+                poses[obj.id] = (tuple(state.objects[obj.id]), IDENTITY)
+        for item in scenario.clutter:
+            x, y = state.clutter[item.id]
+            poses[item.id] = ((x, y, table_top(scenario, (x, y)) + item.height / 2), IDENTITY)
+        return poses
+
+    def restore(self, state: WorldState, poses: dict[str, Pose]) -> None:
+        """Put the robot and every item at the given poses, at rest, with fresh contacts."""
+        if self._scenario is None:
+            raise RuntimeError("Simulation.restore before reset: no scenario loaded")
+        if self._held is not None and self._held != state.holding:
+            self._release(self._held)
+        self._poses = {name: (tuple(p), tuple(q)) for name, (p, q) in poses.items()}
+        robot = self._robot_body
+        robot.set_base(state.base, state.heading)
+        if state.holding is not None:
+            held = state.objects[state.holding]
+            forward, lateral = _robot_frame(state, held)
+            robot.set_hand(HandPose(forward, lateral, held[2]))
+            self._grasp(state.holding, held)
+        else:
+            robot.set_hand(HandPose(robot.hand.forward, robot.hand.lateral, robot.arm_height))
+        self._fresh_contacts()
+
+    @property
+    def poses(self) -> dict[str, Pose]:
+        """The recorded pose of every item that is not held (what a copy needs to continue exactly)."""
+        return dict(self._poses)
+
+    # ------------------------------------------------------------------ primitives
+    def move(self, base: Point, heading: Heading, holding: str | None) -> Point3 | None:
+        """Teleport the base (the caller has checked the segment is free); a held object follows the hand.
+
+        Returns the held object's new centre, or None.
+        """
+        robot = self._robot_body
+        robot.set_base(base, heading)
+        if holding is None:
+            return None
+        hand = robot.hand
+        dx, dy = to_world_frame(heading, hand.forward, hand.lateral)
+        position = (base[0] + dx, base[1] + dy, hand.z)
+        self.client.resetBasePositionAndOrientation(self._layout.objects[holding], position, IDENTITY)
+        return position
+
+    def pick(self, object_id: str, base: Point, heading: Heading) -> Point3:
+        """Grasp ``object_id`` (within reach of the hand from this pose) and lift it by ``LIFT_HEIGHT``.
+
+        Returns the object's new centre. The object is attached to the hand: it has no
+        mass and touches nothing until it is placed.
+        """
+        robot = self._robot_body
+        robot.set_base(base, heading)
+        (x, y, z), _ = self._poses.pop(object_id)
+        lifted = (x, y, z + LIFT_HEIGHT)
+        forward, lateral = _robot_frame_of(base, heading, lifted)
+        robot.set_hand(HandPose(forward, lateral, lifted[2]))
+        self._grasp(object_id, lifted)
+        return lifted
+
+    def place(self, object_id: str, base: Point, heading: Heading, goal: Point) -> dict[str, Pose]:
+        """Put the held object down standing at ``goal``, release it and let the world settle.
+
+        Returns the pose of every item after settling.
+        """
+        scenario = self._scenario
+        obj = scenario.object(object_id)
+        standing = (goal[0], goal[1], table_top(scenario, goal) + obj.height / 2)
+        robot = self._robot_body
+        robot.set_base(base, heading)
+        forward, lateral = _robot_frame_of(base, heading, standing)
+        robot.set_hand(HandPose(forward, lateral, standing[2]))
+        self._release(object_id)
+        self._poses[object_id] = (standing, IDENTITY)
+        self._fresh_contacts()
+        step = self.client.stepSimulation
+        for _ in range(physics.PLACE_SETTLE_STEPS):
+            step()
+        return self._read_poses()
+
+    def push(
+        self,
+        clutter_id: str,
+        base: Point,
+        heading: Heading,
+        hand: tuple[float, float],
+        direction: Heading,
+        length: float,
+    ) -> PushOutcome:
+        """Stroke the base ``length`` metres along ``direction`` with the hand against ``clutter_id``.
+
+        The hand starts at the robot-frame offset ``hand`` (``(forward, lateral)``, touching
+        the clutter's rear face) and keeps that offset while the base moves, at most
+        :data:`physics.MAX_HAND_STEP` per simulation step; PyBullet moves the clutter and
+        whatever it runs into. If the clutter jams (the hand sinks
+        :data:`physics.STALL_DEPTH` into it) the stroke stops there. Afterwards the world
+        settles and every item's pose is read back (:attr:`poses`).
+        """
+        client = self.client
+        robot = self._robot_body
+        ux, uy = heading_vector(direction)
+        (cx, cy, cz), _ = self._poses[clutter_id]
+        item_height = self._scenario.clutter_item(clutter_id).height
+        hand_z = cz - item_height / 2 + max(item_height / 2, HAND_HALF_SIZE + HAND_LIFT)
+        robot.set_base(base, heading)
+        robot.set_hand(HandPose(hand[0], hand[1], hand_z))
+        self._fresh_contacts()
+        robot.set_hand_contact(True)
+        clutter_body = self._layout.clutter[clutter_id]
+        hand_x, hand_y = (base[0] + c for c in to_world_frame(heading, hand[0], hand[1]))
+        gap = (cx - hand_x) * ux + (cy - hand_y) * uy  # metres from the hand's centre to the clutter's, at rest
+        # The stroke is driven through the arm's joints (with their velocities, so that PyBullet
+        # sees a moving kinematic hand, not a teleported one); the base follows afterwards.
+        along_forward, along_lateral = to_robot_frame(heading, ux, uy)
+        drive, step, get_pose = robot.drive_hand, client.stepSimulation, client.getBasePositionAndOrientation
+        travelled, stalled, steps, previous = 0.0, False, 0, 0.0
+        for s in stroke_profile(length):
+            speed = (s - previous) / physics.TIME_STEP
+            drive(
+                hand[0] + along_forward * s, hand[1] + along_lateral * s, along_forward * speed, along_lateral * speed
+            )
+            step()
+            steps += 1
+            travelled, previous = s, s
+            (px, py, _), _ = get_pose(clutter_body)
+            sink = gap - ((px - hand_x - ux * s) * ux + (py - hand_y - uy * s) * uy)
+            if sink > physics.STALL_DEPTH:
+                travelled, stalled = s - sink, True
+                break
+        drive(hand[0] + along_forward * travelled, hand[1] + along_lateral * travelled, 0.0, 0.0)
+        for _ in range(physics.PUSH_SETTLE_STEPS):
+            step()
+        steps += physics.PUSH_SETTLE_STEPS
+        robot.set_hand_contact(False)
+        robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
+        robot.set_hand(HandPose(hand[0], hand[1], hand_z))
+        self._read_poses()
+        return PushOutcome(travelled=travelled, stalled=stalled, simulation_steps=steps)
+
+    # ------------------------------------------------------------------ reading back
+    def item_position(self, name: str) -> Point3:
+        """Where PyBullet has the centre of object or clutter ``name`` (metres)."""
+        bodies = self._layout
+        body = bodies.objects.get(name, bodies.clutter.get(name))
+        if body is None:
+            raise KeyError(f"no object or clutter named {name!r}")
+        return tuple(self.client.getBasePositionAndOrientation(body)[0])
+
+    def body_id(self, name: str) -> int:
+        """PyBullet body id of a table, obstacle, object or clutter by scenario id (``"robot"`` for the robot)."""
+        if name == "robot":
+            return self._robot_body.body
+        bodies = self._layout
+        for group in (bodies.tables, bodies.obstacles, bodies.objects, bodies.clutter):
+            if name in group:
+                return group[name]
+        raise KeyError(f"no body named {name!r}")
+
+    @property
+    def robot(self) -> RobotBody:
+        return self._robot_body
+
+    def render(self, camera: Camera, width: int, height: int) -> np.ndarray:
+        """An RGB image (``height x width x 3``, uint8) of the world seen by ``camera``."""
+        return render_image(self.client, self._scenario, camera, width, height)
+
+    # ------------------------------------------------------------------ internals
+    @property
+    def _layout(self) -> LayoutBodies:
+        if self._bodies is None:
+            raise RuntimeError("the simulation has no scenario yet: call reset() first")
+        return self._bodies
+
+    @property
+    def _robot_body(self) -> RobotBody:
+        if self._robot is None:
+            raise RuntimeError("the simulation has no scenario yet: call reset() first")
+        return self._robot
+
+    def _build(self, scenario: Scenario) -> None:
+        client = self.client
+        client.resetSimulation()
+        client.setGravity(0.0, 0.0, -physics.GRAVITY)
+        client.setPhysicsEngineParameter(
+            fixedTimeStep=physics.TIME_STEP,
+            numSolverIterations=physics.SOLVER_ITERATIONS,
+            deterministicOverlappingPairs=1,
+            collisionFilterMode=0,  # AND: two shapes touch only when each one's group is in the other's mask
+        )
+        self._bodies = build_layout(client, scenario)
+        tops = [t.height for t in scenario.tables] or [0.0]
+        standing = [o.height for o in scenario.objects] + [c.height for c in scenario.clutter]
+        arm_height = max(max(tops) + max(standing) + physics.ARM_CLEARANCE, physics.BASE_HEIGHT + 0.1)
+        self._robot = RobotBody(client, scenario.robot.radius, arm_height, lowest_hand=min(tops))
+        self._layout_key = scenario.layout_key
+        self._held = None
+        self.builds += 1
+
+    def _grasp(self, object_id: str, position: Point3) -> None:
+        client = self.client
+        body = self._layout.objects[object_id]
+        client.changeDynamics(body, -1, mass=0.0)
+        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_NONE)
+        client.resetBasePositionAndOrientation(body, position, IDENTITY)
+        client.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        self._held = object_id
+
+    def _release(self, object_id: str) -> None:
+        client = self.client
+        body = self._layout.objects[object_id]
+        client.changeDynamics(body, -1, mass=physics.OBJECT_MASS)
+        set_item_dynamics(client, body)
+        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_ITEM)
+        self._held = None
+
+    def _item_bodies(self) -> dict[str, int]:
+        bodies = self._layout
+        return {**bodies.objects, **bodies.clutter}
+
+    def _fresh_contacts(self) -> None:
+        """Pose every item from the record, at rest, with no cached contacts (see the module docstring).
+
+        PyBullet keeps contact manifolds (and their warm-start impulses) across a teleport;
+        parking the bodies far apart for one collision pass drops them, so the next steps
+        start exactly as in a newly built world.
+        """
+        client = self.client
+        items = self._item_bodies()
+        robot = self._robot_body.body
+        parked = [robot, *(items[name] for name in self._poses)]
+        for k, body in enumerate(parked):
+            spot = (PARKING_DISTANCE + PARKING_SPACING * k, PARKING_DISTANCE, PARKING_DISTANCE)
+            client.resetBasePositionAndOrientation(body, spot, IDENTITY)
+        client.performCollisionDetection()
+        self._robot_body.set_base(*self._robot_body.pose)
+        zero = (0.0, 0.0, 0.0)
+        for name, (position, orientation) in self._poses.items():
+            body = items[name]
+            client.resetBasePositionAndOrientation(body, position, orientation)
+            client.resetBaseVelocity(body, zero, zero)
+
+    def _read_poses(self) -> dict[str, Pose]:
+        get_pose = self.client.getBasePositionAndOrientation
+        items = self._item_bodies()
+        self._poses = {name: get_pose(items[name]) for name in self._poses}
+        return dict(self._poses)
+
+
+def stroke_profile(length: float) -> list[float]:
+    """Distances (metres) of the hand along a push stroke after each simulation step.
+
+    A trapezoidal speed profile: accelerate at :data:`physics.PUSH_ACCELERATION` up to
+    :data:`physics.PUSH_SPEED`, decelerate so as to arrive at ``length`` no faster than
+    :data:`physics.PUSH_MIN_SPEED`. The deceleration stays below what friction gives the
+    clutter, so it stops with the hand instead of sliding on.
+    """
+    dt, accel = physics.TIME_STEP, physics.PUSH_ACCELERATION
+    positions: list[float] = []
+    s, v = 0.0, 0.0
+    while s < length - 1e-12:
+        if v * v / (2 * accel) >= length - s:
+            v = max(v - accel * dt, physics.PUSH_MIN_SPEED)
+        else:
+            v = min(v + accel * dt, physics.PUSH_SPEED)
+        s = min(s + min(v * dt, physics.MAX_HAND_STEP), length)
+        positions.append(s)
+    return positions
+
+
+def _robot_frame(state: WorldState, point: Point3) -> tuple[float, float]:
+    return _robot_frame_of(state.base, state.heading, point)
+
+
+def _robot_frame_of(base: Point, heading: Heading, point: Point3) -> tuple[float, float]:
+    """Robot-frame ``(forward, lateral)`` of a world point seen from the base pose (metres)."""
+    return to_robot_frame(heading, point[0] - base[0], point[1] - base[1])
