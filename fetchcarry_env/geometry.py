@@ -152,28 +152,7 @@ def segment_intersects_rect(p: Point, q: Point, rect: Rect, tol: float = EPS) ->
     that only grazes an edge does not count.
     """
     inner = rect.inflate(-tol)
-    if not inner.is_proper:
-        return False
-    t0, t1 = 0.0, 1.0
-    dx, dy = q[0] - p[0], q[1] - p[1]
-    for denom, num in (
-        (-dx, p[0] - inner.min_x),
-        (dx, inner.max_x - p[0]),
-        (-dy, p[1] - inner.min_y),
-        (dy, inner.max_y - p[1]),
-    ):
-        if abs(denom) <= 1e-15:
-            if num < 0:
-                return False
-            continue
-        t = num / denom
-        if denom < 0:
-            t0 = max(t0, t)
-        else:
-            t1 = min(t1, t)
-        if t0 > t1:
-            return False
-    return True
+    return inner.is_proper and _clip(p, q[0] - p[0], q[1] - p[1], inner) is not None
 
 
 def segment_point_distance(p: Point, q: Point, c: Point) -> float:
@@ -238,8 +217,8 @@ def _sweep_disc_rect(p: Point, q: Point, radius: float, rect: Rect) -> float:
     return min([1.0, *hits])
 
 
-def _ray_rect_entry(p: Point, dx: float, dy: float, rect: Rect) -> float | None:
-    """Entry parameter in [0, 1] of ``p + t (dx, dy)`` into ``rect``, or None."""
+def _clip(p: Point, dx: float, dy: float, rect: Rect) -> tuple[float, float] | None:
+    """Liang-Barsky: the parameters ``(t0, t1)`` in [0, 1] of ``p + t (dx, dy)`` inside ``rect``, or None."""
     t0, t1 = 0.0, 1.0
     for denom, num in (
         (-dx, p[0] - rect.min_x),
@@ -258,8 +237,14 @@ def _ray_rect_entry(p: Point, dx: float, dy: float, rect: Rect) -> float | None:
             t1 = min(t1, t)
         if t0 > t1:
             return None
+    return (t0, t1)
+
+
+def _ray_rect_entry(p: Point, dx: float, dy: float, rect: Rect) -> float | None:
+    """Entry parameter in [0, 1] of ``p + t (dx, dy)`` into ``rect``, or None."""
+    span = _clip(p, dx, dy, rect)
     # Entering exactly at t0 = 0 with a direction that leaves the rectangle is not a hit.
-    return t0 if t1 - t0 > EPS else None
+    return span[0] if span is not None and span[1] - span[0] > EPS else None
 
 
 def _ray_circle_entry(p: Point, dx: float, dy: float, c: Point, r: float) -> float | None:
