@@ -9,6 +9,7 @@ scenario (what the world is: :mod:`fetchcarry_env.scenario`, or a family of them
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
@@ -20,6 +21,7 @@ import numpy as np
 from gymnasium import spaces
 
 from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec
+from fetchcarry_env.families import DEFAULT_FAMILY, Family, get_family
 from fetchcarry_env.geometry import Rect, heading_vector
 from fetchcarry_env.kinematics import (
     COLLISION_PENALTY,
@@ -30,9 +32,10 @@ from fetchcarry_env.kinematics import (
 )
 from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
 from fetchcarry_env.rules import Phase, action_mask, check_action, move_stop
-from fetchcarry_env.scenario import Scenario, ScenarioError
+from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
+from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
+from fetchcarry_env.sim.client import check_display, display_available
 
-DEFAULT_FAMILY = "push"  # the family drawn from when neither a scenario nor a family is given
 DEFAULT_RESOLUTION = 0.05  # metres between lattice points
 DEFAULT_IMAGE_SIZE = (320, 240)  # pixels (width, height) of rgb_array frames
 ACTION_COMPONENTS = ("x cell", "y cell", "heading", "posture", "mode")
@@ -55,10 +58,12 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     line to a point of a lattice over the floor, turns to a heading, and the arm, in
     one of the robot's postures, does nothing, picks, places or pushes. The world is
     simulated in PyBullet: the base stops at the first contact with a table, an
-    obstacle or the edge of the area (an exact swept-disc test, nothing tunnels); a
-    picked object is attached to the hand; a placed object is released on the table
-    and settles; a push drives the hand through the stroke (1 cm per simulation step
-    at most) and PyBullet moves the clutter, which may shove a neighbour or jam.
+    obstacle or the edge of the area (an exact swept-disc test, nothing tunnels; a
+    move that grazes a blocker within 1 µm, the plan validator's tolerance, is free),
+    and the arm then does nothing; a picked object is lifted 5 cm and attached to the
+    hand; a placed object is released standing on the table and settles; a push
+    drives the hand through the stroke (1 cm per simulation step at most) and PyBullet
+    moves the clutter, which may shove a neighbour, or jam (the stroke then stops).
 
     The scenario is fixed (``scenario=``) or drawn at every reset from a family
     (``family=``, by default ``"push"``). The whole geometry is in the observation,
@@ -71,9 +76,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     | index | meaning | values |
     |-------|---------|--------|
-    | 0, 1 | lattice point ``origin + (i, j) * resolution`` the base goes to (push: stroke end) | ``i < nx``, ``j < ny`` |
+    | 0, 1 | the base's lattice point ``origin + (i, j) * resolution`` (push: stroke end) | ``i < nx``, ``j < ny`` |
     | 2 | heading at the end of the phase | 0 ``+x``, 1 ``+y``, 2 ``-x``, 3 ``-y`` |
-    | 3 | arm posture (index into the scenario's ``robot.postures``) | ``0 <= k < n_postures`` (``capacity.postures``) |
+    | 3 | arm posture: index into the scenario's ``robot.postures`` | ``k < capacity.postures`` |
     | 4 | mode | 0 move, 1 pick, 2 place, 3 push |
 
     The lattice covers the scenario's area (fixed scenario) or the family's extent, at
@@ -82,8 +87,13 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ranges); place puts the held object at its goal; push needs an empty hand, strokes
     axis-aligned from where the base stands, with the heading along the stroke or at
     right angles to it, against the piece of clutter whose rear face the posture
-    reaches. :meth:`action_masks` gives MaskablePPO's flat mask. An action outside the
-    space raises ``ValueError``; an impossible one does nothing (see Rewards).
+    reaches. A push whose base touches something during the stroke stops there.
+
+    :meth:`action_masks` gives MaskablePPO's flat mask (length ``nx + ny + 4 +
+    capacity.postures + 4``): lattice columns and rows where the base disc does not fit
+    in the area, postures the robot does not have, pick and push with a full hand, place
+    with an empty one and push without clutter are masked. An action outside the space
+    raises ``ValueError``; an impossible one (masked or not) does nothing (see Rewards).
 
     ## Observation Space
 
@@ -154,14 +164,19 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     - ``resolution``: metres between lattice points.
     - ``capacity``: a :class:`~fetchcarry_env.observation.Capacity` (slots in the observation).
     - ``render_mode``: ``"rgb_array"`` (headless, PyBullet's tiny renderer) or
-      ``"human"`` (a PyBullet window; needs a display).
+      ``"human"`` (a PyBullet window). ``"human"`` needs a display: without one it
+      raises :class:`~fetchcarry_env.errors.UsageError`, and the instance's
+      ``metadata["render_modes"]`` lists only ``"rgb_array"``.
     - ``camera``: ``"perspective"`` or ``"top_down"`` for ``rgb_array`` frames of
       ``width`` x ``height`` pixels.
 
     The unwrapped env exposes ``scenario``, ``state`` (a
     :class:`~fetchcarry_env.observation.WorldState`), ``lattice``, ``capacity`` and
-    ``action_masks()``. Copies (``copy.deepcopy``, ``pickle``) are independent envs in
-    the same state that continue exactly as the original would.
+    ``action_masks()``. Copies (``copy.copy``, ``copy.deepcopy``, ``pickle``) are
+    independent envs in the same state, with their own PyBullet world, that continue
+    exactly (bit for bit) as the original would; an env with ``render_mode="human"``
+    refuses to be copied (``TypeError``). ``close()`` disconnects from PyBullet (twice
+    is safe); an env used after ``close()`` reconnects and continues where it was.
 
     ## Version History
 
@@ -181,36 +196,28 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         width: int = DEFAULT_IMAGE_SIZE[0],
         height: int = DEFAULT_IMAGE_SIZE[1],
     ) -> None:
-        from fetchcarry_env.sim import CAMERAS, Simulation
-
         if scenario is not None and family is not None:
             raise ValueError("give a scenario or a family, not both")
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
+        if render_mode is not None and render_mode not in type(self).metadata["render_modes"]:
+            modes = type(self).metadata["render_modes"]
+            raise ValueError(f"render_mode must be one of {modes} or None, got {render_mode!r}")
         if camera not in CAMERAS:
             raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
         if width < 1 or height < 1:
             raise ValueError(f"image size must be positive, got {width} x {height}")
-        self._init_kwargs = {
-            "scenario": scenario,
-            "family": family,
-            "resolution": resolution,
-            "capacity": capacity,
-            "render_mode": render_mode,
-            "camera": camera,
-            "width": width,
-            "height": height,
-        }
+        if render_mode == "human":
+            check_display()
+        # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
+        modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
+        self.metadata = {**type(self).metadata, "render_modes": modes}
         self.capacity = capacity if capacity is not None else Capacity()
         self._fixed: Scenario | None = None
-        self._family = None
+        self._family_name: str | None = None
         if scenario is not None:
             self._fixed = _as_scenario(scenario)
             extent = self._fixed.area
         else:
-            from fetchcarry_env.families import get_family
-
-            self._family = get_family(family if family is not None else DEFAULT_FAMILY)
+            self._family_name = family if family is not None else DEFAULT_FAMILY
             extent = self._family.extent
         self.lattice = Lattice.over(extent, resolution)
         self._extent: Rect = extent
@@ -221,15 +228,11 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.image_size = (width, height)
         self.action_space = spaces.MultiDiscrete(action_nvec(self.lattice, self.capacity.postures))
         self.observation_space = observation_space(self.capacity)
-        if render_mode == "human":
-            from fetchcarry_env.sim.client import check_display
-
-            check_display()
-        self._sim = Simulation(gui=render_mode == "human")
+        self._sim = Simulation(gui=render_mode == "human")  # connects to PyBullet on first use
+        self._sim_in_sync = False  # False until reset, and after close() or a copy: rebuilt on next use
+        self._snapshot: Snapshot | None = None  # the world's exact poses to rebuild from (copies, close)
         self._scenario: Scenario | None = None
         self._state: WorldState | None = None
-        self._sim_in_sync = False  # False after unpickling: the simulation is rebuilt on first use
-        self._pending_poses: dict | None = None
         self._achieved: np.ndarray | None = None
         self._path_length = 0.0
         self._collisions = 0
@@ -269,7 +272,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._scenario = scenario
         self._state = WorldState.initial(scenario)
         self._sim.reset(scenario, self._state)
-        self._sim_in_sync = True
+        self._sim_in_sync, self._snapshot = True, None
         self._path_length = 0.0
         self._collisions = 0
         observation = encode(scenario, self._state, self.capacity)
@@ -349,24 +352,32 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return self._sim.render(self.camera, *self.image_size)
 
     def close(self) -> None:
-        """Disconnect from PyBullet (safe to call twice)."""
+        """Disconnect from PyBullet (safe to call twice).
+
+        The episode is kept: using the env again reconnects and rebuilds the world where it was.
+        """
+        if self._sim_in_sync:
+            self._snapshot = self._sim.snapshot()
         self._sim.close()
         self._sim_in_sync = False
 
     # ------------------------------------------------------------------ copying
     def __getstate__(self) -> dict[str, Any]:
+        """What ``pickle`` and ``copy.deepcopy`` keep: everything but the PyBullet world, plus its exact poses."""
         if self.render_mode == "human":
             raise TypeError("an env with render_mode='human' cannot be copied: PyBullet allows one window per process")
         state = {k: v for k, v in self.__dict__.items() if k != "_sim"}
-        state["_pending_poses"] = self._sim.poses if self._sim_in_sync else self._pending_poses
+        state["_snapshot"] = self._sim.snapshot() if self._sim_in_sync else self._snapshot
         state["_sim_in_sync"] = False
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        from fetchcarry_env.sim import Simulation
-
         self.__dict__.update(state)
-        self._sim = Simulation(gui=False)
+        self._sim = Simulation(gui=False)  # rebuilt from the snapshot on first use
+
+    def __copy__(self) -> FetchCarryPushEnv:
+        """A shallow copy would share the random generator and the PyBullet world: make an independent one."""
+        return copy.deepcopy(self)
 
     # ------------------------------------------------------------------ internals
     def _move_and_act(self, phase: Phase) -> str | None:
@@ -417,14 +428,17 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 objects[name] = tuple(position)
         return replace(state, objects=objects, clutter=clutter)
 
+    @property
+    def _family(self) -> Family:
+        """The family scenarios are drawn from (looked up by name, so that copies need not pickle it)."""
+        return get_family(self._family_name)
+
     def _sync_sim(self) -> None:
-        """Rebuild the simulation after unpickling (or close), at the recorded poses."""
+        """Rebuild the simulation after a copy or close(), exactly where the world was."""
         if self._sim_in_sync:
             return
-        self._sim.reset(self.scenario, self.state)
-        if self._pending_poses is not None:
-            self._sim.restore(self.state, self._pending_poses)
-        self._sim_in_sync = True
+        self._sim.reset(self.scenario, self.state, self._snapshot)
+        self._sim_in_sync, self._snapshot = True, None
 
     def _decode(self, action: Any) -> Action:
         """The action as an :class:`Action`; ``ValueError`` naming the component if it is outside the space."""
@@ -485,7 +499,11 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
 
 def _as_scenario(scenario: ScenarioLike) -> Scenario:
+    """A validated scenario from a :class:`Scenario`, a mapping or a path; :class:`ScenarioError` names broken rules."""
     if isinstance(scenario, Scenario):
+        violations = check_rules(scenario)  # the constructor trusts its input: check it here
+        if violations:
+            raise ScenarioError(violations, scenario.name)
         return scenario
     if isinstance(scenario, Mapping):
         return Scenario.from_dict(scenario)

@@ -26,6 +26,7 @@ from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Posture, Scenario
 
 ALIGN_TOLERANCE = 1e-6  # metres: a stroke whose cross-axis component is below this is axis-aligned
+CONTACT_SLACK = 1e-6  # metres: a base that passes this close to a blocker (spec/plan.md's tolerance) does not touch it
 EDGE_DEPTH = 1.0  # metres: thickness of the strips outside the area that stop the base at its edge
 AREA_EDGE = "area edge"  # what a move that stops at the edge of the area reports it touched
 
@@ -55,8 +56,8 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
 
     False marks what no action with that component can do: lattice columns or rows where
     the base disc does not fit in the area, postures the robot does not have, pick or
-    push with a full hand, place with an empty one. Every component keeps at least one
-    allowed value (MaskablePPO needs one).
+    push with a full hand, place with an empty one, push when there is no clutter. Every
+    component keeps at least one allowed value (``move`` always is: MaskablePPO needs one).
     """
     radius = scenario.robot.radius
     area = scenario.area
@@ -71,7 +72,7 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
     parts.append(np.arange(max_postures) < len(scenario.robot.postures))
     empty = state.holding is None
     modes = np.zeros(len(Mode), dtype=bool)
-    modes[[Mode.MOVE, Mode.PICK, Mode.PLACE, Mode.PUSH]] = [True, empty, not empty, empty]
+    modes[[Mode.MOVE, Mode.PICK, Mode.PLACE, Mode.PUSH]] = [True, empty, not empty, empty and bool(scenario.clutter)]
     parts.append(modes)
     return np.concatenate(parts)
 
@@ -97,14 +98,17 @@ def move_stop(scenario: Scenario, start: Point, end: Point) -> tuple[Point, str 
     """Where a base sliding from ``start`` to ``end`` stops, and what it touched (None if nothing).
 
     Tables, obstacles and the edge of the area stop it at the first contact
-    (:func:`fetchcarry_env.geometry.first_contact`, exact).
+    (:func:`fetchcarry_env.geometry.first_contact`, exact: nothing tunnels). A move that
+    only grazes a blocker, closer than the base's radius by at most :data:`CONTACT_SLACK`
+    (the plan validator's tolerance), is free: a valid plan never touches anything.
     """
     radius = scenario.robot.radius
     t_stop, touched = 1.0, None
     for name, rect in base_blockers(scenario):
-        t = first_contact(start, end, radius, (rect,))
-        if t < t_stop:
-            t_stop, touched = t, name
+        if first_contact(start, end, radius - CONTACT_SLACK, (rect,)) < 1.0:
+            t = first_contact(start, end, radius, (rect,))  # at most the slack test's t, so below 1
+            if t < t_stop:
+                t_stop, touched = t, name
     if touched is None:
         return end, None
     return (start[0] + t_stop * (end[0] - start[0]), start[1] + t_stop * (end[1] - start[1])), touched

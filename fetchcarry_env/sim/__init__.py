@@ -7,6 +7,6 @@ place, push). Nothing here runs at import time: a server starts on first use.
 
 from fetchcarry_env.sim.camera import CAMERAS, Camera
 from fetchcarry_env.sim.robot import HandPose
-from fetchcarry_env.sim.world import PushOutcome, Simulation, stroke_profile
+from fetchcarry_env.sim.world import PushOutcome, Simulation, Snapshot, stroke_profile
 
-__all__ = ["CAMERAS", "Camera", "HandPose", "PushOutcome", "Simulation", "stroke_profile"]
+__all__ = ["CAMERAS", "Camera", "HandPose", "PushOutcome", "Simulation", "Snapshot", "stroke_profile"]

@@ -9,12 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import pybullet
-
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim import physics
-from fetchcarry_env.sim.client import QuietClient
+from fetchcarry_env.sim.client import QuietClient, pybullet
 
 RGBA = tuple[float, float, float, float]
 

@@ -1,14 +1,70 @@
-"""Connecting to PyBullet: one private physics server per simulation, never the module-level one."""
+"""Connecting to PyBullet: one private physics server per simulation, never the module-level one.
+
+This is the only module that imports ``pybullet``; the rest of :mod:`fetchcarry_env.sim`
+takes the module (for its constants) from here. The import is made quiet: PyBullet's
+C code prints ``pybullet build time: ...`` when it loads (to stderr with pybullet 3.2.7,
+to stdout with some builds), which would pollute command output, ``--json`` and
+notebooks. File descriptors 1 and 2 are pointed at ``/dev/null`` around the import
+and restored afterwards, even when the import fails.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import importlib
 import os
-
-import pybullet
-from pybullet_utils.bullet_client import BulletClient
+import sys
+from collections.abc import Iterator
+from types import ModuleType
 
 from fetchcarry_env.errors import UsageError
+
+
+@contextlib.contextmanager
+def silenced_file_descriptors(*descriptors: int) -> Iterator[None]:
+    """Send what C code writes to ``descriptors`` (1 stdout, 2 stderr) to ``/dev/null`` inside the block.
+
+    Python's own streams are flushed first and C's stdio buffers before the descriptors
+    are restored, so nothing written inside leaks out afterwards. A descriptor that is
+    not open (a daemon without stdout) is left alone.
+    """
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    saved: list[tuple[int, int]] = []
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        for fd in descriptors:
+            try:
+                saved.append((fd, os.dup(fd)))
+            except OSError:
+                continue
+            os.dup2(devnull, fd)
+        yield
+    finally:
+        _flush_c_stdio()
+        for fd, copy in saved:
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
+
+
+def _flush_c_stdio() -> None:
+    """``fflush(NULL)``: write out C's buffered stdout before its descriptor is restored."""
+    with contextlib.suppress(OSError, AttributeError, TypeError):
+        ctypes.CDLL(None).fflush(None)
+
+
+def _import_quietly(name: str) -> ModuleType:
+    if name in sys.modules:
+        return sys.modules[name]
+    with silenced_file_descriptors(1, 2):
+        return importlib.import_module(name)
+
+
+pybullet = _import_quietly("pybullet")
+BulletClient = _import_quietly("pybullet_utils.bullet_client").BulletClient
 
 
 class QuietClient(BulletClient):
@@ -50,13 +106,18 @@ class QuietClient(BulletClient):
         self._client = -1
 
 
+def display_available() -> bool:
+    """True when a PyBullet window can be opened (an X11 or Wayland display is set)."""
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def check_display() -> None:
     """Raise :class:`UsageError` unless a display exists for a PyBullet window.
 
     ``p.GUI`` without a display makes the whole process exit without an exception, so
     this is checked before any window is opened.
     """
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+    if not display_available():
         raise UsageError(
             "render_mode='human' needs a display (DISPLAY is not set); use render_mode='rgb_array' when headless"
         )

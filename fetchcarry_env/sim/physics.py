@@ -7,6 +7,7 @@ GRAVITY = 9.81  # m/s^2
 SOLVER_ITERATIONS = 50  # constraint-solver iterations per step (PyBullet's default, stated)
 
 FRICTION = 0.5  # lateral (Coulomb) friction of table tops, clutter, objects and the hand
+# (PyBullet multiplies the coefficients of the two bodies in contact: clutter on a table slides at 0.25.)
 SPINNING_FRICTION = 0.001  # N*m per N: resists cylinders spinning on their base
 ROLLING_FRICTION = 0.0001  # N*m per N: resists cylinders rolling once toppled
 RESTITUTION = 0.0  # nothing bounces
@@ -22,7 +23,7 @@ BASE_HEIGHT = 0.35  # metres: the round mobile base
 ARM_CLEARANCE = 0.10  # metres between the arm and the highest top of anything standing on a table
 
 PUSH_SPEED = 0.5  # m/s: cruise speed of the hand along a push stroke
-PUSH_ACCELERATION = 2.5  # m/s^2: below FRICTION * GRAVITY, so the clutter stops with the hand
+PUSH_ACCELERATION = 2.0  # m/s^2: below FRICTION**2 * GRAVITY (2.45), so the clutter stops with the hand
 PUSH_MIN_SPEED = 0.02  # m/s: the hand never creeps slower than this near the end of a stroke
 MAX_HAND_STEP = 0.01  # metres: the most the hand moves in one simulation step (the limit)
 PUSH_SETTLE_STEPS = 24  # steps (0.1 s) the world runs after a stroke with the hand in place

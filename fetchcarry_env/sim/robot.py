@@ -15,12 +15,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import pybullet
-
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, heading_yaw
 from fetchcarry_env.kinematics import HAND_HALF_SIZE
 from fetchcarry_env.sim import physics
-from fetchcarry_env.sim.client import QuietClient
+from fetchcarry_env.sim.client import QuietClient, pybullet
 
 BASE_COLOR = (0.92, 0.92, 0.92, 1.0)
 LINK_COLOR = (0.18, 0.18, 0.20, 1.0)
@@ -103,9 +101,14 @@ class RobotBody:
         client.changeDynamics(self.body, WRIST, lateralFriction=physics.FRICTION, restitution=physics.RESTITUTION)
         self.set_hand_contact(False)
         client.resetJointState(self.body, LIFT, arm_height - physics.BASE_HEIGHT)
-        self.hand = HandPose(0.0, 0.0, arm_height)
         self.pose: tuple[Point, Heading] = ((0.0, 0.0), "+x")
         self._yaw_quaternion = {h: client.getQuaternionFromEuler([0.0, 0.0, heading_yaw(h)]) for h in HEADINGS}
+        self.set_hand(self.rest_hand)
+
+    @property
+    def rest_hand(self) -> HandPose:
+        """Where the empty hand waits between phases: over the front edge of the base, at the arm's height."""
+        return HandPose(self.radius, 0.0, self.arm_height)
 
     def set_hand_contact(self, enabled: bool) -> None:
         """Let the hand touch objects and clutter (during a push stroke) or nothing."""

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fetchcarry_env.geometry import Heading, Point, heading_vector, to_robot_frame, to_world_frame
-from fetchcarry_env.kinematics import HAND_HALF_SIZE
+from fetchcarry_env.kinematics import HAND_HALF_SIZE, hand_offset
 from fetchcarry_env.observation import LIFT_HEIGHT, Point3, WorldState
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim import physics
@@ -45,6 +45,19 @@ class PushOutcome:
     travelled: float  # metres along the stroke, at most the length asked for
     stalled: bool  # True when the pushed clutter stopped moving with the hand (jammed)
     simulation_steps: int  # stepSimulation calls the stroke and its settling took
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What a rebuilt world needs to continue exactly as this one: every free item's pose, and the hand.
+
+    ``poses`` holds each object and piece of clutter that is not held (position in metres,
+    orientation as a quaternion); ``hand`` is the hand's pose relative to the base (it
+    carries the held object, if any, at exactly that offset).
+    """
+
+    poses: dict[str, Pose]
+    hand: HandPose
 
 
 class Simulation:
@@ -86,19 +99,48 @@ class Simulation:
         )
 
     # ------------------------------------------------------------------ scenario and state
-    def reset(self, scenario: Scenario, state: WorldState) -> None:
-        """Show ``scenario`` at ``state``: rebuild the bodies if the layout changed, then pose everything."""
+    def reset(self, scenario: Scenario, state: WorldState, snapshot: Snapshot | None = None) -> None:
+        """Show ``scenario`` at ``state``: rebuild the bodies if the layout changed, then pose everything.
+
+        Items stand upright where ``state`` puts them, or take the exact poses of ``snapshot``
+        (taken from another world in the same state: a copied environment continues with it).
+        """
         client = self.client
         if self._layout_key != scenario.layout_key:
             self._build(scenario)
         self._scenario = scenario
-        bodies = self._layout
+        robot = self._robot_body
         for obj in scenario.objects:
             marker = (obj.goal[0], obj.goal[1], table_top(scenario, obj.goal))
-            client.resetBasePositionAndOrientation(bodies.goal_markers[obj.id], marker, IDENTITY)
-        self.restore(state, self.standing_poses(scenario, state))
+            client.resetBasePositionAndOrientation(self._layout.goal_markers[obj.id], marker, IDENTITY)
+        if self._held is not None:
+            self._release(self._held)
+        robot.set_base(state.base, state.heading)
+        if snapshot is not None:
+            self._poses = {name: (tuple(p), tuple(q)) for name, (p, q) in snapshot.poses.items()}
+            robot.set_hand(snapshot.hand)
+        else:
+            self._poses = self._standing_poses(scenario, state)
+            if state.holding is None:
+                robot.set_hand(robot.rest_hand)
+            else:
+                held = state.objects[state.holding]
+                robot.set_hand(HandPose(*hand_offset(state.base, state.heading, held[:2]), held[2]))
+        if state.holding is not None:
+            self._grasp(state.holding, self._hand_world_position())
+        self._fresh_contacts()
 
-    def standing_poses(self, scenario: Scenario, state: WorldState) -> dict[str, Pose]:
+    def snapshot(self) -> Snapshot:
+        """The exact state of this world between phases (see :class:`Snapshot`)."""
+        return Snapshot(dict(self._poses), self._robot_body.hand)
+
+    @property
+    def poses(self) -> dict[str, Pose]:
+        """The recorded pose of every item that is not held."""
+        return dict(self._poses)
+
+    @staticmethod
+    def _standing_poses(scenario: Scenario, state: WorldState) -> dict[str, Pose]:
         """Upright poses of every item not held, as ``state`` places them (clutter on its table)."""
         poses: dict[str, Pose] = {}
         for obj in scenario.objects:
@@ -109,42 +151,16 @@ class Simulation:
             poses[item.id] = ((x, y, table_top(scenario, (x, y)) + item.height / 2), IDENTITY)
         return poses
 
-    def restore(self, state: WorldState, poses: dict[str, Pose]) -> None:
-        """Put the robot and every item at the given poses, at rest, with fresh contacts."""
-        if self._scenario is None:
-            raise RuntimeError("Simulation.restore before reset: no scenario loaded")
-        if self._held is not None and self._held != state.holding:
-            self._release(self._held)
-        self._poses = {name: (tuple(p), tuple(q)) for name, (p, q) in poses.items()}
-        robot = self._robot_body
-        robot.set_base(state.base, state.heading)
-        if state.holding is not None:
-            held = state.objects[state.holding]
-            forward, lateral = _robot_frame(state, held)
-            robot.set_hand(HandPose(forward, lateral, held[2]))
-            self._grasp(state.holding, held)
-        else:
-            robot.set_hand(HandPose(robot.hand.forward, robot.hand.lateral, robot.arm_height))
-        self._fresh_contacts()
-
-    @property
-    def poses(self) -> dict[str, Pose]:
-        """The recorded pose of every item that is not held (what a copy needs to continue exactly)."""
-        return dict(self._poses)
-
     # ------------------------------------------------------------------ primitives
     def move(self, base: Point, heading: Heading, holding: str | None) -> Point3 | None:
         """Teleport the base (the caller has checked the segment is free); a held object follows the hand.
 
         Returns the held object's new centre, or None.
         """
-        robot = self._robot_body
-        robot.set_base(base, heading)
+        self._robot_body.set_base(base, heading)
         if holding is None:
             return None
-        hand = robot.hand
-        dx, dy = to_world_frame(heading, hand.forward, hand.lateral)
-        position = (base[0] + dx, base[1] + dy, hand.z)
+        position = self._hand_world_position()
         self.client.resetBasePositionAndOrientation(self._layout.objects[holding], position, IDENTITY)
         return position
 
@@ -158,25 +174,22 @@ class Simulation:
         robot.set_base(base, heading)
         (x, y, z), _ = self._poses.pop(object_id)
         lifted = (x, y, z + LIFT_HEIGHT)
-        forward, lateral = _robot_frame_of(base, heading, lifted)
-        robot.set_hand(HandPose(forward, lateral, lifted[2]))
+        robot.set_hand(HandPose(*hand_offset(base, heading, lifted[:2]), lifted[2]))
         self._grasp(object_id, lifted)
         return lifted
 
     def place(self, object_id: str, base: Point, heading: Heading, goal: Point) -> dict[str, Pose]:
         """Put the held object down standing at ``goal``, release it and let the world settle.
 
-        Returns the pose of every item after settling.
+        The hand then goes back to its rest pose. Returns the pose of every item after settling.
         """
-        scenario = self._scenario
-        obj = scenario.object(object_id)
-        standing = (goal[0], goal[1], table_top(scenario, goal) + obj.height / 2)
+        obj = self._scenario.object(object_id)
+        standing = (goal[0], goal[1], table_top(self._scenario, goal) + obj.height / 2)
         robot = self._robot_body
         robot.set_base(base, heading)
-        forward, lateral = _robot_frame_of(base, heading, standing)
-        robot.set_hand(HandPose(forward, lateral, standing[2]))
         self._release(object_id)
         self._poses[object_id] = (standing, IDENTITY)
+        robot.set_hand(robot.rest_hand)
         self._fresh_contacts()
         step = self.client.stepSimulation
         for _ in range(physics.PLACE_SETTLE_STEPS):
@@ -238,7 +251,7 @@ class Simulation:
         steps += physics.PUSH_SETTLE_STEPS
         robot.set_hand_contact(False)
         robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
-        robot.set_hand(HandPose(hand[0], hand[1], hand_z))
+        robot.set_hand(robot.rest_hand)
         self._read_poses()
         return PushOutcome(travelled=travelled, stalled=stalled, simulation_steps=steps)
 
@@ -300,6 +313,13 @@ class Simulation:
         self._layout_key = scenario.layout_key
         self._held = None
         self.builds += 1
+
+    def _hand_world_position(self) -> Point3:
+        """Where the hand's centre is in the world (metres), from the base pose and the hand's offset."""
+        robot = self._robot_body
+        (x, y), heading = robot.pose
+        dx, dy = to_world_frame(heading, robot.hand.forward, robot.hand.lateral)
+        return (x + dx, y + dy, robot.hand.z)
 
     def _grasp(self, object_id: str, position: Point3) -> None:
         client = self.client
@@ -370,12 +390,3 @@ def stroke_profile(length: float) -> list[float]:
         s = min(s + min(v * dt, physics.MAX_HAND_STEP), length)
         positions.append(s)
     return positions
-
-
-def _robot_frame(state: WorldState, point: Point3) -> tuple[float, float]:
-    return _robot_frame_of(state.base, state.heading, point)
-
-
-def _robot_frame_of(base: Point, heading: Heading, point: Point3) -> tuple[float, float]:
-    """Robot-frame ``(forward, lateral)`` of a world point seen from the base pose (metres)."""
-    return to_robot_frame(heading, point[0] - base[0], point[1] - base[1])
