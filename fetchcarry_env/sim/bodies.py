@@ -54,7 +54,11 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
             pybullet.GEOM_CYLINDER, radius=obj.radius, length=obj.height, rgbaColor=OBJECT_COLOR
         )
         objects[obj.id] = client.createMultiBody(
-            physics.OBJECT_MASS, collision, visual, _on_table(scenario, obj.start, obj.height)
+            physics.OBJECT_MASS,
+            collision,
+            visual,
+            _on_table(scenario, obj.start, obj.height),
+            useMaximalCoordinates=True,
         )
         marker = client.createVisualShape(
             pybullet.GEOM_CYLINDER, radius=obj.radius * 1.2, length=GOAL_MARKER_THICKNESS, rgbaColor=GOAL_COLOR
@@ -66,7 +70,11 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
         collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
         visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=CLUTTER_COLOR)
         clutter[item.id] = client.createMultiBody(
-            physics.CLUTTER_MASS, collision, visual, _on_table(scenario, item.rect.center, item.height)
+            physics.CLUTTER_MASS,
+            collision,
+            visual,
+            _on_table(scenario, item.rect.center, item.height),
+            useMaximalCoordinates=True,
         )
     for body in (floor, *tables.values(), *obstacles.values()):
         client.setCollisionFilterGroupMask(body, -1, physics.GROUP_STATIC, physics.GROUP_ITEM)
@@ -114,4 +122,4 @@ def _static_box(client: QuietClient, rect: Rect, z_low: float, z_high: float, co
     collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
     visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=color)
     center = [*rect.center, (z_low + z_high) / 2]
-    return client.createMultiBody(0.0, collision, visual, center)
+    return client.createMultiBody(0.0, collision, visual, center, useMaximalCoordinates=True)

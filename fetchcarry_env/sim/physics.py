@@ -22,18 +22,21 @@ OBSTACLE_HEIGHT = 1.2  # metres: walls and shelves are "full height", taller tha
 BASE_HEIGHT = 0.35  # metres: the round mobile base
 ARM_CLEARANCE = 0.10  # metres between the arm and the highest top of anything standing on a table
 
+PUSHER_MASS = 0.2  # kg: the hand's contact block during a push stroke
+PUSH_FORCE = 30.0  # N: the most the arm pushes with (a Toyota HSR's arm is rated for about 30 N at the hand)
+CONSTRAINT_ERP = 0.9  # share of a constraint's error corrected per step (PyBullet's erp: the pusher's grip)
 PUSH_SPEED = 0.5  # m/s: cruise speed of the hand along a push stroke
 PUSH_ACCELERATION = 2.0  # m/s^2: below FRICTION**2 * GRAVITY (2.45), so the clutter stops with the hand
 PUSH_MIN_SPEED = 0.02  # m/s: the hand never creeps slower than this near the end of a stroke
 MAX_HAND_STEP = 0.01  # metres: the most the hand moves in one simulation step (the limit)
 PUSH_SETTLE_STEPS = 24  # steps (0.1 s) the world runs after a stroke with the hand in place
 PLACE_SETTLE_STEPS = 12  # steps (0.05 s) the world runs after a placed object is released
-STALL_DEPTH = 0.005  # metres: a hand this far into the pushed clutter means it is jammed: the stroke stops
+STALL_DEPTH = 0.005  # metres: a pusher this far behind the hand's path means the push is jammed: the stroke stops
 
 # Collision groups (PyBullet's AND filter mode: two shapes touch when each one's group is in the other's mask).
 GROUP_STATIC = 1  # floor, tables, obstacles
 GROUP_ITEM = 2  # objects and clutter
-GROUP_ROBOT = 4  # base, lift, arm: visual only for the physics (the base is kept off tables geometrically)
-GROUP_HAND = 8  # the hand: touches items during a push stroke only
+GROUP_ROBOT = 4  # the robot's multibody: visual only for the physics (the base is kept off tables geometrically)
+GROUP_HAND = 8  # the pusher: touches objects and clutter (it is parked far away between strokes)
 MASK_ITEM = GROUP_STATIC | GROUP_ITEM | GROUP_HAND
 MASK_NONE = 0

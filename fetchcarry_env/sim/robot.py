@@ -5,10 +5,16 @@ that sits above everything standing on the tables and slides forward (prismatic,
 robot's x) and sideways (prismatic, the robot's y), and a wrist that drops the hand
 (prismatic, z). The hand is a cube of half-size :data:`~fetchcarry_env.kinematics.HAND_HALF_SIZE`.
 
-Every link has mass 0: the robot is kinematic, posed by resetting its base pose and its
-joint positions. Only the hand takes part in contacts, and only during a push stroke
-(:meth:`RobotBody.set_hand_contact`); the base is kept off tables and obstacles by the
+Every link has mass 0 and touches nothing: the robot is kinematic, posed by resetting
+its base pose and its joint positions. The base is kept off tables and obstacles by the
 exact swept-disc test of :func:`fetchcarry_env.geometry.first_contact` before it moves.
+
+What the hand touches during a push stroke is the *pusher*, a separate dynamic block the
+size of the hand, held at the hand's place by a force-limited constraint: the arm's
+strength (:data:`~fetchcarry_env.sim.physics.PUSH_FORCE`). PyBullet's contact solver
+then decides what moves: the pushed clutter slides, shoves a neighbour, or jams, and
+a jammed pusher falls behind the hand's path (:meth:`RobotBody.pusher_position`).
+Between strokes the pusher is parked far away.
 """
 
 from __future__ import annotations
@@ -29,6 +35,9 @@ ARM_VISUAL_LENGTH = 0.5  # metres: the arm drawn behind the wrist (it slides out
 WRIST_RADIUS = 0.012  # metres
 
 LIFT, FORWARD, LATERAL, WRIST = 0, 1, 2, 3  # joint (and link) indices; the hand is the wrist link
+PUSHER_PARKING = (-1000.0, -1000.0, -1000.0)  # metres: where the pusher waits between strokes, far from all
+IDENTITY = (0.0, 0.0, 0.0, 1.0)  # quaternion (x, y, z, w)
+ZERO = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -86,7 +95,7 @@ class RobotBody:
             baseVisualShapeIndex=base_visual,
             basePosition=[0.0, 0.0, half_base],
             linkMasses=[0.0] * 4,
-            linkCollisionShapeIndices=[-1, -1, -1, hand_collision],
+            linkCollisionShapeIndices=[-1, -1, -1, -1],
             linkVisualShapeIndices=[mast_visual, arm_visual, -1, hand_visual],
             linkPositions=[[0, 0, half_base], [0, 0, 0], [0, 0, 0], [0, 0, 0]],
             linkOrientations=[[0, 0, 0, 1]] * 4,
@@ -96,10 +105,24 @@ class RobotBody:
             linkJointTypes=[pybullet.JOINT_PRISMATIC] * 4,
             linkJointAxis=[[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         )
-        for link in (-1, LIFT, FORWARD, LATERAL):
-            client.setCollisionFilterGroupMask(self.body, link, physics.GROUP_ROBOT, physics.MASK_NONE)
-        client.changeDynamics(self.body, WRIST, lateralFriction=physics.FRICTION, restitution=physics.RESTITUTION)
-        self.set_hand_contact(False)
+        client.setCollisionFilterGroupMask(self.body, -1, physics.GROUP_ROBOT, physics.MASK_NONE)
+        # The robot only ever moves by teleporting: asleep, the physics engine skips it (half a step's cost).
+        client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
+        client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
+        self.pusher = client.createMultiBody(
+            physics.PUSHER_MASS, hand_collision, -1, PUSHER_PARKING, useMaximalCoordinates=True
+        )
+        self._anchor = client.createMultiBody(0.0, -1, -1, PUSHER_PARKING, useMaximalCoordinates=True)
+        self._grip = client.createConstraint(self._anchor, -1, self.pusher, -1, pybullet.JOINT_FIXED, ZERO, ZERO, ZERO)
+        client.changeConstraint(self._grip, maxForce=physics.PUSH_FORCE)
+        client.setCollisionFilterGroupMask(self.pusher, -1, physics.GROUP_HAND, physics.GROUP_ITEM)
+        client.changeDynamics(
+            self.pusher,
+            -1,
+            lateralFriction=physics.FRICTION,
+            restitution=physics.RESTITUTION,
+            activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING,
+        )
         client.resetJointState(self.body, LIFT, arm_height - physics.BASE_HEIGHT)
         self.pose: tuple[Point, Heading] = ((0.0, 0.0), "+x")
         self._yaw_quaternion = {h: client.getQuaternionFromEuler([0.0, 0.0, heading_yaw(h)]) for h in HEADINGS}
@@ -109,11 +132,6 @@ class RobotBody:
     def rest_hand(self) -> HandPose:
         """Where the empty hand waits between phases: over the front edge of the base, at the arm's height."""
         return HandPose(self.radius, 0.0, self.arm_height)
-
-    def set_hand_contact(self, enabled: bool) -> None:
-        """Let the hand touch objects and clutter (during a push stroke) or nothing."""
-        mask = physics.GROUP_ITEM if enabled else physics.MASK_NONE
-        self._client.setCollisionFilterGroupMask(self.body, WRIST, physics.GROUP_HAND, mask)
 
     def set_base(self, base: Point, heading: Heading) -> None:
         """Put the base centre at ``base`` facing ``heading`` (the arm follows)."""
@@ -129,15 +147,30 @@ class RobotBody:
         self._client.resetJointState(self.body, WRIST, hand.z - self.arm_height)
         self.hand = hand
 
-    def drive_hand(self, forward: float, lateral: float, forward_speed: float, lateral_speed: float) -> None:
-        """Move the hand in the robot frame with the given joint speeds (m/s), keeping its height.
+    def grip_pusher(self, position: tuple[float, float, float]) -> None:
+        """Start a stroke: the pusher, at rest at ``position`` (world, metres), held there with the arm's force.
 
-        PyBullet takes the joint speeds into the contact solver, so a hand driven this way
-        pushes like a moving kinematic body (a teleported one only pushes out of overlap).
+        The arm's grip is a fixed constraint, at most :data:`physics.PUSH_FORCE` strong, between
+        the pusher and an anchor that :meth:`drive_pusher` moves along the hand's path.
         """
-        self._client.resetJointState(self.body, FORWARD, forward, targetVelocity=forward_speed)
-        self._client.resetJointState(self.body, LATERAL, lateral, targetVelocity=lateral_speed)
-        self.hand = HandPose(forward, lateral, self.hand.z)
+        self._pose_pusher(position)
+
+    def drive_pusher(self, position: tuple[float, float, float]) -> None:
+        """Move the point the arm holds the pusher at (world, metres); PyBullet pulls the pusher there."""
+        self._client.resetBasePositionAndOrientation(self._anchor, position, IDENTITY)
+
+    def pusher_position(self) -> tuple[float, float, float]:
+        """Where the pusher's centre is (world, metres), as PyBullet has it."""
+        return self._client.getBasePositionAndOrientation(self.pusher)[0]
+
+    def release_pusher(self) -> None:
+        """End a stroke: the pusher is parked, at rest, far from everything."""
+        self._pose_pusher(PUSHER_PARKING)
+
+    def _pose_pusher(self, position: tuple[float, float, float]) -> None:
+        for body in (self.pusher, self._anchor):
+            self._client.resetBasePositionAndOrientation(body, position, IDENTITY)
+        self._client.resetBaseVelocity(self.pusher, ZERO, ZERO)
 
     def hand_position(self) -> tuple[float, float, float]:
         """World position (metres) of the hand's centre, as PyBullet has it."""

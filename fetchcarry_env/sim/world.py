@@ -19,12 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fetchcarry_env.geometry import Heading, Point, heading_vector, to_robot_frame, to_world_frame
+from fetchcarry_env.geometry import Heading, Point, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import HAND_HALF_SIZE, hand_offset
 from fetchcarry_env.observation import LIFT_HEIGHT, Point3, WorldState
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim import physics
-from fetchcarry_env.sim.bodies import IDENTITY, LayoutBodies, build_layout, set_item_dynamics, table_top
+from fetchcarry_env.sim.bodies import IDENTITY, LayoutBodies, build_layout, table_top
 from fetchcarry_env.sim.camera import Camera, render_image
 from fetchcarry_env.sim.client import QuietClient, connect
 from fetchcarry_env.sim.robot import HandPose, RobotBody
@@ -205,55 +205,49 @@ class Simulation:
         direction: Heading,
         length: float,
     ) -> PushOutcome:
-        """Stroke the base ``length`` metres along ``direction`` with the hand against ``clutter_id``.
+        """Stroke the hand ``length`` metres along ``direction`` against ``clutter_id``; the base follows.
 
         The hand starts at the robot-frame offset ``hand`` (``(forward, lateral)``, touching
-        the clutter's rear face) and keeps that offset while the base moves, at most
-        :data:`physics.MAX_HAND_STEP` per simulation step; PyBullet moves the clutter and
-        whatever it runs into. If the clutter jams (the hand sinks
-        :data:`physics.STALL_DEPTH` into it) the stroke stops there. Afterwards the world
-        settles and every item's pose is read back (:attr:`poses`).
+        the clutter's rear face), at the clutter's mid-height (at least just above the table
+        top), and moves at most :data:`physics.MAX_HAND_STEP` per simulation step along a
+        smooth speed profile (:func:`stroke_profile`). The arm holds the pusher with at most
+        :data:`physics.PUSH_FORCE`; PyBullet moves the clutter and whatever it runs into. When
+        the pusher falls :data:`physics.STALL_DEPTH` behind the hand's path, the push is jammed
+        and the stroke stops where the pusher is. The hand then lets go, the world settles,
+        every item's pose is read back (:attr:`poses`), and the base ends ``travelled`` metres
+        along the stroke with the hand back at rest.
         """
-        client = self.client
         robot = self._robot_body
         ux, uy = heading_vector(direction)
-        (cx, cy, cz), _ = self._poses[clutter_id]
+        (_, _, center_z), _ = self._poses[clutter_id]
         item_height = self._scenario.clutter_item(clutter_id).height
-        hand_z = cz - item_height / 2 + max(item_height / 2, HAND_HALF_SIZE + HAND_LIFT)
+        hand_z = center_z - item_height / 2 + max(item_height / 2, HAND_HALF_SIZE + HAND_LIFT)
         robot.set_base(base, heading)
         robot.set_hand(HandPose(hand[0], hand[1], hand_z))
         self._fresh_contacts()
-        robot.set_hand_contact(True)
-        clutter_body = self._layout.clutter[clutter_id]
-        hand_x, hand_y = (base[0] + c for c in to_world_frame(heading, hand[0], hand[1]))
-        gap = (cx - hand_x) * ux + (cy - hand_y) * uy  # metres from the hand's centre to the clutter's, at rest
-        # The stroke is driven through the arm's joints (with their velocities, so that PyBullet
-        # sees a moving kinematic hand, not a teleported one); the base follows afterwards.
-        along_forward, along_lateral = to_robot_frame(heading, ux, uy)
-        drive, step, get_pose = robot.drive_hand, client.stepSimulation, client.getBasePositionAndOrientation
-        travelled, stalled, steps, previous = 0.0, False, 0, 0.0
+        start_x, start_y = (b + d for b, d in zip(base, to_world_frame(heading, *hand), strict=True))
+        robot.grip_pusher((start_x, start_y, hand_z))
+        step, drive, reached = self.client.stepSimulation, robot.drive_pusher, robot.pusher_position
+        travelled, stalled, steps = 0.0, False, 0
         for s in stroke_profile(length):
-            speed = (s - previous) / physics.TIME_STEP
-            drive(
-                hand[0] + along_forward * s, hand[1] + along_lateral * s, along_forward * speed, along_lateral * speed
-            )
+            drive((start_x + ux * s, start_y + uy * s, hand_z))
             step()
             steps += 1
-            travelled, previous = s, s
-            (px, py, _), _ = get_pose(clutter_body)
-            sink = gap - ((px - hand_x - ux * s) * ux + (py - hand_y - uy * s) * uy)
-            if sink > physics.STALL_DEPTH:
-                travelled, stalled = s - sink, True
+            x, y, _ = reached()
+            travelled = (x - start_x) * ux + (y - start_y) * uy
+            if s - travelled > physics.STALL_DEPTH:
+                stalled = True
                 break
-        drive(hand[0] + along_forward * travelled, hand[1] + along_lateral * travelled, 0.0, 0.0)
+        if not stalled:
+            travelled = length
+        robot.release_pusher()  # the hand lets go and the world settles
         for _ in range(physics.PUSH_SETTLE_STEPS):
             step()
         steps += physics.PUSH_SETTLE_STEPS
-        robot.set_hand_contact(False)
         robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
         robot.set_hand(robot.rest_hand)
         self._read_poses()
-        return PushOutcome(travelled=travelled, stalled=stalled, simulation_steps=steps)
+        return PushOutcome(travelled=max(travelled, 0.0), stalled=stalled, simulation_steps=steps)
 
     # ------------------------------------------------------------------ reading back
     def item_position(self, name: str) -> Point3:
@@ -302,6 +296,7 @@ class Simulation:
         client.setPhysicsEngineParameter(
             fixedTimeStep=physics.TIME_STEP,
             numSolverIterations=physics.SOLVER_ITERATIONS,
+            erp=physics.CONSTRAINT_ERP,
             deterministicOverlappingPairs=1,
             collisionFilterMode=0,  # AND: two shapes touch only when each one's group is in the other's mask
         )
@@ -322,20 +317,22 @@ class Simulation:
         return (x + dx, y + dy, robot.hand.z)
 
     def _grasp(self, object_id: str, position: Point3) -> None:
+        """Attach an object to the hand: it touches nothing and goes where the hand goes.
+
+        No physics runs while the hand is full (a push needs an empty hand, a place lets go
+        first), so the object keeps its mass and only its contacts are switched off.
+        """
         client = self.client
         body = self._layout.objects[object_id]
-        client.changeDynamics(body, -1, mass=0.0)
         client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_NONE)
         client.resetBasePositionAndOrientation(body, position, IDENTITY)
         client.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         self._held = object_id
 
     def _release(self, object_id: str) -> None:
-        client = self.client
-        body = self._layout.objects[object_id]
-        client.changeDynamics(body, -1, mass=physics.OBJECT_MASS)
-        set_item_dynamics(client, body)
-        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_ITEM)
+        self.client.setCollisionFilterGroupMask(
+            self._layout.objects[object_id], -1, physics.GROUP_ITEM, physics.MASK_ITEM
+        )
         self._held = None
 
     def _item_bodies(self) -> dict[str, int]:
