@@ -6,19 +6,28 @@ the expert can label any state: the start, mid-episode with an object in the han
 after a push that slid differently in physics, or a state a learner drove into. This
 is what DAgger needs.
 
-It keeps its plan while execution follows it: after each action it expects the state
-of the next phase of the plan, and it replans when the observed state departs from
-that (the base more than ``base_tolerance`` from the planned point, a different
-object in the hand, an object or a piece of clutter more than ``item_tolerance`` from
-where the plan put it: a push that slid, a move that stopped at a contact), when the
-plan is used up before the task is done, and at ``episode_start``.
+It keeps its plan while execution follows it. After each action it expects the state
+of the plan's next phase, and it replans when the observed state departs from that
+beyond a tolerance (the base more than ``base_tolerance`` from the planned point,
+another object in the hand, an object or a piece of clutter more than
+``item_tolerance`` from where the plan put it: a push that slid, a move that stopped
+at a contact), when the plan is used up before the task is done, and at
+``episode_start``.
 
-When the planner gives no plan (infeasible, time limit), the policy returns a
-well-defined fallback (a ``move`` to the lattice point nearest the base, keeping the
-heading: it does nothing useful and breaks nothing) and does not plan again until the
-state changes. :attr:`ExpertPolicy.stats` counts plans, replans, failures, fallbacks
-and planning seconds; :attr:`ExpertPolicy.last_decisions` says what the last call did
-for each env of the batch.
+Before it gives an action, the expert checks it with the environment's own rules
+(:func:`fetchcarry_env.rules.check_action`, pure geometry, no simulator). The MILP does
+not model one of them: when several objects (or pieces of clutter) lie within the arm's
+reach, the env picks (or pushes) the one nearest the middle of the posture's ranges.
+When the env would refuse the planned action or act on another item, the expert first
+replans if its plan is older than this state, then *repairs* the action: it moves the
+acting base to the nearest lattice point (within ``REPAIR_RADIUS_CELLS``) from which the
+env acts on the planned item, and replans after the repaired action.
+
+When it cannot act (the planner finds no plan, or no repair exists) the policy returns
+the idle action (a ``move`` to the lattice point nearest the base, keeping the heading:
+it does nothing useful and breaks nothing), says why in :attr:`ExpertPolicy.last_decision`
+(``failure``), and does not plan again until the state changes.
+:attr:`ExpertPolicy.stats` counts plans, replans, repairs, failures and planning seconds.
 
 The policy uses the env only for its lattice and observation capacity (never its
 simulation), so it works on a plain env, a wrapped env or an SB3 ``VecEnv``.
@@ -28,19 +37,24 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Action, Lattice, Mode
+from fetchcarry_env.geometry import HEADINGS, heading_of
+from fetchcarry_env.kinematics import push_headings
 from fetchcarry_env.observation import Capacity, WorldState, decode
+from fetchcarry_env.rules import Phase as EnvPhase
+from fetchcarry_env.rules import check_action, move_stop
 from fetchcarry_env.scenario import Scenario
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
+REPAIR_RADIUS_CELLS = 3  # lattice cells: how far a repair may move the acting base from the planned one
 
 
 @dataclass(frozen=True)
@@ -50,7 +64,9 @@ class ExpertStats:
     plans: int = 0  # planning calls
     replans: int = 0  # planning calls other than the first of an episode
     failures: int = 0  # planning calls that found no plan (infeasible, time limit)
-    fallbacks: int = 0  # actions returned without a plan
+    repairs: int = 0  # actions moved to another base so that the env acts on the planned item
+    stuck: int = 0  # planned actions the env would refuse and no repair could fix
+    fallbacks: int = 0  # idle actions returned because the expert could not act
     planning_s: float = 0.0  # seconds spent in the planner
     last_status: str | None = None  # status of the last planning call
     last_objective: float | None = None  # objective (Eq. 1) of the last plan found
@@ -63,23 +79,48 @@ class ExpertStats:
 class Decision:
     """What one ``predict`` call did for one env."""
 
-    planned: bool  # the planner ran
-    replanned: bool  # it ran although an episode was already under way
-    reason: str  # why it planned (or did not): "episode_start", "departed: ...", "plan_used_up", "following", ...
-    planning_s: float  # seconds spent in the planner
-    status: str | None  # the plan's status when it planned, else None
-    fallback: bool  # the action is the fallback (no plan)
+    planned: bool  # the planner ran (once or twice)
+    replanned: bool  # it ran although the episode was already under way
+    reason: str  # why it planned, or "following", "done", "failed here"
+    planning_s: float = 0.0  # seconds spent in the planner
+    status: str | None = None  # the last plan's status when it planned, else None
+    objective: float | None = None  # that plan's objective (Eq. 1), if one was found
+    repaired: bool = False  # the action was moved to another base (see the module docstring)
+    failure: str | None = None  # why the expert cannot act (the action is the idle one), else None
+
+    @property
+    def fallback(self) -> bool:
+        """True when the action is the idle fallback because the expert could not act."""
+        return self.failure is not None
+
+
+@dataclass(frozen=True)
+class _Step:
+    """One action of the plan and the phase the world should be in after it."""
+
+    action: Action
+    expected: Phase
 
 
 @dataclass
 class _Track:
     """The plan being followed in one env of the batch."""
 
-    actions: list[Action] = field(default_factory=list)  # actions not yet given
-    expected: list[Phase] = field(default_factory=list)  # phase reached after each of those actions
-    now: Phase | None = None  # the phase the state should be in now
-    failed_state: WorldState | None = None  # the state in which planning last failed
+    steps: list[_Step] = field(default_factory=list)  # actions not yet given
+    now: Phase | None = None  # the phase the world should be in now
     started: bool = False  # the planner already ran in this episode
+    replan: str | None = None  # a reason to replan at the next call, whatever the state
+    failed_in: WorldState | None = None  # the state in which the expert could not act
+    failure: str | None = None  # why
+
+
+@dataclass(frozen=True)
+class _Planned:
+    """The outcome of one planning call."""
+
+    plan: Plan
+    seconds: float
+    replanned: bool
 
 
 class ExpertPolicy:
@@ -108,8 +149,8 @@ class ExpertPolicy:
             raise ValueError(f"time_limit must be positive (seconds), got {time_limit}")
         if base_tolerance < 0 or item_tolerance < 0:
             raise ValueError("tolerances must not be negative")
-        self.lattice = lattice if lattice is not None else _env_attribute(env, "lattice")
-        self.capacity = capacity if capacity is not None else _env_attribute(env, "capacity")
+        self.lattice: Lattice = lattice if lattice is not None else _env_attribute(env, "lattice")
+        self.capacity: Capacity = capacity if capacity is not None else _env_attribute(env, "capacity")
         self.time_limit = time_limit
         self.base_tolerance = base_tolerance
         self.item_tolerance = item_tolerance
@@ -138,7 +179,7 @@ class ExpertPolicy:
 
     def predict(
         self,
-        observation: dict[str, np.ndarray],
+        observation: dict[str, np.ndarray] | np.ndarray,
         state: Any = None,
         episode_start: np.ndarray | bool | None = None,
         deterministic: bool = True,
@@ -146,125 +187,198 @@ class ExpertPolicy:
         """The expert's action for each observation: ``(action, state)`` as stable-baselines3 returns them.
 
         ``observation`` is one observation dict (arrays of the env's shapes) or a batch
-        (the same keys, arrays with a leading dimension). ``episode_start`` (one bool per
-        env) makes the expert drop its plan for that env. The expert is deterministic;
-        ``deterministic`` is accepted for the protocol. ``state`` is returned unchanged.
+        (the same keys, arrays with a leading dimension, as a ``VecEnv`` gives them).
+        ``episode_start`` (one bool per env) makes the expert drop its plan for that env.
+        The expert is deterministic; ``deterministic`` is accepted for the protocol.
+        ``state`` is returned unchanged.
         """
         flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation)
         batched = flat.ndim == 2
         rows = flat if batched else flat[None, :]
-        starts = np.broadcast_to(
-            np.asarray(False if episode_start is None else episode_start, dtype=bool), (len(rows),)
-        )
+        starts = np.broadcast_to(np.asarray(False if episode_start is None else episode_start, dtype=bool), len(rows))
         while len(self._tracks) < len(rows):
             self._tracks.append(_Track())
-        decisions, actions = [], []
+        actions, decisions = [], []
         for k, row in enumerate(rows):
-            action, decision = self._act(self._tracks[k], row, bool(starts[k]))
+            if starts[k]:
+                self._tracks[k] = _Track()
+            action, decision = self._act(self._tracks[k], row)
             actions.append(action.to_array())
             decisions.append(decision)
         self.last_decisions = decisions
         stacked = np.stack(actions)
         return (stacked if batched else stacked[0]), state
 
-    # -- one env ---------------------------------------------------------------------------
+    # -- one env -----------------------------------------------------------------------------
 
-    def _act(self, track: _Track, row: np.ndarray, episode_start: bool) -> tuple[Action, Decision]:
+    def _act(self, track: _Track, row: np.ndarray) -> tuple[Action, Decision]:
         scenario, world = decode(row, self.capacity)
-        if episode_start:
-            track.__init__()
-        reason = self._why_plan(track, scenario, world)
-        if reason is None:
-            track.now = track.expected.pop(0)
-            return track.actions.pop(0), Decision(False, False, "following", 0.0, None, False)
-        if reason == "done":
-            return self._fallback(world), Decision(False, False, "done", 0.0, None, False)
-        if reason == "failed_here":
+        if track.failed_in is not None:
+            if _gap(track.failed_in, world, self.lattice.resolution, self.item_tolerance) is None:
+                self._count(fallbacks=1)
+                return self._idle(world), Decision(False, False, "failed here", failure=track.failure)
+            track.failed_in = track.failure = None
+        if _solved(scenario, world):
+            return self._idle(world), Decision(False, False, "done")
+
+        reason = self._why_plan(track, world)
+        planned: list[_Planned] = []
+        if reason is not None:
+            planned.append(self._plan_into(track, scenario, world))
+        refusal = self._refusal(scenario, world, track.steps[0]) if track.steps else None
+        if refusal is not None and not planned:  # the plan is older than this state: plan again first
+            reason = f"refused: {refusal}"
+            planned.append(self._plan_into(track, scenario, world))
+            refusal = self._refusal(scenario, world, track.steps[0]) if track.steps else None
+
+        failure, repaired = None, False
+        if planned and not planned[-1].plan.found:
+            failure = f"no plan ({planned[-1].plan.status})"
+            self._count(failures=1)
+        elif not track.steps:  # the plan is empty although the task is not done
+            failure = "the plan has no step from this state"
+        elif refusal is not None:
+            repaired = self._repair(track, scenario, world)
+            if repaired:
+                self._count(repairs=1)
+            else:
+                failure = f"stuck: the env would refuse the planned action ({refusal}) and no repair works"
+                self._count(stuck=1)
+
+        decision = Decision(
+            planned=bool(planned),
+            replanned=any(p.replanned for p in planned),
+            reason=reason or "following",
+            planning_s=sum(p.seconds for p in planned),
+            status=planned[-1].plan.status if planned else None,
+            objective=planned[-1].plan.objective if planned else None,
+            repaired=repaired,
+            failure=failure,
+        )
+        if failure is not None:
+            track.steps, track.now, track.failed_in, track.failure = [], None, world, failure
             self._count(fallbacks=1)
-            return self._fallback(world), Decision(False, False, "no plan for this state", 0.0, None, True)
+            return self._idle(world), decision
+        step = track.steps.pop(0)
+        track.now = step.expected
+        return step.action, decision
 
-        replanned = track.started
-        plan_result, seconds = self._plan(scenario, world)
-        track.started = True
-        self._count(plans=1, replans=int(replanned), planning_s=seconds, last_status=plan_result.status)
-        if not plan_result.found:
-            track.__init__(failed_state=world, started=True)
-            self._count(failures=1, fallbacks=1)
-            return self._fallback(world), Decision(True, replanned, reason, seconds, plan_result.status, True)
-
-        from expert.to_actions import plan_to_actions
-
-        actions = list(plan_to_actions(plan_result, scenario, self.lattice))
-        phases = list(plan_result.phases[1:])
-        if len(actions) != len(phases):
-            raise RuntimeError(f"plan_to_actions gave {len(actions)} actions for {len(phases)} phases")
-        self._count(last_objective=plan_result.objective)
-        self.last_plan = plan_result
-        if not actions:  # the state already solves the task
-            track.__init__(started=True)
-            return self._fallback(world), Decision(True, replanned, reason, seconds, plan_result.status, False)
-        track.actions, track.expected, track.failed_state = actions[1:], phases[1:], None
-        track.now = phases[0]
-        return actions[0], Decision(True, replanned, reason, seconds, plan_result.status, False)
-
-    def _why_plan(self, track: _Track, scenario: Scenario, world: WorldState) -> str | None:
-        """Why the expert must plan now, ``None`` to follow the plan, or "done" / "failed_here"."""
-        if track.failed_state is not None and not self._departed(track.failed_state, world, self.lattice.resolution):
-            return "failed_here"
+    def _why_plan(self, track: _Track, world: WorldState) -> str | None:
+        """Why the expert must plan now, or ``None`` to follow its plan."""
         if track.now is None:
-            if _solved(scenario, world):
-                return "done"
-            return "episode_start" if not track.started else "no_plan"
-        departure = self._departure(track.now, world)
+            return "retry after a failure" if track.started else "episode_start"
+        departure = _gap(track.now, world, self.base_tolerance, self.item_tolerance)
         if departure is not None:
             return f"departed: {departure}"
-        if not track.actions:
-            return "done" if _solved(scenario, world) else "plan_used_up"
+        if track.replan is not None:
+            return track.replan
+        if not track.steps:
+            return "plan used up"
         return None
 
-    def _departure(self, phase: Phase, world: WorldState) -> str | None:
-        """How ``world`` departs from the state ``phase`` promised, beyond the tolerances, or ``None``."""
-        gap = math.dist(phase.base, world.base)
-        if gap > self.base_tolerance:
-            return f"base {gap * 100:.1f} cm from the plan"
-        if phase.holding != world.holding:
-            return f"holding {world.holding} instead of {phase.holding}"
-        for object_id, planned in phase.objects.items():
-            if object_id == world.holding or object_id not in world.objects:
-                continue
-            gap = math.dist(planned, world.objects[object_id][:2])
-            if gap > self.item_tolerance:
-                return f"{object_id} {gap * 100:.1f} cm from the plan"
-        for clutter_id, planned in phase.clutter.items():
-            if clutter_id in world.clutter:
-                gap = math.dist(planned, world.clutter[clutter_id])
-                if gap > self.item_tolerance:
-                    return f"{clutter_id} {gap * 100:.1f} cm from the plan"
-        return None
-
-    def _departed(self, before: WorldState, now: WorldState, base_tolerance: float) -> bool:
-        """True when the state changed since ``before`` beyond the tolerances (the base may move a cell)."""
-        if before.holding != now.holding or math.dist(before.base, now.base) > base_tolerance + 1e-9:
-            return True
-        moved = any(
-            math.dist(before.objects[k][:2], now.objects.get(k, before.objects[k])[:2]) > self.item_tolerance
-            for k in before.objects
-        )
-        return moved or any(
-            math.dist(before.clutter[k], now.clutter.get(k, before.clutter[k])) > self.item_tolerance
-            for k in before.clutter
-        )
-
-    def _plan(self, scenario: Scenario, world: WorldState) -> tuple[Plan, float]:
+    def _plan_into(self, track: _Track, scenario: Scenario, world: WorldState) -> _Planned:
+        """Plan from ``world`` and make the result the track's plan (an empty one if none was found)."""
         from expert.planner import plan
+        from expert.to_actions import plan_to_actions
 
+        replanned = track.started
         started = time.perf_counter()
         result = plan(
             scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, **self.planner_options
         )
-        return result, time.perf_counter() - started
+        seconds = time.perf_counter() - started
+        self._count(plans=1, replans=int(replanned), planning_s=seconds, last_status=result.status)
+        track.started, track.replan, track.steps, track.now = True, None, [], None
+        if result.found:
+            self.last_plan = result
+            self._count(last_objective=result.objective)
+            actions = plan_to_actions(result, scenario, self.lattice)
+            track.steps = [_Step(a, p) for a, p in zip(actions, result.phases[1:], strict=True)]
+            track.now = result.phases[0]
+        return _Planned(result, seconds, replanned)
 
-    def _fallback(self, world: WorldState) -> Action:
+    # -- checking actions with the env's rules --------------------------------------------------
+
+    def _refusal(self, scenario: Scenario, world: WorldState, step: _Step) -> str | None:
+        """Why the env would not do what ``step`` plans from ``world`` (refuse it, or act on another item)."""
+        if step.action.mode == Mode.MOVE:
+            return None
+        outcome = check_action(scenario, world, self.lattice, step.action)
+        return _mismatch(outcome, step)
+
+    def _repair(self, track: _Track, scenario: Scenario, world: WorldState) -> bool:
+        """Replace the track's first step by the nearest variant the env executes as planned, and replan after it.
+
+        Pick and place: another lattice point for the base (reached without a contact),
+        any heading and posture. Push: a move to another start first, then the same stroke
+        from there. Returns False when nothing within ``REPAIR_RADIUS_CELLS`` works.
+        """
+        step = track.steps[0]
+        if step.action.mode == Mode.PUSH:
+            repaired = self._repair_push(scenario, world, step)
+        else:
+            repaired = self._repair_arm(scenario, world, step)
+        if repaired is None:
+            return False
+        track.steps = repaired
+        track.replan = "after a repaired action"
+        return True
+
+    def _repair_arm(self, scenario: Scenario, world: WorldState, step: _Step) -> list[_Step] | None:
+        mode = step.action.mode
+        for cell in self._cells_around(step.action.cell):
+            base = self.lattice.point(*cell)
+            if move_stop(scenario, world.base, base)[1] is not None:
+                continue
+            for heading, posture in self._poses(step.action.heading, step.action.posture, HEADINGS):
+                action = Action(cell, heading, posture, mode)
+                if _mismatch(check_action(scenario, world, self.lattice, action), step) is None:
+                    return [_Step(action, replace(step.expected, base=base, heading=heading))]
+        return None
+
+    def _repair_push(self, scenario: Scenario, world: WorldState, step: _Step) -> list[_Step] | None:
+        start_cell = self.lattice.index(world.base)
+        di, dj = step.action.cell[0] - start_cell[0], step.action.cell[1] - start_cell[1]
+        direction = heading_of((di, dj))
+        if direction is None:
+            return None  # not an axis-aligned stroke: nothing to repair
+        headings = push_headings(direction)
+        for cell in self._cells_around(start_cell):
+            start, end_cell = self.lattice.point(*cell), (cell[0] + di, cell[1] + dj)
+            if not (0 <= end_cell[0] < self.lattice.shape[0] and 0 <= end_cell[1] < self.lattice.shape[1]):
+                continue
+            end = self.lattice.point(*end_cell)
+            if move_stop(scenario, world.base, start)[1] is not None or move_stop(scenario, start, end)[1] is not None:
+                continue
+            moved = replace(world, base=start)
+            for heading, posture in self._poses(step.action.heading, step.action.posture, headings):
+                action = Action(end_cell, heading, posture, Mode.PUSH)
+                if _mismatch(check_action(scenario, moved, self.lattice, action), step) is None:
+                    approach = Action(cell, heading, 0, Mode.MOVE)
+                    before = Phase(start, heading, "move", holding=None, objects=dict(step.expected.objects))
+                    return [_Step(approach, before), _Step(action, replace(step.expected, base=end, heading=heading))]
+        return None
+
+    def _cells_around(self, cell: tuple[int, int]) -> list[tuple[int, int]]:
+        """Lattice points within ``REPAIR_RADIUS_CELLS`` of ``cell``, nearest first (``cell`` itself first)."""
+        r = REPAIR_RADIUS_CELLS
+        nx, ny = self.lattice.shape
+        around = [
+            (cell[0] + i, cell[1] + j)
+            for i in range(-r, r + 1)
+            for j in range(-r, r + 1)
+            if i * i + j * j <= r * r and 0 <= cell[0] + i < nx and 0 <= cell[1] + j < ny
+        ]
+        return sorted(around, key=lambda c: ((c[0] - cell[0]) ** 2 + (c[1] - cell[1]) ** 2, c))
+
+    def _poses(self, heading: str, posture: int, headings: tuple[str, ...]) -> list[tuple[str, int]]:
+        """Heading and posture pairs to try, the planned pair first."""
+        pairs = [(h, p) for h in headings for p in range(self.capacity.postures)]
+        return sorted(pairs, key=lambda pair: pair != (heading, posture))
+
+    # -- helpers ------------------------------------------------------------------------------
+
+    def _idle(self, world: WorldState) -> Action:
         """A move to the lattice point nearest the base, keeping the heading: the do-nothing action."""
         return Action(self.lattice.index(world.base), world.heading, 0, Mode.MOVE)
 
@@ -273,6 +387,33 @@ class ExpertPolicy:
         for key, value in changes.items():
             values[key] = value if key.startswith("last_") else values[key] + value
         self._stats = ExpertStats(**values)
+
+
+def _mismatch(outcome: EnvPhase | str, step: _Step) -> str | None:
+    """Why the env's resolution of an action (``check_action``) is not what ``step`` plans, or None."""
+    if isinstance(outcome, str):
+        return outcome
+    planned = step.expected.target
+    if outcome.target != planned:
+        return f"the env would {outcome.mode.name.lower()} {outcome.target!r}, not {planned!r}"
+    return None
+
+
+def _gap(expected: Phase | WorldState, world: WorldState, base_tolerance: float, item_tolerance: float) -> str | None:
+    """How ``world`` departs from ``expected`` beyond the tolerances (metres), or None."""
+    gap = math.dist(expected.base, world.base)
+    if gap > base_tolerance + 1e-9:
+        return f"base {gap * 100:.1f} cm from the plan"
+    if expected.holding != world.holding:
+        return f"holding {world.holding} instead of {expected.holding}"
+    for planned, seen in ((expected.objects, world.objects), (expected.clutter, world.clutter)):
+        for item, position in planned.items():
+            if item == world.holding or item not in seen:
+                continue
+            gap = math.dist(position[:2], seen[item][:2])
+            if gap > item_tolerance:
+                return f"{item} {gap * 100:.1f} cm from the plan"
+    return None
 
 
 def _solved(scenario: Scenario, world: WorldState) -> bool:

@@ -109,26 +109,35 @@ def _check_picture(path: str | None) -> Path | None:
 
 
 def _figures_text(figures: Any, label: str, policy: str) -> str:
-    return "\n".join(
-        [
-            f"scenario   {figures.scenario} ({label}, seed {figures.seed}), policy {policy}",
-            f"outcome    {figures.outcome}: delivered {figures.delivered}/{figures.objects} in {figures.steps} steps, "
-            f"return {figures.episode_return:.2f}",
-            f"motion     path {figures.path_length_m:.2f} m, contacts {figures.collisions}, "
-            f"invalid actions {figures.invalid_actions}",
-            f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
-            f"{figures.planner_failures} failures"
-            + ("" if figures.objective is None else f", objective {figures.objective:.3f}"),
-            f"timings    policy {figures.policy_s:.3f} s, simulation {figures.simulation_s:.3f} s",
-        ]
-    )
+    lines = [
+        f"scenario   {figures.scenario} ({label}, seed {figures.seed}), policy {policy}",
+        f"outcome    {figures.outcome}: {figures.delivered}/{figures.objects} object(s) at the goal after "
+        f"{figures.steps} steps, return {figures.episode_return:.2f}",
+    ]
+    if figures.failure is not None:
+        lines.append(f"failure    {figures.failure}")
+    lines += [
+        f"motion     path {figures.path_length_m:.2f} m, contacts {figures.collisions}, "
+        f"refused actions {figures.invalid_actions}",
+        f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
+        f"{figures.repairs} repairs, {figures.planner_failures} failures"
+        + ("" if figures.objective is None else f", objective {figures.objective:.3f}"),
+        f"timings    policy {figures.policy_s:.3f} s (planning included), simulation {figures.simulation_s:.3f} s",
+    ]
+    return "\n".join(lines)
 
 
 def _run_one(source: Any, picture: Path | None) -> Any:
     from training.generate import make_env, make_policy
     from training.rollout import run_episode
 
-    env = make_env(source, render_mode="rgb_array" if picture is not None else None)
+    if picture is None:
+        env = make_env(source)
+    else:
+        from training.pictures import STILL_RENDER_SIZE, is_gif
+
+        size = {} if is_gif(picture) else dict(zip(("width", "height"), STILL_RENDER_SIZE, strict=True))
+        env = make_env(source, render_mode="rgb_array", **size)
     try:
         record = run_episode(env, make_policy(source, env, source.seed), source.seed, render=picture is not None)
     finally:

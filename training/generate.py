@@ -104,13 +104,13 @@ class GenerationReport:
     figures: list[dict[str, Any]] = field(default_factory=list)  # EpisodeFigures of the episodes made now
 
 
-def make_env(source: EpisodeSource, render_mode: str | None = None):
-    """A fresh env for ``source``."""
+def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
+    """A fresh env for ``source`` (``render_options``: the env's ``camera``, ``width``, ``height``)."""
     import gymnasium as gym
 
     import fetchcarry_env  # noqa: F401  (registers the env ids)
 
-    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs)
+    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs, **render_options)
 
 
 def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:

@@ -1,30 +1,53 @@
-"""Pictures of an episode: an animated GIF of its frames, or one PNG strip of its key states.
+"""Pictures of an episode: a still that tells its story at a glance, or an animated GIF of every state.
 
-The frames are the env's ``rgb_array`` renders, one per state (``run_episode(...,
-render=True)`` keeps them). A GIF shows every state; a still picture (PNG, JPEG, SVG,
-PDF) lays out up to :data:`MAX_PANELS` states in a grid, each titled with the step and
-the action that led to it, under a caption with the episode's figures. Headless
-(matplotlib's Agg canvas, Pillow for GIFs).
+The still (PNG, JPEG, SVG, PDF) has three parts under a title with the episode's figures:
+
+- a large top-down map of the executed episode (:mod:`fetchcarry_env.drawing`): the room,
+  the base's path step by step (travel with an empty hand, carrying in the object's
+  colour, push strokes in red), the base at every step with its number, the arm line of
+  every pick and place, clutter where it started (dashed) and where it ended;
+- a close-up map of where objects were placed and clutter pushed;
+- a strip of the env's renders (perspective camera) at the key states (the start and the
+  state after each pick, place and push), each cropped around the robot and what its arm
+  acted on, titled with the step's number and what it did.
+
+The colours are those of the plan plot (:mod:`expert.plot`). The GIF shows the env's
+frames, one per state. Headless (matplotlib's Agg canvas, Pillow for GIFs).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, FancyArrowPatch, Patch
 
-from fetchcarry_env.actions import Action
+from expert.plot import CARRY, PICK, PLACE, PUSH, TRAVEL
+from fetchcarry_env import drawing
+from fetchcarry_env.actions import Action, Mode
+from fetchcarry_env.geometry import Point, Rect
+from fetchcarry_env.observation import WorldState
+from fetchcarry_env.scenario import Scenario
 from training.rollout import EpisodeFigures, EpisodeRecord
 
-MAX_PANELS = 12  # states shown in a still picture
-PANEL_WIDTH_IN = 3.2  # inches per panel
-COLUMNS = 4  # panels per row
-GIF_FRAME_MS = 700  # milliseconds each state is shown in a GIF
 STILL_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
+GIF_FRAME_MS = 700  # milliseconds each state is shown in a GIF
+MAX_RENDERS = 6  # env renders in the strip of a still picture
+MAP_WIDTH_IN = 6.6  # inches of the whole-area map (the close-up has the same size)
+CLOSE_UP_MARGIN = 0.35  # metres shown around the close-up's content
+CROP_MARGIN = 0.06  # of the frame's width, kept around the robot and its target in a render crop
+CROP_MIN_WIDTH = 0.28  # of the frame's width: the smallest crop (a zoom of about 3.5)
+ROBOT_TOP = 1.0  # metres: the height of the robot's head, kept inside a crop
+STILL_DPI = 100
+# The env's render size for a still picture: the strip crops it, so it is rendered large.
+STILL_RENDER_SIZE = (1024, 768)  # pixels (width, height)
 
 
 def check_picture_path(path: str | Path) -> Path:
@@ -35,15 +58,22 @@ def check_picture_path(path: str | Path) -> Path:
     return path
 
 
+def is_gif(path: str | Path) -> bool:
+    return Path(path).suffix.lower() == ".gif"
+
+
 def save_episode_picture(record: EpisodeRecord, path: str | Path) -> Path:
-    """Write ``record``'s frames to ``path``: a GIF of every state, or a still grid of key states."""
+    """Write ``record`` as a picture: a GIF of every frame, or the still described in the module docstring.
+
+    The record must have its frames (``run_episode(..., render=True)``) and its states.
+    """
     path = check_picture_path(path)
     if not record.frames:
         raise ValueError("the episode has no frames: run it with render=True")
-    if path.suffix.lower() == ".gif":
+    if is_gif(path):
         save_gif(record.frames, path)
     else:
-        save_strip(record.frames, step_titles(record.actions), caption(record.figures), path)
+        save_story(record, path)
     return path
 
 
@@ -56,46 +86,302 @@ def save_gif(frames: Sequence[np.ndarray], path: Path, frame_ms: int = GIF_FRAME
     images[0].save(path, save_all=True, append_images=images[1:], duration=durations, loop=0)
 
 
-def save_strip(frames: Sequence[np.ndarray], titles: Sequence[str], text: str, path: Path) -> None:
-    """Up to :data:`MAX_PANELS` frames (first and last always) in a grid, with ``text`` above."""
-    chosen = key_states(len(frames))
-    columns = min(COLUMNS, len(chosen))
-    rows = math.ceil(len(chosen) / columns)
-    height, width = np.asarray(frames[0]).shape[:2]
-    panel_height_in = PANEL_WIDTH_IN * height / width + 0.35
-    figure = Figure(figsize=(columns * PANEL_WIDTH_IN, rows * panel_height_in + 0.9), layout="constrained")
+# ---------------------------------------------------------------------------- what each step did
+@dataclass(frozen=True)
+class Step:
+    """What one step of the episode did, read from the states before and after it."""
+
+    number: int  # 1-based: step k leads from state k-1 to state k
+    mode: Mode
+    before: WorldState
+    after: WorldState
+    target: str | None  # the object picked or placed, the clutter pushed (None for a move, or if refused)
+    pushed_m: float  # metres the pushed clutter moved
+
+    @property
+    def acted(self) -> bool:
+        """True when the arm picked, placed or pushed something."""
+        return self.target is not None
+
+    def label(self) -> str:
+        """A few words: ``"3 push block 15 cm"``, ``"4 pick bottle"``, ``"1 move"``."""
+        if self.mode == Mode.PUSH and self.target is not None:
+            return f"{self.number} push {self.target} {self.pushed_m * 100:.0f} cm"
+        if self.target is not None:
+            return f"{self.number} {self.mode.name.lower()} {self.target}"
+        if self.mode != Mode.MOVE:
+            return f"{self.number} {self.mode.name.lower()} (refused)"
+        return f"{self.number} move"
+
+
+def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[Step]:
+    """One :class:`Step` per action, from the states around it (``len(states) == len(actions) + 1``)."""
+    if len(states) != len(actions) + 1:
+        raise ValueError(f"{len(states)} states for {len(actions)} actions: the record has no states?")
+    steps = []
+    for k, vector in enumerate(actions):
+        before, after = states[k], states[k + 1]
+        mode = Action.from_array(vector).mode
+        target, pushed = None, 0.0
+        if mode == Mode.PICK and after.holding is not None and before.holding is None:
+            target = after.holding
+        elif mode == Mode.PLACE and before.holding is not None and after.holding is None:
+            target = before.holding
+        elif mode == Mode.PUSH:
+            moved = {c: math.dist(before.clutter[c], after.clutter[c]) for c in before.clutter if c in after.clutter}
+            if moved and max(moved.values()) > 1e-3:
+                target = max(moved, key=moved.get)
+                pushed = moved[target]
+        steps.append(Step(k + 1, mode, before, after, target, pushed))
+    return steps
+
+
+def key_states(steps: Sequence[Step], most: int = MAX_RENDERS) -> list[int]:
+    """State indices for the strip: the start, the state after each arm action, and the end (at most ``most``)."""
+    acted = [s.number for s in steps if s.acted]
+    chosen = sorted({0, *acted, len(steps)})
+    if len(chosen) <= most:
+        return chosen
+    middle = chosen[1:-1]
+    keep = [middle[round(k * (len(middle) - 1) / (most - 3))] for k in range(most - 2)] if most > 3 else []
+    return sorted({0, *keep, len(steps)})
+
+
+# ---------------------------------------------------------------------------- the still picture
+def save_story(record: EpisodeRecord, path: Path) -> None:
+    """The still picture of the module docstring."""
+    scenario = Scenario.from_dict(record.scenario)
+    steps = episode_steps(record.states, record.actions)
+    shown = key_states(steps)
+    map_height_in = drawing.map_height_in(scenario, MAP_WIDTH_IN)
+    render_width_in = 2 * MAP_WIDTH_IN / max(len(shown), 3)
+    strip_height_in = render_width_in * 0.75 + 0.3
+    figure = Figure(figsize=(2 * MAP_WIDTH_IN, map_height_in + strip_height_in + 1.5), layout="constrained")
     FigureCanvasAgg(figure)
-    figure.suptitle(text, fontsize=9, ha="left", x=0.01, family="monospace")
-    for slot, state in enumerate(chosen):
-        axes = figure.add_subplot(rows, columns, slot + 1)
-        axes.imshow(np.asarray(frames[state]))
-        axes.set_title(titles[state], fontsize=8)
+    rows = figure.add_gridspec(3, 1, height_ratios=[map_height_in, strip_height_in, 0.4])
+    maps = rows[0].subgridspec(1, 2)
+    whole = figure.add_subplot(maps[0])
+    drawing.frame_map(whole, scenario.area.inflate(drawing.MARGIN))
+    draw_episode(whole, scenario, record.states, steps, label_size_m=0.2 * scenario.area.size[0] / MAP_WIDTH_IN)
+    whole.set_title("the episode from above (numbers: the state after each step)", fontsize=10)
+    close = figure.add_subplot(maps[1])
+    view = close_up_view(scenario, steps)
+    drawing.frame_map(close, view)
+    draw_episode(close, scenario, record.states, steps, label_size_m=0.2 * view.size[0] / MAP_WIDTH_IN)
+    close.set_title("close-up: pushes and places", fontsize=10)
+
+    strip = rows[1].subgridspec(1, max(len(shown), 3))
+    for slot, state_index in enumerate(shown):
+        axes = figure.add_subplot(strip[slot])
+        frame = np.asarray(record.frames[state_index])
+        if state_index > 0:
+            frame = crop(frame, scenario, focus_points(steps[state_index - 1]))
+        axes.imshow(frame)
         axes.set_axis_off()
-    figure.savefig(path, dpi=110)
+        axes.set_title("0 start" if state_index == 0 else steps[state_index - 1].label(), fontsize=10)
+    legend_axes = figure.add_subplot(rows[2])
+    legend_axes.set_axis_off()
+    legend_axes.legend(handles=legend_handles(scenario), loc="center", ncol=5, fontsize=8, frameon=False)
+    figure.suptitle(title(record.figures), fontsize=11, family="monospace")
+    figure.savefig(path, dpi=STILL_DPI)
 
 
-def key_states(count: int, most: int = MAX_PANELS) -> list[int]:
-    """Indices of at most ``most`` states out of ``count``, evenly spread, first and last included."""
-    if count <= most:
-        return list(range(count))
-    return sorted({round(k * (count - 1) / (most - 1)) for k in range(most)})
-
-
-def step_titles(actions: np.ndarray) -> list[str]:
-    """A title per state: ``start``, then ``step k: <mode> to (i, j) facing <heading>``."""
-    titles = ["start"]
-    for k, vector in enumerate(actions, start=1):
-        action = Action.from_array(vector)
-        titles.append(f"step {k}: {action.mode.name.lower()} to {action.cell} facing {action.heading}")
-    return titles
-
-
-def caption(figures: EpisodeFigures) -> str:
-    """Two lines of the episode's figures."""
-    return (
-        f"{figures.scenario}  seed {figures.seed}  {figures.outcome}: delivered {figures.delivered}/{figures.objects} "
-        f"in {figures.steps} steps, return {figures.episode_return:.2f}\n"
-        f"path {figures.path_length_m:.2f} m, contacts {figures.collisions}, invalid actions "
-        f"{figures.invalid_actions}, planning {figures.planning_s:.2f} s in {figures.plans} plan(s) "
-        f"({figures.replans} replans)"
+def title(figures: EpisodeFigures) -> str:
+    """Two lines: what happened, and the figures behind it."""
+    objective = "" if figures.objective is None else f", objective {figures.objective:.2f}"
+    first = (
+        f"{figures.scenario} (seed {figures.seed}): {figures.outcome}, {figures.delivered}/{figures.objects} "
+        f"object(s) at the goal after {figures.steps} steps, return {figures.episode_return:.2f}"
     )
+    second = (
+        f"path {figures.path_length_m:.2f} m, {figures.collisions} contacts, {figures.invalid_actions} refused "
+        f"actions; planning {figures.planning_s:.2f} s in {figures.plans} plan(s), {figures.replans} replans"
+        f"{objective}; simulation {figures.simulation_s:.2f} s"
+    )
+    return f"{first}\n{second}"
+
+
+def draw_episode(
+    axes: Axes, scenario: Scenario, states: Sequence[WorldState], steps: Sequence[Step], *, label_size_m: float
+) -> None:
+    """The scene at the end of the episode, the clutter's start (dashed), and every step of the base."""
+    last = states[-1]
+    drawing.draw_scenario(axes, scenario, last, show_robot=False, show_clutter=False)
+    for item in scenario.clutter:
+        start, end = states[0].clutter[item.id], last.clutter[item.id]
+        if math.dist(start, end) > 1e-3:
+            drawing.draw_clutter(axes, item, start, ghost=True)
+        drawing.draw_clutter(axes, item, end)
+    for state in states[:-1]:
+        _faint_base(axes, scenario, state)
+    for step in steps:
+        _draw_step(axes, scenario, step)
+    drawing.draw_robot(axes, last.base, last.heading, scenario.robot.radius)
+    _number_bases(axes, states, label_size_m, 0.75 * scenario.robot.radius)
+
+
+def close_up_view(scenario: Scenario, steps: Sequence[Step]) -> Rect:
+    """A square around the goal tables and the bases of every push and place."""
+    boxes = [t.rect for o in scenario.objects if (t := scenario.table_under(o.goal, o.radius)) is not None]
+    for step in steps:
+        if step.acted and step.mode == Mode.PUSH:
+            boxes += [Rect.around(step.before.base, 0.0, 0.0), Rect.around(step.after.base, 0.0, 0.0)]
+        elif step.acted and step.mode == Mode.PLACE:
+            boxes.append(Rect.around(step.after.base, 0.0, 0.0))
+    if not boxes:
+        return scenario.area.inflate(drawing.MARGIN)
+    lo_x, lo_y = min(b.min_x for b in boxes), min(b.min_y for b in boxes)
+    box = Rect(lo_x, lo_y, max(b.max_x for b in boxes), max(b.max_y for b in boxes)).inflate(CLOSE_UP_MARGIN)
+    half = max(box.size) / 2
+    return Rect.around(box.center, half, half)
+
+
+def _draw_step(axes: Axes, scenario: Scenario, step: Step) -> None:
+    before, after = step.before, step.after
+    if step.mode == Mode.PUSH and step.target is not None:
+        _arrow(axes, before.base, after.base, PUSH, width=3.0)
+        _arrow(axes, before.clutter[step.target], after.clutter[step.target], PUSH, width=1.5, style="->")
+        return
+    colour = TRAVEL if before.holding is None else drawing.object_colour(scenario, before.holding)
+    _arrow(axes, before.base, after.base, colour, width=1.6)
+    if step.target is not None and step.mode in (Mode.PICK, Mode.PLACE):
+        at = before.objects[step.target] if step.mode == Mode.PICK else after.objects[step.target]
+        arm = PICK if step.mode == Mode.PICK else PLACE
+        axes.plot([after.base[0], at[0]], [after.base[1], at[1]], color=arm, linestyle=":", linewidth=1.8, zorder=8)
+        axes.plot(
+            [at[0]],
+            [at[1]],
+            marker="^" if step.mode == Mode.PICK else "v",
+            markersize=9,
+            markerfacecolor=drawing.object_colour(scenario, step.target),
+            markeredgecolor=arm,
+            markeredgewidth=1.8,
+            linestyle="none",
+            zorder=8,
+        )
+
+
+def _faint_base(axes: Axes, scenario: Scenario, state: WorldState) -> None:
+    radius, edge = scenario.robot.radius, drawing.PALETTE.robot_edge
+    axes.add_patch(
+        Circle(state.base, radius, facecolor=drawing.PALETTE.robot, edgecolor=edge, alpha=0.15, zorder=drawing.Z_ROBOT)
+    )
+    axes.add_patch(Circle(state.base, radius, facecolor="none", edgecolor=edge, linewidth=0.8, zorder=drawing.Z_ROBOT))
+    drawing.draw_heading(axes, state.base, state.heading, radius, color=edge, zorder=drawing.Z_ROBOT + 0.1)
+
+
+def _number_bases(axes: Axes, states: Sequence[WorldState], merge_m: float, offset_m: float) -> None:
+    """The state number beside each base; bases closer than ``merge_m`` share one label ("2,5")."""
+    groups: list[tuple[Point, list[int]]] = []
+    for k, state in enumerate(states):
+        for at, members in groups:
+            if math.dist(at, state.base) < merge_m:
+                members.append(k)
+                break
+        else:
+            groups.append((state.base, [k]))
+    for at, members in groups:
+        axes.text(
+            at[0] - offset_m,
+            at[1] + offset_m,
+            ",".join(str(k) for k in members),
+            ha="center",
+            va="center",
+            fontsize=8,
+            weight="bold",
+            zorder=drawing.Z_TEXT + 1,
+            clip_on=True,
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": drawing.PALETTE.robot_edge},
+        )
+
+
+def _arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:
+    if math.dist(start, end) < 1e-9:
+        return  # turned in place
+    axes.add_patch(
+        FancyArrowPatch(
+            tuple(start[:2]),
+            tuple(end[:2]),
+            arrowstyle=style,
+            mutation_scale=14,
+            color=colour,
+            linewidth=width,
+            shrinkA=0,
+            shrinkB=0,
+            zorder=drawing.Z_ROBOT + 0.5,
+        )
+    )
+
+
+def legend_handles(scenario: Scenario) -> list:
+    palette = drawing.PALETTE
+    handles = [
+        Line2D([], [], color=TRAVEL, linewidth=1.6, marker=">", label="move, hand empty"),
+        Line2D([], [], color=CARRY, linewidth=1.6, marker=">", label="move, carrying (object's colour)"),
+        Line2D([], [], color=PUSH, linewidth=3.0, marker=">", label="push stroke"),
+        Line2D([], [], color=PICK, linestyle=":", marker="^", markerfacecolor="white", label="pick (arm line)"),
+        Line2D([], [], color=PLACE, linestyle=":", marker="v", markerfacecolor="white", label="place (arm line)"),
+        Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label="base at state k"),
+    ]
+    for obj in scenario.objects:
+        colour = drawing.object_colour(scenario, obj.id)
+        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}, goal ring"))
+    if scenario.clutter:
+        handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter (end)"))
+        handles.append(Patch(facecolor="none", edgecolor=palette.clutter_edge, linestyle="--", label="clutter (start)"))
+    return handles
+
+
+# ---------------------------------------------------------------------------- render crops
+def focus_points(step: Step) -> list[tuple[float, float, float]]:
+    """World points (metres) a render of the state after ``step`` must show: the robot and what it acted on."""
+    after = step.after
+    points = [(after.base[0], after.base[1], 0.0), (after.base[0], after.base[1], ROBOT_TOP)]
+    if step.target in after.objects:
+        x, y, z = after.objects[step.target]
+        points.append((x, y, z))
+    elif step.target in after.clutter:
+        x, y = after.clutter[step.target]
+        points.append((x, y, 0.7))
+    return points
+
+
+def crop(frame: np.ndarray, scenario: Scenario, points: Sequence[tuple[float, float, float]]) -> np.ndarray:
+    """The part of a perspective render that shows ``points`` with a margin (aspect kept, at least 3x zoom).
+
+    ``frame`` is the env's perspective render of ``scenario``; the points are projected with
+    the env's camera (:func:`fetchcarry_env.sim.camera.view_and_projection`).
+    """
+    import pybullet  # already imported (quietly) by the env that rendered the frame
+
+    from fetchcarry_env.sim.camera import view_and_projection
+
+    height, width = frame.shape[:2]
+    # The camera's matrices are pure math: pybullet's module functions compute them without a connection.
+    view, projection = view_and_projection(pybullet, scenario, "perspective", width, height)
+    pixels = project(points, view, projection, width, height)
+    aspect = height / width
+    lo, hi = pixels.min(axis=0), pixels.max(axis=0)
+    crop_w = max(hi[0] - lo[0] + 2 * CROP_MARGIN * width, (hi[1] - lo[1]) / aspect + 2 * CROP_MARGIN * width)
+    crop_w = float(np.clip(crop_w, CROP_MIN_WIDTH * width, width))
+    crop_h = crop_w * aspect
+    cx, cy = (lo + hi) / 2
+    x0 = round(float(np.clip(cx - crop_w / 2, 0, width - crop_w)))
+    y0 = round(float(np.clip(cy - crop_h / 2, 0, height - crop_h)))
+    return frame[y0 : y0 + int(crop_h), x0 : x0 + int(crop_w)]
+
+
+def project(
+    points: Sequence[tuple[float, float, float]],
+    view: Sequence[float],
+    projection: Sequence[float],
+    width: int,
+    height: int,
+) -> np.ndarray:
+    """Pixel coordinates ``(column, row)`` of world points under PyBullet's column-major view and projection."""
+    v = np.asarray(view, dtype=np.float64).reshape(4, 4).T
+    p = np.asarray(projection, dtype=np.float64).reshape(4, 4).T
+    homogeneous = np.c_[np.asarray(points, dtype=np.float64), np.ones(len(points))]
+    clip = homogeneous @ (p @ v).T
+    ndc = clip[:, :3] / clip[:, 3:4]
+    return np.c_[(ndc[:, 0] + 1) / 2 * width, (1 - ndc[:, 1]) / 2 * height]

@@ -7,12 +7,15 @@ keeps everything a dataset needs (observations, actions, rewards, flags, per-ste
 infos) plus the figures a person wants (delivered objects, path length, contacts,
 invalid actions, planning and simulation seconds, replans).
 
-An expert that finds no plan does not crash the episode: the episode ends after the
-policy's fallback action, truncated, with the outcome ``planner_failed (<status>)``.
+An expert that cannot act does not crash the episode: the episode ends after the
+policy's idle fallback action, truncated, with the outcome ``planner_failed (<status>)``
+(no plan: infeasible, time limit) or ``expert_stuck`` (the env would refuse the planned
+action and no repair works), and the policy's reason in ``failure``.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -21,10 +24,26 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from expert.policy import Decision
+from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
 
-# The per-step infos recorded for every episode (Minari needs the same keys at every step).
-INFO_KEYS = ("planning_s", "planned", "replanned", "fallback", "invalid_action", "contact", "delivered")
+# The per-step infos recorded for every episode (Minari needs the same keys at every step):
+# seconds in the planner before the step, whether the policy planned / replanned / repaired its
+# action / fell back to the idle action, the objective (Eq. 1) of the plan made before the step
+# (NaN when it did not plan), whether the env refused the action or stopped the base at a
+# contact, and how many objects stand at their goals after the step.
+INFO_KEYS = (
+    "planning_s",
+    "planned",
+    "replanned",
+    "repaired",
+    "fallback",
+    "objective",
+    "invalid_action",
+    "contact",
+    "delivered",
+)
 
 
 @dataclass(frozen=True)
@@ -36,7 +55,8 @@ class EpisodeFigures:
     objects: int  # objects to deliver
     delivered: int  # objects standing at their goals at the end
     success: bool  # every object delivered and the hand empty
-    outcome: str  # "delivered", "truncated", "planner_failed (<status>)"
+    outcome: str  # "delivered", "truncated" (time limit), "planner_failed (<status>)", "expert_stuck"
+    failure: str | None  # the policy's reason when it could not act, else None
     steps: int  # actions taken
     episode_return: float  # sum of rewards
     path_length_m: float  # metres the base travelled (straight segments between phases)
@@ -47,6 +67,7 @@ class EpisodeFigures:
     simulation_s: float  # seconds in env.reset and env.step
     plans: int  # planning calls
     replans: int  # planning calls after the first
+    repairs: int  # actions the expert moved so that the env acts on the planned item
     planner_failures: int  # planning calls that found no plan
     objective: float | None  # objective (Eq. 1) of the first plan, if the policy plans
 
@@ -73,6 +94,7 @@ class EpisodeRecord:
     truncations: np.ndarray
     infos: dict[str, np.ndarray]
     figures: EpisodeFigures
+    states: list[WorldState] = field(default_factory=list)  # the env's state after reset and after each step
     frames: list[np.ndarray] = field(default_factory=list)  # rgb renders, one per state, when asked
 
 
@@ -87,59 +109,62 @@ def run_episode(
     """Run one episode of ``policy`` in ``env`` from ``env.reset(seed=seed)`` and record it.
 
     ``policy`` has stable-baselines3's ``predict``; if it has ``reset()`` it is called
-    first (a seeded random policy is re-seeded with ``seed``). ``render`` keeps an rgb frame
-    per state (the env must have ``render_mode="rgb_array"``). ``max_steps`` caps the
-    episode for envs without a time limit.
+    first (with ``seed=`` when it takes one: a random policy is re-seeded). A planning
+    policy (:class:`~expert.policy.ExpertPolicy`) reports each step through its
+    ``last_decision`` and its totals through ``stats``. ``render`` keeps an rgb frame per
+    state (the env must have ``render_mode="rgb_array"``). ``max_steps`` caps the episode
+    for envs without a time limit.
     """
     _reset_policy(policy, seed)
-    simulation_s = policy_s = 0.0
-    started = time.perf_counter()
-    observation, _ = env.reset(seed=seed)
-    simulation_s += time.perf_counter() - started
+    clock = _Clock()
+    observation, _ = clock.time("simulation", env.reset, seed=seed)
     unwrapped = env.unwrapped
     scenario: Scenario = unwrapped.scenario
     frames = [env.render()] if render else []
     observations = [observation]
-    actions, rewards, terminations, truncations = [], [], [], []
-    infos = [dict.fromkeys(INFO_KEYS, 0)]
-    infos[0]["delivered"] = len(unwrapped.state.delivered(scenario))
+    states = [unwrapped.state]
+    actions: list[np.ndarray] = []
+    rewards: list[float] = []
+    terminations: list[bool] = []
+    truncations: list[bool] = []
+    infos = [{**dict.fromkeys(INFO_KEYS, 0), "objective": math.nan, "delivered": _delivered(unwrapped)}]
     path_length = 0.0
-    outcome = "truncated"
+    failure: Decision | None = None
     first_objective: float | None = None
     episode_start = True
     while True:
-        started = time.perf_counter()
-        action, _ = policy.predict(observation, episode_start=np.array([episode_start]), deterministic=True)
-        policy_s += time.perf_counter() - started
+        action, _ = clock.time(
+            "policy", policy.predict, observation, episode_start=np.array([episode_start]), deterministic=True
+        )
         episode_start = False
         decision = _decision(policy)
-        if decision["planned"] and first_objective is None:
-            first_objective = _last_objective(policy)
+        if first_objective is None and decision.objective is not None:
+            first_objective = decision.objective
         base_before = unwrapped.state.base
-        started = time.perf_counter()
-        observation, reward, terminated, truncated, info = env.step(action)
-        simulation_s += time.perf_counter() - started
+        observation, reward, terminated, truncated, info = clock.time("simulation", env.step, action)
         path_length += math.dist(base_before, unwrapped.state.base)
-        failed = bool(decision["fallback"])
-        if failed and not terminated:
+        if decision.failure is not None and not terminated:
+            failure = decision
             truncated = True
-            outcome = f"planner_failed ({decision['status']})"
-        if max_steps is not None and len(actions) + 1 >= max_steps and not terminated:
-            truncated = True
+        if max_steps is not None and len(actions) + 1 >= max_steps:
+            truncated = truncated or not terminated
         observations.append(observation)
+        states.append(unwrapped.state)
         actions.append(np.asarray(action, dtype=np.int64))
         rewards.append(float(reward))
         terminations.append(bool(terminated))
         truncations.append(bool(truncated))
         infos.append(
             {
-                "planning_s": decision["planning_s"],
-                "planned": decision["planned"],
-                "replanned": decision["replanned"],
-                "fallback": failed,
+                "planning_s": decision.planning_s,
+                "planned": decision.planned,
+                "replanned": decision.replanned,
+                "repaired": decision.repaired,
+                "fallback": decision.failure is not None,
+                "objective": math.nan if decision.objective is None else decision.objective,
                 "invalid_action": bool(info.get("invalid_action")),
                 "contact": bool(info.get("contact")),
-                "delivered": len(unwrapped.state.delivered(scenario)),
+                "delivered": _delivered(unwrapped),
             }
         )
         if render:
@@ -150,8 +175,6 @@ def run_episode(
     state = unwrapped.state
     delivered = len(state.delivered(scenario))
     success = delivered == len(scenario.objects) and state.holding is None
-    if success:
-        outcome = "delivered"
     stats = _policy_stats(policy)
     figures = EpisodeFigures(
         seed=seed,
@@ -159,17 +182,19 @@ def run_episode(
         objects=len(scenario.objects),
         delivered=delivered,
         success=success,
-        outcome=outcome,
+        outcome=_outcome(success, failure),
+        failure=None if success or failure is None else failure.failure,
         steps=len(actions),
         episode_return=float(sum(rewards)),
         path_length_m=path_length,
         collisions=sum(int(i["contact"]) for i in infos),
         invalid_actions=sum(int(i["invalid_action"]) for i in infos),
         planning_s=float(stats.get("planning_s", 0.0)),
-        policy_s=policy_s,
-        simulation_s=simulation_s,
+        policy_s=clock.seconds["policy"],
+        simulation_s=clock.seconds["simulation"],
         plans=int(stats.get("plans", 0)),
         replans=int(stats.get("replans", 0)),
+        repairs=int(stats.get("repairs", 0)),
         planner_failures=int(stats.get("failures", 0)),
         objective=first_objective,
     )
@@ -183,38 +208,55 @@ def run_episode(
         truncations=np.asarray(truncations, dtype=bool),
         infos={key: np.asarray([i[key] for i in infos]) for key in INFO_KEYS},
         figures=figures,
+        states=states,
         frames=frames,
     )
+
+
+class _Clock:
+    """Seconds spent in each kind of call (``policy``, ``simulation``)."""
+
+    def __init__(self) -> None:
+        self.seconds = {"policy": 0.0, "simulation": 0.0}
+
+    def time(self, kind: str, function: Any, *args: Any, **kwargs: Any) -> Any:
+        started = time.perf_counter()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            self.seconds[kind] += time.perf_counter() - started
+
+
+def _outcome(success: bool, failure: Decision | None) -> str:
+    if success:
+        return "delivered"
+    if failure is None:
+        return "truncated"
+    if failure.status in ("infeasible", "time_limit") and failure.failure.startswith("no plan"):
+        return f"planner_failed ({failure.status})"
+    return "expert_stuck"
+
+
+def _delivered(unwrapped: Any) -> int:
+    return len(unwrapped.state.delivered(unwrapped.scenario))
 
 
 def _reset_policy(policy: Any, seed: int | None) -> None:
     reset = getattr(policy, "reset", None)
     if reset is None:
         return
-    try:
+    if "seed" in inspect.signature(reset).parameters:
         reset(seed=seed)
-    except TypeError:
+    else:
         reset()
 
 
-def _decision(policy: Any) -> dict[str, Any]:
+def _decision(policy: Any) -> Decision:
     """The last decision of a planning policy (``ExpertPolicy.last_decision``), or a neutral one."""
     decision = getattr(policy, "last_decision", None)
-    if decision is None:
-        return {"planned": False, "replanned": False, "planning_s": 0.0, "fallback": False, "status": None}
-    return {
-        "planned": bool(decision.planned),
-        "replanned": bool(decision.replanned),
-        "planning_s": float(decision.planning_s),
-        "fallback": bool(decision.fallback),
-        "status": decision.status,
-    }
+    return decision if decision is not None else Decision(planned=False, replanned=False, reason="no planner")
 
 
 def _policy_stats(policy: Any) -> dict[str, Any]:
     stats = getattr(policy, "stats", None)
     return stats.to_dict() if stats is not None else {}
-
-
-def _last_objective(policy: Any) -> float | None:
-    return _policy_stats(policy).get("last_objective")

@@ -13,9 +13,9 @@ from training.staging import Staging
 def _record(seed: int, steps: int) -> EpisodeRecord:
     rng = np.random.default_rng(seed)
     figures = EpisodeFigures(
-        seed=seed, scenario="toy", objects=1, delivered=1, success=True, outcome="delivered", steps=steps,
-        episode_return=7.5, path_length_m=3.25, collisions=0, invalid_actions=0, planning_s=0.1, policy_s=0.2,
-        simulation_s=0.3, plans=1, replans=0, planner_failures=0, objective=None,
+        seed=seed, scenario="toy", objects=1, delivered=1, success=True, outcome="delivered", failure=None,
+        steps=steps, episode_return=7.5, path_length_m=3.25, collisions=0, invalid_actions=0, planning_s=0.1,
+        policy_s=0.2, simulation_s=0.3, plans=1, replans=0, repairs=0, planner_failures=0, objective=None,
     )  # fmt: skip
     return EpisodeRecord(
         seed=seed,
