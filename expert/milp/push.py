@@ -15,6 +15,10 @@ goal and every axis direction. For each piece of clutter ``c`` that covers a goa
 - a neighbour that will itself be pushed does not block: the direction then waits for
   that neighbour to go first (a *precedence*), and two strokes whose floors meet at
   their ends are mutually exclusive.
+- the direction is also blocked when the hand (a cube of ``2 * HAND_HALF_SIZE`` at the
+  push contact) has no room behind the piece: an object or a piece of clutter that is
+  never pushed stands there (the environment refuses such a push); a pushable
+  neighbour there makes the push wait for it, as on the swept floor.
 
 Which pushes the arm can do from where (forward or lateral, the paper's ``q`` of
 Fig. 3(d): the arm sweeping across a neighbour) is decided per pose option in
@@ -46,7 +50,7 @@ from pyscipopt import quicksum
 
 from expert.milp.grid import Grid
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector
-from fetchcarry_env.kinematics import push_contact, push_stroke, swept_rect
+from fetchcarry_env.kinematics import HAND_HALF_SIZE, push_contact, push_stroke, swept_rect
 from fetchcarry_env.scenario import Scenario
 
 if TYPE_CHECKING:
@@ -113,6 +117,8 @@ def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...
             end = item.rect.translate(ux * stroke, uy * stroke)
             swept = swept_rect(item.rect, direction, stroke)
             reason = _blocked_by(swept, end, item.rect, table.rect if table else None, scenario, static_clutter, discs)
+            hand = _hand_box(item.rect, direction)
+            reason = reason or _no_hand_room(hand, scenario, static_clutter, holding)
             if reason is not None:
                 blocked[(clutter_id, direction)] = reason
                 continue
@@ -128,7 +134,8 @@ def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...
                 contact=push_contact(item.rect, direction),
             )
             for other in pushable:
-                if other != clutter_id and swept.overlaps_rect(scenario.clutter_item(other).rect):
+                other_rect = scenario.clutter_item(other).rect
+                if other != clutter_id and (swept.overlaps_rect(other_rect) or hand.overlaps_rect(other_rect, tol=0.0)):
                     waits.append((len(candidates), other))
             candidates.append(candidate)
     exclusive = [
@@ -166,6 +173,28 @@ def _blocked_by(
             swept.overlaps_disc(center, radius) and not start.overlaps_disc(center, radius)
         ):
             return f"the piece would run into the {name}"
+    return None
+
+
+def _hand_box(rect: Rect, direction: Heading) -> Rect:
+    """The hand (a cube of ``2 * HAND_HALF_SIZE``) at the contact for pushing ``rect`` along ``direction``."""
+    return Rect.around(push_contact(rect, direction), HAND_HALF_SIZE, HAND_HALF_SIZE)
+
+
+def _no_hand_room(hand: Rect, scenario: Scenario, static_clutter: list, holding: str | None) -> str | None:
+    """Why the hand cannot stand behind the piece to push it, or None.
+
+    The environment refuses a push whose hand would overlap another piece of clutter or
+    an object (``fetchcarry_env.rules``); clutter that is never pushed and objects at
+    their starts block the direction, a pushable neighbour there makes the push wait
+    for it (a precedence, like a neighbour on the swept floor).
+    """
+    for other in static_clutter:
+        if other.rect.overlaps_rect(hand, tol=0.0):
+            return f"no room for the hand behind the piece: clutter {other.id!r} is there"
+    for obj in scenario.objects:
+        if obj.id != holding and hand.overlaps_disc(obj.start, obj.radius, tol=0.0):
+            return f"no room for the hand behind the piece: object {obj.id!r} is there"
     return None
 
 
