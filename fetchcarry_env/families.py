@@ -31,7 +31,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, heading_vector, to_world_frame
-from fetchcarry_env.kinematics import push_contact, push_headings, push_stroke, reaches, swept_rect
+from fetchcarry_env.kinematics import (
+    HAND_HALF_SIZE,
+    push_contact,
+    push_headings,
+    push_stroke,
+    reaches,
+    swept_rect,
+)
 from fetchcarry_env.reachability import FreeSpace, unreachable_targets
 from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table, check_rules
 
@@ -114,14 +121,52 @@ def _push_works(
     if any(swept.overlaps_disc(c, r) and not item.rect.overlaps_disc(c, r) for c, r in discs):
         return False
     contact = push_contact(item.rect, direction)
+    if not _hand_fits(scenario, item, contact):
+        return False
     ux, uy = heading_vector(direction)
     for heading in push_headings(direction):
         for posture in scenario.robot.postures:
             for base in _bases_reaching(contact, heading, posture):
                 end = (base[0] + ux * stroke, base[1] + uy * stroke)
-                if space.reachable(base) and space.reachable(end) and reaches(posture, base, heading, contact):
+                hand_end = (contact[0] + ux * stroke, contact[1] + uy * stroke)
+                if (
+                    space.reachable(base)
+                    and space.reachable(end)
+                    and reaches(posture, base, heading, contact)
+                    and _arm_clear_through_stroke(scenario, item, (base, end, contact, hand_end))
+                ):
                     return True
     return False
+
+
+def _hand_fits(scenario: Scenario, item: Clutter, contact: Point) -> bool:
+    """The hand (a cube of ``2 * HAND_HALF_SIZE`` at the push contact) overlaps no other clutter and no object.
+
+    The environment refuses a push without room for the hand behind the piece.
+    """
+    hand = Rect.around(contact, HAND_HALF_SIZE, HAND_HALF_SIZE)
+    if any(c.id != item.id and c.rect.overlaps_rect(hand, tol=0.0) for c in scenario.clutter):
+        return False
+    return not any(hand.overlaps_disc(o.start, o.radius, tol=0.0) for o in scenario.objects)
+
+
+def _arm_clear_through_stroke(scenario: Scenario, item: Clutter, points: tuple[Point, ...]) -> bool:
+    """Eq. 19 through a push (the paper's q), as the planner models it.
+
+    The bases and hands at both ends of the stroke lie on one side of every obstacle and
+    every other piece of clutter, so the arm sweeps across none of them.
+    """
+    blockers = [o.rect for o in scenario.obstacles] + [c.rect for c in scenario.clutter if c.id != item.id]
+    return all(_one_side(rect, points) for rect in blockers)
+
+
+def _one_side(rect: Rect, points: tuple[Point, ...]) -> bool:
+    return (
+        all(x >= rect.max_x for x, _ in points)
+        or all(x <= rect.min_x for x, _ in points)
+        or all(y >= rect.max_y for _, y in points)
+        or all(y <= rect.min_y for _, y in points)
+    )
 
 
 def _bases_reaching(point: Point, heading: Heading, posture: Posture) -> list[Point]:
