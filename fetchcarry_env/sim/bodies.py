@@ -58,7 +58,6 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
             collision,
             visual,
             _on_table(scenario, obj.start, obj.height),
-            useMaximalCoordinates=True,
         )
         marker = client.createVisualShape(
             pybullet.GEOM_CYLINDER, radius=obj.radius * 1.2, length=GOAL_MARKER_THICKNESS, rgbaColor=GOAL_COLOR
@@ -74,7 +73,6 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
             collision,
             visual,
             _on_table(scenario, item.rect.center, item.height),
-            useMaximalCoordinates=True,
         )
     for body in (floor, *tables.values(), *obstacles.values()):
         client.setCollisionFilterGroupMask(body, -1, physics.GROUP_STATIC, physics.GROUP_ITEM)
@@ -122,4 +120,4 @@ def _static_box(client: QuietClient, rect: Rect, z_low: float, z_high: float, co
     collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
     visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=color)
     center = [*rect.center, (z_low + z_high) / 2]
-    return client.createMultiBody(0.0, collision, visual, center, useMaximalCoordinates=True)
+    return client.createMultiBody(0.0, collision, visual, center)

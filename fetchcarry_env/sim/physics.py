@@ -23,7 +23,7 @@ BASE_HEIGHT = 0.35  # metres: the round mobile base
 ARM_CLEARANCE = 0.10  # metres between the arm and the highest top of anything standing on a table
 
 PUSHER_MASS = 0.2  # kg: the hand's contact block during a push stroke
-PUSH_FORCE = 30.0  # N: the most the arm pushes with (a Toyota HSR's arm is rated for about 30 N at the hand)
+PUSH_FORCE = 30.0  # N: the arm's strength: slides several kilograms of clutter (1 kg needs 2.5 N), cannot crush a jam
 CONSTRAINT_ERP = 0.9  # share of a constraint's error corrected per step (PyBullet's erp: the pusher's grip)
 PUSH_SPEED = 0.5  # m/s: cruise speed of the hand along a push stroke
 PUSH_ACCELERATION = 2.0  # m/s^2: below FRICTION**2 * GRAVITY (2.45), so the clutter stops with the hand

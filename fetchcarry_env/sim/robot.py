@@ -14,7 +14,8 @@ size of the hand, held at the hand's place by a force-limited constraint: the ar
 strength (:data:`~fetchcarry_env.sim.physics.PUSH_FORCE`). PyBullet's contact solver
 then decides what moves: the pushed clutter slides, shoves a neighbour, or jams, and
 a jammed pusher falls behind the hand's path (:meth:`RobotBody.pusher_position`).
-Between strokes the pusher is parked far away.
+Between strokes the pusher is parked far away. It never sleeps: a body's sleeping state
+is history that a rebuilt world would not have (copies must continue exactly).
 """
 
 from __future__ import annotations
@@ -106,15 +107,12 @@ class RobotBody:
             linkJointAxis=[[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
         )
         client.setCollisionFilterGroupMask(self.body, -1, physics.GROUP_ROBOT, physics.MASK_NONE)
-        # The robot only ever moves by teleporting: asleep, the physics engine skips it (half a step's cost).
+        # Asleep from the start, the robot costs the physics engine nothing (a third of a step); it is
+        # only ever teleported and touches nothing, so it never wakes, in this world or a rebuilt one.
         client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
         client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
-        self.pusher = client.createMultiBody(
-            physics.PUSHER_MASS, hand_collision, -1, PUSHER_PARKING, useMaximalCoordinates=True
-        )
-        self._anchor = client.createMultiBody(0.0, -1, -1, PUSHER_PARKING, useMaximalCoordinates=True)
-        self._grip = client.createConstraint(self._anchor, -1, self.pusher, -1, pybullet.JOINT_FIXED, ZERO, ZERO, ZERO)
-        client.changeConstraint(self._grip, maxForce=physics.PUSH_FORCE)
+        self.pusher = client.createMultiBody(physics.PUSHER_MASS, hand_collision, -1, PUSHER_PARKING)
+        self._grip: int | None = None  # the constraint that holds the pusher during a stroke
         client.setCollisionFilterGroupMask(self.pusher, -1, physics.GROUP_HAND, physics.GROUP_ITEM)
         client.changeDynamics(
             self.pusher,
@@ -123,6 +121,7 @@ class RobotBody:
             restitution=physics.RESTITUTION,
             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING,
         )
+        self.release_pusher()
         client.resetJointState(self.body, LIFT, arm_height - physics.BASE_HEIGHT)
         self.pose: tuple[Point, Heading] = ((0.0, 0.0), "+x")
         self._yaw_quaternion = {h: client.getQuaternionFromEuler([0.0, 0.0, heading_yaw(h)]) for h in HEADINGS}
@@ -151,25 +150,36 @@ class RobotBody:
         """Start a stroke: the pusher, at rest at ``position`` (world, metres), held there with the arm's force.
 
         The arm's grip is a fixed constraint, at most :data:`physics.PUSH_FORCE` strong, between
-        the pusher and an anchor that :meth:`drive_pusher` moves along the hand's path.
+        the pusher and a point of the world that :meth:`drive_pusher` moves along the hand's
+        path. It is made afresh for every stroke (a constraint keeps its impulses to
+        warm-start the next step: a stroke must not depend on the previous one).
         """
+        client = self._client
         self._pose_pusher(position)
+        self._grip = client.createConstraint(self.pusher, -1, -1, -1, pybullet.JOINT_FIXED, ZERO, ZERO, position)
+        client.changeConstraint(self._grip, maxForce=physics.PUSH_FORCE)
 
     def drive_pusher(self, position: tuple[float, float, float]) -> None:
         """Move the point the arm holds the pusher at (world, metres); PyBullet pulls the pusher there."""
-        self._client.resetBasePositionAndOrientation(self._anchor, position, IDENTITY)
+        self._client.changeConstraint(self._grip, position)
 
     def pusher_position(self) -> tuple[float, float, float]:
         """Where the pusher's centre is (world, metres), as PyBullet has it."""
         return self._client.getBasePositionAndOrientation(self.pusher)[0]
 
     def release_pusher(self) -> None:
-        """End a stroke: the pusher is parked, at rest, far from everything."""
+        """End a stroke (or make sure none is under way): the grip goes, the pusher is parked far from everything.
+
+        A parked pusher falls freely and touches nothing; every primitive parks it again first.
+        """
+        client = self._client
+        if self._grip is not None:
+            client.removeConstraint(self._grip)
+            self._grip = None
         self._pose_pusher(PUSHER_PARKING)
 
     def _pose_pusher(self, position: tuple[float, float, float]) -> None:
-        for body in (self.pusher, self._anchor):
-            self._client.resetBasePositionAndOrientation(body, position, IDENTITY)
+        self._client.resetBasePositionAndOrientation(self.pusher, position, IDENTITY)
         self._client.resetBaseVelocity(self.pusher, ZERO, ZERO)
 
     def hand_position(self) -> tuple[float, float, float]:

@@ -348,6 +348,7 @@ class Simulation:
         """
         client = self.client
         items = self._item_bodies()
+        self._robot_body.release_pusher()
         robot = self._robot_body.body
         parked = [robot, *(items[name] for name in self._poses)]
         for k, body in enumerate(parked):
