@@ -83,6 +83,11 @@ class Simulation:
             self._layout_key = None
         return self._client
 
+    @property
+    def connected(self) -> bool:
+        """True while this simulation has a physics server (it connects on first use)."""
+        return self._client is not None and self._client.connected
+
     def close(self) -> None:
         """Disconnect from the physics server (safe to call twice; the next use reconnects)."""
         if self._client is not None:
