@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from expert.milp.grid import point_in_region
 from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, heading_of
@@ -55,6 +56,7 @@ DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
 REPAIR_RADIUS_CELLS = 3  # lattice cells: how far a repair may move the acting base from the planned one
+ESCAPE_RADIUS_CELLS = 4  # lattice cells: how far an escape from a corner gap may go
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,7 @@ class ExpertStats:
     plans: int = 0  # planning calls
     replans: int = 0  # planning calls other than the first of an episode
     failures: int = 0  # planning calls that found no plan (infeasible, time limit)
-    repairs: int = 0  # actions moved to another base so that the env acts on the planned item
+    repairs: int = 0  # actions adapted to the env: moved so that it acts on the planned item, or an escape move
     stuck: int = 0  # planned actions the env would refuse and no repair could fix
     fallbacks: int = 0  # idle actions returned because the expert could not act
     planning_s: float = 0.0  # seconds spent in the planner
@@ -220,8 +222,20 @@ class ExpertPolicy:
             track.failed_in = track.failure = None
         if _solved(scenario, world):
             return self._idle(world), Decision(False, False, "done")
+        decision = self._prepare(track, scenario, world)
+        if decision.failure is not None:
+            track.steps, track.now, track.failed_in, track.failure = [], None, world, decision.failure
+            self._count(fallbacks=1)
+            return self._idle(world), decision
+        step = track.steps.pop(0)
+        track.now = step.expected
+        return step.action, decision
 
+    def _prepare(self, track: _Track, scenario: Scenario, world: WorldState) -> Decision:
+        """Make the track's first step one the env executes as planned (plan, replan, repair); say what was done."""
         reason = self._why_plan(track, world)
+        if reason is not None and (corner := _corner_gap(scenario, world)) is not None:
+            return self._escape(track, scenario, world, reason, corner)
         planned: list[_Planned] = []
         if reason is not None:
             planned.append(self._plan_into(track, scenario, world))
@@ -230,38 +244,28 @@ class ExpertPolicy:
             reason = f"refused: {refusal}"
             planned.append(self._plan_into(track, scenario, world))
             refusal = self._refusal(scenario, world, track.steps[0]) if track.steps else None
-
-        failure, repaired = None, False
+        made: dict[str, Any] = {
+            "planned": bool(planned),
+            "replanned": any(p.replanned for p in planned),
+            "reason": reason or "following",
+            "planning_s": sum(p.seconds for p in planned),
+            "status": planned[-1].plan.status if planned else None,
+            "objective": planned[-1].plan.objective if planned else None,
+        }
         if planned and not planned[-1].plan.found:
-            failure = f"no plan ({planned[-1].plan.status})"
             self._count(failures=1)
-        elif not track.steps:  # the plan is empty although the task is not done
-            failure = "the plan has no step from this state"
-        elif refusal is not None:
-            repaired = self._repair(track, scenario, world)
-            if repaired:
-                self._count(repairs=1)
-            else:
-                failure = f"stuck: the env would refuse the planned action ({refusal}) and no repair works"
-                self._count(stuck=1)
-
-        decision = Decision(
-            planned=bool(planned),
-            replanned=any(p.replanned for p in planned),
-            reason=reason or "following",
-            planning_s=sum(p.seconds for p in planned),
-            status=planned[-1].plan.status if planned else None,
-            objective=planned[-1].plan.objective if planned else None,
-            repaired=repaired,
-            failure=failure,
+            return Decision(**made, failure=f"no plan ({planned[-1].plan.status})")
+        if not track.steps:
+            return Decision(**made, failure="the plan has no step from this state")
+        if refusal is None:
+            return Decision(**made)
+        if self._repair(track, scenario, world):
+            self._count(repairs=1)
+            return Decision(**made, repaired=True)
+        self._count(stuck=1)
+        return Decision(
+            **made, failure=f"stuck: the env would refuse the planned action ({refusal}) and no repair works"
         )
-        if failure is not None:
-            track.steps, track.now, track.failed_in, track.failure = [], None, world, failure
-            self._count(fallbacks=1)
-            return self._idle(world), decision
-        step = track.steps.pop(0)
-        track.now = step.expected
-        return step.action, decision
 
     def _why_plan(self, track: _Track, world: WorldState) -> str | None:
         """Why the expert must plan now, or ``None`` to follow its plan."""
@@ -359,9 +363,32 @@ class ExpertPolicy:
                     return [_Step(approach, before), _Step(action, replace(step.expected, base=end, heading=heading))]
         return None
 
-    def _cells_around(self, cell: tuple[int, int]) -> list[tuple[int, int]]:
-        """Lattice points within ``REPAIR_RADIUS_CELLS`` of ``cell``, nearest first (``cell`` itself first)."""
-        r = REPAIR_RADIUS_CELLS
+    def _escape(self, track: _Track, scenario: Scenario, world: WorldState, reason: str, corner: str) -> Decision:
+        """Leave a corner gap with one straight move to the nearest lattice point outside every grown square.
+
+        The MILP keeps the base out of every table and obstacle grown by the radius into a
+        square (the paper's Eq. 18), which is stricter than the disc: a base that stopped at
+        a contact near a corner can stand where the MILP has no plan from.
+        """
+        why = f"escape: the base is in the corner gap of {corner!r} ({reason})"
+        for cell in self._cells_around(self.lattice.index(world.base), ESCAPE_RADIUS_CELLS):
+            base = self.lattice.point(*cell)
+            if (
+                scenario.area.contains_disc(base, scenario.robot.radius)
+                and _corner_gap(scenario, replace(world, base=base)) is None
+                and move_stop(scenario, world.base, base)[1] is None
+            ):
+                objects = {k: v[:2] for k, v in world.objects.items()}
+                expected = Phase(base, world.heading, "move", holding=world.holding, objects=objects)
+                track.steps = [_Step(Action(cell, world.heading, 0, Mode.MOVE), expected)]
+                track.replan = "after an escape move"
+                self._count(repairs=1)
+                return Decision(False, False, why, repaired=True)
+        self._count(stuck=1)
+        return Decision(False, False, why, failure=f"stuck: no straight move takes the base out of {corner!r}'s corner")
+
+    def _cells_around(self, cell: tuple[int, int], r: int = REPAIR_RADIUS_CELLS) -> list[tuple[int, int]]:
+        """Lattice points within ``r`` cells of ``cell``, nearest first (``cell`` itself first)."""
         nx, ny = self.lattice.shape
         around = [
             (cell[0] + i, cell[1] + j)
@@ -416,17 +443,26 @@ def _gap(expected: Phase | WorldState, world: WorldState, base_tolerance: float,
     return None
 
 
+def _corner_gap(scenario: Scenario, world: WorldState) -> str | None:
+    """The id of a table or obstacle whose square grown by the radius holds the base (the MILP's Eq. 18), or None."""
+    radius = scenario.robot.radius
+    for item in (*scenario.tables, *scenario.obstacles):
+        if not any(point_in_region(world.base, item.rect, radius, region) for region in range(4)):
+            return item.id
+    return None
+
+
 def _solved(scenario: Scenario, world: WorldState) -> bool:
     """Every object delivered and the hand empty."""
     return world.holding is None and len(world.delivered(scenario)) == len(scenario.objects)
 
 
 def _env_attribute(env: Any, name: str) -> Any:
-    """``env.<name>`` through wrappers, or from the first env of a ``VecEnv``."""
+    """``env.<name>`` through wrappers, or from the first env of a vector env (Gymnasium's or SB3's)."""
     if env is None:
         raise ValueError(f"ExpertPolicy needs an env or an explicit {name}=")
+    if hasattr(env, "get_attr"):  # gymnasium.vector.VectorEnv and SB3's VecEnv: one value per env
+        return env.get_attr(name)[0]
     if hasattr(env, "get_wrapper_attr"):
         return env.get_wrapper_attr(name)
-    if hasattr(env, "get_attr"):
-        return env.get_attr(name, indices=[0])[0]
     return getattr(env, name)

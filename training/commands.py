@@ -303,7 +303,8 @@ def run_dataset_info(args: argparse.Namespace) -> int:
                 f"{summary['mean_steps']:.1f} per episode)",
                 f"outcomes    {outcomes}; success rate {summary['success_rate']:.1%}",
                 f"planning    {summary['mean_planning_s']:.3f} s per episode (max {summary['max_planning_s']:.2f} s), "
-                f"{summary['replans']} replans, {summary['planner_failures']} planner failures",
+                f"{summary['replans']} replans, {summary['repairs']} repairs, "
+                f"{summary['planner_failures']} planner failures",
             ]
         )
     )
@@ -424,15 +425,28 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- bench generate
 def _register_bench(bench: argparse._SubParsersAction) -> None:
+    from training.evaluate_expert import DEFAULT_FAMILIES
+
     parser = bench.add_parser(
         "generate",
         help="episodes per second per worker, planning vs simulation, speed-up with more workers",
-        description="Run the same seeded episodes with each worker count and print episodes per second, "
-        "episodes per second per worker, the split between policy (planning) and simulation seconds, and "
-        "the speed-up over the first worker count.",
+        description="Run the same seeded expert episodes of each family with each worker count (the process "
+        "pool of dataset generation, start-up included) and print episodes per second, episodes per second "
+        "per worker, the seconds per episode in the planner, in the rest of the policy and in the simulation, "
+        "and the speed-up over the first worker count.",
     )
-    _add_source_arguments(parser)
-    parser.add_argument("--episodes", type=_positive_int, default=20, metavar="N", help="episodes per run")
+    parser.add_argument(
+        "--families",
+        default=",".join(DEFAULT_FAMILIES),
+        metavar="A,B",
+        help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
+    )
+    parser.add_argument("--seed", type=_int, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
+    parser.add_argument(
+        "--policy", choices=("expert", "random"), default="expert", help="the MILP expert (default) or random"
+    )
+    parser.add_argument("--time-limit", type=_positive_float, default=10.0, metavar="S", help="per planning call")
+    parser.add_argument("--episodes", type=_positive_int, default=100, metavar="N", help="episodes per run")
     parser.add_argument(
         "--workers", type=_positive_int, nargs="+", default=[1, 2], metavar="W", help="worker counts (default 1 2)"
     )
@@ -441,41 +455,27 @@ def _register_bench(bench: argparse._SubParsersAction) -> None:
 
 
 def run_bench_generate(args: argparse.Namespace) -> int:
-    import time
+    from training.generate import EpisodeSource, bench_generation
 
-    from training.generate import run_episodes
-
-    source = _source(args)
     rows = []
-    for workers in args.workers:
-        started = time.perf_counter()
-        figures = [r.figures for _, r in run_episodes(source, list(range(args.episodes)), workers=workers)]
-        wall = time.perf_counter() - started
-        policy_s = sum(f.policy_s for f in figures)
-        simulation_s = sum(f.simulation_s for f in figures)
-        rows.append(
-            {
-                "workers": workers,
-                "episodes": len(figures),
-                "wall_s": wall,
-                "episodes_per_s": len(figures) / wall,
-                "episodes_per_s_per_worker": len(figures) / wall / workers,
-                "policy_s_per_episode": policy_s / len(figures),
-                "planning_s_per_episode": sum(f.planning_s for f in figures) / len(figures),
-                "simulation_s_per_episode": simulation_s / len(figures),
-                "successes": sum(f.success for f in figures),
-            }
-        )
-    for row in rows:
-        row["speed_up"] = row["episodes_per_s"] / rows[0]["episodes_per_s"]
+    for family in _families(args.families):
+        source = EpisodeSource(family=family, seed=args.seed, policy=args.policy, time_limit=args.time_limit)
+        rows += bench_generation(source, args.episodes, args.workers)
     if args.json:
-        print(json.dumps({"source": source.label, "policy": source.policy, "runs": rows}, indent=2))
+        print(json.dumps({"policy": args.policy, "episodes": args.episodes, "runs": rows}, indent=2))
         return 0
-    print(f"{source.label}, policy {source.policy}, {args.episodes} episodes (seeds {source.seed}..)")
-    print(f"{'workers':>7} {'ep/s':>7} {'ep/s/worker':>11} {'policy s/ep':>11} {'sim s/ep':>9} {'speed-up':>8}")
+    print(f"policy {args.policy}, {args.episodes} episodes per run (seeds {args.seed}..), process pool")
+    header = (
+        f"{'family':<9} {'workers':>7} {'ep/s':>7} {'ep/s/worker':>11} {'plan s/ep':>9} {'policy s/ep':>11} "
+        f"{'sim s/ep':>8} {'plan %':>6} {'speed-up':>8}"
+    )
+    print(header)
+    print("-" * len(header))
     for row in rows:
         print(
-            f"{row['workers']:>7} {row['episodes_per_s']:>7.2f} {row['episodes_per_s_per_worker']:>11.2f} "
-            f"{row['policy_s_per_episode']:>11.3f} {row['simulation_s_per_episode']:>9.3f} {row['speed_up']:>8.2f}"
+            f"{row['family']:<9} {row['workers']:>7} {row['episodes_per_s']:>7.2f} "
+            f"{row['episodes_per_s_per_worker']:>11.2f} {row['planning_s_per_episode']:>9.4f} "
+            f"{row['policy_s_per_episode']:>11.4f} {row['simulation_s_per_episode']:>8.4f} "
+            f"{100 * row['planning_share']:>6.1f} {row['speed_up']:>8.2f}"
         )
     return 0

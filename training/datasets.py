@@ -21,6 +21,7 @@ a dataset id either does not exist or holds a whole dataset.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 from collections import Counter
@@ -137,7 +138,7 @@ def _buffers(staging: Staging, episodes: range) -> Iterator[Any]:
 
 
 def _episode_metadata(record: EpisodeRecord) -> dict[str, Any]:
-    """HDF5 attributes of an episode: the scenario JSON and the figures (``None`` becomes NaN)."""
+    """HDF5 attributes of an episode: the scenario JSON and the figures (``None`` is stored as NaN)."""
     metadata: dict[str, Any] = {"scenario": json.dumps(record.scenario)}
     for key, value in record.figures.to_dict().items():
         if key == "seed":
@@ -173,10 +174,13 @@ def episode_metadata(dataset, episode: int) -> dict[str, Any]:
 
 
 def _plain(value: Any) -> Any:
+    """A plain Python value from an HDF5 attribute (NaN stands for None: HDF5 has no null)."""
     if isinstance(value, np.generic):
-        return value.item()
+        value = value.item()
     if isinstance(value, bytes):
         return value.decode()
+    if isinstance(value, float) and math.isnan(value):
+        return None
     return value
 
 
@@ -207,6 +211,7 @@ def info(dataset_id: str) -> dict[str, Any]:
         "mean_planning_s": float(planning.mean()),
         "max_planning_s": float(planning.max()),
         "replans": int(sum(e["replans"] for e in episodes)),
+        "repairs": int(sum(e["repairs"] for e in episodes)),
         "planner_failures": int(sum(e["planner_failures"] for e in episodes)),
         "size_mb": float(metadata.get("dataset_size", 0.0)),
     }

@@ -41,6 +41,7 @@ class FamilyResult:
     failures: list[dict[str, Any]]  # seed, outcome, delivered/objects, scenario file of each failed episode
     mean_steps: float
     replans: int  # planning calls after the first of an episode, all episodes together
+    repairs: int  # actions the expert adapted to the env's rules (see expert.policy), all episodes together
     planner_failures: int  # planning calls without a plan
     planning_s: float  # seconds in the planner, all episodes together
     policy_s: float  # seconds in ExpertPolicy.predict (planning and decoding)
@@ -102,6 +103,7 @@ def _summarise(
         failures=failures,
         mean_steps=statistics.fmean(f.steps for f in figures),
         replans=sum(f.replans for f in figures),
+        repairs=sum(f.repairs for f in figures),
         planner_failures=sum(f.planner_failures for f in figures),
         planning_s=sum(planning),
         policy_s=sum(f.policy_s for f in figures),
@@ -121,6 +123,7 @@ def _failure_entry(family: str, record: EpisodeRecord, failures_dir: Path | None
         "seed": record.seed,
         "scenario": figures.scenario,
         "outcome": figures.outcome,
+        "failure": figures.failure,
         "delivered": f"{figures.delivered}/{figures.objects}",
         "steps": figures.steps,
         "replans": figures.replans,
@@ -134,24 +137,28 @@ def _failure_entry(family: str, record: EpisodeRecord, failures_dir: Path | None
         scenario_file = failures_dir / f"{stem}.json"
         scenario_file.write_text(json.dumps(record.scenario, indent=2) + "\n")
         entry["scenario_file"] = str(scenario_file)
+        entry["replay_scenario"] = f"fetchcarry rollout --scenario {scenario_file}"
         sidecar = {**entry, "figures": figures.to_dict(), "actions": record.actions.tolist()}
         (failures_dir / f"{stem}.outcome.json").write_text(json.dumps(sidecar, indent=2) + "\n")
     return entry
 
 
 def results_table(results: list[FamilyResult]) -> str:
-    """A plain-text table of the results, one family a row."""
+    """A plain-text table of the results, one family a row.
+
+    ``plan %`` is the planner's share of the time in the policy and the simulation.
+    """
     header = (
-        f"{'family':<10} {'episodes':>8} {'success':>9} {'fails':>5} {'replans':>7} {'steps':>6} "
+        f"{'family':<10} {'episodes':>8} {'success':>9} {'fails':>5} {'replans':>7} {'repairs':>7} {'steps':>6} "
         f"{'plan s/ep':>9} {'max plan s':>10} {'sim s/ep':>8} {'plan %':>6} {'ep/s/worker':>11}"
     )
     lines = [header, "-" * len(header)]
     for r in results:
         busy = r.policy_s + r.simulation_s
         lines.append(
-            f"{r.family:<10} {r.episodes:>8} {r.success_rate:>8.1%} {len(r.failures):>5} {r.replans:>7} "
+            f"{r.family:<10} {r.episodes:>8} {r.success_rate:>8.1%} {len(r.failures):>5} {r.replans:>7} {r.repairs:>7} "
             f"{r.mean_steps:>6.1f} {r.mean_planning_s:>9.3f} {r.max_planning_s:>10.2f} "
-            f"{r.simulation_s / r.episodes:>8.3f} {100 * r.policy_s / busy if busy else 0:>6.1f} "
+            f"{r.simulation_s / r.episodes:>8.3f} {100 * r.planning_s / busy if busy else 0:>6.1f} "
             f"{r.episodes_per_s_per_worker:>11.2f}"
         )
     return "\n".join(lines)

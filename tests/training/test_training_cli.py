@@ -1,0 +1,158 @@
+"""The training commands: rollout, demo, generate, dataset info/replay, evaluate-expert, bench generate.
+
+Run in-process through ``training.cli.main``. Exit statuses: 0 success, 1 a negative
+answer, 2 bad input with a short message on stderr and never a traceback.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import pytest
+from PIL import Image
+
+from fetchcarry_env.scenario import Scenario
+from training.cli import main
+from training.datasets import dataset_path
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
+DATASET_ID = "fetchcarry/cli-v0"
+
+
+def _run(capsys: pytest.CaptureFixture, *argv: str) -> tuple[int, str, str]:
+    status = main(list(argv))
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+# ---------------------------------------------------------------------------- rollout and demo
+def test_rollout_prints_the_figures_as_json(capsys) -> None:
+    status, out, _ = _run(capsys, "rollout", "--scenario", str(EXAMPLE), "--json")
+    figures = json.loads(out)
+    assert status == 0 and figures["success"] and figures["outcome"] == "delivered"
+    assert figures["delivered"] == figures["objects"] == 1 and figures["plans"] == 1
+
+
+def test_rollout_writes_a_gif_of_every_state(capsys, tmp_path: Path) -> None:
+    gif = tmp_path / "episode.gif"
+    status, out, _ = _run(capsys, "rollout", "--family", "push", "--seed", "3", "--render", str(gif))
+    assert status == 0 and f"picture    {gif}" in out
+    steps = int(out.split(" after ")[1].split(" steps")[0])
+    with Image.open(gif) as image:
+        assert image.n_frames == steps + 1
+
+
+def test_rollout_without_a_plan_is_a_negative_answer(capsys) -> None:
+    status, out, _ = _run(capsys, "rollout", "--scenario", str(EXAMPLE), "--time-limit", "0.0001")
+    assert status == 1
+    assert "outcome    planner_failed (time_limit): 0/1 object(s)" in out and "failure    no plan" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["rollout", "--scenario", "missing.json"], "missing.json"),
+        (["rollout", "--family", "nope"], "unknown family 'nope'"),
+        (["rollout", "--family", "push", "--render", "out.txt"], "cannot write a picture"),
+        (["rollout", "--family", "push", "--render", "no/such/folder/x.png"], "does not exist"),
+        (["demo", "--out", "episode.bmp"], "cannot write a picture"),
+    ],
+)
+def test_bad_input_is_a_short_message_and_exit_2(capsys, argv: list[str], message: str) -> None:
+    status, out, err = _run(capsys, *argv)
+    assert status == 2 and message in err and out == ""
+
+
+def test_demo_writes_the_episode_picture_and_its_figures(capsys, tmp_path: Path) -> None:
+    picture = tmp_path / "episode.png"
+    status, out, _ = _run(capsys, "demo", "--out", str(picture))
+    assert status == 0
+    assert "outcome    delivered: 1/1 object(s) at the goal" in out and "delivered: delivered" not in out
+    with Image.open(picture) as image:
+        assert image.size[0] >= 1200 and image.size[1] >= 900  # a map, a close-up and a strip of renders
+
+
+# ---------------------------------------------------------------------------- datasets
+@pytest.fixture
+def dataset(capsys) -> str:
+    status, out, _ = _run(
+        capsys, "generate", "--family", "push", "--seed", "5", "--episodes", "2", "--dataset-id", DATASET_ID,
+        "--no-progress",
+    )  # fmt: skip
+    assert status == 0 and "2 episodes (0 resumed, 2 generated: 2 delivered everything)" in out
+    return DATASET_ID
+
+
+def test_generate_refuses_an_existing_id(capsys, dataset: str) -> None:
+    status, _, err = _run(capsys, "generate", "--family", "push", "--episodes", "2", "--dataset-id", dataset)
+    assert status == 2 and "already exists" in err and "--overwrite" in err
+
+
+def test_dataset_info(capsys, dataset: str) -> None:
+    status, out, _ = _run(capsys, "dataset", "info", dataset)
+    assert status == 0 and "episodes    2" in out and "success rate 100.0%" in out
+    status, out, _ = _run(capsys, "dataset", "info", dataset, "--json")
+    assert status == 0 and json.loads(out)["seeds"] == [5, 6]
+
+
+def test_dataset_replay_exit_statuses(capsys, dataset: str) -> None:
+    status, out, _ = _run(capsys, "dataset", "replay", dataset, "--episode", "1")
+    assert status == 0 and ": reproduced" in out
+    status, _, err = _run(capsys, "dataset", "replay", dataset, "--episode", "2")
+    assert status == 2 and "out of range" in err
+    with h5py.File(dataset_path(dataset) / "data" / "main_data.hdf5", "r+") as file:
+        file["episode_0"]["observations"]["observation"][3, 0] += 0.5
+    status, out, _ = _run(capsys, "dataset", "replay", dataset, "--episode", "0")
+    assert status == 1 and "NOT reproduced" in out and "first divergence at state 3" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["dataset", "info", "fetchcarry/absent-v0"], "no dataset 'fetchcarry/absent-v0'"),
+        (["dataset", "info", "not an id"], "not a Minari id"),
+        (["dataset", "replay", "fetchcarry/absent-v0", "--episode", "0"], "no dataset"),
+        (["generate", "--family", "push", "--episodes", "1", "--dataset-id", "bad id"], "not a Minari id"),
+    ],
+)
+def test_dataset_bad_input_is_exit_2(capsys, argv: list[str], message: str) -> None:
+    status, _, err = _run(capsys, *argv)
+    assert status == 2 and message in err
+
+
+def test_bad_numbers_are_argparse_errors(capsys) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["generate", "--family", "push", "--episodes", "0", "--dataset-id", DATASET_ID])
+    assert exit_info.value.code == 2 and "positive integer" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------- evaluation and benchmark
+def test_evaluate_expert_writes_every_failure_as_a_replayable_scenario(capsys, tmp_path: Path) -> None:
+    """With a time limit too short to plan, every episode fails: each one is written out with its seed."""
+    failures = tmp_path / "failures"
+    status, out, _ = _run(
+        capsys, "evaluate-expert", "--families", "basic", "--episodes", "2", "--seed", "4", "--time-limit", "0.0001",
+        "--failures-dir", str(failures), "--no-progress",
+    )  # fmt: skip
+    assert status == 1 and "failed: basic seed 4: planner_failed (time_limit)" in out
+    for seed in (4, 5):
+        scenario = Scenario.load(failures / f"basic-seed{seed}.json")
+        sidecar = json.loads((failures / f"basic-seed{seed}.outcome.json").read_text())
+        assert sidecar["seed"] == seed and sidecar["replay"] == f"fetchcarry rollout --family basic --seed {seed}"
+        assert sidecar["scenario"] == scenario.name and sidecar["figures"]["failure"] == "no plan (time_limit)"
+
+
+def test_bench_generate_prints_the_split_and_the_speed_up(capsys) -> None:
+    argv = ["bench", "generate", "--families", "basic,push", "--episodes", "2", "--workers", "1", "--json"]
+    status, out, _ = _run(capsys, *argv)
+    runs = json.loads(out)["runs"]
+    assert status == 0 and [run["family"] for run in runs] == ["basic", "push"]
+    for run in runs:
+        assert run["speed_up"] == 1.0 and run["successes"] == 2
+        assert 0 < run["planning_s_per_episode"] <= run["policy_s_per_episode"]
+        assert run["simulation_s_per_episode"] > 0 and 0 < run["planning_share"] < 1
+    status, out, _ = _run(capsys, "bench", "generate", "--families", "basic", "--episodes", "1", "--workers", "1")
+    assert status == 0 and "ep/s/worker" in out and "speed-up" in out
