@@ -244,14 +244,7 @@ class ExpertPolicy:
             reason = f"refused: {refusal}"
             planned.append(self._plan_into(track, scenario, world))
             refusal = self._refusal(scenario, world, track.steps[0]) if track.steps else None
-        made: dict[str, Any] = {
-            "planned": bool(planned),
-            "replanned": any(p.replanned for p in planned),
-            "reason": reason or "following",
-            "planning_s": sum(p.seconds for p in planned),
-            "status": planned[-1].plan.status if planned else None,
-            "objective": planned[-1].plan.objective if planned else None,
-        }
+        made = _summary(planned, reason or "following")
         if planned and not planned[-1].plan.found:
             self._count(failures=1)
             return Decision(**made, failure=f"no plan ({planned[-1].plan.status})")
@@ -414,6 +407,18 @@ class ExpertPolicy:
         for key, value in changes.items():
             values[key] = value if key.startswith("last_") else values[key] + value
         self._stats = ExpertStats(**values)
+
+
+def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:
+    """The planning part of a :class:`Decision` from this call's planning calls."""
+    return {
+        "planned": bool(planned),
+        "replanned": any(p.replanned for p in planned),
+        "reason": reason,
+        "planning_s": sum(p.seconds for p in planned),
+        "status": planned[-1].plan.status if planned else None,
+        "objective": planned[-1].plan.objective if planned else None,
+    }
 
 
 def _mismatch(outcome: EnvPhase | str, step: _Step) -> str | None:
