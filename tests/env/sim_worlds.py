@@ -8,6 +8,7 @@ defaults (``reach_far`` forward 0.55-0.70 m, ``reach_near`` 0.35-0.50 m, lateral
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -118,3 +119,22 @@ def make(scenario: Scenario, **kwargs: Any) -> gym.Env:
     env = gym.make("FetchCarryPush-v0", scenario=scenario, **kwargs)
     env.reset(seed=0)
     return env
+
+
+SPEC_EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
+
+
+def spec_example() -> Scenario:
+    """The scenario of spec/scenario.md: a 20 cm block on the goal, an obstacle between the tables."""
+    return Scenario.load(SPEC_EXAMPLE)
+
+
+SPEC_EXAMPLE_PLAN = (  # the MILP expert's optimal plan for it
+    ((3.45, 1.45), "+x", FAR, Mode.MOVE),
+    ((3.95, 3.2), "+x", FAR, Mode.MOVE),
+    ((3.95, 3.35), "+y", FAR, Mode.PUSH),  # off-centre: the hand is at the posture's lateral limit
+    ((3.45, 2.65), "+y", FAR, Mode.MOVE),
+    ((2.7, 2.05), "-x", FAR, Mode.PICK),
+    ((3.45, 2.65), "-x", FAR, Mode.MOVE),
+    ((3.95, 3.3), "+y", FAR, Mode.PLACE),
+)
