@@ -21,7 +21,10 @@ reach, the env picks (or pushes) the one nearest the middle of the posture's ran
 When the env would refuse the planned action or act on another item, the expert first
 replans if its plan is older than this state, then *repairs* the action: it moves the
 acting base to the nearest lattice point (within ``REPAIR_RADIUS_CELLS``) from which the
-env acts on the planned item, and replans after the repaired action.
+env acts on the planned item, and replans after the repaired action. When no nearby base
+works (the item the env would take stands right in front of the target), it plans again
+with the confusing item made a small obstacle, so that the plan comes from another side,
+and follows that plan up to the action on the target.
 
 When it cannot act (the planner finds no plan, or no repair exists) the policy returns
 the idle action (a ``move`` to the lattice point nearest the base, keeping the heading:
@@ -45,18 +48,19 @@ import numpy as np
 from expert.milp.grid import point_in_region
 from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Action, Lattice, Mode
-from fetchcarry_env.geometry import HEADINGS, heading_of
+from fetchcarry_env.geometry import HEADINGS, Rect, heading_of
 from fetchcarry_env.kinematics import push_headings
 from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.rules import Phase as EnvPhase
 from fetchcarry_env.rules import check_action, move_stop
-from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.scenario import Obstacle, Scenario
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
 REPAIR_RADIUS_CELLS = 3  # lattice cells: how far a repair may move the acting base from the planned one
 ESCAPE_RADIUS_CELLS = 4  # lattice cells: how far an escape from a corner gap may go
+MAX_CONFUSERS = 3  # items made blockers, one after the other, when planning around a confused pick or push
 
 
 @dataclass(frozen=True)
@@ -255,6 +259,11 @@ class ExpertPolicy:
         if self._repair(track, scenario, world):
             self._count(repairs=1)
             return Decision(**made, repaired=True)
+        around = self._plan_around(track, scenario, world)
+        if around:
+            self._count(repairs=1)
+            made = _summary(planned + around, f"{made['reason']}; planned around it")
+            return Decision(**made, repaired=True)
         self._count(stuck=1)
         return Decision(
             **made, failure=f"stuck: the env would refuse the planned action ({refusal}) and no repair works"
@@ -273,15 +282,25 @@ class ExpertPolicy:
             return "plan used up"
         return None
 
-    def _plan_into(self, track: _Track, scenario: Scenario, world: WorldState) -> _Planned:
-        """Plan from ``world`` and make the result the track's plan (an empty one if none was found)."""
+    def _plan_into(
+        self, track: _Track, scenario: Scenario, world: WorldState, problem: Scenario | None = None
+    ) -> _Planned:
+        """Plan from ``world`` and make the result the track's plan (an empty one if none was found).
+
+        ``problem`` is the scenario handed to the planner when it is not ``scenario`` itself
+        (see :meth:`_plan_around`).
+        """
         from expert.planner import plan
         from expert.to_actions import plan_to_actions
 
         replanned = track.started
         started = time.perf_counter()
         result = plan(
-            scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, **self.planner_options
+            problem or scenario,
+            time_limit=self.time_limit,
+            lattice=self.lattice,
+            holding=world.holding,
+            **self.planner_options,
         )
         seconds = time.perf_counter() - started
         self._count(plans=1, replans=int(replanned), planning_s=seconds, last_status=result.status)
@@ -289,10 +308,75 @@ class ExpertPolicy:
         if result.found:
             self.last_plan = result
             self._count(last_objective=result.objective)
-            actions = plan_to_actions(result, scenario, self.lattice)
+            actions = plan_to_actions(result, problem or scenario, self.lattice)
             track.steps = [_Step(a, p) for a, p in zip(actions, result.phases[1:], strict=True)]
             track.now = result.phases[0]
         return _Planned(result, seconds, replanned)
+
+    def _plan_around(self, track: _Track, scenario: Scenario, world: WorldState) -> list[_Planned]:
+        """Plan the track's first (confused) step again with the items the env confuses made blockers.
+
+        The MILP does not know that the env picks (or pushes) the item nearest the middle
+        of the posture's ranges. When the env would act on another item than the planned
+        one and no nearby base helps, the expert plans on a copy of the scenario in which
+        each confusing item is a small obstacle (the arm may not reach across it, Eq. 19),
+        so the plan approaches the target from another side. It keeps that plan up to the
+        action on the target (moves, then that action), checks the action against the real
+        scenario and repairs it if the env would still confuse it (:meth:`_repair_arm`,
+        :meth:`_repair_push` at the base the moves lead to), and plans as usual after it.
+        Returns the planning calls made; empty when no such plan exists (the track is then
+        left without steps).
+        """
+        step = track.steps[0]
+        target = step.expected.target
+        problem = scenario
+        planned: list[_Planned] = []
+        confused = self._confuser(scenario, world, step)
+        blockers: set[str] = set()
+        for _ in range(MAX_CONFUSERS):
+            if not confused or confused == target or confused in blockers:
+                break
+            blockers.add(confused)
+            problem = _as_obstacle(problem, confused)
+            planned.append(self._plan_into(track, scenario, world, problem))
+            steps = _until_acting_on(track.steps, target)
+            if not steps or any(s.action.mode != Mode.MOVE for s in steps[:-1]):
+                break
+            steps, confused = self._settle_acting_step(scenario, world, steps)
+            if confused is None:
+                track.steps, track.replan = steps, None
+                return planned
+        track.steps, track.now = [], None
+        return []
+
+    def _confuser(self, scenario: Scenario, world: WorldState, step: _Step) -> str | None:
+        """The item the env would act on instead of ``step``'s target ("" when it would refuse), or None."""
+        outcome = check_action(scenario, world, self.lattice, step.action)
+        if isinstance(outcome, str):
+            return ""
+        return None if outcome.target == step.expected.target else outcome.target
+
+    def _settle_acting_step(
+        self, scenario: Scenario, world: WorldState, steps: list[_Step]
+    ) -> tuple[list[_Step], str | None]:
+        """``steps`` (moves, then an action on the target) with the last one repaired if the env would confuse it.
+
+        Returns the steps and what the env would still act on instead of the target ("" if
+        it would refuse the action, None when the steps work).
+        """
+        for step in steps[:-1]:
+            world = replace(world, base=step.expected.base, heading=step.expected.heading)
+        confused = self._confuser(scenario, world, steps[-1])
+        if confused is None:
+            return steps, None
+        last = steps[-1]
+        if last.action.mode == Mode.PUSH:
+            repaired = self._repair_push(scenario, world, last)
+        else:
+            repaired = self._repair_arm(scenario, world, last)
+        if repaired is None:
+            return steps, confused
+        return [*steps[:-1], *repaired], None
 
     # -- checking actions with the env's rules --------------------------------------------------
 
@@ -419,6 +503,27 @@ def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:
         "status": planned[-1].plan.status if planned else None,
         "objective": planned[-1].plan.objective if planned else None,
     }
+
+
+def _until_acting_on(steps: list[_Step], target: str | None) -> list[_Step]:
+    """``steps`` up to and including the first pick or push of ``target`` (empty when there is none)."""
+    for k, step in enumerate(steps):
+        if step.action.mode in (Mode.PICK, Mode.PUSH) and step.expected.target == target:
+            return steps[: k + 1]
+    return []
+
+
+def _as_obstacle(scenario: Scenario, item_id: str) -> Scenario:
+    """``scenario`` with the object or piece of clutter ``item_id`` turned into an obstacle of its footprint."""
+    objects = tuple(o for o in scenario.objects if o.id != item_id)
+    clutter = tuple(c for c in scenario.clutter if c.id != item_id)
+    if len(objects) < len(scenario.objects):
+        obj = scenario.object(item_id)
+        rect = Rect.around(obj.start, obj.radius, obj.radius)
+    else:
+        rect = scenario.clutter_item(item_id).rect
+    obstacles = (*scenario.obstacles, Obstacle(f"{item_id}_as_blocker", rect))
+    return replace(scenario, objects=objects, clutter=clutter, obstacles=obstacles)
 
 
 def _mismatch(outcome: EnvPhase | str, step: _Step) -> str | None:

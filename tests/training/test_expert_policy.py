@@ -165,3 +165,24 @@ def test_escapes_a_corner_gap_the_milp_cannot_start_from(spec_example: Scenario)
     record = run_episode(env, ExpertPolicy(env), seed=0)
     assert record.figures.success and record.figures.repairs == 1
     assert bool(record.infos["repaired"][1]) and Action.from_array(record.actions[0]).mode == Mode.MOVE
+
+
+def test_plans_around_an_object_standing_right_in_front_of_its_target() -> None:
+    """multi-2 seed 34: the first object is delivered 9 cm in front of the second one, so from the side the
+    plan picks from, and from every pose nearby, the env would pick the delivered one. The expert plans again
+    with it as a blocker, picks from another side of the table and delivers both."""
+    scenario = Scenario.load(SCENARIOS / "pick_blocked_in_front.json")
+    env = gym.make("FetchCarryPush-v0", scenario=scenario)
+    policy = ExpertPolicy(env)
+    record = run_episode(env, policy, seed=0)
+    assert record.figures.success and record.figures.invalid_actions == 0
+    assert record.figures.repairs >= 1
+
+
+def test_without_planning_around_that_scenario_is_stuck(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The scenario above does need planning around: the nearby-pose repair alone cannot fix it."""
+    monkeypatch.setattr(ExpertPolicy, "_plan_around", lambda self, track, scenario, world: [])
+    scenario = Scenario.load(SCENARIOS / "pick_blocked_in_front.json")
+    env = gym.make("FetchCarryPush-v0", scenario=scenario)
+    record = run_episode(env, ExpertPolicy(env), seed=0)
+    assert record.figures.outcome == "expert_stuck" and record.figures.delivered == 1
