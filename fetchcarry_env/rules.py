@@ -103,8 +103,16 @@ def move_stop(scenario: Scenario, start: Point, end: Point) -> tuple[Point, str 
     (the plan validator's tolerance), is free: a valid plan never touches anything.
     """
     radius = scenario.robot.radius
+    swept = Rect(  # the box around every disc of the move: a blocker outside it cannot be touched
+        min(start[0], end[0]) - radius,
+        min(start[1], end[1]) - radius,
+        max(start[0], end[0]) + radius,
+        max(start[1], end[1]) + radius,
+    )
     t_stop, touched = 1.0, None
     for name, rect in base_blockers(scenario):
+        if not swept.overlaps_rect(rect, tol=0.0):
+            continue
         if first_contact(start, end, radius - CONTACT_SLACK, (rect,)) < 1.0:
             t = first_contact(start, end, radius, (rect,))  # at most the slack test's t, so below 1
             if t < t_stop:

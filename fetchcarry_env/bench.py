@@ -1,0 +1,424 @@
+"""The environment benchmark: how fast FetchCarryPush-v0 resets and steps, next to what PyBullet itself costs.
+
+``python -m fetchcarry_env.bench`` (or ``fetchcarry bench env``) runs, in this process,
+the spec's example scenario (``spec/scenario.md``) and the MILP expert's optimal plan
+for it (two moves, a push, a move, a pick, a move, a place), episode after episode, and
+times every reset and step. It prints, with the issue's goal for each: reset of an
+unchanged layout, move, pick and place steps per second, a push step as a multiple
+of the physics steps it simulates, and a random masked policy's steps per second
+(``gym.make("FetchCarryPush-v0")``: random scenarios of the default family, resets
+included), plus the peak memory. Next to each figure it prints the cost of the
+PyBullet calls that step cannot avoid (posing the bodies it moves, the physics steps
+it simulates), measured on the same world.
+
+Per-step figures use the median of their samples (the machines are shared and
+noisy); the policy's figure is its whole run's steps divided by its wall time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import resource
+import statistics
+import sys
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass
+from importlib import metadata
+from typing import Any, TextIO
+
+import numpy as np
+
+ENV_ID = "FetchCarryPush-v0"
+DEFAULT_EPISODES = 200  # episodes of the expert's plan
+DEFAULT_RESETS = 500  # resets per reset figure (the rebuilding ones use a tenth)
+DEFAULT_RANDOM_STEPS = 3000  # steps of the random masked policy
+DEFAULT_SEED = 0
+
+SCENARIO: dict[str, Any] = {  # spec/scenario.md's example
+    "format": "fetchcarry-scenario/1",
+    "name": "basic-area3-07",
+    "area": {"min": [-1.0, -1.0], "max": [6.0, 6.0]},
+    "robot": {"start": [0.0, 0.0], "heading": "+x", "radius": 0.22},
+    "tables": [
+        {"id": "table_src", "min": [1.7, 1.7], "max": [2.3, 2.3], "height": 0.70},
+        {"id": "table_goal", "min": [3.7, 3.7], "max": [4.3, 4.3], "height": 0.70},
+    ],
+    "obstacles": [{"id": "box_1", "min": [2.8, 2.9], "max": [3.2, 3.3]}],
+    "objects": [{"id": "bottle", "start": [2.0, 2.0], "goal": [4.0, 4.0], "radius": 0.035, "height": 0.20}],
+    "clutter": [{"id": "block", "min": [3.9, 3.9], "max": [4.1, 4.1], "height": 0.10}],
+}
+PLAN: tuple[
+    tuple[str, tuple[float, float], str, int], ...
+] = (  # the expert's optimal plan: mode, base, heading, posture
+    ("move", (3.45, 1.45), "+x", 0),
+    ("move", (3.95, 3.2), "+x", 0),
+    ("push", (3.95, 3.35), "+y", 0),  # a 0.15 m stroke
+    ("move", (3.45, 2.65), "+y", 0),
+    ("pick", (2.7, 2.05), "-x", 0),
+    ("move", (3.45, 2.65), "-x", 0),
+    ("place", (3.95, 3.3), "+y", 0),
+)
+
+
+@dataclass(frozen=True)
+class Figure:
+    """One measured figure, its goal and the cost of what PyBullet must do for it."""
+
+    name: str
+    value: float
+    unit: str
+    goal: str | None = None  # the issue's goal, in words
+    met: bool | None = None
+    floor: str | None = None  # the unavoidable PyBullet calls: what they cost on this world
+
+
+# ---------------------------------------------------------------------- timing helpers
+def _median_s(samples: Sequence[float]) -> float:
+    return statistics.median(samples)
+
+
+def _time_calls(call: Callable[[], Any], repeats: int) -> float:
+    """Median seconds of ``call()`` over ``repeats`` calls."""
+    samples = []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        call()
+        samples.append(time.perf_counter() - started)
+    return _median_s(samples)
+
+
+@contextmanager
+def physics_timer(simulation: Any) -> Iterator[dict[str, float]]:
+    """Time the ``stepSimulation`` calls of ``simulation`` (seconds and count) while the block runs.
+
+    The client keeps its bound functions as attributes, so wrapping its ``stepSimulation``
+    attribute catches every physics step the primitives make.
+    """
+    client = simulation.client
+    step = client.stepSimulation
+    spent = {"seconds": 0.0, "steps": 0}
+
+    def timed_step() -> None:
+        started = time.perf_counter()
+        step()
+        spent["seconds"] += time.perf_counter() - started
+        spent["steps"] += 1
+
+    client.stepSimulation = timed_step
+    try:
+        yield spent
+    finally:
+        client.stepSimulation = step
+
+
+def _progress(total: int, description: str, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=description, disable=None if enabled else True, leave=False, file=sys.stderr)
+
+
+# ---------------------------------------------------------------------- the workloads
+def bench_resets(env: Any, resets: int, progress: bool) -> list[Figure]:
+    """Reset of the unchanged layout (goal under 2 ms), of a new layout (rebuild), and of a family."""
+    import gymnasium as gym
+
+    from fetchcarry_env.scenario import Scenario
+
+    unwrapped = env.unwrapped
+    with _progress(resets, "resets", progress) as bar:
+        samples = []
+        for _ in range(resets):
+            started = time.perf_counter()
+            unwrapped.reset()
+            samples.append(time.perf_counter() - started)
+            bar.update()
+    same = _median_s(samples)
+    sim = unwrapped._sim
+    client = sim.client
+    bodies = [sim.body_id("robot"), *(sim.body_id(o["id"]) for o in SCENARIO["objects"])]
+    bodies += [sim.body_id(c["id"]) for c in SCENARIO["clutter"]]
+    poses = [client.getBasePositionAndOrientation(b) for b in bodies]
+
+    def pose_every_body() -> None:
+        for body, (position, orientation) in zip(bodies, poses, strict=True):
+            client.resetBasePositionAndOrientation(body, position, orientation)
+
+    floor = _time_calls(pose_every_body, resets)
+    figures = [
+        Figure(
+            "reset, same layout",
+            same * 1e3,
+            "ms",
+            "under 2 ms",
+            same < 2e-3,
+            f"{floor * 1e3:.3f} ms to pose the robot, the object and the clutter",
+        )
+    ]
+
+    tables = [{**SCENARIO["tables"][0], "height": 0.71}, SCENARIO["tables"][1]]  # another layout
+    moved = Scenario.from_dict({**SCENARIO, "tables": tables})
+    original = unwrapped.scenario
+    rebuilds = max(resets // 10, 2)
+    samples = []
+    for k in range(rebuilds):
+        started = time.perf_counter()
+        unwrapped.reset(options={"scenario": moved if k % 2 == 0 else original})
+        samples.append(time.perf_counter() - started)
+    figures.append(Figure("reset, new layout (bodies rebuilt)", _median_s(samples) * 1e3, "ms"))
+
+    from fetchcarry_env.families import DEFAULT_FAMILY
+
+    family_env = gym.make(ENV_ID)
+    family_env.reset(seed=0)
+    samples = []
+    for k in range(rebuilds):
+        started = time.perf_counter()
+        family_env.reset(seed=k)
+        samples.append(time.perf_counter() - started)
+    family_env.close()
+    figures.append(
+        Figure(f"reset, a new '{DEFAULT_FAMILY}' scenario (draw, check, build)", _median_s(samples) * 1e3, "ms")
+    )
+    unwrapped.reset(options={"scenario": original})
+    return figures
+
+
+def bench_plan_steps(env: Any, episodes: int, progress: bool) -> list[Figure]:
+    """Move, pick, place and push steps of the expert's plan, each next to its PyBullet floor."""
+    from fetchcarry_env.actions import Action, Mode
+
+    unwrapped = env.unwrapped
+    lattice = unwrapped.lattice
+    actions = [
+        (mode, Action(lattice.index(base), heading, posture, Mode[mode.upper()]).to_array())
+        for mode, base, heading, posture in PLAN
+    ]
+    step_s: dict[str, list[float]] = defaultdict(list)
+    physics_s: dict[str, list[float]] = defaultdict(list)
+    physics_steps: dict[str, int] = {}
+    sim = unwrapped._sim
+    with _progress(episodes, "episodes", progress) as bar:
+        for _ in range(episodes):
+            unwrapped.reset()
+            for mode, vector in actions:
+                with physics_timer(sim) as physics:
+                    started = time.perf_counter()
+                    _, _, _, _, info = unwrapped.step(vector)
+                    step_s[mode].append(time.perf_counter() - started)
+                if info["invalid_action"] is not None:
+                    raise RuntimeError(f"the benchmark's plan was refused at {mode}: {info['invalid_action']}")
+                physics_s[mode].append(physics["seconds"])
+                physics_steps[mode] = physics["steps"]
+            if not info["is_success"]:
+                raise RuntimeError("the benchmark's plan did not deliver the object")
+            bar.update()
+
+    client = sim.client
+    robot = sim.robot
+    base, _ = client.getBasePositionAndOrientation(robot.body)
+    bottle = sim.body_id("bottle")
+    bottle_pose = client.getBasePositionAndOrientation(bottle)
+
+    def move_calls() -> None:
+        client.resetBasePositionAndOrientation(robot.body, base, (0.0, 0.0, 0.0, 1.0))
+
+    def pick_calls() -> None:
+        move_calls()
+        for joint in (1, 2, 3):  # forward, lateral, wrist: the hand onto the object
+            client.resetJointState(robot.body, joint, 0.3)
+        client.resetBasePositionAndOrientation(bottle, *bottle_pose)
+
+    floors = {"move": _time_calls(move_calls, 1000), "pick": _time_calls(pick_calls, 1000)}
+    figures = []
+    for mode, goal_rate in (("move", 2000), ("pick", 2000)):
+        median = _median_s(step_s[mode])
+        figures.append(
+            Figure(
+                f"{mode} step",
+                1.0 / median,
+                "per s",
+                f"{goal_rate:,} or more",
+                1.0 / median >= goal_rate,
+                f"{floors[mode] * 1e6:.0f} us to pose the robot"
+                + (", the arm and the object" if mode == "pick" else ""),
+            )
+        )
+    median = _median_s(step_s["place"])
+    figures.append(
+        Figure(
+            "place step",
+            1.0 / median,
+            "per s",
+            "500 or more",
+            1.0 / median >= 500,
+            f"{_median_s(physics_s['place']) * 1e3:.2f} ms in {physics_steps['place']} physics steps (settling)",
+        )
+    )
+    ratios = [s / p for s, p in zip(step_s["push"], physics_s["push"], strict=True)]
+    ratio = _median_s(ratios)
+    figures.append(
+        Figure(
+            "push step (0.15 m stroke), time / its physics steps' time",
+            ratio,
+            "x",
+            "1.5 or less",
+            ratio <= 1.5,
+            f"{_median_s(physics_s['push']) * 1e3:.1f} ms in {physics_steps['push']} physics steps; "
+            f"the step takes {_median_s(step_s['push']) * 1e3:.1f} ms",
+        )
+    )
+    return figures
+
+
+def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, dict[str, int]]:
+    """A random masked policy on ``gym.make("FetchCarryPush-v0")``: steps per second, resets included."""
+    import gymnasium as gym
+
+    env = gym.make(ENV_ID)
+    unwrapped = env.unwrapped
+    rng = np.random.default_rng(seed)
+    bounds = np.concatenate([[0], np.cumsum(env.action_space.nvec)])
+    counts = {"episodes": 1, "refused": 0, "contacts": 0, "pushes": 0}
+    env.reset(seed=seed)
+    started = time.perf_counter()
+    with _progress(steps, "random policy", progress) as bar:
+        for _ in range(steps):
+            mask = unwrapped.action_masks()
+            vector = np.array([rng.choice(np.flatnonzero(mask[a:b])) for a, b in itertools.pairwise(bounds)])
+            _, _, terminated, truncated, info = env.step(vector)
+            counts["refused"] += info["invalid_action"] is not None
+            counts["contacts"] += info["contact"] is not None
+            counts["pushes"] += "push" in info
+            if terminated or truncated:
+                env.reset()
+                counts["episodes"] += 1
+            bar.update()
+    rate = steps / (time.perf_counter() - started)
+    env.close()
+    return Figure("random masked policy", rate, "steps per s", "500 or more", rate >= 500), counts
+
+
+def run_benchmark(
+    episodes: int = DEFAULT_EPISODES,
+    resets: int = DEFAULT_RESETS,
+    random_steps: int = DEFAULT_RANDOM_STEPS,
+    seed: int = DEFAULT_SEED,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Every figure of the benchmark, with the settings and the machine (a JSON-ready mapping)."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the env)
+
+    env = gym.make(ENV_ID, scenario=SCENARIO)
+    env.reset(seed=seed)
+    started = time.perf_counter()
+    figures = bench_resets(env, resets, progress)
+    figures += bench_plan_steps(env, episodes, progress)
+    env.close()
+    policy, counts = bench_random_policy(random_steps, seed, progress)
+    figures.append(policy)
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux reports kilobytes
+    figures.append(Figure("peak memory of the process (resident)", peak_mb, "MB"))
+    return {
+        "env": ENV_ID,
+        "pybullet": metadata.version("pybullet"),
+        "scenario": SCENARIO["name"],
+        "episodes": episodes,
+        "resets": resets,
+        "random_steps": random_steps,
+        "seed": seed,
+        "random_policy": counts,
+        "wall_s": time.perf_counter() - started,
+        "figures": [asdict(f) for f in figures],
+    }
+
+
+# ---------------------------------------------------------------------- printing and the command line
+def format_report(report: dict[str, Any]) -> str:
+    """The figures as a table for people."""
+    lines = [
+        f"env benchmark: {report['env']} on PyBullet {report['pybullet']} (DIRECT), scenario {report['scenario']}, "
+        f"{report['episodes']} episodes of the expert's plan, seed {report['seed']}, {report['wall_s']:.1f} s",
+        "",
+        f"{'figure':<58} {'value':>10}  {'unit':<11} {'goal':<13} {'met':<4} PyBullet floor",
+        "-" * 130,
+    ]
+    for f in report["figures"]:
+        value = f"{f['value']:,.0f}" if f["value"] >= 100 else f"{f['value']:.2f}"
+        met = "-" if f["met"] is None else ("yes" if f["met"] else "NO")
+        lines.append(
+            f"{f['name']:<58} {value:>10}  {f['unit']:<11} {f['goal'] or '-':<13} {met:<4} {f['floor'] or '-'}"
+        )
+    counts = report["random_policy"]
+    lines.append("")
+    lines.append(
+        f"random policy: {report['random_steps']} steps in {counts['episodes']} episodes, {counts['refused']} refused, "
+        f"{counts['contacts']} stopped at a contact, {counts['pushes']} pushes"
+    )
+    return "\n".join(lines)
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {value}")
+    return value
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--episodes", type=_positive_int, default=DEFAULT_EPISODES, metavar="N", help="episodes of the plan"
+    )
+    parser.add_argument(
+        "--resets", type=_positive_int, default=DEFAULT_RESETS, metavar="N", help="resets of the same layout"
+    )
+    parser.add_argument(
+        "--random-steps",
+        type=_positive_int,
+        default=DEFAULT_RANDOM_STEPS,
+        metavar="N",
+        help="steps of the random masked policy",
+    )
+    parser.add_argument("--seed", type=int, default=DEFAULT_SEED, metavar="S", help="seed of the resets and the policy")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+
+
+def run(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Run the benchmark and print it on ``out`` (stdout); exit 1 only with ``--strict`` and a missed goal."""
+    out = out if out is not None else sys.stdout
+    report = run_benchmark(args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress)
+    print(json.dumps(report, indent=2) if args.json else format_report(report), file=out)
+    missed = [f["name"] for f in report["figures"] if f["met"] is False]
+    return 1 if args.strict and missed else 0
+
+
+def register(bench: argparse._SubParsersAction) -> None:
+    """Add ``env`` to ``fetchcarry bench``."""
+    parser = bench.add_parser(
+        "env",
+        help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
+        description=__doc__.split("\n\n")[1],
+    )
+    add_arguments(parser)
+    parser.set_defaults(handler=run)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m fetchcarry_env.bench", description=__doc__.split("\n\n")[1])
+    add_arguments(parser)
+    return run(parser.parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
