@@ -62,8 +62,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     move that grazes a blocker within 1 µm, the plan validator's tolerance, is free),
     and the arm then does nothing; a picked object is lifted 5 cm and attached to the
     hand; a placed object is released standing on the table and settles; a push
-    drives the hand through the stroke (1 cm per simulation step at most) and PyBullet
-    moves the clutter, which may shove a neighbour, or jam (the stroke then stops).
+    drives the hand through the stroke (1 cm per simulation step at most, with at most
+    30 N) and PyBullet moves the clutter, which may shove a neighbour, or jam (the
+    stroke then stops where the hand is).
 
     The scenario is fixed (``scenario=``) or drawn at every reset from a family
     (``family=``, by default ``"push"``). The whole geometry is in the observation,
