@@ -6,7 +6,8 @@ robot's x) and sideways (prismatic, the robot's y), and a wrist that drops the h
 (prismatic, z). The hand is a cube of half-size :data:`~fetchcarry_env.kinematics.HAND_HALF_SIZE`.
 
 Every link has mass 0 and touches nothing: the robot is kinematic, posed by resetting
-its base pose and its joint positions. The base is kept off tables and obstacles by the
+its base pose and its joint positions, and asleep for the physics engine from its
+creation (nothing ever wakes it). The base is kept off tables and obstacles by the
 exact swept-disc test of :func:`fetchcarry_env.geometry.first_contact` before it moves.
 
 What the hand touches during a push stroke is the *pusher*, a separate dynamic block the

@@ -172,8 +172,8 @@ class Simulation:
     def pick(self, object_id: str, base: Point, heading: Heading) -> Point3:
         """Grasp ``object_id`` (within reach of the hand from this pose) and lift it by ``LIFT_HEIGHT``.
 
-        Returns the object's new centre. The object is attached to the hand: it has no
-        mass and touches nothing until it is placed.
+        Returns the object's new centre. The object is attached to the hand: it goes where
+        the hand goes and touches nothing until it is placed.
         """
         robot = self._robot_body
         robot.set_base(base, heading)
