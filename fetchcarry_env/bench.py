@@ -3,7 +3,7 @@
 ``python -m fetchcarry_env.bench`` (or ``fetchcarry bench env``) runs, in this process,
 the spec's example scenario (``spec/scenario.md``) and the MILP expert's optimal plan
 for it (two moves, a push, a move, a pick, a move, a place), episode after episode, and
-times every reset and step. It prints, with the issue's goal for each: reset of an
+times every reset and step. It prints, with the project's goal for each: reset of an
 unchanged layout, move, pick and place steps per second, a push step as a multiple
 of the physics steps it simulates, and a random masked policy's steps per second
 (``gym.make("FetchCarryPush-v0")``: random scenarios of the default family, resets
@@ -375,19 +375,13 @@ def _positive_int(text: str) -> int:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--episodes", type=_positive_int, default=DEFAULT_EPISODES, metavar="N", help="episodes of the plan"
+    counts = (
+        ("--episodes", DEFAULT_EPISODES, "episodes of the plan"),
+        ("--resets", DEFAULT_RESETS, "resets of the same layout"),
+        ("--random-steps", DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
     )
-    parser.add_argument(
-        "--resets", type=_positive_int, default=DEFAULT_RESETS, metavar="N", help="resets of the same layout"
-    )
-    parser.add_argument(
-        "--random-steps",
-        type=_positive_int,
-        default=DEFAULT_RANDOM_STEPS,
-        metavar="N",
-        help="steps of the random masked policy",
-    )
+    for flag, default, meaning in counts:
+        parser.add_argument(flag, type=_positive_int, default=default, metavar="N", help=f"{meaning} ({default})")
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED, metavar="S", help="seed of the resets and the policy")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
