@@ -32,7 +32,7 @@ import numpy as np
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import (
-    HAND_HALF_SIZE,
+    hand_blocker,
     push_contact,
     push_headings,
     push_stroke,
@@ -144,10 +144,8 @@ def _hand_fits(scenario: Scenario, item: Clutter, contact: Point) -> bool:
 
     The environment refuses a push without room for the hand behind the piece.
     """
-    hand = Rect.around(contact, HAND_HALF_SIZE, HAND_HALF_SIZE)
-    if any(c.id != item.id and c.rect.overlaps_rect(hand, tol=0.0) for c in scenario.clutter):
-        return False
-    return not any(hand.overlaps_disc(o.start, o.radius, tol=0.0) for o in scenario.objects)
+    others = ((c.id, c.rect) for c in scenario.clutter if c.id != item.id)
+    return hand_blocker(contact, others, ((o.id, o.start, o.radius) for o in scenario.objects), tol=0.0) is None
 
 
 def _arm_clear_through_stroke(scenario: Scenario, item: Clutter, points: tuple[Point, ...]) -> bool:

@@ -91,3 +91,25 @@ def swept_rect(rect: Rect, direction: Heading, stroke: float) -> Rect:
         max(rect.max_x, moved.max_x),
         max(rect.max_y, moved.max_y),
     )
+
+
+def hand_blocker(
+    contact: Point,
+    clutter: Iterable[tuple[str, Rect]],
+    objects: Iterable[tuple[str, Point, float]],
+    tol: float = 1e-6,
+) -> str | None:
+    """The id of a piece of clutter or an object that leaves no room for the hand at a push contact, or None.
+
+    The hand is a cube of ``2 * HAND_HALF_SIZE`` centred on ``contact``; ``clutter`` gives
+    ``(id, footprint)`` and ``objects`` ``(id, centre, radius)`` of everything else standing
+    there (metres). Overlaps of ``tol`` or less do not count.
+    """
+    hand = Rect.around(contact, HAND_HALF_SIZE, HAND_HALF_SIZE)
+    for item_id, rect in clutter:
+        if rect.overlaps_rect(hand, tol=tol):
+            return item_id
+    for item_id, center, radius in objects:
+        if hand.overlaps_disc(center, radius, tol=tol):
+            return item_id
+    return None

@@ -21,7 +21,7 @@ import numpy as np
 
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, first_contact, heading_of, heading_vector
-from fetchcarry_env.kinematics import HAND_HALF_SIZE, arm_line_clear, hand_offset, push_contact, push_headings
+from fetchcarry_env.kinematics import arm_line_clear, hand_blocker, hand_offset, push_contact, push_headings
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Posture, Scenario
 
@@ -228,13 +228,13 @@ def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Head
     if not table.rect.contains_rect(rect.translate(ux * length, uy * length), tol=1e-6):
         return f"push would take {best!r} off {table.id!r}"
     contact = push_contact(rect, direction)
-    hand_box = Rect.around(contact, HAND_HALF_SIZE, HAND_HALF_SIZE)
-    for item in scenario.clutter:
-        if item.id != best and clutter_rect(scenario, state, item.id).overlaps_rect(hand_box, tol=1e-6):
-            return f"no room for the hand behind {best!r}: {item.id!r} is there"
-    for obj in scenario.objects:
-        if obj.id != state.holding and hand_box.overlaps_disc(state.objects[obj.id][:2], obj.radius, tol=1e-6):
-            return f"no room for the hand behind {best!r}: {obj.id!r} is there"
+    in_the_way = hand_blocker(
+        contact,
+        ((c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != best),
+        ((o.id, state.objects[o.id][:2], o.radius) for o in scenario.objects if o.id != state.holding),
+    )
+    if in_the_way is not None:
+        return f"no room for the hand behind {best!r}: {in_the_way!r} is there"
     blocker = _arm_blocker(scenario, state, start, contact, ignore=best)
     if blocker is not None:
         return f"arm line crosses {blocker!r}"
