@@ -329,6 +329,19 @@ def legend_handles(scenario: Scenario) -> list:
     if scenario.clutter:
         handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter (end)"))
         handles.append(Patch(facecolor="none", edgecolor=palette.clutter_edge, linestyle="--", label="clutter (start)"))
+    return handles + render_handles(scenario)
+
+
+def render_handles(scenario: Scenario) -> list:
+    """The colours of the env's renders (they are the simulator's, not the maps')."""
+    from fetchcarry_env.sim.bodies import CLUTTER_COLOR, GOAL_COLOR, OBJECT_COLOR
+
+    handles = [
+        Patch(facecolor=OBJECT_COLOR, label="renders: objects"),
+        Patch(facecolor=GOAL_COLOR, label="renders: goals"),
+    ]
+    if scenario.clutter:
+        handles.append(Patch(facecolor=CLUTTER_COLOR, label="renders: clutter"))
     return handles
 
 
