@@ -143,7 +143,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     by the registration's ``TimeLimit``).
 
     ``info`` (reset and step): ``is_success`` (bool), ``delivered`` (objects at their
-    goals), ``path_length`` (travel cost of the episode so far, metres),
+    goals), ``path_length`` (metres the base has travelled this episode),
+    ``travel_cost`` (the paper's cost of those moves so far: Manhattan plus the diagonal term),
     ``collisions`` (contacts so far), ``invalid_action`` (a short reason, or None),
     ``contact`` (the id of what the base touched this step, or None), ``travel`` and
     ``penalty`` (this step's travel cost and penalties), ``previous_achieved_goal``
@@ -236,6 +237,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._state: WorldState | None = None
         self._achieved: np.ndarray | None = None
         self._path_length = 0.0
+        self._travel_cost = 0.0
         self._collisions = 0
 
     # ------------------------------------------------------------------ public state
@@ -275,6 +277,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._sim.reset(scenario, self._state)
         self._sim_in_sync, self._snapshot = True, None
         self._path_length = 0.0
+        self._travel_cost = 0.0
         self._collisions = 0
         observation = encode(scenario, self._state, self.capacity)
         self._achieved = observation["achieved_goal"]
@@ -301,7 +304,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if invalid is None:
             travel = travel_cost(state.base, self._state.base)
             penalty = COLLISION_PENALTY if contact is not None else 0.0
-            self._path_length += travel
+            self._path_length += math.dist(state.base, self._state.base)
+            self._travel_cost += travel
             self._collisions += contact is not None
         observation = encode(scenario, self._state, self.capacity)
         info = self._info(observation, travel=travel, penalty=penalty, invalid=invalid, contact=contact)
@@ -488,6 +492,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "is_success": bool(delivered == n_objects and self._state.holding is None),
             "delivered": delivered,
             "path_length": self._path_length,
+            "travel_cost": self._travel_cost,
             "collisions": self._collisions,
             "invalid_action": invalid,
             "contact": contact,

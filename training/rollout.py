@@ -128,7 +128,6 @@ def run_episode(
     terminations: list[bool] = []
     truncations: list[bool] = []
     infos = [{**dict.fromkeys(INFO_KEYS, 0), "objective": math.nan, "delivered": _delivered(unwrapped)}]
-    path_length = 0.0
     failure: Decision | None = None
     first_objective: float | None = None
     episode_start = True
@@ -140,9 +139,7 @@ def run_episode(
         decision = _decision(policy)
         if first_objective is None and decision.objective is not None:
             first_objective = decision.objective
-        base_before = unwrapped.state.base
         observation, reward, terminated, truncated, info = clock.time("simulation", env.step, action)
-        path_length += math.dist(base_before, unwrapped.state.base)
         if decision.failure is not None and not terminated:
             failure = decision
             truncated = True
@@ -186,7 +183,7 @@ def run_episode(
         failure=None if success or failure is None else failure.failure,
         steps=len(actions),
         episode_return=float(sum(rewards)),
-        path_length_m=path_length,
+        path_length_m=info["path_length"],
         collisions=sum(int(i["contact"]) for i in infos),
         invalid_actions=sum(int(i["invalid_action"]) for i in infos),
         planning_s=float(stats.get("planning_s", 0.0)),

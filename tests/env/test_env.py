@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import warnings
 from dataclasses import replace
 
@@ -317,7 +318,8 @@ def test_rewards_follow_the_paper_s_objective_and_the_episode_ends_on_delivery()
     assert [r[2] for r in results] == [False, False, True]  # terminated when delivered with an empty hand
     info = results[-1][4]
     assert info["is_success"] and info["delivered"] == 1 and info["collisions"] == 0
-    assert info["path_length"] == pytest.approx(sum(travels))
+    assert info["travel_cost"] == pytest.approx(sum(travels))
+    assert info["path_length"] == pytest.approx(sum(math.dist(a, b) for a, b in itertools.pairwise(bases)))
     assert info["invalid_action"] is None
     env.close()
 
