@@ -10,14 +10,13 @@ objective. Headless (Agg); see :mod:`fetchcarry_env.drawing` for the shared piec
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, FancyArrowPatch, Patch
+from matplotlib.patches import Patch
 
 from expert.plans import Phase, Plan
 from fetchcarry_env import drawing
@@ -81,10 +80,10 @@ def _draw_plan(axes: Axes, scenario: Scenario, plan: Plan, *, label_merge_m: flo
     drawing.draw_scenario(axes, scenario, show_robot=not phases, show_clutter=False)
     _draw_clutter(axes, scenario, phases)
     for phase in phases:
-        _draw_pose(axes, scenario, phase)
+        drawing.draw_faint_base(axes, phase.base, phase.heading, scenario.robot.radius)
     for k in range(1, len(phases)):
         _draw_step(axes, scenario, phases[k - 1], phases[k])
-    _number_phases(axes, phases, label_merge_m, LABEL_OFFSET * scenario.robot.radius)
+    drawing.number_points(axes, [p.base for p in phases], label_merge_m, LABEL_OFFSET * scenario.robot.radius)
 
 
 def _close_up_view(scenario: Scenario, plan: Plan) -> Rect:
@@ -122,75 +121,20 @@ def _draw_clutter(axes: Axes, scenario: Scenario, phases: tuple[Phase, ...]) -> 
 def _draw_step(axes: Axes, scenario: Scenario, before: Phase, after: Phase) -> None:
     """The base move into ``after`` and what the arm does at its end."""
     if after.action == "push":
-        _arrow(axes, before.base, after.base, PUSH, width=3.0)
+        drawing.draw_arrow(axes, before.base, after.base, PUSH, width=3.0)
         if after.target in before.clutter and after.target in after.clutter:
-            _arrow(axes, before.clutter[after.target], after.clutter[after.target], PUSH, width=1.5, style="->")
+            drawing.draw_arrow(
+                axes, before.clutter[after.target], after.clutter[after.target], PUSH, width=1.5, style="->"
+            )
         return
     colour = TRAVEL if before.holding is None else drawing.object_colour(scenario, before.holding)
-    _arrow(axes, before.base, after.base, colour, width=1.6)
+    drawing.draw_arrow(axes, before.base, after.base, colour, width=1.6)
     if after.action in ("pick", "place") and after.target is not None:
         state = before if after.action == "pick" else after
         target = state.objects.get(after.target)
         if target is not None:
             colour = PICK if after.action == "pick" else PLACE
             _arm(axes, after.base, target, colour, after.action, drawing.object_colour(scenario, after.target))
-
-
-def _draw_pose(axes: Axes, scenario: Scenario, phase: Phase) -> None:
-    """The base disc (faint) and its heading."""
-    radius = scenario.robot.radius
-    edge = drawing.PALETTE.robot_edge
-    axes.add_patch(
-        Circle(phase.base, radius, facecolor=drawing.PALETTE.robot, edgecolor=edge, alpha=0.15, zorder=drawing.Z_ROBOT)
-    )
-    axes.add_patch(Circle(phase.base, radius, facecolor="none", edgecolor=edge, linewidth=0.8, zorder=drawing.Z_ROBOT))
-    drawing.draw_heading(axes, phase.base, phase.heading, radius, color=edge, zorder=drawing.Z_ROBOT + 0.1)
-
-
-def _number_phases(axes: Axes, phases: tuple[Phase, ...], merge_m: float, offset_m: float) -> None:
-    """Phase numbers beside the bases (up-left on the rim, off the path through the centre).
-
-    Phases whose bases lie within ``merge_m`` metres share one label ("3,7").
-    """
-    groups: list[tuple[Point, list[int]]] = []
-    for k, phase in enumerate(phases):
-        for at, members in groups:
-            if math.dist(at, phase.base) < merge_m:
-                members.append(k)
-                break
-        else:
-            groups.append((phase.base, [k]))
-    for at, members in groups:
-        axes.text(
-            at[0] - offset_m,
-            at[1] + offset_m,
-            ",".join(str(k) for k in members),
-            ha="center",
-            va="center",
-            fontsize=7,
-            weight="bold",
-            zorder=drawing.Z_TEXT + 1,
-            clip_on=True,
-            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": drawing.PALETTE.robot_edge},
-        )
-
-
-def _arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:
-    if abs(start[0] - end[0]) < 1e-9 and abs(start[1] - end[1]) < 1e-9:
-        return  # turned in place: nothing to draw
-    axes.add_patch(
-        FancyArrowPatch(
-            tuple(start),
-            tuple(end),
-            arrowstyle=style,
-            mutation_scale=14,
-            color=colour,
-            linewidth=width,
-            shrinkA=0,
-            shrinkB=0,
-            zorder=drawing.Z_ROBOT + 0.5,
-        )
-    )
 
 
 def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str, object_colour: str) -> None:

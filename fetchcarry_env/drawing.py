@@ -14,6 +14,7 @@ Units are metres; one axis unit is one metre.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol
@@ -289,4 +290,59 @@ def _label(
         zorder=Z_TEXT,
         clip_on=True,
         path_effects=LABEL_HALO,
+    )
+
+
+def draw_faint_base(axes: Axes, base: Point, heading: Heading, radius: float) -> None:
+    """A base disc of ``radius`` metres, faint, with its heading: one pose along a path."""
+    edge = PALETTE.robot_edge
+    axes.add_patch(Circle(base, radius, facecolor=PALETTE.robot, edgecolor=edge, alpha=0.15, zorder=Z_ROBOT))
+    axes.add_patch(Circle(base, radius, facecolor="none", edgecolor=edge, linewidth=0.8, zorder=Z_ROBOT))
+    draw_heading(axes, base, heading, radius, color=edge, zorder=Z_ROBOT + 0.1)
+
+
+def number_points(axes: Axes, points: Sequence[Point], merge_m: float, offset_m: float, *, fontsize: float = 7) -> None:
+    """The index of each point beside it, ``offset_m`` up-left.
+
+    Points closer than ``merge_m`` metres share one label ("3,7").
+    """
+    groups: list[tuple[Point, list[int]]] = []
+    for k, point in enumerate(points):
+        for at, members in groups:
+            if math.dist(at, point) < merge_m:
+                members.append(k)
+                break
+        else:
+            groups.append((point, [k]))
+    for at, members in groups:
+        axes.text(
+            at[0] - offset_m,
+            at[1] + offset_m,
+            ",".join(str(k) for k in members),
+            ha="center",
+            va="center",
+            fontsize=fontsize,
+            weight="bold",
+            zorder=Z_TEXT + 1,
+            clip_on=True,
+            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": PALETTE.robot_edge},
+        )
+
+
+def draw_arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:
+    """A straight arrow from ``start`` to ``end`` (metres); nothing when they coincide (a turn in place)."""
+    if math.dist(start, end) < 1e-9:
+        return
+    axes.add_patch(
+        FancyArrowPatch(
+            tuple(start),
+            tuple(end),
+            arrowstyle=style,
+            mutation_scale=14,
+            color=colour,
+            linewidth=width,
+            shrinkA=0,
+            shrinkB=0,
+            zorder=Z_ROBOT + 0.5,
+        )
     )

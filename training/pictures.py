@@ -27,12 +27,12 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, FancyArrowPatch, Patch
+from matplotlib.patches import Patch
 
 from expert.plot import CARRY, PICK, PLACE, PUSH, TRAVEL
 from fetchcarry_env import drawing
 from fetchcarry_env.actions import Action, Mode
-from fetchcarry_env.geometry import Point, Rect
+from fetchcarry_env.geometry import Rect
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
 from training.rollout import EpisodeFigures, EpisodeRecord
@@ -213,11 +213,11 @@ def draw_episode(
             drawing.draw_clutter(axes, item, start, ghost=True)
         drawing.draw_clutter(axes, item, end)
     for state in states[:-1]:
-        _faint_base(axes, scenario, state)
+        drawing.draw_faint_base(axes, state.base, state.heading, scenario.robot.radius)
     for step in steps:
         _draw_step(axes, scenario, step)
     drawing.draw_robot(axes, last.base, last.heading, scenario.robot.radius)
-    _number_bases(axes, states, label_size_m, 0.75 * scenario.robot.radius)
+    drawing.number_points(axes, [s.base for s in states], label_size_m, 0.75 * scenario.robot.radius, fontsize=8)
 
 
 def close_up_view(scenario: Scenario, steps: Sequence[Step]) -> Rect:
@@ -239,11 +239,11 @@ def close_up_view(scenario: Scenario, steps: Sequence[Step]) -> Rect:
 def _draw_step(axes: Axes, scenario: Scenario, step: Step) -> None:
     before, after = step.before, step.after
     if step.mode == Mode.PUSH and step.target is not None:
-        _arrow(axes, before.base, after.base, PUSH, width=3.0)
-        _arrow(axes, before.clutter[step.target], after.clutter[step.target], PUSH, width=1.5, style="->")
+        drawing.draw_arrow(axes, before.base, after.base, PUSH, width=3.0)
+        drawing.draw_arrow(axes, before.clutter[step.target], after.clutter[step.target], PUSH, width=1.5, style="->")
         return
     colour = TRAVEL if before.holding is None else drawing.object_colour(scenario, before.holding)
-    _arrow(axes, before.base, after.base, colour, width=1.6)
+    drawing.draw_arrow(axes, before.base, after.base, colour, width=1.6)
     if step.target is not None and step.mode in (Mode.PICK, Mode.PLACE):
         at = before.objects[step.target] if step.mode == Mode.PICK else after.objects[step.target]
         arm = PICK if step.mode == Mode.PICK else PLACE
@@ -259,58 +259,6 @@ def _draw_step(axes: Axes, scenario: Scenario, step: Step) -> None:
             linestyle="none",
             zorder=8,
         )
-
-
-def _faint_base(axes: Axes, scenario: Scenario, state: WorldState) -> None:
-    radius, edge = scenario.robot.radius, drawing.PALETTE.robot_edge
-    axes.add_patch(
-        Circle(state.base, radius, facecolor=drawing.PALETTE.robot, edgecolor=edge, alpha=0.15, zorder=drawing.Z_ROBOT)
-    )
-    axes.add_patch(Circle(state.base, radius, facecolor="none", edgecolor=edge, linewidth=0.8, zorder=drawing.Z_ROBOT))
-    drawing.draw_heading(axes, state.base, state.heading, radius, color=edge, zorder=drawing.Z_ROBOT + 0.1)
-
-
-def _number_bases(axes: Axes, states: Sequence[WorldState], merge_m: float, offset_m: float) -> None:
-    """The state number beside each base; bases closer than ``merge_m`` share one label ("2,5")."""
-    groups: list[tuple[Point, list[int]]] = []
-    for k, state in enumerate(states):
-        for at, members in groups:
-            if math.dist(at, state.base) < merge_m:
-                members.append(k)
-                break
-        else:
-            groups.append((state.base, [k]))
-    for at, members in groups:
-        axes.text(
-            at[0] - offset_m,
-            at[1] + offset_m,
-            ",".join(str(k) for k in members),
-            ha="center",
-            va="center",
-            fontsize=8,
-            weight="bold",
-            zorder=drawing.Z_TEXT + 1,
-            clip_on=True,
-            bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": drawing.PALETTE.robot_edge},
-        )
-
-
-def _arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:
-    if math.dist(start, end) < 1e-9:
-        return  # turned in place
-    axes.add_patch(
-        FancyArrowPatch(
-            tuple(start[:2]),
-            tuple(end[:2]),
-            arrowstyle=style,
-            mutation_scale=14,
-            color=colour,
-            linewidth=width,
-            shrinkA=0,
-            shrinkB=0,
-            zorder=drawing.Z_ROBOT + 0.5,
-        )
-    )
 
 
 def legend_handles(scenario: Scenario) -> list:
