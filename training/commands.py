@@ -242,6 +242,7 @@ def run_generate(args: argparse.Namespace) -> int:
         "workers": report.workers,
         "backend": report.backend,
         "wall_s": report.wall_s,
+        "assembly_s": report.assembly_s,
         "planning_s": sum(f["planning_s"] for f in report.figures),
         "simulation_s": sum(f["simulation_s"] for f in report.figures),
     }
@@ -251,7 +252,8 @@ def run_generate(args: argparse.Namespace) -> int:
         print(
             f"dataset {report.dataset_id}: {report.episodes} episodes ({report.resumed} resumed, "
             f"{report.generated} generated: {summary['successes_generated']} delivered everything) "
-            f"in {report.wall_s:.1f} s with {report.workers} {report.backend} worker(s)\n"
+            f"in {report.wall_s:.1f} s with {report.workers} {report.backend} worker(s) "
+            f"({report.assembly_s:.1f} s of it writing the dataset)\n"
             f"written to {summary['path']}"
         )
     return 0

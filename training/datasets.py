@@ -100,8 +100,9 @@ def assemble(config: GenerationConfig, staging: Staging) -> None:
         }
     )
     episodes = range(config.episodes)
-    storage.update_episodes(_buffers(staging, episodes))
-    storage.update_episode_metadata((_episode_metadata(staging.read(k)) for k in episodes), episodes)
+    metadata: list[dict[str, Any]] = []  # filled while the episodes are written: each staged file is read once
+    storage.update_episodes(_buffers(staging, episodes, metadata))
+    storage.update_episode_metadata(metadata, episodes)
 
     namespace = config.dataset_id.rsplit("/", 1)[0] if "/" in config.dataset_id else None
     if namespace is not None and namespace not in list_local_namespaces():
@@ -120,11 +121,13 @@ def _description(config: GenerationConfig) -> str:
     )
 
 
-def _buffers(staging: Staging, episodes: range) -> Iterator[Any]:
+def _buffers(staging: Staging, episodes: range, metadata: list[dict[str, Any]]) -> Iterator[Any]:
+    """Minari's buffer of each staged episode; appends each episode's metadata to ``metadata``."""
     from minari.data_collector import EpisodeBuffer
 
     for k in episodes:
         record = staging.read(k)
+        metadata.append(_episode_metadata(record))
         yield EpisodeBuffer(
             id=k,
             seed=record.seed,

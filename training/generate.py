@@ -101,6 +101,7 @@ class GenerationReport:
     workers: int
     backend: str
     wall_s: float  # seconds of this run, assembly included
+    assembly_s: float  # seconds spent writing the Minari dataset from the staged episodes
     figures: list[dict[str, Any]] = field(default_factory=list)  # EpisodeFigures of the episodes made now
 
 
@@ -180,8 +181,10 @@ def generate(
             bar.set_postfix_str(_postfix(figures), refresh=False)
             if on_episode is not None:
                 on_episode(index, record)
+    assembly_started = time.perf_counter()
     assemble(config, staging)
     staging.remove()
+    assembly_s = time.perf_counter() - assembly_started
     return GenerationReport(
         dataset_id=config.dataset_id,
         episodes=config.episodes,
@@ -190,6 +193,7 @@ def generate(
         workers=workers,
         backend=backend,
         wall_s=time.perf_counter() - started,
+        assembly_s=assembly_s,
         figures=figures,
     )
 
