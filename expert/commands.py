@@ -17,6 +17,7 @@ from typing import Any
 
 from expert.plans import Plan, PlanFormatError
 from expert.validate import validate_plan
+from fetchcarry_env.arguments import positive_float, positive_int
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
 
@@ -57,14 +58,14 @@ def _register_plan(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--time-limit",
-        type=_positive_float,
+        type=positive_float,
         default=DEFAULT_TIME_LIMIT,
         metavar="S",
         help=f"seconds for the whole planning call, model building included (default {DEFAULT_TIME_LIMIT:g})",
     )
     parser.add_argument(
         "--max-phases",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         metavar="N",
         help="the largest number of phases to try (default: the planner's own bound)",
@@ -246,23 +247,3 @@ def _check_picture_format(path: Path) -> None:
     formats = FigureCanvasBase.get_supported_filetypes()
     if path.suffix.lower().lstrip(".") not in formats:
         raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0 or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
-    return value
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {text!r}")
-    return value

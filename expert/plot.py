@@ -134,10 +134,10 @@ def _draw_step(axes: Axes, scenario: Scenario, before: Phase, after: Phase) -> N
         target = state.objects.get(after.target)
         if target is not None:
             colour = PICK if after.action == "pick" else PLACE
-            _arm(axes, after.base, target, colour, after.action, drawing.object_colour(scenario, after.target))
+            draw_arm(axes, after.base, target, colour, after.action, drawing.object_colour(scenario, after.target))
 
 
-def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str, object_colour: str) -> None:
+def draw_arm(axes: Axes, base: Point, hand: Point, colour: str, action: str, object_colour: str) -> None:
     """The arm line of a pick or place and a marker at the hand.
 
     Triangle up: pick, down: place; the edge is the action's colour, the fill the object's.
@@ -156,7 +156,8 @@ def _arm(axes: Axes, base: Point, hand: Point, colour: str, action: str, object_
     )
 
 
-def _legend_handles(scenario: Scenario) -> list:
+def path_legend_handles(scenario: Scenario, base_label: str, object_label: str) -> list:
+    """Legend entries of a drawn path: moves, pushes, picks, places, base poses and each object (``object_label``)."""
     palette = drawing.PALETTE
     handles = [
         Line2D([], [], color=TRAVEL, linewidth=1.6, marker=">", label="move, hand empty"),
@@ -164,12 +165,18 @@ def _legend_handles(scenario: Scenario) -> list:
         Line2D([], [], color=PUSH, linewidth=3.0, marker=">", label="push stroke"),
         Line2D([], [], color=PICK, linestyle=":", marker="^", markerfacecolor="white", label="pick (arm line)"),
         Line2D([], [], color=PLACE, linestyle=":", marker="v", markerfacecolor="white", label="place (arm line)"),
-        Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label="base at phase k, heading"),
-        Patch(facecolor=palette.table, edgecolor=palette.table_edge, label="table"),
+        Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label=base_label),
     ]
     for obj in scenario.objects:
         colour = drawing.object_colour(scenario, obj.id)
-        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}: start, goal ring"))
+        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}: {object_label}"))
+    return handles
+
+
+def _legend_handles(scenario: Scenario) -> list:
+    palette = drawing.PALETTE
+    handles = path_legend_handles(scenario, "base at phase k, heading", "start, goal ring")
+    handles.append(Patch(facecolor=palette.table, edgecolor=palette.table_edge, label="table"))
     if scenario.obstacles:
         handles.append(Patch(facecolor=palette.obstacle, edgecolor=palette.wall, hatch="//", label="obstacle"))
     if scenario.clutter:

@@ -33,6 +33,8 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from fetchcarry_env.arguments import positive_int
+
 ENV_ID = "FetchCarryPush-v0"
 DEFAULT_EPISODES = 200  # episodes of the expert's plan
 DEFAULT_RESETS = 500  # resets per reset figure (the rebuilding ones use a tenth)
@@ -364,16 +366,6 @@ def format_report(report: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {value}")
-    return value
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     counts = (
         ("--episodes", DEFAULT_EPISODES, "episodes of the plan"),
@@ -381,7 +373,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         ("--random-steps", DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
     )
     for flag, default, meaning in counts:
-        parser.add_argument(flag, type=_positive_int, default=default, metavar="N", help=f"{meaning} ({default})")
+        parser.add_argument(flag, type=positive_int, default=default, metavar="N", help=f"{meaning} ({default})")
     parser.add_argument("--seed", type=int, default=DEFAULT_SEED, metavar="S", help="seed of the resets and the policy")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.arguments import positive_float, positive_int, whole_number
 from fetchcarry_env.errors import UsageError
 
 DEFAULT_DEMO_PICTURE = "episode.png"
@@ -32,35 +33,11 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 
 # ---------------------------------------------------------------------------- helpers
-def _positive_int(text: str) -> int:
-    value = _int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
-    return value
-
-
-def _int(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be an integer, got {text!r}") from None
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
-    return value
-
-
 def _add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True) -> None:
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--scenario", metavar="FILE", help="one fixed scenario (fetchcarry-scenario/1 JSON)")
     source.add_argument("--family", metavar="NAME", help="random scenarios of this family (basic, push, ...)")
-    parser.add_argument("--seed", type=_int, default=0, metavar="N", help="reset seed (default 0)")
+    parser.add_argument("--seed", type=whole_number, default=0, metavar="N", help="reset seed (default 0)")
     if policy:
         parser.add_argument(
             "--policy",
@@ -70,7 +47,7 @@ def _add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = Tru
         )
     parser.add_argument(
         "--time-limit",
-        type=_positive_float,
+        type=positive_float,
         default=10.0,
         metavar="S",
         help="seconds per planning call of the expert (default 10)",
@@ -192,9 +169,9 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
         "partial run), 130 interrupted (run again to resume).",
     )
     _add_source_arguments(parser)
-    parser.add_argument("--episodes", type=_positive_int, required=True, metavar="N", help="episodes in the dataset")
+    parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
     parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
-    parser.add_argument("--workers", type=_positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
     parser.add_argument(
         "--backend",
         choices=("process", "ray"),
@@ -281,7 +258,7 @@ def _register_dataset(commands: argparse._SubParsersAction) -> None:
         epilog="Exit status: 0 reproduced, 1 not reproduced, 2 bad input.",
     )
     replay.add_argument("dataset_id", metavar="ID")
-    replay.add_argument("--episode", type=_int, required=True, metavar="K", help="episode index (0-based)")
+    replay.add_argument("--episode", type=whole_number, required=True, metavar="K", help="episode index (0-based)")
     replay.add_argument("--json", action="store_true", help="print the report as one JSON object")
     replay.set_defaults(handler=run_dataset_replay)
 
@@ -342,9 +319,9 @@ def _register_demo(commands: argparse._SubParsersAction) -> None:
         epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
     )
     parser.add_argument("--out", default=DEFAULT_DEMO_PICTURE, metavar="PICTURE", help="picture to write")
-    parser.add_argument("--seed", type=_int, default=DEFAULT_DEMO_SEED, metavar="N", help="the scenario's seed")
+    parser.add_argument("--seed", type=whole_number, default=DEFAULT_DEMO_SEED, metavar="N", help="the scenario's seed")
     parser.add_argument("--scenario", metavar="FILE", help="a scenario file instead of the push family")
-    parser.add_argument("--time-limit", type=_positive_float, default=10.0, metavar="S", help=argparse.SUPPRESS)
+    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help=argparse.SUPPRESS)
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
     parser.set_defaults(handler=run_demo, family=None)
 
@@ -381,11 +358,13 @@ def _register_evaluate(commands: argparse._SubParsersAction) -> None:
         metavar="A,B",
         help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
     )
-    parser.add_argument("--episodes", type=_positive_int, default=500, metavar="N", help="per family (default 500)")
-    parser.add_argument("--seed", type=_int, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
-    parser.add_argument("--start", type=_int, default=0, metavar="K", help="first episode index (default 0)")
-    parser.add_argument("--workers", type=_positive_int, default=1, metavar="W", help="parallel workers (default 1)")
-    parser.add_argument("--time-limit", type=_positive_float, default=10.0, metavar="S", help="per planning call")
+    parser.add_argument("--episodes", type=positive_int, default=500, metavar="N", help="per family (default 500)")
+    parser.add_argument(
+        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
+    )
+    parser.add_argument("--start", type=whole_number, default=0, metavar="K", help="first episode index (default 0)")
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help="per planning call")
     parser.add_argument("--failures-dir", metavar="DIR", help="write failed scenarios and their sidecars here")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -443,14 +422,16 @@ def _register_bench(bench: argparse._SubParsersAction) -> None:
         metavar="A,B",
         help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
     )
-    parser.add_argument("--seed", type=_int, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
+    parser.add_argument(
+        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
+    )
     parser.add_argument(
         "--policy", choices=("expert", "random"), default="expert", help="the MILP expert (default) or random"
     )
-    parser.add_argument("--time-limit", type=_positive_float, default=10.0, metavar="S", help="per planning call")
-    parser.add_argument("--episodes", type=_positive_int, default=100, metavar="N", help="episodes per run")
+    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help="per planning call")
+    parser.add_argument("--episodes", type=positive_int, default=100, metavar="N", help="episodes per run")
     parser.add_argument(
-        "--workers", type=_positive_int, nargs="+", default=[1, 2], metavar="W", help="worker counts (default 1 2)"
+        "--workers", type=positive_int, nargs="+", default=[1, 2], metavar="W", help="worker counts (default 1 2)"
     )
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(handler=run_bench_generate)

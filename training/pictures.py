@@ -26,10 +26,9 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from expert.plot import CARRY, PICK, PLACE, PUSH, TRAVEL
+from expert.plot import PICK, PLACE, PUSH, TRAVEL, draw_arm, path_legend_handles
 from fetchcarry_env import drawing
 from fetchcarry_env.actions import Action, Mode
 from fetchcarry_env.geometry import Rect
@@ -246,34 +245,13 @@ def _draw_step(axes: Axes, scenario: Scenario, step: Step) -> None:
     drawing.draw_arrow(axes, before.base, after.base, colour, width=1.6)
     if step.target is not None and step.mode in (Mode.PICK, Mode.PLACE):
         at = before.objects[step.target] if step.mode == Mode.PICK else after.objects[step.target]
-        arm = PICK if step.mode == Mode.PICK else PLACE
-        axes.plot([after.base[0], at[0]], [after.base[1], at[1]], color=arm, linestyle=":", linewidth=1.8, zorder=8)
-        axes.plot(
-            [at[0]],
-            [at[1]],
-            marker="^" if step.mode == Mode.PICK else "v",
-            markersize=9,
-            markerfacecolor=drawing.object_colour(scenario, step.target),
-            markeredgecolor=arm,
-            markeredgewidth=1.8,
-            linestyle="none",
-            zorder=8,
-        )
+        arm, action = (PICK, "pick") if step.mode == Mode.PICK else (PLACE, "place")
+        draw_arm(axes, after.base, at, arm, action, drawing.object_colour(scenario, step.target))
 
 
 def legend_handles(scenario: Scenario) -> list:
     palette = drawing.PALETTE
-    handles = [
-        Line2D([], [], color=TRAVEL, linewidth=1.6, marker=">", label="move, hand empty"),
-        Line2D([], [], color=CARRY, linewidth=1.6, marker=">", label="move, carrying (object's colour)"),
-        Line2D([], [], color=PUSH, linewidth=3.0, marker=">", label="push stroke"),
-        Line2D([], [], color=PICK, linestyle=":", marker="^", markerfacecolor="white", label="pick (arm line)"),
-        Line2D([], [], color=PLACE, linestyle=":", marker="v", markerfacecolor="white", label="place (arm line)"),
-        Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.5, label="base at state k"),
-    ]
-    for obj in scenario.objects:
-        colour = drawing.object_colour(scenario, obj.id)
-        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}, goal ring"))
+    handles = path_legend_handles(scenario, "base at state k", "at the end, goal ring")
     if scenario.clutter:
         handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter (end)"))
         handles.append(Patch(facecolor="none", edgecolor=palette.clutter_edge, linestyle="--", label="clutter (start)"))

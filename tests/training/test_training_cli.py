@@ -126,7 +126,7 @@ def test_dataset_bad_input_is_exit_2(capsys, argv: list[str], message: str) -> N
 def test_bad_numbers_are_argparse_errors(capsys) -> None:
     with pytest.raises(SystemExit) as exit_info:
         main(["generate", "--family", "push", "--episodes", "0", "--dataset-id", DATASET_ID])
-    assert exit_info.value.code == 2 and "positive integer" in capsys.readouterr().err
+    assert exit_info.value.code == 2 and "--episodes: expected a positive number, got 0" in capsys.readouterr().err
 
 
 # ---------------------------------------------------------------------------- evaluation and benchmark
