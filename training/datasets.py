@@ -33,8 +33,8 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
-from training.generate import GenerationConfig, make_env
 from training.rollout import EpisodeRecord
+from training.sources import GenerationConfig, make_env
 from training.staging import Staging, datasets_root
 
 AUTHOR = "fetchcarry"

@@ -24,70 +24,34 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from fetchcarry_env.errors import UsageError
+from training.datasets import assemble, dataset_exists, delete_dataset, validate_dataset_id
 from training.rollout import EpisodeRecord, run_episode
+from training.sources import (
+    DEFAULT_TIME_LIMIT,
+    ENV_ID,
+    POLICIES,
+    EpisodeSource,
+    GenerationConfig,
+    make_env,
+    make_policy,
+)
 from training.staging import Staging
 
-ENV_ID = "FetchCarryPush-v0"
-POLICIES = ("expert", "random")
+__all__ = [
+    "DEFAULT_TIME_LIMIT",
+    "ENV_ID",
+    "POLICIES",
+    "EpisodeSource",
+    "GenerationConfig",
+    "GenerationReport",
+    "generate",
+    "make_env",
+    "make_policy",
+    "run_episodes",
+    "run_indexed_episode",
+]
+
 BACKENDS = ("process", "ray")
-DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
-
-
-@dataclass(frozen=True)
-class EpisodeSource:
-    """Where episodes come from: the env (a family or one scenario), the policy and the seeds.
-
-    Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
-    """
-
-    family: str | None = None  # a scenario family name, or
-    scenario: dict[str, Any] | None = None  # one fixed scenario (fetchcarry-scenario/1 JSON)
-    seed: int = 0  # episode k uses seed + k
-    policy: str = "expert"
-    time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
-    env_id: str = ENV_ID
-
-    def __post_init__(self) -> None:
-        if (self.family is None) == (self.scenario is None):
-            raise UsageError("give exactly one of a family (--family) and a scenario (--scenario)")
-        if self.family is not None:
-            from fetchcarry_env.families import FAMILY_NAMES
-
-            if self.family not in FAMILY_NAMES:
-                raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
-        if self.policy not in POLICIES:
-            raise UsageError(f"--policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
-        if self.time_limit <= 0:
-            raise UsageError(f"--time-limit must be positive, got {self.time_limit}")
-
-    @property
-    def env_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
-        return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
-
-    @property
-    def label(self) -> str:
-        return f"family {self.family}" if self.family is not None else f"scenario {self.scenario['name']}"
-
-    def episode_seed(self, index: int) -> int:
-        return self.seed + index
-
-
-@dataclass(frozen=True)
-class GenerationConfig:
-    """A dataset to make: its id, how many episodes, and where they come from."""
-
-    dataset_id: str
-    episodes: int
-    source: EpisodeSource
-
-    def __post_init__(self) -> None:
-        if self.episodes < 1:
-            raise UsageError(f"--episodes must be at least 1, got {self.episodes}")
-
-    def manifest(self) -> dict[str, Any]:
-        """The options that identify the staged episodes (everything but how many there are)."""
-        return {"dataset_id": self.dataset_id, **asdict(self.source)}
 
 
 @dataclass(frozen=True)
@@ -103,26 +67,6 @@ class GenerationReport:
     wall_s: float  # seconds of this run, assembly included
     assembly_s: float  # seconds spent writing the Minari dataset from the staged episodes
     figures: list[dict[str, Any]] = field(default_factory=list)  # EpisodeFigures of the episodes made now
-
-
-def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
-    """A fresh env for ``source`` (``render_options``: the env's ``camera``, ``width``, ``height``)."""
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-
-    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs, **render_options)
-
-
-def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
-    """The policy named by ``source.policy`` for ``env``."""
-    if source.policy == "expert":
-        from expert.policy import ExpertPolicy
-
-        return ExpertPolicy(env, time_limit=source.time_limit)
-    from training.policies import RandomMaskedPolicy
-
-    return RandomMaskedPolicy(env, seed=seed)
 
 
 def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
@@ -151,11 +95,9 @@ def generate(
     a staging of the same id was made with other options. ``on_episode`` is called
     after each episode is staged (tests use it to interrupt a run).
     """
-    from training.datasets import assemble, dataset_exists, delete_dataset, validate_dataset_id
-
     validate_dataset_id(config.dataset_id)
     if workers < 1:
-        raise UsageError(f"--workers must be at least 1, got {workers}")
+        raise UsageError(f"the number of workers must be at least 1, got {workers}")
     staging = Staging(config.dataset_id)
     if dataset_exists(config.dataset_id):
         if not overwrite:
@@ -224,9 +166,9 @@ def run_episodes(
 ) -> Iterator[tuple[int, EpisodeRecord]]:
     """Episodes ``indices`` of ``source`` as ``(index, record)``, as they finish (not in order when parallel)."""
     if workers < 1:
-        raise UsageError(f"--workers must be at least 1, got {workers}")
+        raise UsageError(f"the number of workers must be at least 1, got {workers}")
     if backend not in BACKENDS:
-        raise UsageError(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+        raise UsageError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if not indices:
         return
     if backend == "ray":
@@ -258,7 +200,7 @@ def _run_ray(
     try:
         import ray
     except ModuleNotFoundError:
-        raise UsageError("--backend ray needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
+        raise UsageError("the Ray backend needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
     started_here = not ray.is_initialized()
     if started_here:
         if address is None:

@@ -1,10 +1,9 @@
-"""The expert's commands: ``fetchcarry plan``, ``fetchcarry validate`` and ``fetchcarry bench planner``.
+"""The planner's commands: ``fetchcarry plan`` and ``fetchcarry validate``.
 
-Registered into ``training/cli.py`` by :func:`register`. Exit statuses follow
-``spec/interfaces.md``: ``plan`` 0 when a plan was found and 1 when none
-(infeasible, time limit); ``validate`` 0 for a valid plan and 1 for an invalid one;
-2 for bad input (raised here as ``UsageError``, ``ScenarioError`` or
-``PlanFormatError`` and turned into one short message by the CLI's ``main``).
+Exit statuses: ``plan`` 0 when a plan was found and 1 when none (infeasible, time
+limit); ``validate`` 0 for a valid plan and 1 for an invalid one; 2 for bad input
+(raised here as ``UsageError``, ``ScenarioError`` or ``PlanFormatError`` and turned
+into one short message by :func:`training.cli.main`).
 """
 
 from __future__ import annotations
@@ -15,11 +14,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from expert.plans import Plan, PlanFormatError
+from expert.plans import Plan
 from expert.validate import validate_plan
-from fetchcarry_env.arguments import positive_float, positive_int
-from fetchcarry_env.errors import UsageError
-from fetchcarry_env.scenario import Scenario, ScenarioError
+from training.cli.arguments import positive_float, positive_int
+from training.cli.files import check_plot_format, check_writable, load_plan, load_scenario
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
 MAX_SUMMARY_PHASES = 30  # phases listed in the one-screen summary
@@ -29,12 +27,9 @@ PLAN_SUFFIX = ".plan.json"
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``plan``, ``validate`` and ``bench planner`` to the ``fetchcarry`` parser."""
+    """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
     _register_plan(commands)
     _register_validate(commands)
-    from expert import bench as planner_bench  # the planner benchmark's own options and handler
-
-    planner_bench.register(bench)
 
 
 # ---------------------------------------------------------------------- plan
@@ -80,11 +75,11 @@ def run_plan(args: argparse.Namespace) -> int:
     scenario_path = Path(args.scenario)
     scenario = load_scenario(scenario_path)
     output = Path(args.output) if args.output else Path.cwd() / (scenario_path.stem + PLAN_SUFFIX)
-    _check_writable(output, "plan output")
+    check_writable(output, "plan output")
     plot_path = Path(args.plot) if args.plot else None
     if plot_path is not None:
-        _check_writable(plot_path, "plot")
-        _check_picture_format(plot_path)
+        check_writable(plot_path, "plot")
+        check_plot_format(plot_path)
 
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
@@ -206,44 +201,3 @@ def run_validate(args: argparse.Namespace) -> int:
         steps = len(plan.phases) - 1
         print(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
     return 1 if violations else 0
-
-
-# ---------------------------------------------------------------------- input
-def load_scenario(path: Path) -> Scenario:
-    """Read a scenario file; a missing or unreadable file is a ``UsageError``, a bad one a ``ScenarioError``."""
-    _check_readable(path, "scenario file")
-    try:
-        return Scenario.load(path)
-    except UnicodeDecodeError:
-        raise ScenarioError(["not a text file (expected JSON)"], str(path)) from None
-
-
-def load_plan(path: Path) -> Plan:
-    """Read a plan file; a missing file is a ``UsageError``, a malformed one a ``PlanFormatError``."""
-    _check_readable(path, "plan file")
-    try:
-        return Plan.load(path)
-    except UnicodeDecodeError:
-        raise PlanFormatError(f"{path}: not a text file (expected JSON)") from None
-
-
-def _check_readable(path: Path, what: str) -> None:
-    if not path.exists():
-        raise UsageError(f"{what} not found: {path}")
-    if path.is_dir():
-        raise UsageError(f"{what} is a directory, not a file: {path}")
-
-
-def _check_writable(path: Path, what: str) -> None:
-    if path.is_dir():
-        raise UsageError(f"{what} {path} is a directory; give a file name")
-    if not path.parent.is_dir():
-        raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
-
-
-def _check_picture_format(path: Path) -> None:
-    from matplotlib.backend_bases import FigureCanvasBase
-
-    formats = FigureCanvasBase.get_supported_filetypes()
-    if path.suffix.lower().lstrip(".") not in formats:
-        raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
