@@ -1,7 +1,10 @@
 """Minari datasets of fetchcarry episodes: assembly from the staging, summary, exact replay.
 
-A dataset is an ordinary Minari 0.5 dataset (``minari.load_dataset(id)`` reads it,
-``recover_environment()`` rebuilds the env from the stored env spec). Besides the
+A dataset is an ordinary Minari 0.5 dataset (``minari.load_dataset(id)`` reads it). Its
+env is rebuilt by :func:`make_recorded_env`, never by Minari's ``recover_environment()``:
+that one ``gym.make``s whatever entry point the dataset's ``metadata.json`` names, so an
+edited file would run any code. :func:`trusted_env_spec` accepts only this project's env
+ids with their registered entry points and plain keyword arguments. Besides the
 observations, actions, rewards and flags, each episode stores:
 
 - its ``seed`` (Minari's episode seed) and its ``scenario`` (the ``fetchcarry-scenario/1``
@@ -43,13 +46,26 @@ ALGORITHMS = {"expert": "fetchcarry MILP expert (SCIP), ExpertPolicy", "random":
 REPLAY_TOLERANCE = 1e-5  # observation units (metres): replayed observations must agree this closely
 
 
+ENV_PACKAGES = ("fetchcarry_env", "training")  # entry points of this project's envs live here
+TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.make a dataset may store
+    "family": (str,),
+    "scenario": (dict,),  # the scenario itself; a path would make the dataset read another file
+    "resolution": (int, float),
+    "render_mode": (type(None),),  # gym.make records it; replay renders nothing
+}
+
+
+class UnknownEnvError(UsageError):
+    """A dataset names an env that is not one of this project's (its env is never made)."""
+
+
 def validate_dataset_id(dataset_id: str) -> None:
     """Raise :class:`UsageError` unless ``dataset_id`` is a Minari id (``namespace/name-vN``)."""
     from minari.dataset.minari_dataset import parse_dataset_id
 
     try:
         parse_dataset_id(dataset_id)
-    except ValueError:
+    except (ValueError, TypeError):  # minari 0.5.4 raises TypeError for an id without -vN
         raise UsageError(
             f"dataset id {dataset_id!r} is not a Minari id: use (namespace/)name-v<version>, "
             "e.g. fetchcarry/push-expert-v0"
@@ -246,7 +262,7 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
     dataset = load(dataset_id)
     metadata = episode_metadata(dataset, episode)
     data = dataset[episode]
-    env = dataset.recover_environment()
+    env = make_recorded_env(dataset, dataset_id)
     try:
         observation, _ = env.reset(seed=metadata["seed"])
         same_scenario = env.unwrapped.scenario.to_dict() == metadata["scenario"]
@@ -273,6 +289,52 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
         same_final_state=same_final,
         reproduced=same_scenario and not diverged and same_rewards,
     )
+
+
+def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
+    """The env id and ``gym.make`` keyword arguments of a dataset's env spec, if it is one of this project's envs.
+
+    Raises :class:`UnknownEnvError` unless the id is registered with an entry point in
+    this project's packages, the spec names that same entry point, it adds no wrappers,
+    and every keyword argument is one of :data:`TRUSTED_ENV_KWARGS` with a plain value.
+    """
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers this project's env ids)
+
+    ours = sorted(k for k, v in gym.envs.registry.items() if _is_ours(v.entry_point))
+    if spec is None:
+        raise UnknownEnvError(f"dataset {dataset_id!r} names no env: it cannot be replayed")
+    registered = gym.envs.registry.get(spec.id) if isinstance(spec.id, str) else None
+    if registered is None or not _is_ours(registered.entry_point) or spec.entry_point != registered.entry_point:
+        raise UnknownEnvError(
+            f"dataset {dataset_id!r} names an unknown env {spec.id!r} (entry point {spec.entry_point!r}); "
+            f"only this project's envs are rebuilt: {', '.join(ours)}"
+        )
+    if spec.additional_wrappers:
+        names = ", ".join(str(w.name) for w in spec.additional_wrappers)
+        raise UnknownEnvError(f"dataset {dataset_id!r} names an unknown env: it adds wrappers ({names})")
+    kwargs = dict(spec.kwargs or {})
+    for key, value in kwargs.items():
+        allowed = TRUSTED_ENV_KWARGS.get(key)
+        if allowed is None or isinstance(value, bool) or not isinstance(value, allowed):
+            raise UnknownEnvError(
+                f"dataset {dataset_id!r} names an unknown env: {spec.id} does not take {key}={value!r:.60} "
+                f"from a dataset (allowed: {', '.join(TRUSTED_ENV_KWARGS)})"
+            )
+    return spec.id, kwargs
+
+
+def make_recorded_env(dataset: Any, dataset_id: str):
+    """The env a dataset was recorded in, made from this project's registry (see :func:`trusted_env_spec`)."""
+    import gymnasium as gym
+
+    env_id, kwargs = trusted_env_spec(dataset.spec.env_spec, dataset_id)
+    return gym.make(env_id, **kwargs)
+
+
+def _is_ours(entry_point: Any) -> bool:
+    return isinstance(entry_point, str) and entry_point.split(":")[0].split(".")[0] in ENV_PACKAGES
 
 
 def _observation_error(observation: dict[str, np.ndarray], recorded: dict[str, np.ndarray], index: int) -> float:
