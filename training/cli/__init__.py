@@ -18,7 +18,7 @@ import argparse
 import importlib
 from collections.abc import Sequence
 
-from training.cli.exits import run_command
+from training.cli.exits import INTERRUPTED, run_command, say
 
 COMMAND_MODULES = (
     "training.cli.planning",
@@ -58,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``fetchcarry argv...`` and return its exit status (argparse's own errors exit 2 by ``SystemExit``)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        say("interrupted")
+        return INTERRUPTED
     return run_command(args.handler, args)

@@ -11,8 +11,10 @@ import argparse
 import json
 import sys
 
+from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_int, whole_number
 from training.cli.episodes import add_source_arguments, episode_source
+from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -52,8 +54,9 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
 
 
 def run_generate(args: argparse.Namespace) -> int:
-    from training.generate import GenerationConfig, generate
-    from training.staging import Staging
+    from training.datasets import dataset_path
+    from training.generate import DatasetExistsError, GenerationConfig, StagingMismatchError, generate
+    from training.staging import Staging, StagingError
 
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
     try:
@@ -66,14 +69,27 @@ def run_generate(args: argparse.Namespace) -> int:
             ray_address=args.ray_address,
         )
     except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         staged = len(Staging(config.dataset_id).staged())
-        print(
-            f"fetchcarry: interrupted: {staged} of {config.episodes} episodes are staged; "
-            "run the same command again to resume",
-            file=sys.stderr,
-        )
-        return 130
-    from training.datasets import dataset_path
+        say(f"interrupted: {staged} of {config.episodes} episodes are staged; run the same command again to resume")
+        return INTERRUPTED
+    except DatasetExistsError as error:
+        raise UsageError(f"{error}: choose another id, or pass --overwrite to replace it") from None
+    except StagingMismatchError as error:
+        raise UsageError(
+            f"{error}: run the same command as before to resume it, or pass --overwrite to start again"
+        ) from None
+    except StagingError as error:
+        raise UsageError(f"{error}; pass --overwrite to start the dataset again") from None
+    for file in report.set_aside:
+        say(f"warning: the staged episode {file} could not be read: set aside in its folder's corrupt/ and made again")
+    if report.already_complete:
+        message = f"dataset {report.dataset_id} is already complete ({report.episodes} episodes): nothing to do"
+        if args.json:
+            print(json.dumps({"dataset_id": report.dataset_id, "already_complete": True, "message": message}))
+        else:
+            print(f"{message}\nit is in {dataset_path(report.dataset_id)}")
+        return 0
 
     summary = {
         "dataset_id": report.dataset_id,
@@ -88,6 +104,8 @@ def run_generate(args: argparse.Namespace) -> int:
         "assembly_s": report.assembly_s,
         "planning_s": sum(f["planning_s"] for f in report.figures),
         "simulation_s": sum(f["simulation_s"] for f in report.figures),
+        "set_aside": report.set_aside,
+        "already_complete": False,
     }
     if args.json:
         print(json.dumps(summary, indent=2))

@@ -41,6 +41,9 @@ def run_command(handler: Callable[[argparse.Namespace], int | None], args: argpa
         sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's last flush
         return status
     except KeyboardInterrupt:
+        # Objects whose construction Ctrl-C cut short (a PyBullet client half connected) complain from
+        # their finalizers as the program winds down: that is noise after an interrupt, not a report.
+        sys.unraisablehook = ignore_unraisable
         say("interrupted")
         return INTERRUPTED
     except BrokenPipeError:
@@ -56,6 +59,10 @@ def run_command(handler: Callable[[argparse.Namespace], int | None], args: argpa
         say(f"the full report is in {write_report(error, args)}")
         return INTERNAL_ERROR
     return BAD_INPUT
+
+
+def ignore_unraisable(unraisable: object) -> None:
+    """An ``sys.unraisablehook`` that prints nothing."""
 
 
 def say(message: str) -> None:
