@@ -281,7 +281,7 @@ def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, 
     unwrapped = env.unwrapped
     rng = np.random.default_rng(seed)
     bounds = np.concatenate([[0], np.cumsum(env.action_space.nvec)])
-    counts = {"episodes": 1, "refused": 0, "contacts": 0, "pushes": 0}
+    counts = {"episodes": 1, "invalid_actions": 0, "collisions": 0, "pushes": 0}  # the names of the env's info
     env.reset(seed=seed)
     started = time.perf_counter()
     with _progress(steps, "random policy", progress) as bar:
@@ -289,8 +289,8 @@ def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, 
             mask = unwrapped.action_masks()
             vector = np.array([rng.choice(np.flatnonzero(mask[a:b])) for a, b in itertools.pairwise(bounds)])
             _, _, terminated, truncated, info = env.step(vector)
-            counts["refused"] += info["invalid_action"] is not None
-            counts["contacts"] += info["contact"] is not None
+            counts["invalid_actions"] += info["invalid_action"] is not None
+            counts["collisions"] += info["contact"] is not None
             counts["pushes"] += "push" in info
             if terminated or truncated:
                 env.reset()

@@ -109,7 +109,7 @@ class Step:
         if self.target is not None:
             return f"{self.number} {self.mode.name.lower()} {self.target}"
         if self.mode != Mode.MOVE:
-            return f"{self.number} {self.mode.name.lower()} (refused)"
+            return f"{self.number} {self.mode.name.lower()} (invalid)"
         return f"{self.number} move"
 
 
@@ -193,7 +193,7 @@ def title(figures: EpisodeFigures) -> str:
         f"object(s) at the goal after {figures.steps} steps, return {figures.episode_return:.2f}"
     )
     second = (
-        f"path {figures.path_length_m:.2f} m, {figures.collisions} contacts, {figures.invalid_actions} refused "
+        f"path {figures.path_length_m:.2f} m, {figures.collisions} collisions, {figures.invalid_actions} invalid "
         f"actions; planning {figures.planning_s:.2f} s in {figures.plans} plan(s), {figures.replans} replans"
         f"{objective}; simulation {figures.simulation_s:.2f} s"
     )

@@ -59,7 +59,7 @@ def test_strict_exits_1_only_when_a_goal_is_missed(monkeypatch, capsys):
         "seed": 0,
         "wall_s": 1.0,
         "random_steps": 1,
-        "random_policy": {"episodes": 1, "refused": 0, "contacts": 0, "pushes": 0},
+        "random_policy": {"episodes": 1, "invalid_actions": 0, "collisions": 0, "pushes": 0},
         "figures": [
             {"name": "move step", "value": 10.0, "unit": "per s", "goal": "2,000 or more", "met": False, "floor": None}
         ],

@@ -106,8 +106,8 @@ def format_env_report(report: dict[str, Any]) -> str:
     counts = report["random_policy"]
     lines.append("")
     lines.append(
-        f"random policy: {report['random_steps']} steps in {counts['episodes']} episodes, {counts['refused']} refused, "
-        f"{counts['contacts']} stopped at a contact, {counts['pushes']} pushes"
+        f"random policy: {report['random_steps']} steps in {counts['episodes']} episodes, "
+        f"{counts['invalid_actions']} invalid actions, {counts['collisions']} collisions, {counts['pushes']} pushes"
     )
     return "\n".join(lines)
 

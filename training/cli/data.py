@@ -15,6 +15,7 @@ from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_int, whole_number
 from training.cli.episodes import add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.text import echo
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -88,7 +89,7 @@ def run_generate(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps({"dataset_id": report.dataset_id, "already_complete": True, "message": message}))
         else:
-            print(f"{message}\nit is in {dataset_path(report.dataset_id)}")
+            echo(f"{message}\nit is in {dataset_path(report.dataset_id)}")
         return 0
 
     summary = {
@@ -110,7 +111,7 @@ def run_generate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
-        print(
+        echo(
             f"dataset {report.dataset_id}: {report.episodes} episodes ({report.resumed} resumed, "
             f"{report.generated} generated: {summary['successes_generated']} delivered everything) "
             f"in {report.wall_s:.1f} s with {report.workers} {report.backend} worker(s) "
@@ -156,7 +157,7 @@ def run_dataset_info(args: argparse.Namespace) -> int:
         return 0
     source = f"family {summary['family']}" if summary["family"] else f"scenario {summary['scenario']}"
     outcomes = ", ".join(f"{k} {v}" for k, v in sorted(summary["outcomes"].items()))
-    print(
+    echo(
         "\n".join(
             [
                 f"dataset     {summary['dataset_id']} ({summary['path']}, {summary['size_mb']:.1f} MB)",
@@ -183,7 +184,7 @@ def run_dataset_replay(args: argparse.Namespace) -> int:
     else:
         verdict = "reproduced" if report.reproduced else "NOT reproduced"
         divergence = "" if report.first_divergence is None else f", first divergence at state {report.first_divergence}"
-        print(
+        echo(
             f"episode {report.episode} of {report.dataset_id} (seed {report.seed}, {report.steps} steps): {verdict}\n"
             f"scenario {'same' if report.same_scenario else 'DIFFERENT'}, rewards "
             f"{'same' if report.same_rewards else 'DIFFERENT'}, largest observation difference "

@@ -15,6 +15,7 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.files import check_picture, load_scenario
+from training.cli.text import echo
 
 DEFAULT_DEMO_PICTURE = "episode.png"
 DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
@@ -39,7 +40,7 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
             "--policy",
             choices=("expert", "random"),
             default="expert",
-            help="the MILP expert (default) or the masked random policy",
+            help="the MILP expert or the masked random policy (default expert)",
         )
     parser.add_argument(
         "--time-limit",
@@ -64,23 +65,64 @@ def episode_source(args: argparse.Namespace, policy: str | None = None):
     )
 
 
-def _figures_text(figures: Any, label: str, policy: str) -> str:
+def _figures_text(figures: Any, label: str, policy: str, time_limit: float) -> str:
     lines = [
         f"scenario   {figures.scenario} ({label}, seed {figures.seed}), policy {policy}",
         f"outcome    {figures.outcome}: {figures.delivered}/{figures.objects} object(s) at the goal after "
-        f"{figures.steps} steps, return {figures.episode_return:.2f}",
+        f"{figures.steps} steps",
     ]
     if figures.failure is not None:
         lines.append(f"failure    {figures.failure}")
+        why = failure_reason(figures.failure, time_limit)
+        if why is not None:
+            lines.append(f"why        {why}")
+    lines += return_and_objective(figures)
     lines += [
-        f"motion     path {figures.path_length_m:.2f} m, contacts {figures.collisions}, "
-        f"refused actions {figures.invalid_actions}",
+        f"motion     path {figures.path_length_m:.2f} m, collisions {figures.collisions}, "
+        f"invalid actions {figures.invalid_actions}",
         f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
-        f"{figures.repairs} repairs, {figures.planner_failures} failures"
-        + ("" if figures.objective is None else f", objective {figures.objective:.3f}"),
+        f"{figures.repairs} repairs, {figures.planner_failures} failures",
         f"timings    policy {figures.policy_s:.3f} s (planning included), simulation {figures.simulation_s:.3f} s",
     ]
     return "\n".join(lines)
+
+
+def return_and_objective(figures: Any) -> list[str]:
+    """The episode's return and the planner's objective, each split into what it is made of.
+
+    The return is the env's reward summed (+10 per object delivered, minus the travel
+    cost and 1 per collision or invalid action: a gain); the objective is the paper's
+    Eq. 1 of the expert's first plan (the travel cost minus 10 per object for every
+    phase it stands at its goal: a cost the planner minimises, so an earlier delivery
+    counts more). They share the travel cost and differ in how delivery counts.
+    """
+    from fetchcarry_env.kinematics import DELIVERY_BONUS
+
+    bonus = DELIVERY_BONUS * figures.delivered
+    lines = [
+        f"return     {figures.episode_return:.2f} (the env's rewards summed, a gain: +{bonus:.2f} for "
+        f"{figures.delivered} object(s) delivered, -{bonus - figures.episode_return:.2f} travel cost and penalties)"
+    ]
+    if figures.objective is not None:
+        lines.append(
+            f"objective  {figures.objective:.3f} (Eq. 1 of the expert's first plan, a cost: its travel cost, "
+            f"-{DELIVERY_BONUS:g} per object for each phase it stands at its goal)"
+        )
+    return lines
+
+
+def failure_reason(failure: str, time_limit: float) -> str | None:
+    """Why an expert could not act, in words, from its failure message."""
+    if failure.startswith("no plan (time_limit)"):
+        return (
+            f"the planner found no plan within its time limit of {time_limit:g} s per planning call "
+            "(--time-limit gives it more)"
+        )
+    if failure.startswith("no plan (infeasible)"):
+        return "the planner proved that no plan delivers every object from this state within the phases it tried"
+    if failure.startswith("stuck"):
+        return "the env would refuse the expert's next action and no nearby repair is allowed"
+    return None
 
 
 def _run_one(source: Any, picture: Path | None) -> Any:
@@ -112,7 +154,8 @@ def _register_rollout(commands: argparse._SubParsersAction) -> None:
         help="run one episode in the physics env and print its figures",
         description="Run one episode of FetchCarryPush-v0 (a fixed scenario, or a family's scenario drawn from "
         "the seed) with the expert or the random policy, and print its figures: objects delivered, steps, "
-        "return, path length, contacts, invalid actions, planning time and replans.",
+        "return, path length, collisions, invalid actions, planning time and replans; when the expert cannot "
+        "act, why.",
         epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
     )
     add_source_arguments(parser)
@@ -128,9 +171,9 @@ def run_rollout(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({**record.figures.to_dict(), "picture": str(picture) if picture else None}, indent=2))
     else:
-        print(_figures_text(record.figures, source.label, source.policy))
+        echo(_figures_text(record.figures, source.label, source.policy, source.time_limit))
         if picture is not None:
-            print(f"picture    {picture}")
+            echo(f"picture    {picture}")
     return 0 if record.figures.success else 1
 
 
@@ -144,9 +187,22 @@ def _register_demo(commands: argparse._SubParsersAction) -> None:
         "(.png: key states; .gif: every state) and print the episode's figures.",
         epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
     )
-    parser.add_argument("--out", default=DEFAULT_DEMO_PICTURE, metavar="PICTURE", help="picture to write")
-    parser.add_argument("--seed", type=whole_number, default=DEFAULT_DEMO_SEED, metavar="N", help="the scenario's seed")
-    parser.add_argument("--scenario", metavar="FILE", help="a scenario file instead of the push family")
+    parser.add_argument(
+        "--out",
+        default=DEFAULT_DEMO_PICTURE,
+        metavar="PICTURE",
+        help=f"picture to write: .png (key states) or .gif (every state) (default {DEFAULT_DEMO_PICTURE})",
+    )
+    parser.add_argument(
+        "--seed",
+        type=whole_number,
+        default=DEFAULT_DEMO_SEED,
+        metavar="N",
+        help=f"the push-family scenario's seed (default {DEFAULT_DEMO_SEED}: its goal is covered by a block)",
+    )
+    parser.add_argument(
+        "--scenario", metavar="FILE", help="a scenario file instead of the push family (default: the push family)"
+    )
     parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help=argparse.SUPPRESS)
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
     parser.set_defaults(handler=run_demo, family=None)
@@ -161,8 +217,8 @@ def run_demo(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({**record.figures.to_dict(), "picture": str(picture)}, indent=2))
     else:
-        print(_figures_text(record.figures, source.label, "expert"))
-        print(f"picture    {picture}")
+        echo(_figures_text(record.figures, source.label, "expert", source.time_limit))
+        echo(f"picture    {picture}")
     return 0 if record.figures.success else 1
 
 
@@ -190,7 +246,9 @@ def _register_evaluate(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--start", type=whole_number, default=0, metavar="K", help="first episode index (default 0)")
     parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
-    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help="per planning call")
+    parser.add_argument(
+        "--time-limit", type=positive_float, default=10.0, metavar="S", help="seconds per planning call (default 10)"
+    )
     parser.add_argument("--failures-dir", metavar="DIR", help="write failed scenarios and their sidecars here")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
@@ -223,8 +281,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps([r.to_dict() for r in results], indent=2))
     else:
-        print(results_table(results))
+        echo(results_table(results))
         for result in results:
             for failure in result.failures:
-                print(f"failed: {failure['family']} seed {failure['seed']}: {failure['outcome']} ({failure['replay']})")
+                echo(f"failed: {failure['family']} seed {failure['seed']}: {failure['outcome']} ({failure['replay']})")
     return 0 if all(r.success_rate >= SUCCESS_GOAL for r in results) else 1

@@ -26,6 +26,7 @@ from pathlib import Path
 from expert.plans import PlanFormatError
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import ScenarioError
+from training.cli.text import printable
 
 BAD_INPUT = 2
 INTERNAL_ERROR = 3
@@ -67,7 +68,7 @@ def ignore_unraisable(unraisable: object) -> None:
 
 def say(message: str) -> None:
     """One message on stderr, prefixed with the program's name."""
-    print(f"fetchcarry: {message}", file=sys.stderr, flush=True)
+    print("\n".join(printable(line) for line in f"fetchcarry: {message}".split("\n")), file=sys.stderr, flush=True)
 
 
 def describe_os_error(error: OSError) -> str:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from expert.plans import Plan, PlanFormatError
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
+
+MAX_PEEK_BYTES = 50_000_000  # files larger than this are not opened just to guess what they are
 
 
 def load_scenario(path: Path) -> Scenario:
@@ -25,6 +28,18 @@ def load_plan(path: Path) -> Plan:
         return Plan.load(path)
     except UnicodeDecodeError:
         raise PlanFormatError(f"{path}: not a text file (expected JSON)") from None
+
+
+def file_format(path: Path) -> str | None:
+    """The ``format`` field of a JSON file, or ``None`` when the file is not a readable JSON object with one."""
+    try:
+        if path.stat().st_size > MAX_PEEK_BYTES:
+            return None
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    value = data.get("format") if isinstance(data, dict) else None
+    return value if isinstance(value, str) else None
 
 
 def check_readable(path: Path, what: str) -> None:
