@@ -132,10 +132,10 @@ def _run_one(source: Any, picture: Path | None) -> Any:
     if picture is None:
         env = make_env(source)
     else:
-        from training.pictures import STILL_RENDER_SIZE, is_gif
+        from training.pictures import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
 
-        size = {} if is_gif(picture) else dict(zip(("width", "height"), STILL_RENDER_SIZE, strict=True))
-        env = make_env(source, render_mode="rgb_array", **size)
+        size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
+        env = make_env(source, render_mode="rgb_array", width=size[0], height=size[1])
     try:
         record = run_episode(env, make_policy(source, env, source.seed), source.seed, render=picture is not None)
     finally:
