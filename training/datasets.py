@@ -322,7 +322,7 @@ def info(dataset_id: str) -> dict[str, Any]:
         "path": str(dataset_path(dataset_id)),
         "env_id": spec.id if spec is not None else None,
         "family": kwargs.get("family"),
-        "scenario": scenario["name"] if isinstance(scenario, dict) else None,
+        "scenario": str(scenario.get("name")) if isinstance(scenario, dict) else None,
         "algorithm": metadata.get("algorithm_name"),
         "generation": metadata.get("fetchcarry_generation"),
         "episodes": dataset.total_episodes,

@@ -98,13 +98,20 @@ class Staging:
         }
         arrays.update({f"observations/{k}": v for k, v in record.observations.items()})
         arrays.update({f"infos/{k}": v for k, v in record.infos.items()})
-        handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
+        target = self.episode_path(index)
+        try:
+            handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
+        except OSError as error:
+            raise _naming(error, target) from error
         try:
             with os.fdopen(handle, "wb") as file:
                 np.savez(file, **arrays)
                 file.flush()
                 os.fsync(file.fileno())
-            os.replace(temporary, self.episode_path(index))
+            os.replace(temporary, target)
+        except OSError as error:
+            Path(temporary).unlink(missing_ok=True)
+            raise _naming(error, target) from error
         except BaseException:
             Path(temporary).unlink(missing_ok=True)
             raise
@@ -223,8 +230,18 @@ class DatasetLock:
             self._file = None
 
 
+def _naming(error: OSError, path: Path) -> OSError:
+    """``error`` with ``path`` as its file name when it names none (a full disk names no file)."""
+    if error.filename is not None:
+        return error
+    return OSError(error.errno, error.strerror or str(error), str(path))
+
+
 def _atomic_write(path: Path, data: bytes) -> None:
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(handle, "wb") as file:
-        file.write(data)
-    os.replace(temporary, path)
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(handle, "wb") as file:
+            file.write(data)
+        os.replace(temporary, path)
+    except OSError as error:
+        raise _naming(error, path) from error

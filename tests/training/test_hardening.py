@@ -343,3 +343,16 @@ def test_a_bad_dataset_id_is_exit_2(capsys, dataset_id: str) -> None:
     assert status == 2 and "is not a Minari id" in err
     status, _, err = run(capsys, "dataset", "info", dataset_id)
     assert status == 2 and "is not a Minari id" in err
+
+
+def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) -> None:
+    import training.staging
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(training.staging.np, "savez", full)
+    status, _, err = generate_random(capsys)
+    assert status == 2 and "No space left on device" in err
+    assert str(Staging(DATASET_ID).episode_path(0)) in err
+    assert not list(Staging(DATASET_ID).path.glob(".episode_*"))  # no temporary file left behind
