@@ -356,3 +356,15 @@ def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) 
     assert status == 2 and "No space left on device" in err
     assert str(Staging(DATASET_ID).episode_path(0)) in err
     assert not list(Staging(DATASET_ID).path.glob(".episode_*"))  # no temporary file left behind
+
+
+def test_a_plan_whose_solve_was_interrupted_is_not_written(capsys, monkeypatch, tmp_path: Path) -> None:
+    """Should the planner report SCIP's status instead of raising, the command still writes nothing."""
+    import expert.planner
+    from expert.plans import Plan
+
+    interrupted = Plan(scenario="s", status="userinterrupt", objective=None)
+    monkeypatch.setattr(expert.planner, "plan", lambda *args, **kwargs: interrupted)
+    output = tmp_path / "out.plan.json"
+    status, _, err = run(capsys, "plan", EXAMPLE, "-o", output)
+    assert status == 130 and "interrupted" in err and not output.exists()

@@ -27,6 +27,7 @@ MAX_SUMMARY_VIOLATIONS = 5  # validator messages repeated in the plan summary
 
 PLAN_SUFFIX = ".plan.json"
 PLAN_FORMAT = "fetchcarry-plan/1"
+INTERRUPTED_STATUS = "userinterrupt"  # SCIP's status of a solve stopped by Ctrl-C
 SCENARIO_FORMAT = "fetchcarry-scenario/1"
 
 
@@ -88,6 +89,8 @@ def run_plan(args: argparse.Namespace) -> int:
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
     result = run_planner(scenario, time_limit=args.time_limit, max_phases=args.max_phases)
+    if result.status == INTERRUPTED_STATUS:  # a solve cut short by Ctrl-C is never written as a plan
+        raise KeyboardInterrupt
     result.save(output)
     violations = validate_plan(scenario, result) if result.found else []
     if plot_path is not None:
