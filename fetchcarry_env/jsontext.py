@@ -44,17 +44,20 @@ def read_json(path: str | Path, max_bytes: int) -> Any:
 
 def decode_text(raw: bytes) -> str:
     """``raw`` as UTF-8 text (a UTF-8 byte order mark is allowed); :class:`JsonInputError` otherwise."""
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or (len(raw) >= 2 and (raw[0] == 0 or raw[1] == 0)):
-        raise JsonInputError("the file is not UTF-8 text (it looks like UTF-16 or UTF-32): save it as UTF-8")
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or _ascii_and_nul(raw[:2]) or _ascii_and_nul(raw[1::-1]):
+        raise JsonInputError("not a UTF-8 text file (it looks like UTF-16 or UTF-32): save it as UTF-8")
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as error:
-        raise JsonInputError(
-            f"the file is not UTF-8 text (byte {error.start} cannot be decoded): expected JSON"
-        ) from None
+        raise JsonInputError(f"not a text file: byte {error.start} is not UTF-8 (expected JSON text)") from None
     if "\x00" in text:
-        raise JsonInputError("the file holds NUL bytes: it is binary, not JSON text")
+        raise JsonInputError("not a text file: it holds NUL bytes (expected JSON text)")
     return text
+
+
+def _ascii_and_nul(pair: bytes) -> bool:
+    """True for a printable ASCII byte (or whitespace) then a NUL: how UTF-16 (no byte order mark) starts."""
+    return len(pair) == 2 and (32 <= pair[0] < 127 or pair[0] in b"\t\n\r") and pair[1] == 0
 
 
 def parse_json(text: str) -> Any:

@@ -179,7 +179,7 @@ def load_error(tmp_path, content: str | bytes) -> str:
 @pytest.mark.parametrize(
     ("content", "expected"),
     [
-        (bytes(range(256)) * 2, "not UTF-8 text"),
+        (bytes(range(256)) * 2, "not a text file: byte 128 is not UTF-8"),
         (json.dumps(SPEC_EXAMPLE).encode("utf-16"), "looks like UTF-16"),
         (json.dumps(SPEC_EXAMPLE).encode("utf-32"), "looks like UTF-16 or UTF-32"),
         ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
