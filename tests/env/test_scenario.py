@@ -400,3 +400,36 @@ def test_a_long_list_of_violations_is_cut_in_the_message(spec_example_dict):
         Scenario.from_dict(spec_example_dict)
     assert len(info.value.violations) == 200
     assert str(info.value).endswith("... and 150 more")
+
+
+# ---------------------------------------------------------------------- rule 6 through the env
+def test_a_scenario_at_the_100_m_bound_gives_observations_in_the_space(spec_example_dict):
+    """Coordinates up to 100 m (the observation's bound) stay inside observation_space; beyond is refused."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the id)
+
+    spec_example_dict["area"] = {"min": [-100.0, -100.0], "max": [100.0, 100.0]}
+    spec_example_dict["robot"]["start"] = [-99.7, 99.7]
+    spec_example_dict["tables"][1]["height"] = 99.0
+    spec_example_dict["objects"][0]["height"] = 0.9
+    env = gym.make("FetchCarryPush-v0", scenario=spec_example_dict, resolution=0.5)
+    observation, _ = env.reset(seed=0)
+    assert env.observation_space.contains(observation)
+    env.close()
+    spec_example_dict["area"]["max"] = [100.5, 100.0]
+    with pytest.raises(ScenarioError, match=r"area max x 100\.5 is more than 100 m from the origin"):
+        gym.make("FetchCarryPush-v0", scenario=spec_example_dict)
+
+
+@pytest.mark.parametrize(("where", "key"), [("robot", "radius"), ("objects", "radius")])
+def test_a_radius_of_zero_is_refused_before_the_simulator(spec_example_dict, where, key):
+    """Radius 0 was accepted by the loader and ended in ``pybullet.error`` at reset."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401
+
+    target = spec_example_dict[where] if where == "robot" else spec_example_dict[where][0]
+    target[key] = 0
+    with pytest.raises(ScenarioError, match="radius 0 is less than 1 mm"):
+        gym.make("FetchCarryPush-v0", scenario=spec_example_dict)

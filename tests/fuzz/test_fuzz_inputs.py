@@ -218,6 +218,9 @@ HOSTILE_FILES = {
     "surrogate": json.dumps({**VALID_SCENARIO, "name": "bad\ud800"}).encode(),
     "ansi": json.dumps({**VALID_SCENARIO, "name": "\x1b[2J\x1b[31mred"}).encode(),
     "obstacles": json.dumps({**VALID_SCENARIO, "obstacles": [VALID_SCENARIO["obstacles"][0]] * 20_000}).encode(),
+    "room-10000-km": json.dumps({**VALID_SCENARIO, "area": {"min": [-1e7, -1e7], "max": [1e7, 1e7]}}).encode(),
+    "room-1e300": json.dumps({**VALID_SCENARIO, "area": {"min": [-1e300, -1e300], "max": [1e300, 1e300]}}).encode(),
+    "radius-0": json.dumps({**VALID_SCENARIO, "robot": {**VALID_SCENARIO["robot"], "radius": 0}}).encode(),
 }
 
 
@@ -236,6 +239,39 @@ def test_hostile_scenario_files_through_the_installed_command(tmp_path, command)
         assert done.returncode == 2, (name, done.returncode, err)
         assert "Traceback" not in err and "\x1b" not in err and err.startswith("fetchcarry: "), (name, err)
         assert len(err) < 3000, (name, len(err))
+
+
+def scenario_with_obstacles(count: int) -> dict:
+    """The example in a 61 m room with ``count`` obstacles: posts 0.5 m wide on a 1.5 m grid, away from the rest."""
+    document = copy.deepcopy(VALID_SCENARIO)
+    document["area"] = {"min": [-1.0, -1.0], "max": [60.0, 60.0]}
+    document["obstacles"] += [
+        {
+            "id": f"post_{i}",
+            "min": [10 + (i % 32) * 1.5, 10 + (i // 32) * 1.5],
+            "max": [10.5 + (i % 32) * 1.5, 10.5 + (i // 32) * 1.5],
+        }
+        for i in range(count - 1)
+    ]
+    return document
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="planner bug, not input handling (expert/milp/grid.py, owned by planner-scale): 1,000 obstacles, which "
+    "the scenario format allows, end in a RecursionError in expert.milp.grid during plan()",
+)
+def test_plan_with_1000_obstacles_exits_without_a_traceback(capsys, tmp_path):
+    scenario = write(tmp_path, "posts.json", json.dumps(scenario_with_obstacles(1000)).encode())
+    status, err = run_cli(capsys, "plan", scenario, "-o", tmp_path / "posts.plan.json", "--time-limit", "5")
+    assert status in (0, 1) and "Traceback" not in err, err
+
+
+def test_validate_with_1024_obstacles(capsys, tmp_path):
+    """The validator handles the most obstacles a scenario may hold (1,000 once gave a RecursionError)."""
+    scenario = write(tmp_path, "posts.json", json.dumps(scenario_with_obstacles(1024)).encode())
+    status, err = run_cli(capsys, "validate", scenario, PLAN_FILE)
+    assert status == 0, err
 
 
 def test_the_valid_files_are_valid():
