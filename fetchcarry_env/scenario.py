@@ -474,18 +474,18 @@ class _Parser:
             self.fail(f"format: {len(unknown) - shown:,} more unknown keys in {where}")
 
     def _text(self, value: Any, where: str) -> str | None:
-        """A name or an id: a non-empty string of printable Unicode characters, at most ``MAX_ID_LENGTH``."""
+        """A name or an id: a non-empty string of valid Unicode, at most ``MAX_ID_LENGTH`` characters.
+
+        Control characters are allowed (the format does not forbid them); whatever prints a name
+        escapes them, so a name cannot drive the terminal."""
         if not isinstance(value, str) or not value:
             self.fail(f"format: {where} is required and must be a non-empty string, got {describe(value)}")
             return None
         if len(value) > MAX_ID_LENGTH:
             self.fail(f"format: {where} {describe(value)} is longer than {MAX_ID_LENGTH} characters")
             return None
-        if any(_unsafe(c) for c in value):
-            self.fail(
-                f"format: {where} {describe(value)} holds a control character or a lone surrogate "
-                "(it must be printable Unicode text)"
-            )
+        if any(_lone_surrogate(c) for c in value):
+            self.fail(f"format: {where} {describe(value)} holds a lone surrogate (it must be valid Unicode text)")
             return None
         return value
 
@@ -590,13 +590,6 @@ class _Parser:
         return Table(item_id, rect, height) if key == "tables" else Clutter(item_id, rect, height)
 
 
-def _unsafe(char: str) -> bool:
-    """True for a character a name or an id may not hold: a control character (ANSI escapes, bidi overrides)
-    or a lone surrogate (not valid Unicode: it cannot be written as UTF-8)."""
-    return (
-        char < " "
-        or "\x7f" <= char <= "\x9f"
-        or "\u202a" <= char <= "\u202e"
-        or "\u2066" <= char <= "\u2069"
-        or "\ud800" <= char <= "\udfff"
-    )
+def _lone_surrogate(char: str) -> bool:
+    """True for a lone surrogate: not valid Unicode, it cannot be written as UTF-8 (nor given to SCIP)."""
+    return "\ud800" <= char <= "\udfff"

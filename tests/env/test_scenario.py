@@ -225,17 +225,15 @@ def test_postures_of_the_wrong_type(spec_example_dict):
         (("name",), "push\ud800"),
         (("objects", 0, "id"), "bott\udfffle"),
         (("robot", "postures", 0, "name"), "\ud83d"),
-        (("name",), "\x1b[31mred\x1b[0m"),
-        (("tables", 0, "id"), "table\u202e"),
     ],
 )
-def test_names_and_ids_must_be_printable_unicode(tmp_path, spec_example_dict, where, value):
+def test_names_and_ids_must_be_valid_unicode(tmp_path, spec_example_dict, where, value):
     target = spec_example_dict
     for key in where[:-1]:
         target = target[key]
     target[where[-1]] = value
     found = violations(spec_example_dict)
-    assert any("holds a control character or a lone surrogate" in v for v in found), found
+    assert any("holds a lone surrogate" in v for v in found), found
     assert all("\x1b" not in v and "\u202e" not in v for v in found)
     str(ScenarioError(found)).encode("utf-8")  # printable anywhere: no lone surrogate left in the message
     error = load_text(tmp_path, json.dumps(spec_example_dict))  # the same through a file (escaped in JSON)
