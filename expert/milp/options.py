@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
-from fetchcarry_env.kinematics import push_headings
+from fetchcarry_env.kinematics import push_contact, push_headings
 from fetchcarry_env.scenario import Posture, Scenario
 
 
@@ -43,8 +43,10 @@ class PoseOption:
 
     ``box`` holds the acting base: the base of the phase for a pick or a place, the base
     where the stroke *starts* (the previous phase's) for a push. ``forbidden`` lists the
-    ``(clutter id, position)`` states of pushable clutter in which the arm line (Eq. 19)
-    would be blocked; ``position`` is ``"start"`` or a push direction.
+    ``(clutter id, position)`` states of pushable clutter in which the option may not be
+    used: the arm line (Eq. 19) would be blocked, or (a push) the env would push that
+    piece instead; ``position`` is ``"start"`` or a push direction. ``confusers`` lists
+    the :class:`ObjectAt` states in which a pick would take another object.
     """
 
     kind: str  # "pick", "place" or "push"
@@ -55,6 +57,7 @@ class PoseOption:
     hand: Point  # where the hand acts: the object's start, its goal, or the push contact
     forbidden: frozenset = frozenset()
     push: PushCandidate | None = None
+    confusers: frozenset = frozenset()
 
     @property
     def end_box(self) -> IndexBox:
@@ -62,14 +65,44 @@ class PoseOption:
         return self.box if self.push is None else self.box.shifted(*self.push.cells)
 
 
+@dataclass(frozen=True)
+class ObjectAt:
+    """A state of another object in which a pick option may not be used: ``where`` is "start" or "goal"."""
+
+    object_id: str
+    where: str
+
+
 HAND_TOL = 5e-7  # metres: a hand point this close to a region counts as inside (float32 observations)
+CONFUSION_MARGIN = 3e-3  # metres: another item counts as in reach this far outside the ranges (the env's
+# reach tolerance is 1 mm; the rest covers float32 observations), so the env never takes it instead
 
 
-def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture) -> IndexBox:
-    """Lattice points from which ``posture`` at ``heading`` puts the hand on ``hand``."""
+def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture, margin: float = 0.0) -> IndexBox:
+    """Lattice points from which ``posture`` at ``heading`` puts the hand on ``hand`` (ranges widened by ``margin``)."""
     offsets = [to_world_frame(heading, f, lat) for f in posture.forward for lat in posture.lateral]
     dxs, dys = [o[0] for o in offsets], [o[1] for o in offsets]
-    return grid.box_between((hand[0] - max(dxs), hand[1] - max(dys)), (hand[0] - min(dxs), hand[1] - min(dys)))
+    return grid.box_between(
+        (hand[0] - max(dxs) - margin, hand[1] - max(dys) - margin),
+        (hand[0] - min(dxs) + margin, hand[1] - min(dys) + margin),
+    )
+
+
+def out_of_reach(grid: Grid, point: Point, heading: Heading, posture: Posture, tag: object = None) -> Condition | None:
+    """The base keeps ``point`` out of the posture's reach (with :data:`CONFUSION_MARGIN`), or None if it always does.
+
+    Outside a box is a union of four half-planes, the same shape as a region of Eq. 18.
+    """
+    box = reach_box(grid, point, heading, posture, CONFUSION_MARGIN)
+    if box.empty:
+        return None
+    planes = (
+        HalfPlane(0, True, box.i_lo - 1),
+        HalfPlane(0, False, box.i_hi + 1),
+        HalfPlane(1, True, box.j_lo - 1),
+        HalfPlane(1, False, box.j_hi + 1),
+    )
+    return Condition(planes, tag)
 
 
 def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[int, int]) -> tuple[HalfPlane, ...]:
@@ -104,9 +137,15 @@ def _with_stroke(plane: HalfPlane, cells: tuple[int, int]) -> HalfPlane:
 class _Blockers:
     """The regions of every table, obstacle and piece of clutter, computed once per problem."""
 
-    def __init__(self, scenario: Scenario, grid: Grid, pushes: PushPlan) -> None:
+    def __init__(
+        self, scenario: Scenario, grid: Grid, pushes: PushPlan, deliver: tuple[str, ...], holding: str | None
+    ) -> None:
         radius = scenario.robot.radius
         self.grid = grid
+        self.scenario = scenario
+        self.pushes = pushes
+        self.deliver = deliver
+        self.holding = holding
         self.base = [
             base_regions(grid, r, radius) for r in (*(t.rect for t in scenario.tables), *self._obstacles(scenario))
         ]
@@ -128,12 +167,48 @@ class _Blockers:
                 out.append(Condition(arm_regions(self.grid, rect, hands, cells), tag=(clutter_id, position)))
         return out
 
+    def confusions(self, kind: str, target: str, heading: Heading, posture: Posture, push: PushCandidate | None):
+        """The env's choice of item: no other object (pick) or piece of clutter (push) within the ranges.
+
+        The env picks the object within the posture's ranges nearest their middle, and pushes
+        the piece whose push contact is (``fetchcarry_env.rules``); with no other one in
+        reach, it takes the target. Items that never move give plain conditions, the others
+        one tagged condition per place they can stand (the option is forbidden while they do).
+        """
+        wanted: list[tuple[Point, object]] = []
+        if kind == "pick":
+            for obj in self.scenario.objects:
+                if obj.id == target:
+                    continue
+                if obj.id not in self.deliver:  # already delivered: it stays at its goal
+                    wanted.append((obj.goal, None))
+                    continue
+                if obj.id != self.holding:
+                    wanted.append((obj.start, ObjectAt(obj.id, "start")))
+                wanted.append((obj.goal, ObjectAt(obj.id, "goal")))
+        elif kind == "push":
+            pushable = set(self.pushes.pushable)
+            for item in self.scenario.clutter:
+                if item.id == target:
+                    continue
+                if item.id not in pushable:
+                    wanted.append((push_contact(item.rect, push.direction), None))
+                    continue
+                for position, rect in self.pushes.positions(item.id).items():
+                    wanted.append((push_contact(rect, push.direction), (item.id, position)))
+        out = []
+        for point, tag in wanted:
+            condition = out_of_reach(self.grid, point, heading, posture, tag)
+            if condition is not None:
+                out.append(condition)
+        return out
+
 
 def pose_options(
     scenario: Scenario, grid: Grid, deliver: tuple[str, ...], holding: str | None, pushes: PushPlan
 ) -> list[PoseOption]:
     """Every pick, place and push pose option of the problem (see the module docstring)."""
-    blockers = _Blockers(scenario, grid, pushes)
+    blockers = _Blockers(scenario, grid, pushes, deliver, holding)
     out: list[PoseOption] = []
     for obj in scenario.objects:
         if obj.id not in deliver:
@@ -171,8 +246,11 @@ def _options(
                 continue
             if conditions is None:
                 conditions = blockers.conditions(hands, cells, target if push else None)
-            for piece, forbidden in split_box(box, conditions):
-                out.append(PoseOption(kind, target, heading, posture.name, piece, hand, forbidden, push))
+            confusions = blockers.confusions(kind, target, heading, posture, push)
+            for piece, tags in split_box(box, conditions + confusions):
+                forbidden = frozenset(t for t in tags if not isinstance(t, ObjectAt))
+                confusers = frozenset(t for t in tags if isinstance(t, ObjectAt))
+                out.append(PoseOption(kind, target, heading, posture.name, piece, hand, forbidden, push, confusers))
     return out
 
 

@@ -120,8 +120,6 @@ def _structural_infeasibility(problem: Problem) -> str | None:
             return f"no base pose reaches object {object_id!r} at its start with a clear arm line"
         if not problem.options_of("place", object_id):
             return f"no base pose reaches the goal of {object_id!r} with a clear arm line"
-    if problem.holding is not None and problem.covers.get(problem.holding):
-        return f"the goal of the held object {problem.holding!r} is covered by clutter, and a push needs an empty hand"
     for clutter_id in problem.pushes.pushable:
         if not problem.options_of("push", clutter_id):
             return f"clutter {clutter_id!r} covers a goal and cannot be pushed off it in any allowed direction"

@@ -28,7 +28,7 @@ from expert.milp.variables import Milp
 
 
 def add_push_constraints(milp: Milp) -> None:
-    """Eq. 20-26 (stroke), once per piece, before the covered object's pick, exclusions and precedences."""
+    """Eq. 20-26 (stroke), once per piece, before the covered object's place, exclusions and precedences."""
     problem, model, n = milp.problem, milp.model, milp.n_phases
     plan = problem.pushes
     if not plan.pushable:
@@ -55,16 +55,24 @@ def add_push_constraints(milp: Milp) -> None:
             model.addCons(pushed[k] == pushed[k - 1] + quicksum(now), name=f"pushed_{clutter_id}_{k}")
         model.addCons(pushed[n - 1] == 1, name=f"push_once_{clutter_id}")
         for object_id, ids in problem.covers.items():
-            if clutter_id not in ids or object_id == problem.holding:
+            if clutter_id not in ids:
                 continue
             for k in range(1, n):
-                picks = milp.action_sum("pick", object_id, k)
-                if picks is not None:
-                    model.addCons(picks <= pushed[k - 1], name=f"push_before_pick_{clutter_id}_{object_id}_{k}")
+                places = milp.action_sum("place", object_id, k)
+                if places is not None:
+                    model.addCons(places <= pushed[k - 1], name=f"push_before_place_{clutter_id}_{object_id}_{k}")
     uses = {index: milp.candidate_uses(index) for index in range(len(plan.candidates))}
     for a, b in plan.exclusive:
         if uses[a] is not None and uses[b] is not None:
             model.addCons(uses[a] + uses[b] <= 1, name=f"push_exclusive_{a}_{b}")
+    for index, candidate in enumerate(plan.candidates):  # the hand needs the floor behind the piece free
+        for object_id in candidate.hand_goals:
+            if object_id not in milp.delta:
+                continue
+            for k in range(2, n):
+                now = milp.candidate_at(index, k)
+                if now is not None:
+                    model.addCons(now <= 1 - milp.delta[object_id][k - 1], name=f"hand_room_{index}_{object_id}_{k}")
     for index, first in plan.precedence:
         for k in range(1, n):
             now = milp.candidate_at(index, k)

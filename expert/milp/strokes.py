@@ -50,6 +50,7 @@ class PushCandidate:
     end: Rect  # the piece after the stroke
     swept: Rect  # the floor it slides over
     contact: Point  # where the hand's centre goes (kinematics.push_contact)
+    hand_goals: tuple[str, ...] = ()  # objects whose goal leaves no room for the hand: push before they are placed
 
     @property
     def key(self) -> tuple[str, str]:
@@ -113,6 +114,7 @@ def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...
                 end=end,
                 swept=swept,
                 contact=push_contact(item.rect, direction),
+                hand_goals=tuple(o.id for o in scenario.objects if hand.overlaps_disc(o.goal, o.radius, tol=0.0)),
             )
             for other in pushable:
                 other_rect = scenario.clutter_item(other).rect

@@ -191,7 +191,8 @@ def test_counting_bound():
     off_lattice = dataclasses.replace(
         push_scene("p", {"block": BLOCK}), robot=dataclasses.replace(push_scene("p", {}).robot, start=(0.01, 0.0))
     )
-    assert counting_bound(problem_of(off_lattice)) == 5  # phase 1 cannot be the push
+    # Phase 1 cannot be the push, but it can be the pick: the push may be made holding the object.
+    assert counting_bound(problem_of(off_lattice)) == 4
 
 
 @pytest.mark.parametrize("scenario", sample_scenarios()[:5], ids=lambda s: s.name)
