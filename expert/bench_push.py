@@ -86,8 +86,8 @@ def compare(after: list[dict], before: list[dict]) -> None:
         f"\n{'group':12} {'n':>3} {'travel before':>13} {'after':>7} {'saved':>6} {'saved %':>7} {'max %':>6} "
         f"{'phases before':>13} {'after':>6} {'fewer phases':>12} {'longer':>6}"
     )
-    groups = [*itertools.groupby(after, key=lambda r: r["group"])]
-    everything = [("all", after)] + [(g, list(rows)) for g, rows in groups]
+    groups = [(g, list(rows)) for g, rows in itertools.groupby(after, key=lambda r: r["group"])]
+    everything = [("all", after), *groups]
     for group, rows in everything:
         pairs = [(old[r["name"]], r) for r in rows if r["phases"] and old.get(r["name"], {}).get("phases")]
         if not pairs:
