@@ -213,9 +213,7 @@ class ExpertPolicy:
         """Make the track's first step one the env executes as planned (plan or replan); say what was done."""
         reason = track.why_plan(world, self.base_tolerance, self.item_tolerance)
         if reason is not None and (corner := corner_gap(scenario, world)) is not None:
-            return self._escape(
-                track, scenario, world, f"escape: the base is in the corner gap of {corner!r} ({reason})"
-            )
+            return self._escape(track, scenario, world, corner, reason)
         planned: list[_Planned] = []
         if reason is not None:
             planned.append(self._plan(track, scenario, world))
@@ -254,12 +252,14 @@ class ExpertPolicy:
         track.follow(result, scenario, self.lattice)
         return _Planned(result, seconds, replanned)
 
-    def _escape(self, track: Track, scenario: Scenario, world: WorldState, why: str) -> Decision:
-        """Leave a corner gap with one straight move (:mod:`expert.escape`), then plan."""
+    def _escape(self, track: Track, scenario: Scenario, world: WorldState, corner: str, reason: str) -> Decision:
+        """Leave the corner gap of ``corner`` with one straight move (:mod:`expert.escape`), then plan."""
+        why = f"escape: the base is in the corner gap of {corner!r} ({reason})"
         step = escape_move(scenario, world, self.lattice)
         if step is None:
             self._stats = self._stats.plus(stuck=1)
-            return Decision(False, False, why, failure="stuck: no straight move takes the base out of the corner gap")
+            failure = f"stuck: no straight move takes the base out of {corner!r}'s corner"
+            return Decision(False, False, why, failure=failure)
         track.steps, track.replan = [step], "after an escape move"
         self._stats = self._stats.plus(repairs=1)
         return Decision(False, False, why, repaired=True)
