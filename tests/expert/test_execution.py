@@ -126,3 +126,30 @@ def test_every_pick_and_push_of_a_plan_acts_on_the_planned_item(family, seed):
         outcome = check_action(scenario, state_of(scenario, before), lattice, action)
         assert not isinstance(outcome, str), (k, planned.action, outcome)
         assert outcome.target == planned.target or planned.action == "move", (k, planned.action, outcome.target)
+
+
+def test_a_push_whose_hand_stands_on_another_goal_comes_before_that_object_is_placed():
+    """The cup's goal lies right behind the block (where the hand goes to push it +x): the env refuses that
+    push once the cup stands there, and bars block the block's other ways, so the plan pushes first."""
+    import dataclasses
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from planner_cases import BLOCK, bar, push_scene
+
+    from expert.milp.problem import prepare
+    from fetchcarry_env.scenario import DeliveryObject
+
+    base = push_scene("hand-goal", {"block": BLOCK, "north": bar("+y"), "south": bar("-y")})
+    cup = DeliveryObject("cup", (2.0, 2.12), (3.87, 3.97))
+    scenario = dataclasses.replace(base, objects=(*base.objects, cup))
+    lattice = Lattice.over(scenario.area, 0.05)
+    candidates = {c.direction: c for c in prepare(scenario, lattice).pushes.candidates}
+    assert candidates["+x"].hand_goals == ("cup",)
+    result = plan(scenario, time_limit=TIME_LIMIT, lattice=lattice)
+    assert result.found and violations(scenario, result) == []
+    actions = [(p.action, p.target) for p in result.phases]
+    assert actions.index(("push", "block")) < actions.index(("place", "cup"))
+    for k, action in enumerate(plan_to_actions(result, scenario, lattice), start=1):
+        outcome = check_action(scenario, state_of(scenario, result.phases[k - 1]), lattice, action)
+        assert not isinstance(outcome, str), (k, outcome)

@@ -330,3 +330,12 @@ def test_the_planner_pushes_with_an_empty_hand_where_that_is_cheaper():
     assert [p.action for p in result.phases] == ["start", "push", "pick", "place"]
     assert result.phases[1].holding is None
     assert result.objective == pytest.approx(-10.0 + 0.11 + 2 * 1.815)
+
+
+def test_an_object_held_at_the_start_may_have_a_covered_goal(spec_example):
+    """Mid-episode with the bottle in the hand and the block still on its goal: push holding it, then place."""
+    result = plan(spec_example, holding="bottle")
+    assert result.status == "optimal"
+    actions = [p.action for p in result.phases]
+    assert "pick" not in actions and actions[-2:] == ["push", "place"]
+    assert all(p.holding == "bottle" for p in result.phases[:-1])
