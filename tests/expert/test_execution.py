@@ -11,14 +11,17 @@ which object a pick takes and which piece a push moves.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from planner_cases import BLOCK, bar, push_scene
 
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from expert import bench_cases
+from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.plans import Phase, Plan
 from expert.policy import BASE_TOLERANCE, ITEM_TOLERANCE
@@ -29,7 +32,7 @@ from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import LIFT_HEIGHT, WorldState, standing_center
 from fetchcarry_env.rules import check_action
-from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.scenario import DeliveryObject, Scenario
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
 TIME_LIMIT = 20.0  # seconds per planning call
@@ -131,15 +134,6 @@ def test_every_pick_and_push_of_a_plan_acts_on_the_planned_item(family, seed):
 def test_a_push_whose_hand_stands_on_another_goal_comes_before_that_object_is_placed():
     """The cup's goal lies right behind the block (where the hand goes to push it +x): the env refuses that
     push once the cup stands there, and bars block the block's other ways, so the plan pushes first."""
-    import dataclasses
-    import sys
-
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from planner_cases import BLOCK, bar, push_scene
-
-    from expert.milp.problem import prepare
-    from fetchcarry_env.scenario import DeliveryObject
-
     base = push_scene("hand-goal", {"block": BLOCK, "north": bar("+y"), "south": bar("-y")})
     cup = DeliveryObject("cup", (2.0, 2.12), (3.87, 3.97))
     scenario = dataclasses.replace(base, objects=(*base.objects, cup))
