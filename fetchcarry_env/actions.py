@@ -22,7 +22,9 @@ Semantics (the environment executes them, the planner models them):
     rear face of a piece of clutter (the face away from the stroke), and the base
     strokes in a straight axis-aligned line to the cell, so the clutter moves by the
     stroke. The stroke runs along the heading (a forward push) or at right angles to
-    it (a lateral push), never backwards. The hand must be empty.
+    it (a lateral push), never backwards. The hand may be empty or hold an object (the
+    paper's push-aside while carrying the object to be placed): a held object stays in
+    the hand, keeps its offset from the base and moves with it.
 """
 
 from __future__ import annotations

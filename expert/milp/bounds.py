@@ -6,10 +6,8 @@ its own phase, plus phase 0:
 
     N >= 1 + 2 * (objects to deliver) - (1 if one is held) + (pieces to push).
 
-And when no object is held, every object's goal is covered and the start is not a
-lattice point, the first action must be a push (a pick of an object whose goal is
-covered must wait for its push, and the hand is full from the pick to the place), but a
-push at phase 1 would start from the off-lattice start: phase 1 is a move, one more.
+(A push may be made while holding an object, so the first action may be a pick even
+when every goal is covered: no phase is added for that.)
 """
 
 from __future__ import annotations
@@ -27,11 +25,7 @@ def counting_bound(problem: Problem) -> int:
     """The action-counting lower bound on N (phases, the start included); see the module docstring."""
     holding = 1 if problem.holding is not None else 0
     pushes = len(problem.pushes.pushable)
-    bound = 1 + 2 * len(problem.deliver) - holding + pushes
-    all_covered = all(problem.covers.get(i) for i in problem.deliver)
-    if pushes and not holding and all_covered and problem.start_index is None:
-        bound += 1
-    return bound
+    return 1 + 2 * len(problem.deliver) - holding + pushes
 
 
 def phase_lower_bound(problem: Problem) -> int:
@@ -195,14 +189,15 @@ def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: fro
     """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``."""
     moves = []
     if held is not None:
-        moves.append((("place", held), (delivered | {held}, None, pushed)))
-        return moves
-    for object_id in problem.deliver:
-        if object_id not in delivered and all(c in pushed for c in problem.covers.get(object_id, ())):
-            moves.append((("pick", object_id), (delivered, object_id, pushed)))
-    for clutter_id in problem.pushes.pushable:
+        if all(c in pushed for c in problem.covers.get(held, ())):
+            moves.append((("place", held), (delivered | {held}, None, pushed)))
+    else:
+        for object_id in problem.deliver:
+            if object_id not in delivered:
+                moves.append((("pick", object_id), (delivered, object_id, pushed)))
+    for clutter_id in problem.pushes.pushable:  # with an empty hand or holding an object
         if clutter_id not in pushed:
-            moves.append((("push", clutter_id), (delivered, None, pushed | {clutter_id})))
+            moves.append((("push", clutter_id), (delivered, held, pushed | {clutter_id})))
     return moves
 
 
