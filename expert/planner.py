@@ -69,6 +69,10 @@ def plan(
     Returns:
         a :class:`~expert.plans.Plan` with ``status`` ``optimal``, ``feasible``,
         ``infeasible`` or ``time_limit`` and ``stats`` (solver, phases tried, seconds).
+
+    Raises:
+        KeyboardInterrupt: on Ctrl-C, also when SCIP caught the signal during a solve
+            (it does so itself and just stops); an interrupted call returns no plan.
     """
     started = time.perf_counter()
     deadline = started + time_limit
@@ -172,9 +176,11 @@ def _solve(
     model = milp.model
     model.setParam("limits/time", remaining)
     model.optimize()
-    record.update(status=model.getStatus(), solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
-    stats["solve_s"] += record["solve_s"]
     status = model.getStatus()
+    if status == "userinterrupt":  # SCIP caught SIGINT itself (misc/catchctrlc): pass the Ctrl-C on
+        raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+    record.update(status=status, solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
+    stats["solve_s"] += record["solve_s"]
     if status in ("infeasible", "inforunbd"):
         return "infeasible"
     if model.getNSols() == 0:
