@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 
 from pyscipopt import quicksum
 
+from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.problem import PoseOption
 from expert.milp.push import PushCandidate, PushPlan
@@ -109,19 +110,24 @@ class _Blockers:
 
 
 def pose_options(
-    scenario: Scenario, grid: Grid, deliver: tuple[str, ...], holding: str | None, pushes: PushPlan
+    scenario: Scenario,
+    grid: Grid,
+    deliver: tuple[str, ...],
+    holding: str | None,
+    pushes: PushPlan,
+    deadline: Deadline = NEVER,
 ) -> list[PoseOption]:
-    """Every pick, place and push pose option of the problem (see the module docstring)."""
+    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``."""
     blockers = _Blockers(scenario, grid, pushes)
     out: list[PoseOption] = []
     for obj in scenario.objects:
         if obj.id not in deliver:
             continue
         if obj.id != holding:
-            out += _options(scenario, grid, blockers, "pick", obj.id, obj.start, None)
-        out += _options(scenario, grid, blockers, "place", obj.id, obj.goal, None)
+            out += _options(scenario, grid, blockers, "pick", obj.id, obj.start, None, deadline)
+        out += _options(scenario, grid, blockers, "place", obj.id, obj.goal, None, deadline)
     for candidate in pushes.candidates:
-        out += _options(scenario, grid, blockers, "push", candidate.clutter, candidate.contact, candidate)
+        out += _options(scenario, grid, blockers, "push", candidate.clutter, candidate.contact, candidate, deadline)
     return out
 
 
@@ -133,6 +139,7 @@ def _options(
     target: str,
     hand: Point,
     push: PushCandidate | None,
+    deadline: Deadline = NEVER,
 ) -> list[PoseOption]:
     """The options of one action: every heading and posture, each box cut by the static collision rules."""
     cells = push.cells if push else (0, 0)
@@ -143,6 +150,7 @@ def _options(
     headings = push_headings(push.direction) if push else HEADINGS
     out = []
     for heading in headings:
+        deadline.check()
         conditions = None
         for posture in scenario.robot.postures:
             box = reach_box(grid, hand, heading, posture).intersect(domain)

@@ -17,11 +17,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from planner_cases import largest_scenario, many_obstacles
 from pyscipopt import SCIP_EVENTTYPE, Eventhdlr
 
 import expert.planner as planner
 from expert import bench_cases
 from expert.planner import plan
+from expert.validate import validate_plan
+from fetchcarry_env.scenario import check_rules
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -93,3 +96,37 @@ def test_sigint_during_a_solve_stops_the_call_without_a_plan():
     assert time.monotonic() - sent < 5.0
     assert "PLAN" not in out
     assert proc.returncode != 0 and "KeyboardInterrupt" in err
+
+
+# ---------------------------------------------------------------------- the deadline
+GRACE_S = 2.0  # seconds: generous against a loaded machine; the benchmark measures the exact overshoot
+
+
+@pytest.mark.parametrize(
+    ("name", "limit"),
+    [("multi-10", 0.5), ("multi-12", 0.5), ("obstacles-400", 1.0), ("obstacles-1000", 1.0), ("largest", 0.5)],
+)
+def test_every_part_of_plan_counts_against_the_time_limit(name, limit):
+    """Before: 10 objects took 9 s and 12 objects 53 s at a 0.5 s limit (the lower-bound search ran
+    outside it), 1,000 obstacles raised RecursionError, the largest scenario spent 5 s preprocessing."""
+    if name.startswith("multi"):
+        scenario = bench_cases.multi(int(name.split("-")[1]), np.random.default_rng(0))
+    elif name.startswith("obstacles"):
+        scenario = many_obstacles(int(name.split("-")[1]))
+    else:
+        scenario = largest_scenario()
+    assert check_rules(scenario) == []
+    started = time.perf_counter()
+    result = plan(scenario, time_limit=limit)
+    elapsed = time.perf_counter() - started
+    assert elapsed < limit + GRACE_S, (name, elapsed, result.stats)
+    assert result.status in ("time_limit", "feasible", "optimal", "infeasible")
+    if result.found:
+        assert validate_plan(scenario, result) == []
+
+
+def test_a_thousand_obstacles_plan_without_a_recursion_error():
+    """The one-move connectivity walked the obstacles recursively (one frame each)."""
+    result = plan(many_obstacles(1000), time_limit=60.0)
+    assert result.status in ("optimal", "feasible", "infeasible", "time_limit")
+    assert "lower_bound" in result.stats
