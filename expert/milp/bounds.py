@@ -36,13 +36,6 @@ def counting_bound(problem: Problem) -> int:
     return bound
 
 
-def phase_lower_bound(problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> int:
-    """The best proven lower bound on N: the larger of 3, the counting and the skeleton bounds (1: nothing to do)."""
-    if not problem.deliver:
-        return 1
-    return max(3, counting_bound(problem), skeleton(problem, free, deadline).phases)
-
-
 def settle(
     start: Hashable,
     expand: Callable[[Hashable], Iterable[tuple[float, Hashable]]],

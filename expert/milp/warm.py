@@ -18,14 +18,14 @@ if TYPE_CHECKING:
     from expert.milp.variables import Milp
 
 
-def solution_values(milp: Milp, steps: list[Step]) -> dict | None:
+def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
     """Values of the model's variables for ``steps`` (padded with idle phases), or None if it does not fit."""
     problem, n = milp.problem, milp.n_phases
     if len(steps) > n - 1 or not steps:
         return None
     steps = list(steps) + [Step(steps[-1].cell, None)] * (n - 1 - len(steps))
     index = {id(option): o for o, option in enumerate(problem.options)}
-    values: dict = {}
+    values = _Values()
     for k, step in enumerate(steps, start=1):
         i, j = step.cell
         values[milp.u[k]], values[milp.v[k]] = float(i), float(j)
@@ -85,7 +85,26 @@ def add_warm_start(milp: Milp, steps: list[Step]) -> bool:
     return bool(model.addSol(solution, free=True))
 
 
-def _value(values: dict, coordinate) -> float:
+class _Values:
+    """Variable -> value (pyscipopt variables are not hashable: keyed by their unique names)."""
+
+    def __init__(self) -> None:
+        self.items_by_name: dict[str, tuple] = {}
+
+    def __setitem__(self, var, value: float) -> None:
+        self.items_by_name[var.name] = (var, value)
+
+    def __getitem__(self, var) -> float:
+        return self.items_by_name[var.name][1]
+
+    def __len__(self) -> int:
+        return len(self.items_by_name)
+
+    def items(self):
+        return self.items_by_name.values()
+
+
+def _value(values: _Values, coordinate) -> float:
     return coordinate if isinstance(coordinate, float) else values[coordinate]
 
 
