@@ -29,7 +29,8 @@ rule 5 (push)
     Clutter moves only in a push of it; the stroke is axis-aligned and moves the
     clutter by the base's displacement; the clutter ends fully on the same table and
     neither ends on nor sweeps through anything. ``docs/design.md`` adds the push's
-    arm: an empty hand, a heading along or across the stroke (never backwards), the
+    arm (with an empty hand or holding an object, which moves with the base): a heading
+    along or across the stroke (never backwards), the
     push contact (``kinematics.push_contact``) within the posture's ranges from the
     base where the stroke starts, and a clear arm line to it.
 rule 6 (goal)
@@ -411,8 +412,6 @@ def _push_arm(
     context: _Context, what: str, before: Phase, after: Phase, start_rect: Rect, direction: Heading
 ) -> list[str]:
     out = []
-    if before.holding is not None:
-        out.append(f"{what} with {before.holding!r} in the hand (docs/design.md: a push needs an empty hand)")
     if after.heading not in push_headings(direction):
         out.append(f"{what}: heading {after.heading!r} pushes backwards along {direction!r} (docs/design.md)")
     posture = context.postures.get(after.posture or "")
