@@ -19,6 +19,7 @@ from fetchcarry_env.actions import Action, Mode
 from fetchcarry_env.env import FetchCarryPushEnv
 from fetchcarry_env.phases import PhaseLayout, PhaseTable, enumerate_phases
 from fetchcarry_env.rules import check_action
+from fetchcarry_env.shaping import DEFAULT_GAMMA, LearningReward
 
 
 class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
@@ -29,7 +30,7 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``Discrete(layout.size)``: candidate ``k`` is the phase :meth:`PhaseLayout.describe`
     names (pick, place, push, approach move, waypoint move; see
     :mod:`fetchcarry_env.phases` for the numbering). With the default layout and
-    capacity, K = 3,936.
+    capacity, K = 4,080.
 
     :meth:`action_masks` (MaskablePPO's convention: one bool per candidate) is True
     exactly for the candidates allowed in the current state: their env action is
@@ -160,6 +161,18 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
         raise RuntimeError("no env action is refused in this state: a masked candidate cannot be refused")
 
 
-def make_phase_env(layout: PhaseLayout | None = None, **env_options: Any) -> PhaseActions:
-    """``FetchCarryPushEnv(**env_options)`` behind :class:`PhaseActions`: ``FetchCarryPushPhases-v0``'s entry point."""
-    return PhaseActions(FetchCarryPushEnv(**env_options), layout)
+REWARDS = ("paper", "learning")
+
+
+def make_phase_env(
+    layout: PhaseLayout | None = None, reward: str = "paper", gamma: float = DEFAULT_GAMMA, **env_options: Any
+) -> gym.Env:
+    """``FetchCarryPushPhases-v0``'s entry point: ``FetchCarryPushEnv(**env_options)`` behind :class:`PhaseActions`.
+
+    ``reward="paper"`` keeps the env's reward; ``reward="learning"`` adds
+    :class:`~fetchcarry_env.shaping.LearningReward` (shaping for a learner of discount ``gamma``).
+    """
+    if reward not in REWARDS:
+        raise ValueError(f"reward must be one of {', '.join(REWARDS)}, got {reward!r}")
+    env: gym.Env = PhaseActions(FetchCarryPushEnv(**env_options), layout)
+    return LearningReward(env, gamma=gamma) if reward == "learning" else env

@@ -37,6 +37,9 @@ kind          numbered by                     env action
 ``waypoint``  ``b, corner, i, j``             move to a point ``i``, ``j`` cells (plus the robot's
                                               radius) outward from a corner of blocker ``b``
                                               (tables, then obstacles): the way around it
+``edge``      ``b, side, i``                  move straight along x or y to the line ``i`` cells
+                                              (plus the radius) outside side ``side`` (in heading
+                                              order) of blocker ``b``: to get clear of it
 ============  ==============================  =====================================================
 
 Moves keep the current heading (every later phase turns to its own). Nothing here
@@ -62,7 +65,7 @@ from fetchcarry_env.observation import Capacity, WorldState
 from fetchcarry_env.rules import check_action, clutter_rect, move_stop
 from fetchcarry_env.scenario import DEFAULT_POSTURES, Posture, Scenario
 
-KINDS: tuple[str, ...] = ("pick", "place", "push", "approach", "waypoint")
+KINDS: tuple[str, ...] = ("pick", "place", "push", "approach", "waypoint", "edge")
 REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance, used to size the pose windows
 
 
@@ -71,11 +74,11 @@ class Candidate:
     """One numbered candidate, decoded (see the module docstring for the meaning of each field)."""
 
     kind: str
-    slot: int  # object slot (pick, place), clutter slot (push, approach), blocker slot (waypoint)
-    heading: int  # pick/place: heading index; push/approach: index k into push_headings(d); waypoint: corner
+    slot: int  # object slot (pick, place), clutter slot (push, approach), blocker slot (waypoint, edge)
+    heading: int  # pick/place: heading; push/approach: index k into push_headings(d); waypoint: corner; edge: side
     direction: int  # push/approach: stroke direction (heading index); else -1
-    a: int  # pick/place/approach: forward cells; push: stroke cells; waypoint: outward x cells
-    b: int  # pick/place/approach: lateral cells; push: 0; waypoint: outward y cells
+    a: int  # pick/place/approach: forward cells; push: stroke cells; waypoint: outward x cells; edge: outward cells
+    b: int  # pick/place/approach: lateral cells; push, edge: 0; waypoint: outward y cells
 
 
 @dataclass(frozen=True)
@@ -140,6 +143,7 @@ class PhaseLayout:
             "push": (self.capacity.clutter, len(HEADINGS), 3, self.strokes),
             "approach": (self.capacity.clutter, len(HEADINGS), 3, nf, nl),
             "waypoint": (self.blockers, 4, self.corner_cells, self.corner_cells),
+            "edge": (self.blockers, len(HEADINGS), self.corner_cells),
         }
         if kind not in shapes:
             raise ValueError(f"unknown candidate kind {kind!r}; known: {', '.join(KINDS)}")
@@ -191,8 +195,11 @@ class PhaseLayout:
         if kind == "approach":
             slot, direction, k, f, lat = coords
             return Candidate(kind, slot, k, direction, self.forward[0] + f, lat - self.lateral)
-        slot, corner, i, j = coords
-        return Candidate(kind, slot, corner, -1, i, j)
+        if kind == "waypoint":
+            slot, corner, i, j = coords
+            return Candidate(kind, slot, corner, -1, i, j)
+        slot, side, i = coords
+        return Candidate(kind, slot, side, -1, i, 0)
 
 
 @dataclass
@@ -250,6 +257,7 @@ class _Enumerator:
         self._pushes()
         self._approaches()
         self._waypoints()
+        self._edges()
         return PhaseTable(self.mask, self.actions, self.lookup)
 
     # ------------------------------------------------------------------ kinds
@@ -326,9 +334,7 @@ class _Enumerator:
         layout = self.layout
         res = self.lattice.resolution
         first = round(self.scenario.robot.radius / res)
-        rects: list[tuple[int, Rect]] = [(k, t.rect) for k, t in enumerate(self.scenario.tables)]
-        rects += [(layout.capacity.tables + k, o.rect) for k, o in enumerate(self.scenario.obstacles)]
-        for slot, rect in rects:
+        for slot, rect in self._blockers():
             for corner, (sx, sy) in enumerate(CORNERS):
                 cx = rect.max_x if sx > 0 else rect.min_x
                 cy = rect.max_y if sy > 0 else rect.min_y
@@ -339,6 +345,29 @@ class _Enumerator:
                             continue
                         index = layout.index("waypoint", slot, corner, i, j)
                         self._offer(index, self._move(self.lattice.index(point)), None)
+
+    def _edges(self) -> None:
+        """Straight moves from the base, along x or y, to the line just outside each side of each blocker."""
+        layout = self.layout
+        res = self.lattice.resolution
+        first = round(self.scenario.robot.radius / res)
+        bx, by = self.state.base
+        for slot, rect in self._blockers():
+            for side, heading in enumerate(HEADINGS):
+                ux, uy = heading_vector(heading)
+                for i in range(layout.corner_cells):
+                    out = (first + i) * res
+                    if ux:
+                        point = (rect.max_x + out if ux > 0 else rect.min_x - out, by)
+                    else:
+                        point = (bx, rect.max_y + out if uy > 0 else rect.min_y - out)
+                    if _inside(self.lattice, point):
+                        self._offer(layout.index("edge", slot, side, i), self._move(self.lattice.index(point)), None)
+
+    def _blockers(self) -> list[tuple[int, Rect]]:
+        """``(slot, rectangle)`` of every table and obstacle (tables first, as in the observation)."""
+        rects = [(k, t.rect) for k, t in enumerate(self.scenario.tables)]
+        return rects + [(self.layout.capacity.tables + k, o.rect) for k, o in enumerate(self.scenario.obstacles)]
 
     # ------------------------------------------------------------------ helpers
     def _window(self, center: tuple[int, int], heading: Heading) -> Iterator[tuple[int, int, tuple[int, int]]]:

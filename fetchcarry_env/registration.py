@@ -11,7 +11,8 @@ def register_envs() -> None:
     ``FetchCarryPushPhases-v0`` is the same env behind
     :class:`fetchcarry_env.phase_env.PhaseActions`: ``Discrete(K)`` candidate phases with
     exact masks. It takes the env's arguments plus ``layout`` (a
-    :class:`fetchcarry_env.phases.PhaseLayout`).
+    :class:`fetchcarry_env.phases.PhaseLayout`), ``reward`` (``"paper"``, the env's, or
+    ``"learning"``: :class:`fetchcarry_env.shaping.LearningReward`) and ``gamma``.
     """
     if "FetchCarryPush-v0" not in registry:
         register(
