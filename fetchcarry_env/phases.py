@@ -15,7 +15,9 @@ never a copy of them. Each candidate stands for one env action; a candidate is
 3. the base reaches the phase's end without a contact (``move_stop``: the env would
    otherwise stop the base there and the arm would do nothing), and
 4. no earlier candidate of the list has the same env action (so that allowed
-   candidates and the env actions they stand for are one to one).
+   candidates and the env actions they stand for are one to one), and
+5. it is not a move that goes nowhere (to the point where the base stands: it would
+   change nothing, and a deterministic learner that picks it once picks it forever).
 
 The list, in this order (``o``: object slot, ``c``: clutter slot, ``h``: heading index
 in ``+x, +y, -x, -y``, ``d``: push direction in the same order, ``k``: index into
@@ -67,6 +69,7 @@ from fetchcarry_env.scenario import DEFAULT_POSTURES, Posture, Scenario
 
 KINDS: tuple[str, ...] = ("pick", "place", "push", "approach", "waypoint", "edge")
 REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance, used to size the pose windows
+STILL = 1e-9  # metres: a move whose end is this close to the base goes nowhere
 
 
 @dataclass(frozen=True)
@@ -409,6 +412,8 @@ class _Enumerator:
         phase = check_action(self.scenario, self.state, self.lattice, action)
         if isinstance(phase, str) or (target is not None and phase.target != target):
             return
+        if phase.mode == Mode.MOVE and math.dist(phase.base, self.state.base) <= STILL:
+            return  # a move that goes nowhere does nothing: not a phase worth choosing
         if not self._end_free(phase.base) or (also is not None and not also()) or not self._free(phase.base):
             return
         self.mask[index] = True
