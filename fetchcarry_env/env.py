@@ -20,7 +20,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec
+from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec, action_vector
 from fetchcarry_env.families import DEFAULT_FAMILY, Family, get_family
 from fetchcarry_env.geometry import Rect, heading_vector
 from fetchcarry_env.kinematics import (
@@ -85,15 +85,18 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     The lattice covers the scenario's area (fixed scenario) or the family's extent, at
     ``resolution`` metres (5 cm by default). Semantics (``fetchcarry_env/actions.py``):
     pick takes the object within the posture's reach (nearest the middle of the
-    ranges); place puts the held object at its goal; push needs an empty hand, strokes
-    axis-aligned from where the base stands, with the heading along the stroke or at
-    right angles to it, against the piece of clutter whose rear face the posture
-    reaches. A push whose base touches something during the stroke stops there.
+    ranges); place puts the held object at its goal; push strokes axis-aligned from
+    where the base stands, with the heading along the stroke or at right angles to it,
+    against the piece of clutter whose rear face the posture reaches (nearest the
+    middle of the ranges). The hand may be empty or hold an object (the paper's push
+    while carrying the object to be placed): the held object touches nothing, keeps
+    its offset from the base and moves with it. A push whose base touches something
+    during the stroke stops there.
 
     :meth:`action_masks` gives MaskablePPO's flat mask (length ``nx + ny + 4 +
     capacity.postures + 4``): lattice columns and rows where the base disc does not fit
-    in the area, postures the robot does not have, pick and push with a full hand, place
-    with an empty one and push without clutter are masked. An action outside the space
+    in the area, postures the robot does not have, pick with a full hand, place with an
+    empty one and push without clutter are masked (push is allowed with either hand). An action outside the space
     raises ``ValueError``; an impossible one (masked or not) does nothing (see Rewards).
 
     ## Observation Space
@@ -182,7 +185,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     ## Version History
 
-    - v0: first version.
+    - v0: first version; a push may be made while holding an object (the paper's
+      push-aside while carrying), masks allow it.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
@@ -411,14 +415,17 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         length = math.dist(state.base, end)
         report = {"clutter": phase.target, "stroke": phase.stroke, "travelled": 0.0, "stalled": False}
         if length <= 0.0:
-            self._sim.move(state.base, phase.heading, None)
-            self._state = replace(state, heading=phase.heading)
+            held = self._sim.move(state.base, phase.heading, state.holding)
+            objects = state.objects if held is None else {**state.objects, state.holding: held}
+            self._state = replace(state, heading=phase.heading, objects=objects)
             return contact, report
         offset = hand_offset(state.base, phase.heading, phase.hand)
         outcome = self._sim.push(phase.target, state.base, phase.heading, offset, phase.direction, length)
         ux, uy = heading_vector(phase.direction)
         base = (state.base[0] + ux * outcome.travelled, state.base[1] + uy * outcome.travelled)
-        self._state = self._with_poses(replace(state, base=base, heading=phase.heading), self._sim.poses)
+        objects = state.objects if outcome.held is None else {**state.objects, state.holding: outcome.held}
+        moved = replace(state, base=base, heading=phase.heading, objects=objects)
+        self._state = self._with_poses(moved, self._sim.poses)
         report.update(travelled=outcome.travelled, stalled=outcome.stalled)
         return contact, report
 
@@ -446,20 +453,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._sim_in_sync, self._snapshot = True, None
 
     def _decode(self, action: Any) -> Action:
-        """The action as an :class:`Action`; ``ValueError`` naming the component if it is outside the space."""
-        array = np.asarray(action)
-        nvec = self.action_space.nvec
-        if array.shape != nvec.shape:
-            raise ValueError(f"action must have shape {nvec.shape} ({', '.join(ACTION_COMPONENTS)}), got {array.shape}")
-        if not (np.issubdtype(array.dtype, np.integer) or np.all(np.equal(np.mod(array, 1), 0))):
-            raise ValueError(f"action must hold integers, got {array.tolist()}")
-        for name, value, size in zip(ACTION_COMPONENTS, array.tolist(), nvec.tolist(), strict=True):
-            if not 0 <= value < size:
-                raise ValueError(
-                    f"action {array.tolist()} is outside the action space {self.action_space}: "
-                    f"{name} = {value} is not in [0, {size})"
-                )
-        return Action.from_array(array)
+        """The action as an :class:`Action`; ``ValueError`` naming the problem if it is not in the space."""
+        return Action.from_array(action_vector(action, self.action_space.nvec, ACTION_COMPONENTS))
 
     def _check_fits(self, scenario: Scenario) -> None:
         """Raise :class:`ScenarioError` if ``scenario`` does not fit the lattice's extent or the capacity."""

@@ -55,8 +55,9 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
     """The flat boolean mask of length ``nx + ny + 4 + max_postures + 4`` (MaskablePPO's convention).
 
     False marks what no action with that component can do: lattice columns or rows where
-    the base disc does not fit in the area, postures the robot does not have, pick or
-    push with a full hand, place with an empty one, push when there is no clutter. Every
+    the base disc does not fit in the area, postures the robot does not have, pick with
+    a full hand, place with an empty one, push when there is no clutter (a push may be
+    made with an empty hand or holding an object). Every
     component keeps at least one allowed value (``move`` always is: MaskablePPO needs one).
     """
     radius = scenario.robot.radius
@@ -72,7 +73,7 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
     parts.append(np.arange(max_postures) < len(scenario.robot.postures))
     empty = state.holding is None
     modes = np.zeros(len(Mode), dtype=bool)
-    modes[[Mode.MOVE, Mode.PICK, Mode.PLACE, Mode.PUSH]] = [True, empty, not empty, empty and bool(scenario.clutter)]
+    modes[[Mode.MOVE, Mode.PICK, Mode.PLACE, Mode.PUSH]] = [True, empty, not empty, bool(scenario.clutter)]
     parts.append(modes)
     return np.concatenate(parts)
 
@@ -194,8 +195,8 @@ def _check_place(scenario: Scenario, state: WorldState, base: Point, heading: He
 
 
 def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Heading, posture: Posture) -> Phase | str:
-    if state.holding is not None:
-        return "push with a full hand"
+    # The hand may be empty or hold an object (the paper's push while carrying): the held
+    # object goes with the hand and touches nothing, so it neither blocks the hand nor is pushed.
     start = state.base
     dx, dy = end[0] - start[0], end[1] - start[1]
     if abs(dx) <= ALIGN_TOLERANCE:

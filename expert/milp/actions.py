@@ -13,8 +13,9 @@ with ``theta^{gsp}`` in [0, 1]: a pick needs an empty hand for ``i`` before and 
 held ``i`` after; a place the converse. Eq. 6 (carrying) is then an expression,
 ``gsp - pck``, used by nobody: a carried object simply follows the hand (Eq. 8).
 
-Eq. 7 (at most one object held) is written together with "a push needs an empty
-hand" (``docs/design.md``): ``sum_i theta^{gsp}_{i,k} + (push at k) <= 1``.
+Eq. 7 (at most one object held): ``sum_i theta^{gsp}_{i,k} <= 1``. A push may be made
+with an empty hand or holding an object (the paper pushes while carrying the object it
+places, ``docs/design.md``), so pushes do not enter it.
 """
 
 from __future__ import annotations
@@ -40,7 +41,6 @@ def add_action_constraints(milp: Milp) -> None:
                 milp.gsp[object_id][k - 1] + (picks if picks is not None else 0) - (places if places is not None else 0)
             )
             model.addCons(milp.gsp[object_id][k] == balance, name=f"eq4_6_grasp_{object_id}_{k}")
-        pushes = [z for _, z in milp.push_options_at(k)]
         held = [milp.gsp[i][k] for i in milp.problem.deliver]
-        if len(held) + len(pushes) > 1:
-            model.addCons(quicksum(held) + quicksum(pushes) <= 1, name=f"eq7_one_in_hand_{k}")
+        if len(held) > 1:
+            model.addCons(quicksum(held) <= 1, name=f"eq7_one_in_hand_{k}")

@@ -15,7 +15,8 @@ import itertools
 import math
 from dataclasses import dataclass
 
-from expert.milp.problem import PoseOption, Problem
+from expert.milp.options import PoseOption
+from expert.milp.problem import Problem
 from expert.plans import Phase
 from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_frame
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost

@@ -20,7 +20,11 @@ Eq. 10-13 (delivery):
   ``delta + gsp = (picked so far) <= 1``.
 - Eq. 13, right part: ``delta_{i,N} = 1``, every object delivered in the last phase.
 
-Also here: an object standing on another's goal is picked before that goal is used.
+Also here: an object standing on another's goal is picked before that goal is used,
+and a pick takes its target (the env takes the object within reach nearest the middle
+of the posture's ranges, ``fetchcarry_env.rules``): a pick option whose base has another
+object within the ranges in some state (:attr:`expert.milp.options.PoseOption.confusers`)
+is forbidden while that object is there (:func:`add_pick_confusion_constraints`).
 """
 
 from __future__ import annotations
@@ -61,6 +65,27 @@ def add_delivery_constraints(milp: Milp) -> None:
             if places is not None:
                 picked = milp.gsp[standing][k - 1] + milp.delta[standing][k - 1]
                 model.addCons(places <= picked, name=f"clear_goal_{goal_owner}_{standing}_{k}")
+    add_pick_confusion_constraints(milp)
+
+
+def add_pick_confusion_constraints(milp: Milp) -> None:
+    """No pick with another object within reach: ``sum_{o confused by (j, where)} z_{o,k} <= 1 - [j there at k]``.
+
+    ``j`` stands at its start until it is picked (``1 - gsp_{j,k-1} - delta_{j,k-1}``) and at
+    its goal once delivered (``delta_{j,k-1}``); one action per phase, so phase k-1's state
+    is the one the pick sees.
+    """
+    problem, model = milp.problem, milp.model
+    for k in range(1, milp.n_phases):
+        groups: dict = {}
+        for o, z in milp.arm_options_at(k):
+            for state in problem.options[o].confusers:
+                groups.setdefault(state, []).append(z)
+        for state, terms in groups.items():
+            j = state.object_id
+            picked = milp.gsp[j][k - 1] + milp.delta[j][k - 1]
+            allowed = picked if state.where == "start" else 1 - milp.delta[j][k - 1]
+            model.addCons(quicksum(terms) <= allowed, name=f"pick_takes_target_{j}_{state.where}_{k}")
 
 
 def add_delivery_timing(milp: Milp) -> None:

@@ -18,38 +18,15 @@ import math
 from dataclasses import dataclass, field
 
 from expert.milp.area import area_is_empty
-from expert.milp.grid import Grid, IndexBox
-from expert.milp.push import PushCandidate, PushPlan, plan_pushes
+from expert.milp.deadline import NEVER, Deadline
+from expert.milp.grid import Grid
+from expert.milp.options import PoseOption, pose_options
+from expert.milp.strokes import PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.geometry import Heading, Point, discs_overlap
+from fetchcarry_env.geometry import discs_overlap
 from fetchcarry_env.scenario import Scenario
 
 AT_GOAL_TOL = 1e-3  # metres: an object (not held) this close to its goal needs nothing (the validator's tolerance)
-
-
-@dataclass(frozen=True)
-class PoseOption:
-    """One way to do one arm action: kind, target, heading, posture and where the base may stand.
-
-    ``box`` holds the acting base: the base of the phase for a pick or a place, the base
-    where the stroke *starts* (the previous phase's) for a push. ``forbidden`` lists the
-    ``(clutter id, position)`` states of pushable clutter in which the arm line (Eq. 19)
-    would be blocked; ``position`` is ``"start"`` or a push direction.
-    """
-
-    kind: str  # "pick", "place" or "push"
-    target: str  # object id (pick, place) or clutter id (push)
-    heading: Heading
-    posture: str
-    box: IndexBox
-    hand: Point  # where the hand acts: the object's start, its goal, or the push contact
-    forbidden: frozenset = frozenset()
-    push: PushCandidate | None = None
-
-    @property
-    def end_box(self) -> IndexBox:
-        """Where the base is at the end of the option's phase (the box, moved by a push's stroke)."""
-        return self.box if self.push is None else self.box.shifted(*self.push.cells)
 
 
 @dataclass(frozen=True)
@@ -76,10 +53,17 @@ class Problem:
         return [n for n, o in enumerate(self.options) if o.kind == kind and (target is None or o.target == target)]
 
 
-def prepare(scenario: Scenario, lattice: Lattice, holding: str | None = None, integral: bool = True) -> Problem:
-    """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand."""
-    from expert.milp.postures import pose_options  # postures imports PoseOption from here
+def prepare(
+    scenario: Scenario,
+    lattice: Lattice,
+    holding: str | None = None,
+    integral: bool = True,
+    deadline: Deadline = NEVER,
+) -> Problem:
+    """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
 
+    Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
+    """
     robot = scenario.robot
     grid = Grid.for_area(lattice, scenario.area, robot.radius, integral)
     ids = {o.id for o in scenario.objects}
@@ -92,12 +76,14 @@ def prepare(scenario: Scenario, lattice: Lattice, holding: str | None = None, in
         for o in scenario.objects
         if o.id in deliver
     }
+    deadline.check()
     pushes = plan_pushes(scenario, grid, covers, holding)
+    deadline.check()
     blocking = _blocking_objects(scenario, deliver, holding)
     start_index = lattice.index(robot.start) if lattice.on_lattice(robot.start) else None
     if start_index is not None and not grid.domain.contains(*start_index):
         start_index = None
-    options = pose_options(scenario, grid, deliver, holding, pushes)
+    options = pose_options(scenario, grid, deliver, holding, pushes, deadline)
     problem = Problem(
         scenario=scenario,
         grid=grid,
@@ -146,8 +132,6 @@ def _structural_infeasibility(problem: Problem) -> str | None:
             return f"no base pose reaches object {object_id!r} at its start with a clear arm line"
         if not problem.options_of("place", object_id):
             return f"no base pose reaches the goal of {object_id!r} with a clear arm line"
-    if problem.holding is not None and problem.covers.get(problem.holding):
-        return f"the goal of the held object {problem.holding!r} is covered by clutter, and a push needs an empty hand"
     for clutter_id in problem.pushes.pushable:
         if not problem.options_of("push", clutter_id):
             return f"clutter {clutter_id!r} covers a goal and cannot be pushed off it in any allowed direction"

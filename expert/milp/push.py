@@ -1,31 +1,6 @@
-"""Push-aside (the paper's IV-E): the preprocessing (s, o, q) and the stroke constraints (Eq. 20-26).
+"""Push-aside constraints (the paper's IV-E, Eq. 20-26), on the preprocessing of :mod:`expert.milp.strokes`.
 
-Preprocessing (:func:`plan_pushes`), generalised to any number of clutter items on any
-goal and every axis direction. For each piece of clutter ``c`` that covers a goal
-(the paper's ``u_i = 1``) and each direction ``d``:
-
-- the stroke ``B`` is :func:`fetchcarry_env.kinematics.push_stroke`: the smallest whole
-  multiple of the lattice resolution that leaves 1 cm between the piece and every goal
-  disc it covered (the paper's constant B, per piece and direction);
-- the direction is *blocked* (the paper's ``o_{i,n} = 1``) when the floor the piece
-  sweeps (:func:`fetchcarry_env.kinematics.swept_rect`) leaves its table, or meets an
-  obstacle, a piece of clutter that is never pushed, an object's start or any goal.
-  The paper's ``s_{i,n}`` (a neighbour in region ``R_n`` of the piece) is the geometric
-  test behind it; we test the swept floor directly, which covers Fig. 3(c);
-- a neighbour that will itself be pushed does not block: the direction then waits for
-  that neighbour to go first (a *precedence*), and two strokes whose floors meet at
-  their ends are mutually exclusive.
-- the direction is also blocked when the hand (a cube of ``2 * HAND_HALF_SIZE`` at the
-  push contact) has no room behind the piece: an object or a piece of clutter that is
-  never pushed stands there (the environment refuses such a push); a pushable
-  neighbour there makes the push wait for it, as on the swept floor.
-
-Which pushes the arm can do from where (forward or lateral, the paper's ``q`` of
-Fig. 3(d): the arm sweeping across a neighbour) is decided per pose option in
-:mod:`expert.milp.postures`: the base at both ends of the stroke and the hand at both
-ends must lie in one common region of every obstacle and other piece of clutter.
-
-Constraints (:func:`add_push_constraints`), with ``z`` the push options chosen at phase k:
+With ``z`` the push options chosen at phase k:
 
 - Eq. 20, 25, 26 (stroke of length B, never diagonal): the base moves by exactly the
   option's stroke vector in the push phase: ``u_k - u_{k-1} = sum_o di_o z_{o,k}``
@@ -33,174 +8,27 @@ Constraints (:func:`add_push_constraints`), with ``z`` the push options chosen a
   (and ``m^y``) states the paper's ``m^x + m^y = B`` on the cost side.
 - Eq. 21-24 (no push towards a neighbour): the blocked directions have no option at
   all, which is what Eq. 21-24 achieve by forcing the motion towards them to zero.
-- Each covering piece is pushed exactly once, before the pick of each object whose
-  goal it covers (the hand is full from that pick to the place).
+- Each covering piece is pushed exactly once, before the place of each object whose
+  goal it covers.
 
-The paper's Eq. 20 multiplies two variables (``theta^plc * u_i``); ``u_i`` is data
-(known before the solve), so the product is linear. Eq. 25's stray ``theta_{d,t}`` is
-read as ``theta_{i,k}``. ``docs/formulation.md`` records both decisions.
+The paper pushes in the placing phase of the object being delivered (``theta^plc_{i,k}
+u_i``): the robot arrives holding the object, strokes and places. Here a push is its
+own phase (one env action is one phase), with an empty hand or holding any object;
+the paper's pattern is the push while holding ``i`` followed by the place of ``i`` at
+the stroke's end. The MILP chooses between the two (``docs/formulation.md``).
+Eq. 20's product ``theta^plc * u_i`` is linear since ``u_i`` is data; Eq. 25's stray
+``theta_{d,t}`` is read as ``theta_{i,k}``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
-
 from pyscipopt import quicksum
 
-from expert.milp.grid import Grid
-from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector
-from fetchcarry_env.kinematics import HAND_HALF_SIZE, push_contact, push_stroke, swept_rect
-from fetchcarry_env.scenario import Scenario
-
-if TYPE_CHECKING:
-    from expert.milp.variables import Milp
+from expert.milp.variables import Milp
 
 
-@dataclass(frozen=True)
-class PushCandidate:
-    """One direction in which one piece of clutter can be pushed off the goals it covers."""
-
-    clutter: str
-    direction: Heading
-    stroke: float  # metres, the paper's B for this piece and direction
-    cells: tuple[int, int]  # the stroke in lattice cells (di, dj)
-    start: Rect  # the piece where it stands
-    end: Rect  # the piece after the stroke
-    swept: Rect  # the floor it slides over
-    contact: Point  # where the hand's centre goes (kinematics.push_contact)
-
-    @property
-    def key(self) -> tuple[str, str]:
-        return (self.clutter, self.direction)
-
-
-@dataclass(frozen=True)
-class PushPlan:
-    """The preprocessing's answer: what must be pushed, how it can be, and the rules between pushes."""
-
-    pushable: tuple[str, ...]  # clutter covering some goal: each is pushed exactly once
-    candidates: tuple[PushCandidate, ...]
-    blocked: dict[tuple[str, str], str] = field(default_factory=dict)  # (clutter, direction) -> why (o = 1)
-    exclusive: tuple[tuple[int, int], ...] = ()  # candidate pairs that cannot both be used
-    precedence: tuple[tuple[int, str], ...] = ()  # (candidate, clutter id): that clutter must be pushed first
-
-    def positions(self, clutter_id: str) -> dict[str, Rect]:
-        """Every place ``clutter_id`` can stand: ``"start"`` and each candidate direction."""
-        out = {}
-        for candidate in self.candidates:
-            if candidate.clutter == clutter_id:
-                out.setdefault("start", candidate.start)
-                out[candidate.direction] = candidate.end
-        return out
-
-
-def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...]], holding: str | None) -> PushPlan:
-    """The push preprocessing (the paper's s, o, q generalised); see the module docstring."""
-    pushable = tuple(sorted({c for ids in covers.values() for c in ids}))
-    if not pushable:
-        return PushPlan((), ())
-    objects = {o.id: o for o in scenario.objects}
-    discs = [(f"start of {o.id!r}", o.start, o.radius) for o in scenario.objects if o.id != holding]
-    discs += [(f"goal of {o.id!r}", o.goal, o.radius) for o in scenario.objects]
-    static_clutter = [c for c in scenario.clutter if c.id not in pushable]
-    candidates: list[PushCandidate] = []
-    blocked: dict[tuple[str, str], str] = {}
-    waits: list[tuple[int, str]] = []
-    for clutter_id in pushable:
-        item = scenario.clutter_item(clutter_id)
-        covered = [(objects[o].goal, objects[o].radius) for o, ids in covers.items() if clutter_id in ids]
-        table = scenario.table_under_rect(item.rect)
-        for direction in HEADINGS:
-            stroke = push_stroke(item.rect, direction, covered, grid.resolution)
-            ux, uy = heading_vector(direction)
-            end = item.rect.translate(ux * stroke, uy * stroke)
-            swept = swept_rect(item.rect, direction, stroke)
-            reason = _blocked_by(swept, end, item.rect, table.rect if table else None, scenario, static_clutter, discs)
-            hand = _hand_box(item.rect, direction)
-            reason = reason or _no_hand_room(hand, scenario, static_clutter, holding)
-            if reason is not None:
-                blocked[(clutter_id, direction)] = reason
-                continue
-            cells = round(stroke / grid.resolution)
-            candidate = PushCandidate(
-                clutter=clutter_id,
-                direction=direction,
-                stroke=stroke,
-                cells=(ux * cells, uy * cells),
-                start=item.rect,
-                end=end,
-                swept=swept,
-                contact=push_contact(item.rect, direction),
-            )
-            for other in pushable:
-                other_rect = scenario.clutter_item(other).rect
-                if other != clutter_id and (swept.overlaps_rect(other_rect) or hand.overlaps_rect(other_rect, tol=0.0)):
-                    waits.append((len(candidates), other))
-            candidates.append(candidate)
-    exclusive = [
-        (a, b)
-        for a in range(len(candidates))
-        for b in range(a + 1, len(candidates))
-        if candidates[a].clutter != candidates[b].clutter
-        and (
-            candidates[a].swept.overlaps_rect(candidates[b].end) or candidates[b].swept.overlaps_rect(candidates[a].end)
-        )
-    ]
-    return PushPlan(pushable, tuple(candidates), blocked, tuple(exclusive), tuple(waits))
-
-
-def _blocked_by(
-    swept: Rect,
-    end: Rect,
-    start: Rect,
-    table: Rect | None,
-    scenario: Scenario,
-    static_clutter: list,
-    discs: list[tuple[str, Point, float]],
-) -> str | None:
-    """Why a stroke is impossible (the paper's o = 1), or None."""
-    if table is None or not table.contains_rect(swept, tol=1e-9):
-        return "the piece would leave its table"
-    for obstacle in scenario.obstacles:
-        if swept.overlaps_rect(obstacle.rect):
-            return f"the piece would run into obstacle {obstacle.id!r}"
-    for other in static_clutter:
-        if swept.overlaps_rect(other.rect):
-            return f"the piece would run into clutter {other.id!r}"
-    for name, center, radius in discs:
-        if end.overlaps_disc(center, radius) or (
-            swept.overlaps_disc(center, radius) and not start.overlaps_disc(center, radius)
-        ):
-            return f"the piece would run into the {name}"
-    return None
-
-
-def _hand_box(rect: Rect, direction: Heading) -> Rect:
-    """The hand (a cube of ``2 * HAND_HALF_SIZE``) at the contact for pushing ``rect`` along ``direction``."""
-    return Rect.around(push_contact(rect, direction), HAND_HALF_SIZE, HAND_HALF_SIZE)
-
-
-def _no_hand_room(hand: Rect, scenario: Scenario, static_clutter: list, holding: str | None) -> str | None:
-    """Why the hand cannot stand behind the piece to push it, or None.
-
-    The environment refuses a push whose hand would overlap another piece of clutter or
-    an object (``fetchcarry_env.rules``); clutter that is never pushed and objects at
-    their starts block the direction, a pushable neighbour there makes the push wait
-    for it (a precedence, like a neighbour on the swept floor).
-    """
-    for other in static_clutter:
-        if other.rect.overlaps_rect(hand, tol=0.0):
-            return f"no room for the hand behind the piece: clutter {other.id!r} is there"
-    for obj in scenario.objects:
-        if obj.id != holding and hand.overlaps_disc(obj.start, obj.radius, tol=0.0):
-            return f"no room for the hand behind the piece: object {obj.id!r} is there"
-    return None
-
-
-# ---------------------------------------------------------------------- constraints
 def add_push_constraints(milp: Milp) -> None:
-    """Eq. 20-26 (stroke), once per piece, before the covered object's pick, exclusions and precedences."""
+    """Eq. 20-26 (stroke), once per piece, before the covered object's place, exclusions and precedences."""
     problem, model, n = milp.problem, milp.model, milp.n_phases
     plan = problem.pushes
     if not plan.pushable:
@@ -227,16 +55,24 @@ def add_push_constraints(milp: Milp) -> None:
             model.addCons(pushed[k] == pushed[k - 1] + quicksum(now), name=f"pushed_{clutter_id}_{k}")
         model.addCons(pushed[n - 1] == 1, name=f"push_once_{clutter_id}")
         for object_id, ids in problem.covers.items():
-            if clutter_id not in ids or object_id == problem.holding:
+            if clutter_id not in ids:
                 continue
             for k in range(1, n):
-                picks = milp.action_sum("pick", object_id, k)
-                if picks is not None:
-                    model.addCons(picks <= pushed[k - 1], name=f"push_before_pick_{clutter_id}_{object_id}_{k}")
+                places = milp.action_sum("place", object_id, k)
+                if places is not None:
+                    model.addCons(places <= pushed[k - 1], name=f"push_before_place_{clutter_id}_{object_id}_{k}")
     uses = {index: milp.candidate_uses(index) for index in range(len(plan.candidates))}
     for a, b in plan.exclusive:
         if uses[a] is not None and uses[b] is not None:
             model.addCons(uses[a] + uses[b] <= 1, name=f"push_exclusive_{a}_{b}")
+    for index, candidate in enumerate(plan.candidates):  # the hand needs the floor behind the piece free
+        for object_id in candidate.hand_goals:
+            if object_id not in milp.delta:
+                continue
+            for k in range(2, n):
+                now = milp.candidate_at(index, k)
+                if now is not None:
+                    model.addCons(now <= 1 - milp.delta[object_id][k - 1], name=f"hand_room_{index}_{object_id}_{k}")
     for index, first in plan.precedence:
         for k in range(1, n):
             now = milp.candidate_at(index, k)

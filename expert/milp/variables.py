@@ -48,6 +48,7 @@ class Milp:
     gsp: dict[str, list] = field(default_factory=dict)
     delta: dict[str, list] = field(default_factory=dict)
     pushed: dict[str, list] = field(default_factory=dict)
+    regions: list = field(default_factory=list)  # Eq. 18: (move k, planes, binaries or None when hard)
     _pushed_dir: dict[tuple[str, str], list] = field(default_factory=dict)
     _arm: list[list] = field(default_factory=list)
     _push: list[list] = field(default_factory=list)
@@ -162,13 +163,14 @@ def option_phases(problem: Problem, option, n_phases: int) -> range | list[int]:
     """The phases at which ``option`` can be chosen at all.
 
     A pick needs a later place (k <= N-2); a place of an object that is not held
-    needs an earlier pick (k >= 2); a push needs a later pick and place of the object
-    it clears (k <= N-3) and, as it starts from the previous phase's base, k >= 2
-    unless the start lies exactly on a lattice point of the option's box.
+    needs an earlier pick (k >= 2); a push needs a later place of the object it clears
+    (k <= N-2; the hand may hold that object while pushing) and, as it starts from the
+    previous phase's base, k >= 2 unless the start lies exactly on a lattice point of
+    the option's box.
     """
     if option.kind == "pick":
         return range(1, n_phases - 1)
     if option.kind == "place":
         return range(1 if option.target == problem.holding else 2, n_phases)
     first = 1 if problem.start_index is not None and option.box.contains(*problem.start_index) else 2
-    return range(first, n_phases - 2)
+    return range(first, n_phases - 1)

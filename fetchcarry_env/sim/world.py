@@ -45,6 +45,7 @@ class PushOutcome:
     travelled: float  # metres along the stroke, at most the length asked for
     stalled: bool  # True when the pushed clutter stopped moving with the hand (jammed)
     simulation_steps: int  # stepSimulation calls the stroke and its settling took
+    held: Point3 | None = None  # the held object's centre after the stroke (metres), if the hand holds one
 
 
 @dataclass(frozen=True)
@@ -221,8 +222,14 @@ class Simulation:
         and the stroke stops where the pusher is. The hand then lets go, the world settles,
         every item's pose is read back (:attr:`poses`), and the base ends ``travelled`` metres
         along the stroke with the hand back at rest.
+
+        A hand that holds an object pushes with the object in it (the paper's push while
+        carrying): the object touches nothing (its contacts stay off) and, after the
+        stroke, the hand goes back to the offset it carried the object at, so the object
+        has moved with the base (:attr:`PushOutcome.held`).
         """
         robot = self._robot_body
+        carry = robot.hand if self._held is not None else None
         ux, uy = heading_vector(direction)
         (_, _, center_z), _ = self._poses[clutter_id]
         item_height = self._scenario.clutter_item(clutter_id).height
@@ -250,9 +257,15 @@ class Simulation:
             step()
         steps += physics.PUSH_SETTLE_STEPS
         robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
-        robot.set_hand(robot.rest_hand)
+        held = None
+        if carry is None:
+            robot.set_hand(robot.rest_hand)
+        else:  # the held object fell freely through the stroke, touching nothing: back into the hand
+            robot.set_hand(carry)
+            held = self._hand_world_position()
+            self._grasp(self._held, held)
         self._read_poses()
-        return PushOutcome(travelled=max(travelled, 0.0), stalled=stalled, simulation_steps=steps)
+        return PushOutcome(travelled=max(travelled, 0.0), stalled=stalled, simulation_steps=steps, held=held)
 
     # ------------------------------------------------------------------ reading back
     def item_position(self, name: str) -> Point3:
@@ -324,8 +337,9 @@ class Simulation:
     def _grasp(self, object_id: str, position: Point3) -> None:
         """Attach an object to the hand: it touches nothing and goes where the hand goes.
 
-        No physics runs while the hand is full (a push needs an empty hand, a place lets go
-        first), so the object keeps its mass and only its contacts are switched off.
+        Its contacts are switched off and it keeps its mass: while physics runs with the
+        hand full (a push while carrying) it falls freely, touching nothing, and the push
+        puts it back into the hand afterwards; a place lets go first.
         """
         client = self.client
         body = self._layout.objects[object_id]

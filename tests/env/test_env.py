@@ -225,7 +225,7 @@ def test_masks_follow_the_maskable_ppo_convention():
     assert list(mask[-4:]) == [True, True, False, True]  # empty hand: move, pick, push
     env.step(action(env, *PUSH_PICK_PLACE_PLAN[0]))
     env.step(action(env, *PUSH_PICK_PLACE_PLAN[1]))
-    assert list(u.action_masks()[-4:]) == [True, False, True, False]  # full hand: move, place
+    assert list(u.action_masks()[-4:]) == [True, False, True, True]  # full hand: move, place, push
     no_clutter = make(room(start=(0.5, 1.5)))
     assert list(unwrapped(no_clutter).action_masks()[-4:]) == [True, True, False, False]  # nothing to push
     env.close()

@@ -316,6 +316,60 @@ def test_a_push_against_a_neighbour_that_cannot_move_stops():
     env.close()
 
 
+HOLDING_PUSH_PLAN = (  # the paper's push-aside while carrying: pick, go behind the block, push, place
+    ((0.7, 1.2), "+x", FAR, Mode.PICK),
+    ((0.6, 1.5), "+x", FAR, Mode.MOVE),
+    ((0.75, 1.5), "+x", FAR, Mode.PUSH),  # the bottle, in the hand, ends right over its goal
+    ((0.75, 1.5), "+x", FAR, Mode.PLACE),  # no move between the stroke's end and the place
+)
+
+
+def test_a_push_while_holding_moves_the_clutter_and_the_held_object_with_the_base():
+    env = make(push_pick_place())
+    u = env.unwrapped
+    env.step(action(env, *HOLDING_PUSH_PLAN[0]))
+    env.step(action(env, *HOLDING_PUSH_PLAN[1]))
+    assert u.state.holding == "bottle"
+    assert list(u.action_masks()[-4:]) == [True, False, True, True]  # full hand: move, place, push
+    grip = hand_offset(u.state.base, u.state.heading, u.state.objects["bottle"][:2])
+    block = item_xyz(env, "block")
+    _, _, _, _, info = env.step(action(env, *HOLDING_PUSH_PLAN[2]))
+    assert info["invalid_action"] is None and info["push"]["stalled"] is False
+    assert np.linalg.norm(item_xyz(env, "block")[:2] - block[:2] - (0.15, 0.0)) <= 0.02  # physics as without
+    assert u.state.holding == "bottle" and np.allclose(u.state.base, (0.75, 1.5))
+    held = np.array(u.state.objects["bottle"])
+    assert np.allclose(held, item_xyz(env, "bottle"), atol=1e-12)  # the env reads the hand back
+    assert np.allclose(held, u._sim.robot.hand_position(), atol=1e-9)  # it is in the hand
+    assert np.allclose(hand_offset(u.state.base, u.state.heading, held[:2]), grip, atol=1e-9)  # at the same offset
+    assert held[2] == pytest.approx(STANDING_Z + LIFT_HEIGHT)
+    _, reward, terminated, _, info = env.step(action(env, *HOLDING_PUSH_PLAN[3]))
+    assert info["invalid_action"] is None and terminated and reward > 9.0
+    assert np.linalg.norm(item_xyz(env, "bottle") - (1.35, 1.5, STANDING_Z)) <= 0.01
+    env.close()
+
+
+def test_a_push_while_holding_is_deterministic_and_copies_continue_bit_for_bit():
+    import copy
+    import pickle
+
+    def run(env, steps):
+        for step in steps:
+            env.step(action(env, *step))
+        return env.unwrapped.state, {n: tuple(item_xyz(env, n)) for n in ("block", "bottle")}
+
+    env = make(push_pick_place())
+    run(env, HOLDING_PUSH_PLAN[:2])
+    copies = [copy.deepcopy(env), pickle.loads(pickle.dumps(env))]
+    reference = run(env, HOLDING_PUSH_PLAN[2:])  # the push, then the place (physics settles the bottle)
+    for other in copies:
+        assert run(other, HOLDING_PUSH_PLAN[2:]) == reference
+        other.close()
+    again = make(push_pick_place())
+    assert run(again, HOLDING_PUSH_PLAN) == reference
+    again.close()
+    env.close()
+
+
 # ---------------------------------------------------------------------- the base
 def test_the_base_stops_at_the_first_contact_with_a_wall_and_nothing_tunnels():
     env = make(thin_wall())

@@ -45,3 +45,18 @@ def test_unknown_postures_and_empty_plans_are_refused(spec_example, hand_plan, l
         plan_to_actions(with_phase(hand_plan, 5, posture="reach_up"), spec_example, lattice)
     with pytest.raises(ValueError, match="has no phases"):
         plan_to_actions(replace(hand_plan, status="infeasible", phases=()), spec_example, lattice)
+
+
+def test_a_push_while_carrying_is_a_push_action_then_a_place_on_the_same_cell(spec_example):
+    """The planner's plan for the spec example: pick, carry, push holding the bottle, place at the stroke's end."""
+    from expert.planner import plan
+
+    lattice = Lattice.over(spec_example.area, 0.05)
+    result = plan(spec_example, lattice=lattice)
+    actions = plan_to_actions(result, spec_example, lattice)
+    modes = [a.mode for a in actions]
+    assert len(modes) == 5 and modes.count(Mode.PICK) == 1 and modes[-2:] == [Mode.PUSH, Mode.PLACE], modes
+    push, place = actions[3], actions[4]
+    assert result.phases[3].holding == "bottle"  # the hand is full when the stroke starts
+    assert place.cell == push.cell  # no move between the stroke's end and the place
+    assert push.posture == 0  # reach_far

@@ -1,0 +1,93 @@
+"""Following a plan in the env: the actions left, the state the world should be in, and departures from it.
+
+A :class:`Track` is what :class:`expert.policy.ExpertPolicy` keeps per env: the plan's
+remaining actions, each with the phase the world should be in after it, and the phase
+it should be in now. :func:`departure` says how an observed state departs from a planned
+one beyond tolerances (metres), which is when the expert plans again.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from expert.plans import Phase, Plan
+from expert.to_actions import plan_to_actions
+from fetchcarry_env.actions import Action, Lattice
+from fetchcarry_env.observation import WorldState
+from fetchcarry_env.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class Step:
+    """One action of the plan and the phase the world should be in after it."""
+
+    action: Action
+    expected: Phase
+
+
+@dataclass
+class Track:
+    """The plan being followed in one env of a batch."""
+
+    steps: list[Step] = field(default_factory=list)  # actions not yet given
+    now: Phase | None = None  # the phase the world should be in now
+    started: bool = False  # the planner already ran in this episode
+    replan: str | None = None  # a reason to replan at the next call, whatever the state
+    failed_in: WorldState | None = None  # the state in which the expert could not act
+    failure: str | None = None  # why
+
+    def follow(self, plan: Plan, scenario: Scenario, lattice: Lattice) -> None:
+        """Make ``plan`` (found or not) the plan to follow from now on."""
+        self.started, self.replan, self.steps, self.now = True, None, [], None
+        if plan.found:
+            actions = plan_to_actions(plan, scenario, lattice)
+            self.steps = [Step(a, p) for a, p in zip(actions, plan.phases[1:], strict=True)]
+            self.now = plan.phases[0]
+
+    def fail(self, world: WorldState, failure: str) -> None:
+        """Forget the plan: the expert cannot act in ``world`` (it will not plan again until the state changes)."""
+        self.steps, self.now, self.failed_in, self.failure = [], None, world, failure
+
+    def advance(self) -> Action:
+        """The next action; the world should then be in its phase."""
+        step = self.steps.pop(0)
+        self.now = step.expected
+        return step.action
+
+    def why_plan(self, world: WorldState, base_tolerance: float, item_tolerance: float) -> str | None:
+        """Why the expert must plan now in ``world``, or None to follow the plan."""
+        if self.now is None:
+            return "retry after a failure" if self.started else "episode_start"
+        gap = departure(self.now, world, base_tolerance, item_tolerance)
+        if gap is not None:
+            return f"departed: {gap}"
+        if self.replan is not None:
+            return self.replan
+        if not self.steps:
+            return "plan used up"
+        return None
+
+
+def departure(
+    expected: Phase | WorldState, world: WorldState, base_tolerance: float, item_tolerance: float
+) -> str | None:
+    """How ``world`` departs from ``expected`` beyond the tolerances (metres), or None."""
+    gap = math.dist(expected.base, world.base)
+    if gap > base_tolerance + 1e-9:
+        return f"base {gap * 100:.1f} cm from the plan"
+    if expected.holding != world.holding:
+        return f"holding {world.holding} instead of {expected.holding}"
+    for planned, seen in ((expected.objects, world.objects), (expected.clutter, world.clutter)):
+        for item, position in planned.items():
+            if item == world.holding or item not in seen:
+                continue
+            gap = math.dist(position[:2], seen[item][:2])
+            if gap > item_tolerance:
+                return f"{item} {gap * 100:.1f} cm from the plan"
+    return None
+
+
+def solved(scenario: Scenario, world: WorldState) -> bool:
+    """Every object delivered and the hand empty."""
+    return world.holding is None and len(world.delivered(scenario)) == len(scenario.objects)
