@@ -61,6 +61,8 @@ TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.
     "scenario": (dict,),  # the scenario itself; a path would make the dataset read another file
     "resolution": (int, float),
     "render_mode": (type(None),),  # gym.make records it; replay renders nothing
+    "reward": (str,),  # FetchCarryPushPhases-v0: "paper" or "learning" (the env checks the name)
+    "gamma": (int, float),  # FetchCarryPushPhases-v0: the learning reward's discount
 }
 
 

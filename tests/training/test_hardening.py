@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from training.cli import main
@@ -144,10 +145,11 @@ def test_ctrl_c_during_a_rollout_exits_130(capsys, monkeypatch) -> None:
     assert status == 130 and out == "" and "interrupted" in err
 
 
-def test_sigint_stops_generate_within_a_second(tmp_path: Path) -> None:
-    """A real SIGINT to a running ``generate`` (random policy: no solver to swallow it)."""
+@pytest.mark.parametrize(("family", "policy"), [("basic", "random"), ("multi", "expert")])
+def test_sigint_stops_generate_within_a_second(tmp_path: Path, family: str, policy: str) -> None:
+    """A real SIGINT to a running ``generate``; with the expert it mostly lands in a SCIP solve."""
     process = cli_process(
-        "generate", "--family", "basic", "--policy", "random", "--episodes", "100000", "--dataset-id", DATASET_ID,
+        "generate", "--family", family, "--policy", policy, "--episodes", "100000", "--dataset-id", DATASET_ID,
         minari_root=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
     )  # fmt: skip
     staging = tmp_path / ".staging" / DATASET_ID
@@ -160,6 +162,34 @@ def test_sigint_stops_generate_within_a_second(tmp_path: Path) -> None:
     stopped = time.monotonic() - sent
     assert process.returncode == 130 and "Traceback" not in err and "run the same command again" in err
     assert stopped < 1.0 + 0.5  # within a second, plus the poll of a loaded machine
+
+
+def test_an_interrupted_then_resumed_dataset_equals_an_uninterrupted_one(tmp_path: Path, minari_root: Path) -> None:
+    """SIGINT in the middle of expert episodes, then a resume: every episode is the one an uninterrupted run makes."""
+    import h5py
+
+    argv = ["generate", "--family", "multi", "--seed", "11", "--episodes", "6", "--no-progress"]
+    process = cli_process(*argv, "--dataset-id", DATASET_ID, minari_root=minari_root,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    staging = minari_root / ".staging" / DATASET_ID
+    deadline = time.monotonic() + 60
+    while not list(staging.glob("episode_*.npz")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    assert process.wait(timeout=30) == 130
+    assert 1 <= len(list(staging.glob("episode_*.npz"))) < 6
+    for dataset_id in (DATASET_ID, "fetchcarry/whole-v0"):  # resume the first; make the second in one go
+        assert cli_process(*argv, "--dataset-id", dataset_id, minari_root=minari_root,
+                           stdout=subprocess.DEVNULL).wait(timeout=300) == 0  # fmt: skip
+    files = [h5py.File(dataset_path(d) / "data" / "main_data.hdf5") for d in (DATASET_ID, "fetchcarry/whole-v0")]
+    try:
+        for k in range(6):
+            resumed, whole = (f[f"episode_{k}"] for f in files)
+            assert np.array_equal(resumed["actions"][()], whole["actions"][()]), k
+            assert np.array_equal(resumed["infos"]["objective"][()], whole["infos"]["objective"][()], equal_nan=True)
+    finally:
+        for file in files:
+            file.close()
 
 
 def test_an_internal_error_exits_3_with_the_path_of_a_full_report(capsys, monkeypatch) -> None:
@@ -368,3 +398,21 @@ def test_a_plan_whose_solve_was_interrupted_is_not_written(capsys, monkeypatch, 
     output = tmp_path / "out.plan.json"
     status, _, err = run(capsys, "plan", EXAMPLE, "-o", output)
     assert status == 130 and "interrupted" in err and not output.exists()
+
+
+def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None:
+    from gymnasium.envs.registration import EnvSpec
+
+    from training.datasets import UnknownEnvError, trusted_env_spec
+
+    phases = EnvSpec(
+        "FetchCarryPushPhases-v0",
+        "fetchcarry_env.phase_env:make_phase_env",
+        kwargs={"family": "basic", "reward": "learning"},
+    )
+    assert trusted_env_spec(phases, "d/x-v0") == ("FetchCarryPushPhases-v0", {"family": "basic", "reward": "learning"})
+    foreign = EnvSpec("FetchCarryPushPhases-v0", "fetchcarry_env.env:FetchCarryPushEnv")  # another id's entry point
+    with pytest.raises(UnknownEnvError, match="names an unknown env"):
+        trusted_env_spec(foreign, "d/x-v0")
+    with pytest.raises(UnknownEnvError, match="layout"):
+        trusted_env_spec(EnvSpec(phases.id, phases.entry_point, kwargs={"layout": "x"}), "d/x-v0")
