@@ -255,11 +255,6 @@ def scenario_with_obstacles(count: int) -> dict:
     return document
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="planner bug, not input handling (expert/milp/grid.py, owned by planner-scale): 1,000 obstacles, which "
-    "the scenario format allows, end in a RecursionError in expert.milp.grid during plan()",
-)
 def test_plan_with_1000_obstacles_exits_without_a_traceback(capsys, tmp_path):
     scenario = write(tmp_path, "posts.json", json.dumps(scenario_with_obstacles(1000)).encode())
     status, err = run_cli(capsys, "plan", scenario, "-o", tmp_path / "posts.plan.json", "--time-limit", "5")

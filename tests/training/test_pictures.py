@@ -31,8 +31,8 @@ def test_each_step_says_what_the_arm_did(record) -> None:
     steps = episode_steps(record.states, record.actions)
     acted = [step.label() for step in steps if step.acted]
     assert len(acted) == 3
-    assert acted[0].endswith("push block 15 cm")
-    assert acted[1].endswith("pick bottle") and acted[2].endswith("place bottle")
+    assert acted[0].endswith("pick bottle")  # the paper's push-aside: carried to the goal, pushed, placed
+    assert acted[1].endswith("push block 15 cm") and acted[2].endswith("place bottle")
     assert [step.number for step in steps] == list(range(1, len(record.actions) + 1))
     assert key_states(steps) == [0, *(step.number for step in steps if step.acted)]  # the last step is the place
 
