@@ -16,6 +16,7 @@ from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.files import check_picture, load_scenario
 from training.cli.text import echo
+from training.sources import EpisodeSource
 
 DEFAULT_DEMO_PICTURE = "episode.png"
 DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
@@ -51,10 +52,8 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
     )
 
 
-def episode_source(args: argparse.Namespace, policy: str | None = None):
+def episode_source(args: argparse.Namespace, policy: str | None = None) -> EpisodeSource:
     """The ``EpisodeSource`` the options of :func:`add_source_arguments` describe."""
-    from training.generate import EpisodeSource
-
     scenario = None if args.scenario is None else load_scenario(Path(args.scenario)).to_dict()
     return EpisodeSource(
         family=args.family,
