@@ -72,21 +72,35 @@ def evaluate_expert(
     Episodes ``start .. start + episodes - 1`` are run (seeds ``seed + k``), so a long
     evaluation can be split. Failures are written to ``failures_dir`` when given.
     """
-    results = []
+    results: list[FamilyResult] = []
     for family in families:
         source = EpisodeSource(family=family, seed=seed, policy="expert", time_limit=time_limit)
         records: list[EpisodeRecord] = []
+        failures: list[dict[str, Any]] = []  # written as each failed episode ends, so an interruption keeps them
         started = time.perf_counter()
-        with progress_bar(episodes, f"expert on {family}", enabled=progress) as bar:
-            for _, record in run_episodes(source, list(range(start, start + episodes)), workers=workers):
-                records.append(record)
-                bar.update(1)
-                bar.set_postfix_str(f"success {sum(r.figures.success for r in records)}/{len(records)}")
-        wall = time.perf_counter() - started
-        failed = sorted((r for r in records if not r.figures.success), key=lambda r: r.seed)
-        failures = [_failure_entry(family, r, failures_dir) for r in failed]
-        results.append(_summarise(family, records, failures, wall, workers))
+        try:
+            with progress_bar(episodes, f"expert on {family}", enabled=progress) as bar:
+                for _, record in run_episodes(source, list(range(start, start + episodes)), workers=workers):
+                    records.append(record)
+                    if not record.figures.success:
+                        failures.append(_failure_entry(family, record, failures_dir))
+                    bar.update(1)
+                    bar.set_postfix_str(f"success {sum(r.figures.success for r in records)}/{len(records)}")
+        except KeyboardInterrupt:
+            if records:
+                results.append(_summarise(family, records, failures, time.perf_counter() - started, workers))
+            raise EvaluationInterrupted(results) from None
+        failures.sort(key=lambda entry: entry["seed"])
+        results.append(_summarise(family, records, failures, time.perf_counter() - started, workers))
     return results
+
+
+class EvaluationInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`evaluate_expert`; ``results`` holds the figures of the episodes that finished."""
+
+    def __init__(self, results: list[FamilyResult]) -> None:
+        super().__init__("interrupted")
+        self.results = results
 
 
 def _summarise(

@@ -416,3 +416,26 @@ def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None
         trusted_env_spec(foreign, "d/x-v0")
     with pytest.raises(UnknownEnvError, match="layout"):
         trusted_env_spec(EnvSpec(phases.id, phases.entry_point, kwargs={"layout": "x"}), "d/x-v0")
+
+
+def test_ctrl_c_during_evaluate_expert_keeps_what_finished(capsys, monkeypatch, tmp_path: Path) -> None:
+    import training.evaluate_expert
+
+    real = training.evaluate_expert.run_episodes
+
+    def two_then_interrupt(*args, **kwargs):
+        for count, item in enumerate(real(*args, **kwargs)):
+            if count == 2:
+                raise KeyboardInterrupt
+            yield item
+
+    monkeypatch.setattr(training.evaluate_expert, "run_episodes", two_then_interrupt)
+    failures = tmp_path / "failures"
+    status, out, err = run(
+        capsys, "evaluate-expert", "--families", "basic", "--episodes", "5", "--time-limit", "0.0001",
+        "--failures-dir", failures, "--no-progress",
+    )  # fmt: skip
+    assert status == 130 and "interrupted after 2 finished episode(s)" in err
+    assert "failed: basic seed 0" in out and "failed: basic seed 1" in out
+    written = sorted(p.name for p in failures.glob("*.outcome.json"))
+    assert written == ["basic-seed0.outcome.json", "basic-seed1.outcome.json"]

@@ -14,6 +14,7 @@ from typing import Any
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
 from training.cli.text import echo
 from training.sources import EpisodeSource
@@ -265,23 +266,36 @@ def families(text: str) -> tuple[str, ...]:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
-    from training.evaluate_expert import SUCCESS_GOAL, evaluate_expert, results_table
+    from training.evaluate_expert import SUCCESS_GOAL, EvaluationInterrupted, evaluate_expert
 
-    results = evaluate_expert(
-        families(args.families),
-        episodes=args.episodes,
-        seed=args.seed,
-        start=args.start,
-        workers=args.workers,
-        time_limit=args.time_limit,
-        failures_dir=Path(args.failures_dir) if args.failures_dir else None,
-        progress=not args.no_progress,
-    )
-    if args.json:
-        print(json.dumps([r.to_dict() for r in results], indent=2))
-    else:
-        echo(results_table(results))
-        for result in results:
-            for failure in result.failures:
-                echo(f"failed: {failure['family']} seed {failure['seed']}: {failure['outcome']} ({failure['replay']})")
+    try:
+        results = evaluate_expert(
+            families(args.families),
+            episodes=args.episodes,
+            seed=args.seed,
+            start=args.start,
+            workers=args.workers,
+            time_limit=args.time_limit,
+            failures_dir=Path(args.failures_dir) if args.failures_dir else None,
+            progress=not args.no_progress,
+        )
+    except EvaluationInterrupted as interrupted:  # keep what finished: print its figures, then exit 130
+        if interrupted.results:
+            _print_evaluation(interrupted.results, args.json)
+        finished = sum(r.episodes for r in interrupted.results)
+        say(f"interrupted after {finished} finished episode(s); the figures above are theirs")
+        return INTERRUPTED
+    _print_evaluation(results, args.json)
     return 0 if all(r.success_rate >= SUCCESS_GOAL for r in results) else 1
+
+
+def _print_evaluation(results: list[Any], as_json: bool) -> None:
+    from training.evaluate_expert import results_table
+
+    if as_json:
+        print(json.dumps([r.to_dict() for r in results], indent=2))
+        return
+    echo(results_table(results))
+    for result in results:
+        for failure in result.failures:
+            echo(f"failed: {failure['family']} seed {failure['seed']}: {failure['outcome']} ({failure['replay']})")
