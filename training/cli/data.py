@@ -33,9 +33,11 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
         "no network. Episode k uses seed SEED + k; every episode stores its seed and scenario JSON (episode "
         "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
         "interrupted run resumes where it stopped when the same command is run again. An existing dataset id "
-        "is never overwritten without --overwrite.",
-        epilog="Exit status: 0 the dataset is complete, 2 bad input (existing id, other options than a "
-        "partial run), 130 interrupted (run again to resume).",
+        "is never overwritten without --overwrite; with it, the new dataset replaces the old one only once it is "
+        "whole. One run per dataset id at a time; a staged episode that cannot be read is set aside and made again.",
+        epilog="Exit status: 0 the dataset is complete (also when it already was, with the same options), 2 bad "
+        "input (an existing id made with other options, a partial run with other options, another run working on "
+        "the id, too little disk space), 130 interrupted (run the same command again to resume).",
     )
     add_source_arguments(parser)
     parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
