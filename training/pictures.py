@@ -13,9 +13,9 @@ The still (PNG, JPEG, SVG, PDF) has three parts under a title with the episode's
 
 The colours are those of the plan plot (:mod:`expert.plot`) and of the renders: objects
 red, goals green, clutter blue in the maps and in the 3-D renders alike. Labels that
-would overlap are moved apart. The GIF shows the env's frames, one per state, rendered
-at :data:`GIF_RENDER_SIZE`, each under a caption that says which step it is and what
-the step did. Headless (matplotlib's Agg canvas, Pillow for GIFs).
+would overlap are moved apart. The GIF shows, for every state, the env's render
+(cropped to where the episode happens) beside the top-down map of the path so far,
+under a caption that says which step it is and what the step did. Headless (matplotlib's Agg canvas, Pillow for GIFs).
 """
 
 from __future__ import annotations
@@ -51,7 +51,8 @@ STILL_DPI = 100
 # The env's render size for a still picture: the strip crops it, so it is rendered large.
 STILL_RENDER_SIZE = (1024, 768)  # pixels (width, height)
 GIF_RENDER_SIZE = (1024, 768)  # pixels (width, height) the env renders a GIF's frames at, before the crop
-GIF_WIDTH = 800  # pixels: a GIF's width (frames cropped to where the episode happens, then scaled to this)
+GIF_HEIGHT = 540  # pixels: a GIF's render and map, side by side at this height (under the caption)
+GIF_MAP_IN = 5.4  # inches (at 100 dpi) of the map beside a GIF's render
 CAPTION_PX = 30  # pixels: the caption's font size; its band is twice as high
 
 
@@ -78,7 +79,11 @@ def save_episode_picture(record: EpisodeRecord, path: str | Path) -> Path:
     if is_gif(path):
         scenario = Scenario.from_dict(record.scenario)
         points = episode_points(scenario, record.states)
-        frames = [crop(np.asarray(frame), scenario, points) for frame in record.frames]
+        steps = episode_steps(record.states, record.actions)
+        frames = [
+            side_by_side(crop(np.asarray(frame), scenario, points), map_so_far(scenario, record.states, steps, k))
+            for k, frame in enumerate(record.frames)
+        ]
         save_gif(frames, path, captions=gif_captions(record))
     else:
         save_story(record, path)
@@ -92,14 +97,35 @@ def save_gif(
     from PIL import Image
 
     images = [Image.fromarray(np.asarray(frame, dtype=np.uint8)) for frame in frames]
-    images = [
-        image.resize((GIF_WIDTH, round(image.height * GIF_WIDTH / image.width)), Image.Resampling.LANCZOS)
-        for image in images
-    ]
     if captions is not None:
         images = [captioned(image, text) for image, text in zip(images, captions, strict=True)]
     durations = [frame_ms] * (len(images) - 1) + [2 * frame_ms]
     images[0].save(path, save_all=True, append_images=images[1:], duration=durations, loop=0)
+
+
+def map_so_far(scenario: Scenario, states: Sequence[WorldState], steps: Sequence[Step], index: int) -> np.ndarray:
+    """The top-down map of state ``index`` with the base's path up to it, as a uint8 rgb array."""
+    figure = Figure(figsize=(GIF_MAP_IN, GIF_MAP_IN), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    view = scenario.area.inflate(drawing.MARGIN)
+    drawing.frame_map(axes, view)
+    draw_episode(axes, scenario, states[: index + 1], steps[:index], label_size_m=0.2 * view.size[0] / GIF_MAP_IN)
+    figure.canvas.draw()
+    drawing.separate_labels(axes)
+    figure.canvas.draw()
+    return np.asarray(figure.canvas.buffer_rgba())[..., :3].copy()
+
+
+def side_by_side(left: np.ndarray, right: np.ndarray, height: int = GIF_HEIGHT) -> np.ndarray:
+    """Two rgb arrays scaled to ``height`` pixels and put next to each other."""
+    from PIL import Image
+
+    parts = []
+    for array in (left, right):
+        image = Image.fromarray(np.asarray(array, dtype=np.uint8))
+        parts.append(np.asarray(image.resize((round(image.width * height / image.height), height))))
+    return np.concatenate(parts, axis=1)
 
 
 def episode_points(scenario: Scenario, states: Sequence[WorldState]) -> list[tuple[float, float, float]]:
