@@ -3,6 +3,7 @@
 Run from the repository root::
 
     PYTHONPATH=. python tests/fuzz/campaign.py --examples 2000
+    PYTHONPATH=. python tests/fuzz/campaign.py --timings
 
 It draws mutated scenario files, plan files and (scenario, plan) pairs for
 ``fetchcarry validate`` with the strategies of :mod:`mutations` (derandomized: the
@@ -115,10 +116,54 @@ def campaign(examples: int, workdir: Path) -> dict[str, Counter]:
     return counts
 
 
+def timings() -> None:
+    """Seconds to load the largest scenarios and to validate long plans on 1,024 obstacles (printed)."""
+    import json
+    import time
+    from dataclasses import replace
+
+    from test_fuzz_inputs import HAND, scenario_with_obstacles
+
+    with tempfile.TemporaryDirectory() as folder:
+        huge = copy_of_example(obstacles=300_000)
+        path = Path(folder) / "huge.json"
+        path.write_text(json.dumps(huge, indent=1))
+        started = time.perf_counter()
+        with contextlib.suppress(ScenarioError):
+            Scenario.load(path)
+        print(f"refuse 300,000 obstacles ({path.stat().st_size / 1e6:.0f} MB): {time.perf_counter() - started:.2f} s")
+    started = time.perf_counter()
+    scenario = Scenario.from_dict(scenario_with_obstacles(1024))
+    print(f"load and check 1,024 obstacles: {time.perf_counter() - started:.3f} s")
+    for label, far in (("back and forth", (4.0, 0.5)), ("diagonal across the posts", (59.0, 59.0))):
+        near = (4.0, 0.0) if far == (4.0, 0.5) else (9.0, 9.0)
+        moves = [replace(HAND.phases[1], base=base) for _ in range(1000) for base in (near, far)]
+        plan = replace(HAND, phases=(HAND.phases[0], *moves, *HAND.phases[1:]))
+        started = time.perf_counter()
+        found = validate_plan(scenario, plan)
+        print(
+            f"validate {len(plan.phases):,} phases ({label}), 1,024 obstacles: {time.perf_counter() - started:.2f} s, "
+            f"{len(found):,} violations"
+        )
+
+
+def copy_of_example(obstacles: int) -> dict:
+    """The example scenario with ``obstacles`` copies of its box (for the refusal by count)."""
+    import copy
+
+    document = copy.deepcopy(VALID_SCENARIO)
+    document["obstacles"] = [{"id": f"box_{i}", "min": [2.8, 2.9], "max": [3.2, 3.3]} for i in range(obstacles)]
+    return document
+
+
 def main_(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--examples", type=int, default=1000, help="files drawn for each of the three targets")
+    parser.add_argument("--timings", action="store_true", help="print load and validation times instead")
     args = parser.parse_args(argv)
+    if args.timings:
+        timings()
+        return 0
     with tempfile.TemporaryDirectory() as folder:
         counts = campaign(args.examples, Path(folder))
     for target, counter in counts.items():
