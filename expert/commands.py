@@ -1,7 +1,7 @@
 """The expert's commands: ``fetchcarry plan``, ``fetchcarry validate`` and ``fetchcarry bench planner``.
 
 Registered into ``training/cli.py`` by :func:`register`. Exit statuses follow
-``spec/interfaces.md``: ``plan`` 0 when a plan was found and 1 when none
+``README.md``: ``plan`` 0 when a plan was found and 1 when none
 (infeasible, time limit); ``validate`` 0 for a valid plan and 1 for an invalid one;
 2 for bad input (raised here as ``UsageError``, ``ScenarioError`` or
 ``PlanFormatError`` and turned into one short message by the CLI's ``main``).
@@ -46,7 +46,7 @@ def _register_plan(commands: argparse._SubParsersAction) -> None:
         "one-screen summary (status, objective, the phases, timings) and write the plan as "
         "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
         "records the status (infeasible, time_limit) and the timings. The command also checks the "
-        "plan with the validator and warns on stderr if it breaks spec/plan.md.",
+        "plan with the validator and warns on stderr if it breaks docs/plan-format.md.",
         epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
@@ -104,7 +104,7 @@ def run_plan(args: argparse.Namespace) -> int:
         shown = "\n".join(f"  - {v}" for v in violations[:MAX_SUMMARY_VIOLATIONS])
         more = len(violations) - MAX_SUMMARY_VIOLATIONS
         tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
-        print(f"fetchcarry: warning: the plan breaks spec/plan.md:\n{shown}{tail}", file=sys.stderr)
+        print(f"fetchcarry: warning: the plan breaks docs/plan-format.md:\n{shown}{tail}", file=sys.stderr)
     return 0 if result.found else 1
 
 
@@ -174,14 +174,14 @@ def _plan_summary_json(
 def _register_validate(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "validate",
-        help="check a plan against spec/plan.md and list every violation",
-        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of spec/plan.md "
+        help="check a plan against docs/plan-format.md and list every violation",
+        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of docs/plan-format.md "
         "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
         "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
         "an empty hand, a forward or lateral stroke and the contact within reach). Every violation is "
         "listed, one line each, naming the rule, the phase and the ids.",
         epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
-        "that breaks spec/scenario.md, a plan file that is not fetchcarry-plan/1).",
+        "that breaks docs/scenario-format.md, a plan file that is not fetchcarry-plan/1).",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
     parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")

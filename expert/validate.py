@@ -1,4 +1,4 @@
-"""The plan validator: ``spec/plan.md`` "What makes a plan valid", checked without the solver.
+"""The plan validator: ``docs/plan-format.md`` "What makes a plan valid", checked without the solver.
 
 :func:`validate_plan` lists every violation of a plan for a scenario, one message
 each, naming the rule, the phase index and the ids involved, so that a person can
@@ -80,7 +80,7 @@ from fetchcarry_env.kinematics import (
 )
 from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
-TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (spec/plan.md)
+TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (docs/plan-format.md)
 CLEARANCE_SLACK = 1e-6  # metres: a base segment may come this much closer than the radius (rule 1)
 OBJECTIVE_RTOL = 1e-6  # relative tolerance of the objective against Eq. 1 recomputed (rule 8)
 GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1
@@ -128,7 +128,7 @@ class _Context:
 
 
 def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None) -> list[str]:
-    """Every way ``plan`` breaks ``spec/plan.md`` for ``scenario``, one message each; empty when valid.
+    """Every way ``plan`` breaks ``docs/plan-format.md`` for ``scenario``, one message each; empty when valid.
 
     ``holding`` names an object already in the hand at the start, as in plans made
     mid-episode with ``plan(..., holding=...)``; its ``start`` in the scenario is then
