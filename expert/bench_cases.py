@@ -3,7 +3,7 @@
 Each generator draws from the ``numpy.random.Generator`` it is given, so a seed gives
 the same scenario bit for bit. They build :class:`~fetchcarry_env.scenario.Scenario`
 records directly (independent of the env's families) and return only scenarios that
-pass every rule of ``spec/scenario.md``.
+pass every rule of ``docs/scenario-format.md``.
 
 V-B (basic performance): start (0, 0), 0.6 m tables centred at (2, 2) (the object) and
 (4, 4) (its goal), one 0.4 m square obstacle whose centre is drawn uniformly in one of

@@ -1,4 +1,4 @@
-"""The planner's answer: :class:`Plan`, in the ``fetchcarry-plan/1`` format of ``spec/plan.md``.
+"""The planner's answer: :class:`Plan`, in the ``fetchcarry-plan/1`` format of ``docs/plan-format.md``.
 
 A plan is a sequence of :class:`Phase` records. Phase 0 is the initial state
 (``action == "start"``); each later phase is one step: the base slides along the
@@ -82,7 +82,7 @@ class Phase:
 
 @dataclass(frozen=True)
 class Plan:
-    """A plan for one scenario, as ``spec/plan.md`` defines it.
+    """A plan for one scenario, as ``docs/plan-format.md`` defines it.
 
     ``status`` is ``optimal``, ``feasible`` (a plan, optimality not proven in time),
     ``infeasible`` (no plan up to the largest number of phases tried) or

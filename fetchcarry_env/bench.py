@@ -1,7 +1,7 @@
 """The environment benchmark: how fast FetchCarryPush-v0 resets and steps, next to what PyBullet itself costs.
 
 ``fetchcarry bench env`` (its options and table are in :mod:`training.cli.bench`) runs, in this process,
-the spec's example scenario (``spec/scenario.md``) and the MILP expert's optimal plan
+the format's example scenario (``docs/scenario-format.md``) and the MILP expert's optimal plan
 for it (two moves, a push, a move, a pick, a move, a place), episode after episode, and
 times every reset and step. It prints, with the project's goal for each: reset of an
 unchanged layout, move, pick and place steps per second, a push step as a multiple
@@ -37,7 +37,7 @@ DEFAULT_RESETS = 500  # resets per reset figure (the rebuilding ones use a tenth
 DEFAULT_RANDOM_STEPS = 3000  # steps of the random masked policy
 DEFAULT_SEED = 0
 
-SCENARIO: dict[str, Any] = {  # spec/scenario.md's example
+SCENARIO: dict[str, Any] = {  # docs/scenario-format.md's example
     "format": "fetchcarry-scenario/1",
     "name": "basic-area3-07",
     "area": {"min": [-1.0, -1.0], "max": [6.0, 6.0]},

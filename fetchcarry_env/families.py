@@ -2,7 +2,7 @@
 
 Every family draws from the ``numpy.random.Generator`` it is given (the env passes its
 ``np_random``, seeded by ``reset(seed=...)``), so a seed gives the same scenario bit for
-bit. A family only returns scenarios that pass every rule of ``spec/scenario.md`` and
+bit. A family only returns scenarios that pass every rule of ``docs/scenario-format.md`` and
 whose every object and goal the robot can reach from at least one side
 (:mod:`fetchcarry_env.reachability`); a layout that fails is drawn again.
 

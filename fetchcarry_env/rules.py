@@ -26,7 +26,7 @@ from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Posture, Scenario
 
 ALIGN_TOLERANCE = 1e-6  # metres: a stroke whose cross-axis component is below this is axis-aligned
-CONTACT_SLACK = 1e-6  # metres: a base that passes this close to a blocker (spec/plan.md's tolerance) does not touch it
+CONTACT_SLACK = 1e-6  # metres: a base that passes this close to a blocker (docs/plan-format.md) does not touch it
 EDGE_DEPTH = 1.0  # metres: thickness of the strips outside the area that stop the base at its edge
 AREA_EDGE = "area edge"  # what a move that stops at the edge of the area reports it touched
 

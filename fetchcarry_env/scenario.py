@@ -2,7 +2,7 @@
 
 A :class:`Scenario` is what the environment simulates, what the MILP expert plans on
 and what the benchmark reports about. It is a tree of frozen dataclasses that reads
-and writes exactly the JSON of ``spec/scenario.md``; :meth:`Scenario.from_dict`
+and writes exactly the JSON of ``docs/scenario-format.md``; :meth:`Scenario.from_dict`
 checks every rule of that spec and reports all violations at once in a
 :class:`ScenarioError` that names the rule and the ids.
 
@@ -33,7 +33,7 @@ MAX_SHOWN = 50  # violations spelled out in the message of a ScenarioError (all 
 
 
 class ScenarioError(ValueError):
-    """A scenario breaks one or more rules of ``spec/scenario.md``.
+    """A scenario breaks one or more rules of ``docs/scenario-format.md``.
 
     ``violations`` lists one message per broken rule and id; ``str(error)`` shows them all.
     """
@@ -259,7 +259,7 @@ def _rect_dict(rect: Rect) -> dict[str, list[float]]:
 
 # ---------------------------------------------------------------------- rules
 def check_rules(scenario: Scenario) -> list[str]:
-    """Every violation of the six rules of ``spec/scenario.md``, one message each."""
+    """Every violation of the six rules of ``docs/scenario-format.md``, one message each."""
     return [
         *_rule_unique_ids(scenario),
         *_rule_rectangles(scenario),

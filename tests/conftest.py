@@ -15,7 +15,7 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 
 @pytest.fixture
 def spec_example_dict() -> dict:
-    """The scenario of spec/scenario.md (a fresh deep copy each time)."""
+    """The scenario of docs/scenario-format.md (a fresh deep copy each time)."""
     return copy.deepcopy(json.loads((EXAMPLES / "push_basic.json").read_text()))
 
 

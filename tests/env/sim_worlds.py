@@ -125,7 +125,7 @@ SPEC_EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.js
 
 
 def spec_example() -> Scenario:
-    """The scenario of spec/scenario.md: a 20 cm block on the goal, an obstacle between the tables."""
+    """The scenario of docs/scenario-format.md: a 20 cm block on the goal, an obstacle between the tables."""
     return Scenario.load(SPEC_EXAMPLE)
 
 

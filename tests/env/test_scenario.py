@@ -1,4 +1,4 @@
-"""The scenario model: spec/scenario.md read and written exactly, every rule checked with its message."""
+"""The scenario model: docs/scenario-format.md read and written exactly, every rule checked with its message."""
 
 from __future__ import annotations
 

@@ -387,7 +387,7 @@ def test_the_base_stops_at_the_first_contact_with_a_wall_and_nothing_tunnels():
 
 
 def test_a_move_along_a_table_at_exactly_the_radius_is_free():
-    """Plans keep a clearance of at least the radius less 1 µm (spec/plan.md): the env must agree."""
+    """Plans keep a clearance of at least the radius less 1 µm (docs/plan-format.md): the env must agree."""
     for closer, touches in ((0.0, False), (5e-7, False), (1e-4, True)):
         table = ((1.0, 1.0), (2.0, 2.03 + closer))  # the path at y = 2.25 passes its edge at 0.22 - closer
         env = make(room(start=(0.5, 2.25), table=table))

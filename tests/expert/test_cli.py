@@ -46,7 +46,7 @@ def bad_inputs(tmp_path) -> dict[str, Path]:
     broken = tmp_path / "broken.json"
     broken.write_text('{"format": "fetchcarry-scenario/1", "name": ')
     invalid = json.loads(EXAMPLE.read_text())
-    invalid["objects"][0]["goal"] = [5.0, 5.0]  # on no table: rule 4 of spec/scenario.md
+    invalid["objects"][0]["goal"] = [5.0, 5.0]  # on no table: rule 4 of docs/scenario-format.md
     invalid["obstacles"][0]["id"] = "table_src"  # a duplicate id: rule 1
     invalid_path = tmp_path / "invalid.json"
     invalid_path.write_text(json.dumps(invalid))

@@ -206,7 +206,7 @@ def test_lower_bound_is_valid(scenario):
 
 
 def test_skeleton_proves_three_phases_too_few_for_the_paper_layout():
-    """The fact measured on SCIP (guides/facts.md): with tables at (2, 2) and (4, 4), 3 phases are infeasible."""
+    """Measured on SCIP: with tables at (2, 2) and (4, 4), 3 phases are infeasible."""
     scenario = dataclasses.replace(bench_cases.basic("V", np.random.default_rng(0)), obstacles=())
     assert skeleton(problem_of(scenario)).phases == 4
 

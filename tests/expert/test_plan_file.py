@@ -10,7 +10,7 @@ import pytest
 
 from expert.plans import Plan, PlanFormatError
 
-SPEC_EXAMPLE = {  # spec/plan.md's example, verbatim
+SPEC_EXAMPLE = {  # the plan format's reference example (as first published), verbatim
     "format": "fetchcarry-plan/1",
     "scenario": "basic-area3-07",
     "status": "optimal",

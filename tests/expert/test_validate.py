@@ -462,3 +462,24 @@ def test_any_well_formed_plan_gets_messages_not_an_exception(phases, status):
     scenario = Scenario.load(EXAMPLE)
     violations = validate_plan(scenario, Plan(scenario.name, status, None, tuple(phases)))
     assert all(isinstance(m, str) and m.split(":")[0].startswith(("structure", "rule ")) for m in violations)
+
+
+_coord = st.floats(-50.0, 50.0)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None)
+@given(
+    p=st.tuples(_coord, _coord),
+    q=st.tuples(_coord, _coord),
+    corner=st.tuples(_coord, _coord),
+    size=st.tuples(st.floats(0.001, 5.0), st.floats(0.001, 5.0)),
+    radius=st.floats(0.001, 1.0),
+)
+def test_rule1_pre_test_skips_only_far_blockers(p, q, corner, size, radius):
+    """The pre-test that keeps rule 1 fast never skips a blocker closer than the radius."""
+    from expert.validate import _far_from_segment
+    from fetchcarry_env.geometry import Rect, segment_rect_distance
+
+    rect = Rect(corner[0], corner[1], corner[0] + size[0], corner[1] + size[1])
+    if _far_from_segment(p, q, rect, radius):
+        assert segment_rect_distance(p, q, rect) > radius

@@ -66,7 +66,7 @@ def _nested(depth: int) -> Any:
 
 
 hostile_values = st.one_of(
-    st.sampled_from(HOSTILE_SCALARS),
+    st.sampled_from(HOSTILE_SCALARS).map(copy.deepcopy),  # a copy: later mutations must not change the table
     st.integers(min_value=-(10**30), max_value=10**30),
     st.floats(allow_nan=True, allow_infinity=True),
     st.text(max_size=20),

@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import file_bytes, mutated, nudged, to_json_text
 
-from expert.plans import Plan, PlanFormatError
+from expert.plans import Phase, Plan, PlanFormatError
 from expert.validate import validate_plan
 from fetchcarry_env.geometry import to_world_frame
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
@@ -104,6 +104,35 @@ def test_plan_load_raises_only_plan_format_error_and_the_validator_only_returns(
     assert all(isinstance(v, str) and v.startswith(("structure", "rule ")) for v in violations), violations
     for v in violations:
         v.encode("utf-8")
+
+
+_any_float = st.floats(allow_nan=False, allow_infinity=False)
+_any_point = st.tuples(_any_float, _any_float)
+
+
+@fuzz(150)
+@given(
+    phases=st.lists(
+        st.builds(
+            Phase,
+            base=_any_point,
+            heading=st.sampled_from(["+x", "+y", "-x", "-y"]),
+            action=st.sampled_from(["start", "move", "pick", "place", "push"]),
+            target=st.sampled_from([None, "bottle", "block"]),
+            posture=st.sampled_from([None, "reach_far", "reach_near"]),
+            holding=st.sampled_from([None, "bottle"]),
+            objects=st.fixed_dictionaries({"bottle": _any_point}),
+            clutter=st.fixed_dictionaries({"block": _any_point}),
+        ),
+        min_size=1,
+        max_size=5,
+    ),
+    objective=st.one_of(st.none(), st.floats()),
+)
+def test_the_validator_survives_extreme_numbers(phases, objective):
+    """Any finite coordinates (1e-300 to 1e308) and any objective: messages, never an exception."""
+    violations = validate_plan(SCENARIO, Plan(SCENARIO.name, "feasible", objective, tuple(phases)))
+    assert all(isinstance(v, str) and v.startswith(("structure", "rule ")) for v in violations)
 
 
 # ---------------------------------------------------------------------- a broken rule is named

@@ -202,7 +202,7 @@ def _register_validate(commands: argparse._SubParsersAction) -> None:
         description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of a valid plan "
         "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
         "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
-        "an empty hand, a forward or lateral stroke and the contact within reach). Every violation is "
+        "a forward or lateral stroke, the contact within reach and room for the hand). Every violation is "
         "listed, one line each, naming the rule, the phase and the ids.",
         epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
         "that breaks the scenario rules, a plan file that is not fetchcarry-plan/1).",
