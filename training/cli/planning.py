@@ -46,7 +46,7 @@ def _register_plan(commands: argparse._SubParsersAction) -> None:
         "one-screen summary (status, objective, the phases, timings) and write the plan as "
         "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
         "records the status (infeasible, time_limit) and the timings. The command also checks the "
-        "plan with the validator and warns on stderr if it breaks the plan rules (see fetchcarry validate --help).",
+        "plan with the validator and warns on stderr if it breaks the rules of docs/plan-format.md.",
         epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
@@ -106,7 +106,7 @@ def run_plan(args: argparse.Namespace) -> int:
         shown = "\n".join(f"  - {v}" for v in violations[:MAX_SUMMARY_VIOLATIONS])
         more = len(violations) - MAX_SUMMARY_VIOLATIONS
         tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
-        echo(f"fetchcarry: warning: the plan breaks the plan rules:\n{shown}{tail}", file=sys.stderr)
+        echo(f"fetchcarry: warning: the plan breaks the rules of docs/plan-format.md:\n{shown}{tail}", file=sys.stderr)
     return 0 if result.found else 1
 
 
@@ -198,14 +198,14 @@ def _plan_summary_json(
 def _register_validate(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "validate",
-        help="check a plan against the plan rules and list every violation",
-        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of a valid plan "
+        help="check a plan against the rules of docs/plan-format.md and list every violation",
+        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of docs/plan-format.md "
         "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
         "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
         "a forward or lateral stroke, the contact within reach and room for the hand). Every violation is "
         "listed, one line each, naming the rule, the phase and the ids.",
         epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
-        "that breaks the scenario rules, a plan file that is not fetchcarry-plan/1).",
+        "that breaks the rules of docs/scenario-format.md, a plan file that is not fetchcarry-plan/1).",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
     parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")
