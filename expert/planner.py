@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 import time
 from typing import Any
 
@@ -30,9 +31,11 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
-from expert.milp.decode import phases_of, plan_objective, read_steps
+from expert.milp.deadline import Deadline, TimeUp
+from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
+from expert.milp.warm import add_warm_start
 from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
@@ -42,6 +45,21 @@ EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not g
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
 _PLANNER_OPTIONS = {"integral", "lower_bound"}
 
+OPTIMALITY = {
+    0: "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)",
+}
+"""What ``optimal`` means, by ``extra_phases`` (stored as ``stats["optimality"]``); see :func:`plan`."""
+
+
+def optimality(extra_phases: int) -> str:
+    """The sentence ``stats["optimality"]`` gives for a plan made with ``extra_phases``."""
+    if extra_phases == 0:
+        return OPTIMALITY[0]
+    return (
+        f"optimal for Eq. 1 among all plans of at most N + {extra_phases} phases (N: the fewest that admit a plan), "
+        "each counted over N + extra_phases phases with idle phases at its end"
+    )
+
 
 def plan(
     scenario: Scenario,
@@ -50,89 +68,204 @@ def plan(
     max_phases: int | None = None,
     lattice: Lattice | None = None,
     holding: str | None = None,
+    extra_phases: int = 0,
     **solver_options: Any,
 ) -> Plan:
     """Plan ``scenario`` (optimal for the fewest phases that admit a plan); never raises for "no plan".
 
     Args:
         scenario: the problem; its robot starts at ``robot.start`` with ``robot.heading``.
-        time_limit: wall-clock seconds for the whole call, model building included.
+        time_limit: wall-clock seconds for the whole call: preprocessing, the lower
+            bounds, model building and every solve count against it.
         max_phases: the largest number of phases (the start included) to try;
             default: the lower bound plus ``EXTRA_PHASES``.
         lattice: the env's action lattice; default ``Lattice.over(scenario.area, 0.05)``.
         holding: id of an object already in the hand at the start.
+        extra_phases: ``k >= 0``. With ``k > 0``, once the fewest phases ``N`` that admit a
+            plan are known, the MILP is solved again with ``N + k`` phases, warm-started
+            from the ``N``-phase plan; plans with fewer phases are in that model as plans
+            followed by idle phases (no move, no action), which are dropped from the
+            answer. ``optimal`` then means optimal among all plans of at most ``N + k``
+            phases, compared by Eq. 1 over ``N + k`` phases (``stats["optimality"]``).
         **solver_options: ``integral`` (bool, default True: integer lattice bases),
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
     Returns:
-        a :class:`~expert.plans.Plan` with ``status`` ``optimal``, ``feasible``,
-        ``infeasible`` or ``time_limit`` and ``stats`` (solver, phases tried, seconds).
+        a :class:`~expert.plans.Plan` with ``status`` ``optimal`` (SCIP proved it, gap 0,
+        in the sense of ``stats["optimality"]``), ``feasible`` (time ran out with a plan;
+        ``stats["gap"]`` is SCIP's proven relative gap ``|primal - dual| / min(|primal|,
+        |dual|)`` and ``stats["dual_bound"]`` the proven bound on Eq. 1),
+        ``infeasible`` (``stats["reason"]`` says why when known) or ``time_limit``.
+
+    Raises:
+        KeyboardInterrupt: on Ctrl-C, also when SCIP caught the signal during a solve
+            (it does so itself and just stops); an interrupted call returns no plan.
     """
+    deadline = Deadline.after(time_limit)
     started = time.perf_counter()
-    deadline = started + time_limit
     unknown = set(solver_options) - _PLANNER_OPTIONS - set(SolverSettings.__dataclass_fields__)
     if unknown:
         raise TypeError(f"plan() got unknown solver option(s): {', '.join(sorted(unknown))}")
+    if not isinstance(extra_phases, int) or extra_phases < 0:
+        raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
     integral = bool(solver_options.pop("integral", True))
     use_bound = bool(solver_options.pop("lower_bound", True))
     settings = SolverSettings(**solver_options)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
+    run = _Run(scenario, started, deadline, settings, extra_phases)
+    try:
+        return run.plan(lattice, holding, integral, use_bound, max_phases)
+    except TimeUp:
+        return run.out_of_time()
 
-    problem = prepare(scenario, lattice, holding=holding, integral=integral)
-    stats: dict[str, Any] = {
-        "solver": solver_name(),
-        "phases_tried": [],
-        "prepare_s": time.perf_counter() - started,
-        "build_s": 0.0,
-        "solve_s": 0.0,
-        "options": len(problem.options),
-    }
 
-    def finish(status: str, phases=(), objective=None) -> Plan:
-        stats["total_s"] = time.perf_counter() - started
-        return Plan(scenario.name, status, objective, tuple(phases), stats)
+@dataclasses.dataclass
+class _Run:
+    """One call of :func:`plan`: its clock, its stats and the best plan found so far."""
 
-    if problem.infeasible is not None:
-        stats["reason"] = problem.infeasible
-        return finish("infeasible")
-    if not problem.deliver:
-        phases = phases_of(problem, [])
-        stats["phases_tried"].append(1)
-        return finish("optimal", phases, plan_objective(scenario, phases))
-    free = Connectivity(problem)
-    pairs = PairCosts(problem, free) if use_bound else None
-    if use_bound:
-        relaxation = skeleton(problem, free)
-        problem = dataclasses.replace(problem, earliest=relaxation.earliest, min_travel=min_travel(problem))
-        first = max(3, counting_bound(problem), relaxation.phases)
-    else:
-        first = max(3, counting_bound(problem))
-    stats["lower_bound"] = first
-    last = max_phases if max_phases is not None else first + EXTRA_PHASES
-    stats["lower_bound_s"] = time.perf_counter() - started - stats["prepare_s"]
-    for n_phases in range(first, last + 1):
-        if time.perf_counter() >= deadline - RESERVE_S:
-            return finish("time_limit")
-        stats["phases_tried"].append(n_phases)
-        outcome = _solve(problem, n_phases, settings, deadline, stats, pairs)
-        if outcome == "infeasible":
-            if n_phases == first:
-                t_reach = time.perf_counter()
-                reason = unreachable_reason(problem)
-                stats["reach_s"] = time.perf_counter() - t_reach
-                if reason is not None:
-                    stats["reason"] = reason
-                    return finish("infeasible")
-            continue
-        if outcome == "time_limit":
-            return finish("time_limit")
-        status, phases = outcome
-        return finish(status, phases, plan_objective(scenario, phases))
-    if not stats["phases_tried"]:
-        stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
-    return finish("infeasible")
+    scenario: Scenario
+    started: float
+    deadline: Deadline
+    settings: SolverSettings
+    extra_phases: int
+    stats: dict[str, Any] = dataclasses.field(default_factory=dict)
+    best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
+
+    def __post_init__(self) -> None:
+        self.stats.update(
+            solver=solver_name(),
+            phases_tried=[],
+            prepare_s=0.0,
+            lower_bound_s=0.0,
+            build_s=0.0,
+            solve_s=0.0,
+            optimality=optimality(self.extra_phases),
+        )
+
+    def finish(self, status: str, phases: tuple = ()) -> Plan:
+        self.stats["total_s"] = time.perf_counter() - self.started
+        objective = plan_objective(self.scenario, phases) if phases else None
+        return Plan(self.scenario.name, status, objective, tuple(phases), self.stats)
+
+    def out_of_time(self) -> Plan:
+        """The answer when the deadline passed outside a solve: the best plan so far, or ``time_limit``."""
+        self.stats["timed_out"] = True
+        if self.best is not None:
+            return self.finish("feasible", self.best[1])
+        return self.finish("time_limit")
+
+    def plan(
+        self, lattice: Lattice, holding: str | None, integral: bool, use_bound: bool, max_phases: int | None
+    ) -> Plan:
+        stats, deadline = self.stats, self.deadline
+        problem = prepare(self.scenario, lattice, holding=holding, integral=integral, deadline=deadline)
+        stats["prepare_s"] = time.perf_counter() - self.started
+        stats["options"] = len(problem.options)
+        deadline.check()
+        if problem.infeasible is not None:
+            stats["reason"] = problem.infeasible
+            return self.finish("infeasible")
+        if not problem.deliver:
+            stats["phases_tried"].append(1)
+            return self.finish("optimal", phases_of(problem, []))
+        t_bound = time.perf_counter()
+        free = Connectivity(problem, deadline)
+        pairs = PairCosts(problem, free, deadline) if use_bound else None
+        if use_bound:
+            relaxation = skeleton(problem, free, deadline)
+            problem = dataclasses.replace(
+                problem, earliest=relaxation.earliest, min_travel=min_travel(problem, deadline)
+            )
+            first = max(3, counting_bound(problem), relaxation.phases)
+        else:
+            first = max(3, counting_bound(problem))
+        stats["lower_bound"] = first
+        stats["lower_bound_s"] += time.perf_counter() - t_bound
+        last = max_phases if max_phases is not None else first + EXTRA_PHASES
+        for n_phases in range(first, last + 1):
+            stats["phases_tried"].append(n_phases)
+            outcome = self.solve(problem, n_phases, pairs)
+            if outcome == "infeasible":
+                if n_phases == first:
+                    t_reach = time.perf_counter()
+                    reason = unreachable_reason(problem, deadline)
+                    stats["reach_s"] = time.perf_counter() - t_reach
+                    if reason is not None:
+                        stats["reason"] = reason
+                        return self.finish("infeasible")
+                continue
+            if outcome == "time_limit":
+                return self.finish("time_limit")
+            status, steps = outcome
+            self.best = (status, phases_of(problem, steps))
+            if self.extra_phases and status == "optimal":
+                stats["fewest_phases"] = n_phases
+                stats["fewest_phases_objective"] = plan_objective(self.scenario, self.best[1])
+                longer = self.solve(problem, n_phases + self.extra_phases, pairs, warm=steps)
+                if isinstance(longer, tuple):
+                    self.best = (longer[0], phases_of(problem, _without_trailing_idle(longer[1])))
+                else:
+                    self.best = ("feasible", self.best[1])
+            return self.finish(*self.best)
+        if not stats["phases_tried"]:
+            stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
+        return self.finish("infeasible")
+
+    def solve(self, problem: Problem, n_phases: int, pairs: PairCosts | None, warm: list[Step] | None = None):
+        """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``."""
+        stats, deadline = self.stats, self.deadline
+        record: dict[str, Any] = {"phases": n_phases}
+        stats.setdefault("solves", []).append(record)
+        bound = windows = None
+        if pairs is not None:
+            t_bound = time.perf_counter()
+            bound = min_objective(problem, n_phases, pairs, deadline)
+            windows = action_windows(problem, n_phases, pairs, deadline)
+            record["objective_bound"] = bound if math.isfinite(bound) else None
+            stats["lower_bound_s"] += time.perf_counter() - t_bound
+        t0 = time.perf_counter()
+        try:
+            milp = build(problem, n_phases, self.settings, bound, windows, deadline)
+        except Infeasible:
+            record.update(status="infeasible", build_s=time.perf_counter() - t0, solve_s=0.0, nodes=0)
+            stats["build_s"] += record["build_s"]
+            return "infeasible"
+        t1 = time.perf_counter()
+        record["build_s"] = t1 - t0
+        stats["build_s"] += t1 - t0
+        if warm is not None:
+            record["warm_start"] = add_warm_start(milp, warm)
+        remaining = deadline.left() - RESERVE_S
+        if remaining <= 0:
+            raise TimeUp
+        model = milp.model
+        model.setParam("limits/time", remaining)
+        model.optimize()
+        status = model.getStatus()
+        if status == "userinterrupt":  # SCIP caught SIGINT itself (misc/catchctrlc): pass the Ctrl-C on
+            raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+        record.update(status=status, solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
+        stats["solve_s"] += record["solve_s"]
+        if status in ("infeasible", "inforunbd"):
+            return "infeasible"
+        if model.getNSols() == 0:
+            return "time_limit"
+        steps = read_steps(problem, milp, model.getBestSol())
+        stats["milp_objective"] = model.getObjVal()
+        stats["dual_bound"] = model.getDualbound()
+        gap = model.getGap()
+        stats["gap"] = gap if math.isfinite(gap) else None
+        return ("optimal" if status == "optimal" else "feasible"), steps
+
+
+def _without_trailing_idle(steps: list[Step]) -> list[Step]:
+    """``steps`` without the idle phases at the end (no action, no move): the padding of a shorter plan."""
+    out = list(steps)
+    while len(out) > 1 and out[-1].option is None and out[-1].cell == out[-2].cell:
+        out.pop()
+    return out
 
 
 @functools.cache
@@ -140,46 +273,3 @@ def solver_name() -> str:
     """``"SCIP <major>.<minor>.<tech>"`` of the SCIP inside pyscipopt."""
     model = pyscipopt.Model()
     return f"SCIP {model.getMajorVersion()}.{model.getMinorVersion()}.{model.getTechVersion()}"
-
-
-def _solve(
-    problem: Problem, n_phases: int, settings: SolverSettings, deadline: float, stats: dict, pairs: PairCosts | None
-):
-    """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, phases)``."""
-    record: dict[str, Any] = {"phases": n_phases}
-    stats.setdefault("solves", []).append(record)
-    bound = windows = None
-    if pairs is not None:
-        t_bound = time.perf_counter()
-        bound = min_objective(problem, n_phases, pairs)
-        windows = action_windows(problem, n_phases, pairs)
-        record["objective_bound"] = bound
-        stats["lower_bound_s"] += time.perf_counter() - t_bound
-    t0 = time.perf_counter()
-    try:
-        milp = build(problem, n_phases, settings, bound, windows)
-    except Infeasible:
-        record.update(status="infeasible", build_s=time.perf_counter() - t0, solve_s=0.0, nodes=0)
-        stats["build_s"] += record["build_s"]
-        return "infeasible"
-    t1 = time.perf_counter()
-    record["build_s"] = t1 - t0
-    stats["build_s"] += t1 - t0
-    remaining = deadline - t1 - RESERVE_S
-    if remaining <= 0:
-        record.update(status="time_limit", solve_s=0.0, nodes=0)
-        return "time_limit"
-    model = milp.model
-    model.setParam("limits/time", remaining)
-    model.optimize()
-    record.update(status=model.getStatus(), solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
-    stats["solve_s"] += record["solve_s"]
-    status = model.getStatus()
-    if status in ("infeasible", "inforunbd"):
-        return "infeasible"
-    if model.getNSols() == 0:
-        return "time_limit"
-    steps = read_steps(problem, milp, model.getBestSol())
-    stats["milp_objective"] = model.getObjVal()
-    stats["gap"] = model.getGap()
-    return ("optimal" if status == "optimal" else "feasible"), phases_of(problem, steps)

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point
+from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 
 FORMAT = "fetchcarry-plan/1"
 
@@ -25,6 +26,7 @@ Status = Literal["optimal", "feasible", "infeasible", "time_limit"]
 STATUSES: tuple[str, ...] = ("optimal", "feasible", "infeasible", "time_limit")
 PhaseAction = Literal["start", "move", "pick", "place", "push"]
 PHASE_ACTIONS: tuple[str, ...] = ("start", "move", "pick", "place", "push")
+MAX_FILE_BYTES = 64 * 2**20  # bytes: a plan file is refused unread beyond this
 
 
 class PlanFormatError(ValueError):
@@ -61,11 +63,11 @@ class Phase:
         if not isinstance(data, Mapping):
             raise PlanFormatError(f"{where} must be an object")
         heading = data.get("heading")
-        if heading not in HEADINGS:
-            raise PlanFormatError(f"{where}.heading must be one of {', '.join(HEADINGS)}, got {heading!r}")
+        if not isinstance(heading, str) or heading not in HEADINGS:
+            raise PlanFormatError(f"{where}.heading must be one of {', '.join(HEADINGS)}, got {describe(heading)}")
         action = data.get("action")
-        if action not in PHASE_ACTIONS:
-            raise PlanFormatError(f"{where}.action must be one of {', '.join(PHASE_ACTIONS)}, got {action!r}")
+        if not isinstance(action, str) or action not in PHASE_ACTIONS:
+            raise PlanFormatError(f"{where}.action must be one of {', '.join(PHASE_ACTIONS)}, got {describe(action)}")
         return cls(
             base=_point(data.get("base"), f"{where}.base"),
             heading=heading,
@@ -115,34 +117,40 @@ class Plan:
         if not isinstance(data, Mapping):
             raise PlanFormatError("a plan must be a JSON object")
         if data.get("format") != FORMAT:
-            raise PlanFormatError(f"'format' must be {FORMAT!r}, got {data.get('format')!r}")
+            raise PlanFormatError(f"'format' must be {FORMAT!r}, got {describe(data.get('format'))}")
         status = data.get("status")
-        if status not in STATUSES:
-            raise PlanFormatError(f"'status' must be one of {', '.join(STATUSES)}, got {status!r}")
+        if not isinstance(status, str) or status not in STATUSES:
+            raise PlanFormatError(f"'status' must be one of {', '.join(STATUSES)}, got {describe(status)}")
+        scenario = _text(data.get("scenario", ""), "'scenario'")
         objective = data.get("objective")
         if objective is not None and (isinstance(objective, bool) or not isinstance(objective, int | float)):
-            raise PlanFormatError(f"'objective' must be a number or null, got {objective!r}")
+            raise PlanFormatError(f"'objective' must be a number or null, got {describe(objective)}")
         phases = data.get("phases", [])
         if not isinstance(phases, list):
-            raise PlanFormatError("'phases' must be a list")
+            raise PlanFormatError(f"'phases' must be a list, got {describe(phases)}")
         stats = data.get("stats", {})
         if not isinstance(stats, Mapping):
-            raise PlanFormatError("'stats' must be an object")
+            raise PlanFormatError(f"'stats' must be an object, got {describe(stats)}")
         return cls(
-            scenario=str(data.get("scenario", "")),
+            scenario=scenario,
             status=status,
-            objective=None if objective is None else float(objective),
+            objective=None if objective is None else _float(objective),
             phases=tuple(Phase.from_dict(p, f"phases[{k}]") for k, p in enumerate(phases)),
             stats=dict(stats),
         )
 
     @classmethod
     def load(cls, path: str | Path) -> Plan:
+        """Read a plan file; :class:`PlanFormatError` names the file and the problem.
+
+        A file larger than ``MAX_FILE_BYTES``, not UTF-8 text, or not JSON is a
+        :class:`PlanFormatError` too; ``OSError`` (a missing or unreadable file) passes through.
+        """
         path = Path(path)
         try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError as error:
-            raise PlanFormatError(f"{path}: not valid JSON: {error}") from None
+            data = read_json(path, MAX_FILE_BYTES)
+        except JsonInputError as error:
+            raise PlanFormatError(f"{path}: {error}") from None
         try:
             return cls.from_dict(data)
         except PlanFormatError as error:
@@ -153,22 +161,42 @@ class Plan:
 
 
 def _point(value: Any, where: str) -> Point:
-    if (
-        not isinstance(value, list | tuple)
-        or len(value) != 2
-        or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in value)
-    ):
-        raise PlanFormatError(f"{where} must be a pair of finite numbers [x, y], got {value!r}")
-    return (float(value[0]), float(value[1]))
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        raise PlanFormatError(f"{where} must be a pair of finite numbers [x, y], got {describe(value)}")
+    x, y = (_float(v) if isinstance(v, int | float) and not isinstance(v, bool) else math.nan for v in value)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise PlanFormatError(f"{where} must be a pair of finite numbers [x, y], got {describe(value)}")
+    return (x, y)
+
+
+def _float(value: int | float) -> float:
+    """``value`` as a float; an integer beyond float range becomes ``inf`` (then refused by the caller's rule)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
 
 
 def _points(value: Any, where: str) -> dict[str, Point]:
     if not isinstance(value, Mapping):
-        raise PlanFormatError(f"{where} must be an object of id -> [x, y]")
-    return {str(k): _point(v, f"{where}.{k}") for k, v in value.items()}
+        raise PlanFormatError(f"{where} must be an object of id -> [x, y], got {describe(value)}")
+    points = {}
+    for key, point in value.items():
+        name = _text(key, f"{where} key")
+        points[name] = _point(point, f"{where}.{name if name.isprintable() else describe(name)}")
+    return points
 
 
 def _optional_str(value: Any, where: str) -> str | None:
-    if value is not None and not isinstance(value, str):
-        raise PlanFormatError(f"{where} must be a string or null, got {value!r}")
+    return None if value is None else _text(value, where, "a string or null")
+
+
+def _text(value: Any, where: str, expected: str = "a string") -> str:
+    """``value`` if it is a string of valid Unicode (no lone surrogate), else :class:`PlanFormatError`."""
+    if not isinstance(value, str):
+        raise PlanFormatError(f"{where} must be {expected}, got {describe(value)}")
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise PlanFormatError(f"{where} {describe(value)} is not valid Unicode text (a lone surrogate)") from None
     return value

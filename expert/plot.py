@@ -26,8 +26,8 @@ from fetchcarry_env.scenario import Scenario
 # Colours of the plan's own marks (the scene's colours are drawing.PALETTE).
 TRAVEL = "#505050"  # a move with an empty hand
 CARRY = drawing.PALETTE.object  # a move holding the first object (each object has its colour)
-PUSH = "#d62728"  # a push stroke
-PICK = "#2ca02c"
+PUSH = drawing.PALETTE.clutter  # a push stroke, in the clutter's colour
+PICK = "#1f9e89"  # teal: not the goals' green
 PLACE = "#9467bd"
 
 SIDE_WIDTH_IN = 3.6  # inches of the column beside the map (steps and the close-up)
@@ -70,6 +70,9 @@ def plot_plan(scenario: Scenario, plan: Plan, path: str | Path, *, width_in: flo
     drawing.frame_map(close_axes, close_view)
     _draw_plan(close_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * close_view.size[0] / SIDE_WIDTH_IN)
     close_axes.set_title("close-up: places and pushes", fontsize=9)
+    figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
+    drawing.separate_labels(map_axes)
+    drawing.separate_labels(close_axes)
     figure.savefig(path, dpi=dpi)
     return path
 

@@ -29,28 +29,62 @@ rule 5 (push)
     Clutter moves only in a push of it; the stroke is axis-aligned and moves the
     clutter by the base's displacement; the clutter ends fully on the same table and
     neither ends on nor sweeps through anything. ``docs/design.md`` adds the push's
-    arm: an empty hand, a heading along or across the stroke (never backwards), the
+    arm (with an empty hand or holding an object, which moves with the base): a heading
+    along or across the stroke (never backwards), the
     push contact (``kinematics.push_contact``) within the posture's ranges from the
     base where the stroke starts, and a clear arm line to it.
 rule 6 (goal)
     In the last phase every object is at its goal and nothing is held.
+rule 7 (held object)
+    A held object is where the hand is: within the ranges of the posture that picked
+    it, at the robot-frame offset it was picked with, so it moves (and turns) with the
+    base, a push stroke included.
+rule 8 (objective)
+    ``objective`` is finite and equals Eq. 1 recomputed from the phases
+    (:func:`plan_objective`, within ``OBJECTIVE_RTOL``); it is null only when the status
+    has no plan.
+rule 9 (hand room)
+    At a push the contact (where the hand meets the piece) lies within the posture's
+    ranges from the base where the stroke starts, and the hand there, the cube the env
+    uses (``kinematics.hand_blocker``), overlaps no other piece of clutter and no object
+    but the one held.
 
 Units are metres.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 from expert.plans import Phase, Plan
-from fetchcarry_env.geometry import Heading, Point, Rect, discs_overlap, heading_of, segment_rect_distance
-from fetchcarry_env.kinematics import arm_line_clear, hand_offset, push_contact, push_headings, swept_rect
+from fetchcarry_env.geometry import (
+    Heading,
+    Point,
+    Rect,
+    discs_overlap,
+    heading_of,
+    segment_rect_distance,
+    to_world_frame,
+)
+from fetchcarry_env.kinematics import (
+    DELIVERY_BONUS,
+    arm_line_clear,
+    hand_blocker,
+    hand_offset,
+    push_contact,
+    push_headings,
+    swept_rect,
+    travel_cost,
+)
 from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
 TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (spec/plan.md)
 CLEARANCE_SLACK = 1e-6  # metres: a base segment may come this much closer than the radius (rule 1)
+OBJECTIVE_RTOL = 1e-6  # relative tolerance of the objective against Eq. 1 recomputed (rule 8)
+GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1
 
 
 @dataclass(frozen=True)
@@ -102,7 +136,10 @@ def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None)
     not where it is.
     """
     if plan.status not in ("optimal", "feasible") or not plan.phases:
-        return [f"structure: the plan has no phases to check (status {plan.status!r})"]
+        return [
+            f"structure: the plan has no phases to check (status {plan.status!r})",
+            *_rule8_objective(scenario, plan),
+        ]
     context = _Context.of(scenario, plan, holding)
     return [
         *_check_structure(context, plan),
@@ -112,7 +149,29 @@ def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None)
         *_rule4_pick_place(context),
         *_rule5_push(context),
         *_rule6_goal(context),
+        *_rule7_held_object(context),
+        *_rule8_objective(scenario, plan),
+        *_rule9_hand_room(context),
     ]
+
+
+def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
+    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
+
+    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within ``GOAL_TOL`` of its
+    goal at the end of phase ``k`` (phase 0 included); ``travel_cost`` is Eq. 2-3's
+    ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres). Phases that lack an object count it as not delivered.
+    """
+    bonus = sum(
+        1
+        for phase in phases
+        for obj in scenario.objects
+        if phase.holding != obj.id
+        and obj.id in phase.objects
+        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
+    )
+    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
+    return -DELIVERY_BONUS * bonus + travel
 
 
 # ---------------------------------------------------------------------- structure
@@ -353,15 +412,12 @@ def _push_arm(
     context: _Context, what: str, before: Phase, after: Phase, start_rect: Rect, direction: Heading
 ) -> list[str]:
     out = []
-    if before.holding is not None:
-        out.append(f"{what} with {before.holding!r} in the hand (docs/design.md: a push needs an empty hand)")
     if after.heading not in push_headings(direction):
         out.append(f"{what}: heading {after.heading!r} pushes backwards along {direction!r} (docs/design.md)")
     posture = context.postures.get(after.posture or "")
     if posture is None:
         return out
     contact = push_contact(start_rect, direction)
-    out.extend(_reach(f"{what}: the push contact", posture, before.base, after.heading, contact))
     blockers = {f"obstacle {o.id!r}": o.rect for o in context.scenario.obstacles}
     blockers.update(
         {f"clutter {cid!r}": rect for cid, rect in context.clutter_rects(before, excluding=after.target).items()}
@@ -384,6 +440,95 @@ def _rule6_goal(context: _Context) -> list[str]:
             )
     if last.holding is not None:
         out.append(f"rule 6 (goal): in the last phase ({last_index}) the robot still holds {last.holding!r}")
+    return out
+
+
+# ---------------------------------------------------------------------- rule 7
+def _rule7_held_object(context: _Context) -> list[str]:
+    out: list[str] = []
+    grip: tuple[str, Posture | None, Point] | None = None  # (object, posture that picked it, robot-frame offset)
+    first = context.phases[0]
+    if first.holding in context.object_ids and first.holding in first.objects:
+        # Held before the plan starts: no pick to name the posture; it must lie within one of them.
+        offset = hand_offset(first.base, first.heading, first.objects[first.holding])
+        if any(p.reaches(*offset, tol=TOL) for p in context.postures.values()):
+            grip = (first.holding, None, offset)
+        else:
+            out.append(
+                f"rule 7 (held object): phase 0 holding {first.holding!r}: it is at "
+                f"{_pt(first.objects[first.holding])}, {_pt(offset)} ahead/left of the base, within no posture's ranges"
+            )
+    for k, _before, after in context.steps():
+        if after.action == "pick" and after.holding == after.target and after.target in after.objects:
+            posture = context.postures.get(after.posture or "")
+            offset = hand_offset(after.base, after.heading, after.objects[after.target])
+            # A grasp out of reach is rule 4's fault; the phases that carry it are not checked against it again.
+            grip = (after.target, posture, offset) if posture and posture.reaches(*offset, tol=TOL) else None
+            continue
+        held = after.holding
+        if held is None or grip is None or grip[0] != held or held not in after.objects:
+            continue  # nothing held, or a grasp rule 2 or 4 already refuses
+        _, posture, offset = grip
+        at = after.objects[held]
+        what = f"rule 7 (held object): phase {k} {after.action} holding {held!r}"
+        if posture is not None:
+            out.extend(_reach(f"{what}: it", posture, after.base, after.heading, at))
+        dx, dy = to_world_frame(after.heading, *offset)
+        hand = (after.base[0] + dx, after.base[1] + dy)
+        if not _same(at, hand):
+            out.append(
+                f"{what}: it is at {_pt(at)}, not in the hand at {_pt(hand)} (it moves with the base, "
+                f"at the offset {_pt(offset)} ahead/left it was picked with)"
+            )
+    return out
+
+
+# ---------------------------------------------------------------------- rule 8
+def _rule8_objective(scenario: Scenario, plan: Plan) -> list[str]:
+    has_plan = plan.status in ("optimal", "feasible")
+    what = f"rule 8 (objective): status {plan.status!r}"
+    objective = plan.objective
+    if not has_plan:
+        return [] if objective is None else [f"{what} has no plan, so the objective must be null, not {objective!r}"]
+    if not plan.phases:
+        return []
+    expected = plan_objective(scenario, plan.phases)
+    if objective is None:
+        return [f"{what} has a plan, so the objective must be Eq. 1 of its phases ({expected:.6g}), not null"]
+    if not math.isfinite(objective):
+        return [f"{what}: the objective {objective!r} is not a finite number (Eq. 1 of the phases is {expected:.6g})"]
+    if not math.isclose(objective, expected, rel_tol=OBJECTIVE_RTOL, abs_tol=1e-9):
+        return [f"{what}: the objective {objective:.6g} is not Eq. 1 recomputed from the phases, {expected:.6g}"]
+    return []
+
+
+# ---------------------------------------------------------------------- rule 9
+def _rule9_hand_room(context: _Context) -> list[str]:
+    out = []
+    for k, before, after in context.steps():
+        if after.action != "push" or after.target not in context.clutter:
+            continue
+        start_rect = context.clutter_rect(after.target, before)
+        end_rect = context.clutter_rect(after.target, after)
+        direction = heading_of(_snap_small((after.base[0] - before.base[0], after.base[1] - before.base[1])))
+        if start_rect is None or end_rect is None or direction is None:
+            continue  # rule 5 names these
+        what = f"rule 9 (hand room): phase {k} push {after.target!r}"
+        contact = push_contact(start_rect, direction)
+        posture = context.postures.get(after.posture or "")
+        if posture is not None:
+            out.extend(_reach(f"{what}: the push contact", posture, before.base, after.heading, contact))
+        # The rule the env applies (rules._check_push): everything else where it stands when the stroke starts.
+        others = context.clutter_rects(before, excluding=after.target)
+        objects = [
+            (obj.id, before.objects[obj.id], obj.radius)
+            for obj in context.scenario.objects
+            if obj.id in before.objects and obj.id != before.holding
+        ]
+        blocker = hand_blocker(contact, others.items(), objects)
+        if blocker is not None:
+            kind = "clutter" if blocker in others else "object"
+            out.append(f"{what}: no room for the hand at the push contact {_pt(contact)}: {kind} {blocker!r} is there")
     return out
 
 

@@ -30,12 +30,16 @@ Semantics (the environment executes them, the planner models them):
 from __future__ import annotations
 
 import math
+import numbers
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import IntEnum
+from typing import Any
 
 import numpy as np
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect
+from fetchcarry_env.jsontext import describe
 
 
 class Mode(IntEnum):
@@ -114,3 +118,44 @@ class Action:
 def action_nvec(lattice: Lattice, max_postures: int) -> np.ndarray:
     """``nvec`` of the ``MultiDiscrete`` action space for a lattice and a posture capacity."""
     return np.array([lattice.shape[0], lattice.shape[1], len(HEADINGS), max_postures, len(Mode)], dtype=np.int64)
+
+
+_KIND_NAMES = {"U": "strings", "S": "bytes", "c": "complex numbers", "M": "dates", "m": "time spans", "V": "records"}
+
+
+def action_vector(action: Any, nvec: np.ndarray, components: Sequence[str]) -> np.ndarray:
+    """``action`` as an ``int64`` vector inside ``MultiDiscrete(nvec)``; ``ValueError`` naming the problem.
+
+    Integers of any dtype, and floats or Python numbers that are whole, are accepted;
+    strings, complex numbers, ragged or nested sequences, non-numbers in object arrays,
+    NaN and infinities are refused, as is a value outside ``[0, nvec[i])`` (named by its
+    component).
+    """
+    expected = f"{len(nvec)} integers ({', '.join(components)})"
+    try:
+        array = np.asarray(action)
+    except (ValueError, TypeError):  # a ragged sequence
+        raise ValueError(f"action must be an array of {expected}, got {describe(action)}") from None
+    if array.shape != nvec.shape:
+        raise ValueError(f"action must have shape {nvec.shape} ({', '.join(components)}), got {array.shape}")
+    shown = describe(array.tolist())
+    if array.dtype.kind in _KIND_NAMES:
+        raise ValueError(f"action must hold integers, got {_KIND_NAMES[array.dtype.kind]}: {shown}")
+    values = [_whole(v) for v in array.tolist()]
+    if any(v is None for v in values):
+        raise ValueError(f"action must hold integers, got {shown}")
+    for name, value, size in zip(components, values, nvec.tolist(), strict=True):
+        if not 0 <= value < size:
+            raise ValueError(
+                f"action {shown} is outside the action space: {name} = {describe(value)} is not in [0, {size})"
+            )
+    return np.array(values, dtype=np.int64)
+
+
+def _whole(value: Any) -> int | None:
+    """``value`` as an int if it is a whole real number (a bool counts as 0 or 1), else None."""
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    if isinstance(value, numbers.Real) and math.isfinite(value) and float(value).is_integer():
+        return int(value)
+    return None

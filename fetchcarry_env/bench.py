@@ -1,6 +1,6 @@
 """The environment benchmark: how fast FetchCarryPush-v0 resets and steps, next to what PyBullet itself costs.
 
-``python -m fetchcarry_env.bench`` (or ``fetchcarry bench env``) runs, in this process,
+``fetchcarry bench env`` (its options and table are in :mod:`training.cli.bench`) runs, in this process,
 the spec's example scenario (``spec/scenario.md``) and the MILP expert's optimal plan
 for it (two moves, a push, a move, a pick, a move, a place), episode after episode, and
 times every reset and step. It prints, with the project's goal for each: reset of an
@@ -17,9 +17,7 @@ noisy); the policy's figure is its whole run's steps divided by its wall time.
 
 from __future__ import annotations
 
-import argparse
 import itertools
-import json
 import resource
 import statistics
 import sys
@@ -29,11 +27,9 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from importlib import metadata
-from typing import Any, TextIO
+from typing import Any
 
 import numpy as np
-
-from fetchcarry_env.arguments import positive_int
 
 ENV_ID = "FetchCarryPush-v0"
 DEFAULT_EPISODES = 200  # episodes of the expert's plan
@@ -285,7 +281,7 @@ def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, 
     unwrapped = env.unwrapped
     rng = np.random.default_rng(seed)
     bounds = np.concatenate([[0], np.cumsum(env.action_space.nvec)])
-    counts = {"episodes": 1, "refused": 0, "contacts": 0, "pushes": 0}
+    counts = {"episodes": 1, "invalid_actions": 0, "collisions": 0, "pushes": 0}  # the names of the env's info
     env.reset(seed=seed)
     started = time.perf_counter()
     with _progress(steps, "random policy", progress) as bar:
@@ -293,8 +289,8 @@ def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, 
             mask = unwrapped.action_masks()
             vector = np.array([rng.choice(np.flatnonzero(mask[a:b])) for a, b in itertools.pairwise(bounds)])
             _, _, terminated, truncated, info = env.step(vector)
-            counts["refused"] += info["invalid_action"] is not None
-            counts["contacts"] += info["contact"] is not None
+            counts["invalid_actions"] += info["invalid_action"] is not None
+            counts["collisions"] += info["contact"] is not None
             counts["pushes"] += "push" in info
             if terminated or truncated:
                 env.reset()
@@ -339,72 +335,3 @@ def run_benchmark(
         "wall_s": time.perf_counter() - started,
         "figures": [asdict(f) for f in figures],
     }
-
-
-# ---------------------------------------------------------------------- printing and the command line
-def format_report(report: dict[str, Any]) -> str:
-    """The figures as a table for people."""
-    lines = [
-        f"env benchmark: {report['env']} on PyBullet {report['pybullet']} (DIRECT), scenario {report['scenario']}, "
-        f"{report['episodes']} episodes of the expert's plan, seed {report['seed']}, {report['wall_s']:.1f} s",
-        "",
-        f"{'figure':<58} {'value':>10}  {'unit':<11} {'goal':<13} {'met':<4} PyBullet floor",
-        "-" * 130,
-    ]
-    for f in report["figures"]:
-        value = f"{f['value']:,.0f}" if f["value"] >= 100 else f"{f['value']:.2f}"
-        met = "-" if f["met"] is None else ("yes" if f["met"] else "NO")
-        lines.append(
-            f"{f['name']:<58} {value:>10}  {f['unit']:<11} {f['goal'] or '-':<13} {met:<4} {f['floor'] or '-'}"
-        )
-    counts = report["random_policy"]
-    lines.append("")
-    lines.append(
-        f"random policy: {report['random_steps']} steps in {counts['episodes']} episodes, {counts['refused']} refused, "
-        f"{counts['contacts']} stopped at a contact, {counts['pushes']} pushes"
-    )
-    return "\n".join(lines)
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    counts = (
-        ("--episodes", DEFAULT_EPISODES, "episodes of the plan"),
-        ("--resets", DEFAULT_RESETS, "resets of the same layout"),
-        ("--random-steps", DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
-    )
-    for flag, default, meaning in counts:
-        parser.add_argument(flag, type=positive_int, default=default, metavar="N", help=f"{meaning} ({default})")
-    parser.add_argument("--seed", type=int, default=DEFAULT_SEED, metavar="S", help="seed of the resets and the policy")
-    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
-    parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
-
-
-def run(args: argparse.Namespace, out: TextIO | None = None) -> int:
-    """Run the benchmark and print it on ``out`` (stdout); exit 1 only with ``--strict`` and a missed goal."""
-    out = out if out is not None else sys.stdout
-    report = run_benchmark(args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress)
-    print(json.dumps(report, indent=2) if args.json else format_report(report), file=out)
-    missed = [f["name"] for f in report["figures"] if f["met"] is False]
-    return 1 if args.strict and missed else 0
-
-
-def register(bench: argparse._SubParsersAction) -> None:
-    """Add ``env`` to ``fetchcarry bench``."""
-    parser = bench.add_parser(
-        "env",
-        help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
-        description=__doc__.split("\n\n")[1],
-    )
-    add_arguments(parser)
-    parser.set_defaults(handler=run)
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m fetchcarry_env.bench", description=__doc__.split("\n\n")[1])
-    add_arguments(parser)
-    return run(parser.parse_args(argv))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

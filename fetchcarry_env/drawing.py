@@ -42,25 +42,32 @@ class StateLike(Protocol):
 
 @dataclass(frozen=True)
 class Palette:
-    """Colours of the top-down pictures (matplotlib colour strings)."""
+    """Colours of the top-down pictures (matplotlib colour strings).
+
+    Objects, their goals and clutter have the colours the simulator gives their bodies
+    (``fetchcarry_env/sim/bodies.py``; a test keeps the two equal), so that a map and a
+    3-D render of the same state read alike: objects red, goals green, clutter blue.
+    Several objects get shades of red, in scenario order.
+    """
 
     outside: str = "#d0d0d0"  # beyond the area
     floor: str = "#fbfbf8"
     wall: str = "#404040"
     table: str = "#e3c59a"
     table_edge: str = "#9c7a4b"
-    obstacle: str = "#6b6b6b"
-    clutter: str = "#e07b39"
-    clutter_edge: str = "#8a4217"
-    objects: tuple[str, ...] = ("#2a6fdb", "#17becf", "#bcbd22", "#8c564b", "#e377c2", "#7f7f7f")  # one per object
+    obstacle: str = "#6b6b7a"  # the renders' obstacle grey
+    clutter: str = "#3373d9"  # the renders' clutter blue
+    clutter_edge: str = "#1d4380"
+    goal: str = "#26bf40"  # the renders' goal-marker green
+    objects: tuple[str, ...] = ("#d92e2e", "#8c1c1c", "#f08080", "#b03060", "#e0604a", "#5e0c0c")  # reds, one each
 
     @property
     def object(self) -> str:
-        """The colour of the first (or only) object."""
+        """The colour of the first (or only) object: the renders' object red."""
         return self.objects[0]
 
-    robot: str = "#3aa655"
-    robot_edge: str = "#1e6b33"
+    robot: str = "#d9d9d9"  # the renders' light grey base
+    robot_edge: str = "#333333"
 
 
 PALETTE = Palette()
@@ -69,6 +76,9 @@ PALETTE = Palette()
 Z_FLOOR, Z_FURNITURE, Z_CLUTTER, Z_GOAL, Z_OBJECT, Z_ROBOT, Z_TEXT = 0, 1, 2, 3, 4, 5, 8
 
 MARGIN = 0.3  # metres of the outside shown around the area
+GOAL_MARKER_SCALE = 1.2  # the goal marker's radius in object radii (as the simulator draws it)
+LABEL_GAP_PX = 2.0  # pixels kept between two labels by separate_labels
+LABEL_TRIES = 12  # positions separate_labels tries for one label
 LABEL_HALO = [patheffects.withStroke(linewidth=2.0, foreground="white")]  # keeps labels legible on any fill
 
 
@@ -218,8 +228,9 @@ def draw_object(
 
 
 def draw_goal(axes: Axes, obj: DeliveryObject, *, colour: str = PALETTE.object) -> None:
-    """An object's goal: a dashed ring of the object's size, in the object's colour, with a cross in it."""
+    """An object's goal: a green disc (the renders' goal marker, 1.2 object radii) ringed in the object's colour."""
     x, y = obj.goal
+    axes.add_patch(Circle((x, y), GOAL_MARKER_SCALE * obj.radius, facecolor=PALETTE.goal, alpha=0.6, zorder=Z_GOAL))
     axes.add_patch(
         Circle((x, y), obj.radius, facecolor="none", edgecolor=colour, linestyle="--", linewidth=1.2, zorder=Z_GOAL)
     )
@@ -327,6 +338,33 @@ def number_points(axes: Axes, points: Sequence[Point], merge_m: float, offset_m:
             clip_on=True,
             bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": PALETTE.robot_edge},
         )
+
+
+def separate_labels(axes: Axes) -> None:
+    """Move the texts of ``axes`` apart so that none overlaps another (call once everything is drawn).
+
+    Texts are placed in drawing order; one that overlaps a placed text moves up or down
+    (alternately, one text height further at each try) to the first free place, at most
+    :data:`LABEL_TRIES` tries. Needs the figure's canvas (the Agg canvas has a renderer).
+    """
+    renderer = axes.figure.canvas.get_renderer()
+    to_data = axes.transData.inverted()
+    placed: list = []
+    for text in axes.texts:
+        if not text.get_visible() or not text.get_text():
+            continue
+        box = text.get_window_extent(renderer).expanded(1.0, 1.0).padded(LABEL_GAP_PX)
+        if any(box.overlaps(other) for other in placed):
+            x, y = text.get_position()
+            anchor = axes.transData.transform((x, y))
+            for k in range(1, LABEL_TRIES + 1):
+                shift = box.height * ((k + 1) // 2) * (1 if k % 2 else -1)
+                moved = box.translated(0, shift)
+                if not any(moved.overlaps(other) for other in placed):
+                    text.set_position(to_data.transform((anchor[0], anchor[1] + shift)))
+                    box = moved
+                    break
+        placed.append(box)
 
 
 def draw_arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:

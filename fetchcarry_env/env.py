@@ -20,7 +20,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec
+from fetchcarry_env.actions import Action, Lattice, Mode, action_nvec, action_vector
 from fetchcarry_env.families import DEFAULT_FAMILY, Family, get_family
 from fetchcarry_env.geometry import Rect, heading_vector
 from fetchcarry_env.kinematics import (
@@ -453,20 +453,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._sim_in_sync, self._snapshot = True, None
 
     def _decode(self, action: Any) -> Action:
-        """The action as an :class:`Action`; ``ValueError`` naming the component if it is outside the space."""
-        array = np.asarray(action)
-        nvec = self.action_space.nvec
-        if array.shape != nvec.shape:
-            raise ValueError(f"action must have shape {nvec.shape} ({', '.join(ACTION_COMPONENTS)}), got {array.shape}")
-        if not (np.issubdtype(array.dtype, np.integer) or np.all(np.equal(np.mod(array, 1), 0))):
-            raise ValueError(f"action must hold integers, got {array.tolist()}")
-        for name, value, size in zip(ACTION_COMPONENTS, array.tolist(), nvec.tolist(), strict=True):
-            if not 0 <= value < size:
-                raise ValueError(
-                    f"action {array.tolist()} is outside the action space {self.action_space}: "
-                    f"{name} = {value} is not in [0, {size})"
-                )
-        return Action.from_array(array)
+        """The action as an :class:`Action`; ``ValueError`` naming the problem if it is not in the space."""
+        return Action.from_array(action_vector(action, self.action_space.nvec, ACTION_COMPONENTS))
 
     def _check_fits(self, scenario: Scenario) -> None:
         """Raise :class:`ScenarioError` if ``scenario`` does not fit the lattice's extent or the capacity."""

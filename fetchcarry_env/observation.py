@@ -111,6 +111,55 @@ def observation_size(capacity: Capacity) -> int:
     )
 
 
+FIELDS: dict[str, tuple[str, ...]] = {
+    "area": ("min_x", "min_y", "max_x", "max_y"),
+    "robot": ("x", "y", "radius", "heading_+x", "heading_+y", "heading_-x", "heading_-y"),
+    "posture": ("present", "forward_low", "forward_high", "lateral_low", "lateral_high"),
+    "object": ("present", "x", "y", "z", "goal_x", "goal_y", "goal_z", "radius", "height", "held", "delivered"),
+    "clutter": ("present", "min_x", "min_y", "max_x", "max_y", "height"),
+    "table": ("present", "min_x", "min_y", "max_x", "max_y", "height"),
+    "obstacle": ("present", "min_x", "min_y", "max_x", "max_y"),
+}
+"""The features of each part of the ``observation`` vector, in order (metres; flags are 0 or 1)."""
+
+SLOT_GROUPS: dict[str, str] = {
+    "postures": "posture",
+    "objects": "object",
+    "clutter": "clutter",
+    "tables": "table",
+    "obstacles": "obstacle",
+}
+"""Capacity field -> the name of one of its slots."""
+
+
+def observation_layout(capacity: Capacity) -> dict[str, slice]:
+    """Named slices of the flat ``observation`` vector for ``capacity``.
+
+    ``"area"`` and ``"robot"``; one slice per slot (``"posture_0"`` ...,
+    ``"object_0"`` ..., ``"clutter_0"`` ..., ``"table_0"`` ..., ``"obstacle_0"`` ...),
+    each holding :data:`FIELDS` of its kind in order; and one slice per group of slots
+    (``"postures"``, ``"objects"``, ``"clutter"``, ``"tables"``, ``"obstacles"``), whose
+    ``reshape(count, width)`` gives one row per slot. The slices cover the vector in
+    order, without gaps (:func:`observation_size`).
+    """
+    layout: dict[str, slice] = {}
+    cursor = 0
+
+    def take(name: str, width: int) -> None:
+        nonlocal cursor
+        layout[name] = slice(cursor, cursor + width)
+        cursor += width
+
+    take("area", _AREA)
+    take("robot", _ROBOT)
+    for group, slot in SLOT_GROUPS.items():
+        start = cursor
+        for k in range(getattr(capacity, group)):
+            take(f"{slot}_{k}", len(FIELDS[slot]))
+        layout[group] = slice(start, cursor)
+    return layout
+
+
 def observation_space(capacity: Capacity) -> spaces.Dict:
     """The ``Dict`` observation space for a capacity."""
 

@@ -6,10 +6,23 @@ MAX_EPISODE_STEPS = 50  # phases; the expert needs at most about 4 per object pl
 
 
 def register_envs() -> None:
-    """Register ``FetchCarryPush-v0`` (idempotent)."""
+    """Register ``FetchCarryPush-v0`` and ``FetchCarryPushPhases-v0`` (idempotent).
+
+    ``FetchCarryPushPhases-v0`` is the same env behind
+    :class:`fetchcarry_env.phase_env.PhaseActions`: ``Discrete(K)`` candidate phases with
+    exact masks. It takes the env's arguments plus ``layout`` (a
+    :class:`fetchcarry_env.phases.PhaseLayout`), ``reward`` (``"paper"``, the env's, or
+    ``"learning"``: :class:`fetchcarry_env.shaping.LearningReward`) and ``gamma``.
+    """
     if "FetchCarryPush-v0" not in registry:
         register(
             id="FetchCarryPush-v0",
             entry_point="fetchcarry_env.env:FetchCarryPushEnv",
+            max_episode_steps=MAX_EPISODE_STEPS,
+        )
+    if "FetchCarryPushPhases-v0" not in registry:
+        register(
+            id="FetchCarryPushPhases-v0",
+            entry_point="fetchcarry_env.phase_env:make_phase_env",
             max_episode_steps=MAX_EPISODE_STEPS,
         )

@@ -13,14 +13,23 @@ from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, rect_under
+from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 
 FORMAT = "fetchcarry-scenario/1"
+
+COORD_LIMIT = 100.0  # metres: every coordinate lies within this of the origin (the observation's bound)
+MIN_SIZE = 1e-3  # metres: the smallest radius, height and rectangle width
+MAX_COUNTS = {"objects": 64, "clutter": 256, "tables": 64, "obstacles": 1024}  # items a scenario may hold
+MAX_FILE_BYTES = 64 * 2**20  # bytes: a file is refused unread beyond this (the largest valid one is under 1 MB)
+MAX_ID_LENGTH = 200  # characters of a name or an id
+MAX_SHOWN = 50  # violations spelled out in the message of a ScenarioError (all are in .violations)
 
 
 class ScenarioError(ValueError):
@@ -32,7 +41,9 @@ class ScenarioError(ValueError):
     def __init__(self, violations: list[str], source: str | None = None) -> None:
         self.violations = list(violations)
         where = f"{source}: " if source else ""
-        lines = "\n".join(f"  - {v}" for v in self.violations)
+        lines = "\n".join(f"  - {v}" for v in self.violations[:MAX_SHOWN])
+        if len(self.violations) > MAX_SHOWN:
+            lines += f"\n  ... and {len(self.violations) - MAX_SHOWN} more"
         super().__init__(f"{where}invalid scenario ({len(self.violations)} problem(s)):\n{lines}")
 
 
@@ -176,7 +187,13 @@ class Scenario:
     # ------------------------------------------------------------------ I/O
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str | None = None) -> Scenario:
-        """Parse and validate a ``fetchcarry-scenario/1`` mapping; raise :class:`ScenarioError`."""
+        """Parse and validate a ``fetchcarry-scenario/1`` mapping; raise :class:`ScenarioError`.
+
+        Too many items (``MAX_COUNTS``) are refused with their count before anything else is looked at.
+        """
+        too_many = _rule_counts(data)
+        if too_many:
+            raise ScenarioError(too_many, source)
         parser = _Parser()
         scenario = parser.parse(data)
         if scenario is not None:
@@ -188,12 +205,16 @@ class Scenario:
 
     @classmethod
     def load(cls, path: str | Path) -> Scenario:
-        """Read and validate a scenario file; broken JSON also raises :class:`ScenarioError`."""
+        """Read and validate a scenario file; raise :class:`ScenarioError` for anything but a valid scenario.
+
+        A file larger than ``MAX_FILE_BYTES``, not UTF-8 text, or not JSON is a
+        :class:`ScenarioError` too; ``OSError`` (a missing or unreadable file) passes through.
+        """
         path = Path(path)
         try:
-            data = json.loads(path.read_text())
-        except json.JSONDecodeError as error:
-            raise ScenarioError([f"not valid JSON: {error}"], str(path)) from None
+            data = read_json(path, MAX_FILE_BYTES)
+        except JsonInputError as error:
+            raise ScenarioError([f"format: {error}"], str(path)) from None
         return cls.from_dict(data, source=str(path))
 
     def to_dict(self) -> dict[str, Any]:
@@ -246,6 +267,7 @@ def check_rules(scenario: Scenario) -> list[str]:
         *_rule_on_tables(scenario),
         *_rule_no_overlap(scenario),
         *_rule_numbers(scenario),
+        *_rule_counts({key: getattr(scenario, key) for key in MAX_COUNTS}),
     ]
 
 
@@ -318,36 +340,81 @@ def _rule_no_overlap(scenario: Scenario) -> list[str]:
 
 
 def _rule_numbers(scenario: Scenario) -> list[str]:
-    out = []
+    """Rule 6: finite numbers of sane size (coordinates, radii, heights, range and rectangle widths)."""
+    out: list[str] = []
 
-    def check(owner: str, name: str, value: float, non_negative: bool) -> None:
-        if not math.isfinite(value):
-            out.append(f"rule 6 (numbers): {owner} {name} is not a finite number")
-        elif non_negative and value < 0:
+    def finite(owner: str, name: str, value: float) -> bool:
+        if math.isfinite(value):
+            return True
+        out.append(f"rule 6 (numbers): {owner} {name} is not a finite number")
+        return False
+
+    def coordinate(owner: str, name: str, value: float) -> None:
+        if finite(owner, name, value) and abs(value) > COORD_LIMIT:
+            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is more than {COORD_LIMIT:g} m from the origin")
+
+    def size(owner: str, name: str, value: float, high: float = COORD_LIMIT) -> None:
+        if not finite(owner, name, value):
+            return
+        if value < 0:
             out.append(f"rule 6 (numbers): {owner} {name} is negative")
+        elif value < MIN_SIZE:
+            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is less than {MIN_SIZE * 1000:g} mm")
+        elif value > high:
+            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is more than {high:g} m")
 
-    area = scenario.area
-    for name, value in zip(
-        ("min x", "min y", "max x", "max y"), (area.min_x, area.min_y, area.max_x, area.max_y), strict=True
-    ):
-        check("area", name, value, False)
-    check("robot", "radius", scenario.robot.radius, True)
+    def rect(owner: str, r: Rect) -> None:
+        for name, value in zip(("min x", "min y", "max x", "max y"), (r.min_x, r.min_y, r.max_x, r.max_y), strict=True):
+            coordinate(owner, name, value)
+        width, depth = r.size
+        if r.is_proper and min(width, depth) < MIN_SIZE:
+            out.append(f"rule 6 (numbers): {owner} is {width:g} x {depth:g} m, less than {MIN_SIZE * 1000:g} mm wide")
+
+    rect("area", scenario.area)
+    size("robot", "radius", scenario.robot.radius)
     for name, value in zip(("start x", "start y"), scenario.robot.start, strict=True):
-        check("robot", name, value, False)
+        coordinate("robot", name, value)
     for posture in scenario.robot.postures:
         for axis in ("forward", "lateral"):
             low, high = getattr(posture, axis)
-            check(f"posture {posture.name!r}", f"{axis} range", low, False)
-            check(f"posture {posture.name!r}", f"{axis} range", high, False)
+            coordinate(f"posture {posture.name!r}", f"{axis} range", low)
+            coordinate(f"posture {posture.name!r}", f"{axis} range", high)
             if math.isfinite(low) and math.isfinite(high) and high < low:
                 out.append(f"rule 6 (numbers): posture {posture.name!r} {axis} range has a negative width")
     for table in scenario.tables:
-        check(repr(table.id), "height", table.height, True)
+        rect(repr(table.id), table.rect)
+        size(repr(table.id), "height", table.height)
+    for obstacle in scenario.obstacles:
+        rect(repr(obstacle.id), obstacle.rect)
     for obj in scenario.objects:
-        check(repr(obj.id), "radius", obj.radius, True)
-        check(repr(obj.id), "height", obj.height, True)
+        for which, point in (("start", obj.start), ("goal", obj.goal)):
+            coordinate(repr(obj.id), f"{which} x", point[0])
+            coordinate(repr(obj.id), f"{which} y", point[1])
+        size(repr(obj.id), "radius", obj.radius)
+        size(repr(obj.id), "height", obj.height, _headroom(scenario, obj.start, obj.goal))
     for item in scenario.clutter:
-        check(repr(item.id), "height", item.height, True)
+        rect(repr(item.id), item.rect)
+        size(repr(item.id), "height", item.height, _headroom(scenario, item.rect.center))
+    return out
+
+
+def _headroom(scenario: Scenario, *points: Point) -> float:
+    """How tall (metres) a thing standing at ``points`` may be: its top stays within ``COORD_LIMIT`` of the floor."""
+    tops = [
+        t.height for t in scenario.tables if math.isfinite(t.height) and any(t.rect.contains_point(p) for p in points)
+    ]
+    return COORD_LIMIT - max([0.0, *tops])
+
+
+def _rule_counts(data: Any) -> list[str]:
+    """Rule 6's counts, read from the raw mapping so that a huge file is refused before it is parsed."""
+    if not isinstance(data, Mapping):
+        return []
+    out = []
+    for key, limit in MAX_COUNTS.items():
+        items = data.get(key)
+        if isinstance(items, list | tuple) and len(items) > limit:
+            out.append(f"rule 6 (numbers): {len(items):,} {key}, more than the {limit:,} a scenario may hold")
     return out
 
 
@@ -378,10 +445,8 @@ class _Parser:
             return None
         self._unknown(data, _TOP_KEYS, "scenario")
         if data.get("format") != FORMAT:
-            self.fail(f"format: 'format' must be {FORMAT!r}, got {data.get('format')!r}")
-        name = data.get("name")
-        if not isinstance(name, str) or not name:
-            self.fail("format: 'name' is required and must be a non-empty string")
+            self.fail(f"format: 'format' must be {FORMAT!r}, got {describe(data.get('format'))}")
+        name = self._text(data.get("name"), "'name'")
         area = self._rect(data.get("area"), "area", required=True)
         robot = self._robot(data.get("robot"))
         if "objects" not in data:
@@ -401,20 +466,41 @@ class _Parser:
             clutter=tuple(groups["clutter"]),
         )
 
-    def _unknown(self, data: Mapping, allowed: set[str], where: str) -> None:
-        for key in data:
-            if key not in allowed:
-                self.fail(f"format: unknown key {key!r} in {where}")
+    def _unknown(self, data: Mapping, allowed: set[str], where: str, shown: int = 10) -> None:
+        unknown = [key for key in data if key not in allowed]
+        for key in unknown[:shown]:
+            self.fail(f"format: unknown key {describe(key)} in {where}")
+        if len(unknown) > shown:
+            self.fail(f"format: {len(unknown) - shown:,} more unknown keys in {where}")
+
+    def _text(self, value: Any, where: str) -> str | None:
+        """A name or an id: a non-empty string of valid Unicode, at most ``MAX_ID_LENGTH`` characters.
+
+        Control characters are allowed (the format does not forbid them); whatever prints a name
+        escapes them, so a name cannot drive the terminal."""
+        if not isinstance(value, str) or not value:
+            self.fail(f"format: {where} is required and must be a non-empty string, got {describe(value)}")
+            return None
+        if len(value) > MAX_ID_LENGTH:
+            self.fail(f"format: {where} {describe(value)} is longer than {MAX_ID_LENGTH} characters")
+            return None
+        if any(_lone_surrogate(c) for c in value):
+            self.fail(f"format: {where} {describe(value)} holds a lone surrogate (it must be valid Unicode text)")
+            return None
+        return value
 
     def _number(self, value: Any, where: str) -> float | None:
         if isinstance(value, bool) or not isinstance(value, int | float):
-            self.fail(f"format: {where} must be a number, got {value!r}")
+            self.fail(f"format: {where} must be a number, got {describe(value)}")
             return None
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:
+            return math.inf  # an integer beyond float range: rule 6 reports it as not finite
 
     def _point(self, value: Any, where: str) -> Point | None:
         if not isinstance(value, list | tuple) or len(value) != 2:
-            self.fail(f"format: {where} must be a pair [x, y], got {value!r}")
+            self.fail(f"format: {where} must be a pair [x, y], got {describe(value)}")
             return None
         x, y = (self._number(v, where) for v in value)
         return None if x is None or y is None else (x, y)
@@ -439,18 +525,22 @@ class _Parser:
         self._unknown(value, _ROBOT_KEYS, "robot")
         start = self._point(value.get("start"), "robot.start")
         heading = value.get("heading", "+x")
-        if heading not in HEADINGS:
-            self.fail(f"format: robot.heading must be one of {', '.join(HEADINGS)}, got {heading!r}")
+        if not isinstance(heading, str) or heading not in HEADINGS:
+            self.fail(f"format: robot.heading must be one of {', '.join(HEADINGS)}, got {describe(heading)}")
         radius = self._number(value.get("radius", DEFAULT_RADIUS), "robot.radius")
         postures = DEFAULT_POSTURES
         if "postures" in value:
-            postures = tuple(p for p in (self._posture(p, i) for i, p in enumerate(value["postures"] or [])) if p)
+            listed = value["postures"]
+            if not isinstance(listed, list | tuple):
+                self.fail(f"format: robot.postures must be a list of postures, got {describe(listed)}")
+                listed = []
+            postures = tuple(p for p in (self._posture(p, i) for i, p in enumerate(listed)) if p)
             if not postures:
                 self.fail("format: robot.postures must hold at least one posture")
-            names = [p.name for p in postures]
-            for name in sorted({n for n in names if names.count(n) > 1}):
+            counts = Counter(p.name for p in postures)
+            for name in sorted(n for n, count in counts.items() if count > 1):
                 self.fail(f"rule 1 (unique ids): posture name {name!r} is used more than once")
-        if start is None or radius is None or heading not in HEADINGS:
+        if start is None or radius is None or not isinstance(heading, str) or heading not in HEADINGS:
             return None
         return Robot(start=start, heading=heading, radius=radius, postures=postures)
 
@@ -460,18 +550,16 @@ class _Parser:
             self.fail(f"format: {where} must be an object")
             return None
         self._unknown(value, _POSTURE_KEYS, where)
-        name = value.get("name")
-        if not isinstance(name, str) or not name:
-            self.fail(f"format: {where}.name must be a non-empty string")
+        name = self._text(value.get("name"), f"{where}.name")
         forward = self._range(value.get("forward"), f"{where}.forward")
         lateral = self._range(value.get("lateral"), f"{where}.lateral")
-        if not isinstance(name, str) or not name or forward is None or lateral is None:
+        if name is None or forward is None or lateral is None:
             return None
         return Posture(name, forward, lateral)
 
     def _items(self, value: Any, key: str) -> list:
-        if not isinstance(value, list):
-            self.fail(f"format: {key!r} must be a list")
+        if not isinstance(value, list | tuple):
+            self.fail(f"format: {key!r} must be a list, got {describe(value)}")
             return []
         return [item for item in (self._item(v, key, i) for i, v in enumerate(value)) if item is not None]
 
@@ -479,11 +567,10 @@ class _Parser:
         if not isinstance(value, Mapping):
             self.fail(f"format: {key}[{index}] must be an object")
             return None
-        item_id = value.get("id")
-        where = f"{key}[{index}]" if not isinstance(item_id, str) else f"{item_id!r}"
+        item_id = self._text(value.get("id"), f"{key}[{index}].id")
+        where = f"{key}[{index}]" if item_id is None else f"{item_id!r}"
         self._unknown(value, _KEYS[key], where)
-        if not isinstance(item_id, str) or not item_id:
-            self.fail(f"format: {key}[{index}].id is required and must be a non-empty string")
+        if item_id is None:
             return None
         if key == "objects":
             start = self._point(value.get("start"), f"{where}.start")
@@ -501,3 +588,8 @@ class _Parser:
         if rect is None or height is None:
             return None
         return Table(item_id, rect, height) if key == "tables" else Clutter(item_id, rect, height)
+
+
+def _lone_surrogate(char: str) -> bool:
+    """True for a lone surrogate: not valid Unicode, it cannot be written as UTF-8 (nor given to SCIP)."""
+    return "\ud800" <= char <= "\udfff"

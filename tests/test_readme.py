@@ -21,3 +21,26 @@ def test_readme_example_runs(index, tmp_path, monkeypatch):
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     monkeypatch.chdir(tmp_path)
     exec(compile(BLOCKS[index], f"README.md block {index}", "exec"), {})
+
+
+def _repository_files() -> set[Path]:
+    return {p for p in ROOT.rglob("*") if ".git" not in p.parts and "__pycache__" not in p.parts}
+
+
+def test_the_planner_examples_write_nothing_into_the_repository(monkeypatch, tmp_path):
+    """Run from the repository itself, as a reader would: the Python and shell planner examples."""
+    from training.cli import main
+
+    planner_python = next(block for block in BLOCKS if "result.save(" in block)
+    shell = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.DOTALL)
+    planner_shell = next(block for block in shell if "fetchcarry plan " in block)
+    monkeypatch.chdir(ROOT)
+    before = _repository_files()
+    exec(compile(planner_python, "README.md planner example", "exec"), {})
+    for line in planner_shell.splitlines():
+        command = line.split("#")[0].strip()
+        if command.startswith("fetchcarry "):
+            argv = command.replace("$out", str(tmp_path)).split()[1:]
+            assert main(argv) == 0, command
+    assert sorted(_repository_files() - before) == []
+    assert (tmp_path / "plan.json").is_file() and (tmp_path / "plan.png").is_file()

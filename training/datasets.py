@@ -1,7 +1,10 @@
 """Minari datasets of fetchcarry episodes: assembly from the staging, summary, exact replay.
 
-A dataset is an ordinary Minari 0.5 dataset (``minari.load_dataset(id)`` reads it,
-``recover_environment()`` rebuilds the env from the stored env spec). Besides the
+A dataset is an ordinary Minari 0.5 dataset (``minari.load_dataset(id)`` reads it). Its
+env is rebuilt by :func:`make_recorded_env`, never by Minari's ``recover_environment()``:
+that one ``gym.make``s whatever entry point the dataset's ``metadata.json`` names, so an
+edited file would run any code. :func:`trusted_env_spec` accepts only this project's env
+ids with their registered entry points and plain keyword arguments. Besides the
 observations, actions, rewards and flags, each episode stores:
 
 - its ``seed`` (Minari's episode seed) and its ``scenario`` (the ``fetchcarry-scenario/1``
@@ -20,10 +23,13 @@ a dataset id either does not exist or holds a whole dataset.
 
 from __future__ import annotations
 
+import ctypes
+import errno
 import json
 import math
 import os
 import shutil
+import sys
 from collections import Counter
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -33,14 +39,37 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
-from training.generate import GenerationConfig, make_env
 from training.rollout import EpisodeRecord
+from training.sources import GenerationConfig, make_env
 from training.staging import Staging, datasets_root
 
 AUTHOR = "fetchcarry"
 CODE_URL = "https://github.com/fetchcarry/fetchcarry"
 ALGORITHMS = {"expert": "fetchcarry MILP expert (SCIP), ExpertPolicy", "random": "RandomMaskedPolicy"}
+ASSEMBLY_FOLDER = "assembling"  # in the staging folder: the dataset being written
+REPLACED_FOLDER = "replaced"  # in the staging folder: an old dataset between the two renames of a replacement
+SPACE_MARGIN = 1.2  # assembled dataset size / staged files' size (HDF5 holds the same arrays)
+MIN_FREE_BYTES = 1_000_000  # bytes kept free besides the estimate
+_AT_FDCWD = -100  # Linux: paths relative to the current directory
+_RENAME_EXCHANGE = 2  # Linux renameat2 flag: swap the two paths
 REPLAY_TOLERANCE = 1e-5  # observation units (metres): replayed observations must agree this closely
+
+
+ENV_PACKAGES = ("fetchcarry_env", "training")  # entry points of this project's envs live here
+TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.make a dataset may store
+    "family": (str,),
+    "scenario": (dict,),  # the scenario itself; a path would make the dataset read another file
+    "resolution": (int, float),
+    "render_mode": (type(None),),  # gym.make records it; replay renders nothing
+}
+
+
+class NoSpaceError(UsageError):
+    """The disk cannot hold the dataset about to be written."""
+
+
+class UnknownEnvError(UsageError):
+    """A dataset names an env that is not one of this project's (its env is never made)."""
 
 
 def validate_dataset_id(dataset_id: str) -> None:
@@ -49,7 +78,7 @@ def validate_dataset_id(dataset_id: str) -> None:
 
     try:
         parse_dataset_id(dataset_id)
-    except ValueError:
+    except (ValueError, TypeError):  # minari 0.5.4 raises TypeError for an id without -vN
         raise UsageError(
             f"dataset id {dataset_id!r} is not a Minari id: use (namespace/)name-v<version>, "
             "e.g. fetchcarry/push-expert-v0"
@@ -64,20 +93,34 @@ def dataset_exists(dataset_id: str) -> bool:
     return dataset_path(dataset_id).exists()
 
 
-def delete_dataset(dataset_id: str) -> None:
-    shutil.rmtree(dataset_path(dataset_id))
+def assemble(config: GenerationConfig, staging: Staging) -> Path:
+    """Write the Minari dataset ``config.dataset_id`` from its staged episodes ``0 .. episodes-1``.
 
-
-def assemble(config: GenerationConfig, staging: Staging) -> None:
-    """Write the Minari dataset ``config.dataset_id`` from its staged episodes ``0 .. episodes-1``."""
-    import minari
-    from minari.dataset.minari_storage import MinariStorage
-    from minari.namespace import create_namespace, list_local_namespaces
-
-    building = staging.path / "assembling"
+    The dataset is built in the staging folder; :func:`publish` moves it into place.
+    Returns the folder it was built in. A write that fails (a full disk) is an
+    ``OSError`` that names that folder.
+    """
+    building = staging.path / ASSEMBLY_FOLDER
     if building.exists():
         shutil.rmtree(building)  # what an interrupted assembly left
     building.mkdir()
+    try:
+        _write_dataset(config, staging, building)
+    except OSError as error:
+        raise OSError(error.errno, f"cannot write the dataset ({error.strerror or error})", str(building)) from error
+    namespace = config.dataset_id.rsplit("/", 1)[0] if "/" in config.dataset_id else None
+    if namespace is not None:
+        from minari.namespace import create_namespace, list_local_namespaces
+
+        if namespace not in list_local_namespaces():
+            create_namespace(namespace)
+    return building
+
+
+def _write_dataset(config: GenerationConfig, staging: Staging, building: Path) -> None:
+    import minari
+    from minari.dataset.minari_storage import MinariStorage
+
     env = make_env(config.source)
     try:
         storage = MinariStorage.new(
@@ -104,12 +147,89 @@ def assemble(config: GenerationConfig, staging: Staging) -> None:
     storage.update_episodes(_buffers(staging, episodes, metadata))
     storage.update_episode_metadata(metadata, episodes)
 
-    namespace = config.dataset_id.rsplit("/", 1)[0] if "/" in config.dataset_id else None
-    if namespace is not None and namespace not in list_local_namespaces():
-        create_namespace(namespace)
-    final = dataset_path(config.dataset_id)
+
+def check_free_space(staging: Staging) -> None:
+    """Raise :class:`NoSpaceError` unless the disk of the staging folder can hold the assembled dataset.
+
+    The estimate is the staged files' size times :data:`SPACE_MARGIN` (the HDF5 file
+    holds the same arrays, uncompressed, plus the per-episode metadata).
+    """
+    needed = int(staging.size_bytes() * SPACE_MARGIN) + MIN_FREE_BYTES
+    free = shutil.disk_usage(staging.path).free
+    if free < needed:
+        raise NoSpaceError(
+            f"not enough free space to assemble {staging.dataset_id!r} in {staging.path}: about "
+            f"{needed / 1e6:.1f} MB needed, {free / 1e6:.1f} MB free (the staged episodes are kept: "
+            "free some space and run the same command again)"
+        )
+
+
+def publish(built: Path, dataset_id: str, aside: Path) -> None:
+    """Move the dataset built in ``built`` to its place; an existing dataset is replaced in one atomic step.
+
+    Where the file system can exchange two folders atomically (Linux ``renameat2``),
+    the old and the new dataset swap places and the old one is deleted. Elsewhere the
+    old one is first renamed to ``aside`` (same file system), then the new one moved
+    in; a run interrupted between the two renames is repaired by
+    :func:`recover_replaced` (the old dataset is put back).
+    """
+    final = dataset_path(dataset_id)
     final.parent.mkdir(parents=True, exist_ok=True)
-    os.rename(building, final)
+    if not final.exists():
+        os.rename(built, final)
+        return
+    if _exchange(built, final):
+        shutil.rmtree(built)  # now the old dataset
+        return
+    if aside.exists():
+        shutil.rmtree(aside)
+    os.rename(final, aside)
+    os.rename(built, final)
+    shutil.rmtree(aside)
+
+
+def recover_replaced(dataset_id: str, aside: Path) -> None:
+    """Undo a replacement interrupted between its two renames (see :func:`publish`)."""
+    if not aside.exists():
+        return
+    final = dataset_path(dataset_id)
+    if final.exists():
+        shutil.rmtree(aside)
+    else:
+        os.rename(aside, final)
+
+
+def finished_with(dataset_id: str, manifest: dict[str, Any], episodes: int) -> bool:
+    """Whether dataset ``dataset_id`` is there, whole, made with ``manifest``'s options and ``episodes`` episodes."""
+    file = dataset_path(dataset_id) / "data" / "metadata.json"
+    try:
+        metadata = json.loads(file.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return False
+    return (
+        isinstance(metadata, dict)
+        and metadata.get("fetchcarry_generation") == manifest
+        and metadata.get("total_episodes") == episodes
+    )
+
+
+def _exchange(first: Path, second: Path) -> bool:
+    """Swap two paths atomically with Linux's ``renameat2(RENAME_EXCHANGE)``; ``False`` where it is not available."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        renameat2 = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    renameat2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    result = renameat2(_AT_FDCWD, os.fsencode(first), _AT_FDCWD, os.fsencode(second), _RENAME_EXCHANGE)
+    if result == 0:
+        return True
+    error = ctypes.get_errno()
+    if error in (errno.ENOSYS, errno.EINVAL, errno.EXDEV, errno.ENOTSUP):
+        return False
+    raise OSError(error, os.strerror(error), str(second))
 
 
 def _description(config: GenerationConfig) -> str:
@@ -202,7 +322,7 @@ def info(dataset_id: str) -> dict[str, Any]:
         "path": str(dataset_path(dataset_id)),
         "env_id": spec.id if spec is not None else None,
         "family": kwargs.get("family"),
-        "scenario": scenario["name"] if isinstance(scenario, dict) else None,
+        "scenario": str(scenario.get("name")) if isinstance(scenario, dict) else None,
         "algorithm": metadata.get("algorithm_name"),
         "generation": metadata.get("fetchcarry_generation"),
         "episodes": dataset.total_episodes,
@@ -246,7 +366,7 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
     dataset = load(dataset_id)
     metadata = episode_metadata(dataset, episode)
     data = dataset[episode]
-    env = dataset.recover_environment()
+    env = make_recorded_env(dataset, dataset_id)
     try:
         observation, _ = env.reset(seed=metadata["seed"])
         same_scenario = env.unwrapped.scenario.to_dict() == metadata["scenario"]
@@ -273,6 +393,52 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
         same_final_state=same_final,
         reproduced=same_scenario and not diverged and same_rewards,
     )
+
+
+def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
+    """The env id and ``gym.make`` keyword arguments of a dataset's env spec, if it is one of this project's envs.
+
+    Raises :class:`UnknownEnvError` unless the id is registered with an entry point in
+    this project's packages, the spec names that same entry point, it adds no wrappers,
+    and every keyword argument is one of :data:`TRUSTED_ENV_KWARGS` with a plain value.
+    """
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers this project's env ids)
+
+    ours = sorted(k for k, v in gym.envs.registry.items() if _is_ours(v.entry_point))
+    if spec is None:
+        raise UnknownEnvError(f"dataset {dataset_id!r} names no env: it cannot be replayed")
+    registered = gym.envs.registry.get(spec.id) if isinstance(spec.id, str) else None
+    if registered is None or not _is_ours(registered.entry_point) or spec.entry_point != registered.entry_point:
+        raise UnknownEnvError(
+            f"dataset {dataset_id!r} names an unknown env {spec.id!r} (entry point {spec.entry_point!r}); "
+            f"only this project's envs are rebuilt: {', '.join(ours)}"
+        )
+    if spec.additional_wrappers:
+        names = ", ".join(str(w.name) for w in spec.additional_wrappers)
+        raise UnknownEnvError(f"dataset {dataset_id!r} names an unknown env: it adds wrappers ({names})")
+    kwargs = dict(spec.kwargs or {})
+    for key, value in kwargs.items():
+        allowed = TRUSTED_ENV_KWARGS.get(key)
+        if allowed is None or isinstance(value, bool) or not isinstance(value, allowed):
+            raise UnknownEnvError(
+                f"dataset {dataset_id!r} names an unknown env: {spec.id} does not take {key}={value!r:.60} "
+                f"from a dataset (allowed: {', '.join(TRUSTED_ENV_KWARGS)})"
+            )
+    return spec.id, kwargs
+
+
+def make_recorded_env(dataset: Any, dataset_id: str):
+    """The env a dataset was recorded in, made from this project's registry (see :func:`trusted_env_spec`)."""
+    import gymnasium as gym
+
+    env_id, kwargs = trusted_env_spec(dataset.spec.env_spec, dataset_id)
+    return gym.make(env_id, **kwargs)
+
+
+def _is_ours(entry_point: Any) -> bool:
+    return isinstance(entry_point, str) and entry_point.split(":")[0].split(".")[0] in ENV_PACKAGES
 
 
 def _observation_error(observation: dict[str, np.ndarray], recorded: dict[str, np.ndarray], index: int) -> float:

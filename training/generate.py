@@ -15,8 +15,13 @@ optional extra: ``pip install ray``).
 
 from __future__ import annotations
 
+import ctypes
 import json
 import multiprocessing
+import os
+import signal
+import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -24,70 +29,45 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from fetchcarry_env.errors import UsageError
+from training.datasets import (
+    REPLACED_FOLDER,
+    assemble,
+    check_free_space,
+    dataset_exists,
+    finished_with,
+    publish,
+    recover_replaced,
+    validate_dataset_id,
+)
 from training.rollout import EpisodeRecord, run_episode
-from training.staging import Staging
+from training.sources import (
+    DEFAULT_TIME_LIMIT,
+    ENV_ID,
+    POLICIES,
+    EpisodeSource,
+    GenerationConfig,
+    make_env,
+    make_policy,
+)
+from training.staging import DatasetLock, Staging, StagingError
 
-ENV_ID = "FetchCarryPush-v0"
-POLICIES = ("expert", "random")
+__all__ = [
+    "DEFAULT_TIME_LIMIT",
+    "ENV_ID",
+    "POLICIES",
+    "EpisodeSource",
+    "GenerationConfig",
+    "GenerationReport",
+    "generate",
+    "make_env",
+    "make_policy",
+    "run_episodes",
+    "run_indexed_episode",
+]
+
 BACKENDS = ("process", "ray")
-DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
-
-
-@dataclass(frozen=True)
-class EpisodeSource:
-    """Where episodes come from: the env (a family or one scenario), the policy and the seeds.
-
-    Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
-    """
-
-    family: str | None = None  # a scenario family name, or
-    scenario: dict[str, Any] | None = None  # one fixed scenario (fetchcarry-scenario/1 JSON)
-    seed: int = 0  # episode k uses seed + k
-    policy: str = "expert"
-    time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
-    env_id: str = ENV_ID
-
-    def __post_init__(self) -> None:
-        if (self.family is None) == (self.scenario is None):
-            raise UsageError("give exactly one of a family (--family) and a scenario (--scenario)")
-        if self.family is not None:
-            from fetchcarry_env.families import FAMILY_NAMES
-
-            if self.family not in FAMILY_NAMES:
-                raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
-        if self.policy not in POLICIES:
-            raise UsageError(f"--policy must be one of {', '.join(POLICIES)}, got {self.policy!r}")
-        if self.time_limit <= 0:
-            raise UsageError(f"--time-limit must be positive, got {self.time_limit}")
-
-    @property
-    def env_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
-        return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
-
-    @property
-    def label(self) -> str:
-        return f"family {self.family}" if self.family is not None else f"scenario {self.scenario['name']}"
-
-    def episode_seed(self, index: int) -> int:
-        return self.seed + index
-
-
-@dataclass(frozen=True)
-class GenerationConfig:
-    """A dataset to make: its id, how many episodes, and where they come from."""
-
-    dataset_id: str
-    episodes: int
-    source: EpisodeSource
-
-    def __post_init__(self) -> None:
-        if self.episodes < 1:
-            raise UsageError(f"--episodes must be at least 1, got {self.episodes}")
-
-    def manifest(self) -> dict[str, Any]:
-        """The options that identify the staged episodes (everything but how many there are)."""
-        return {"dataset_id": self.dataset_id, **asdict(self.source)}
+PARENT_CHECK_S = 0.5  # seconds between a pool worker's checks that its parent is alive
+_PR_SET_PDEATHSIG = 1  # Linux prctl option: the signal a process gets when its parent dies
 
 
 @dataclass(frozen=True)
@@ -103,26 +83,16 @@ class GenerationReport:
     wall_s: float  # seconds of this run, assembly included
     assembly_s: float  # seconds spent writing the Minari dataset from the staged episodes
     figures: list[dict[str, Any]] = field(default_factory=list)  # EpisodeFigures of the episodes made now
+    set_aside: list[str] = field(default_factory=list)  # staged episode files that could not be read (made again)
+    already_complete: bool = False  # the dataset was already there, whole, with the same options
 
 
-def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
-    """A fresh env for ``source`` (``render_options``: the env's ``camera``, ``width``, ``height``)."""
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-
-    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs, **render_options)
+class DatasetExistsError(UsageError):
+    """A dataset with this id exists (and was made with other options)."""
 
 
-def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
-    """The policy named by ``source.policy`` for ``env``."""
-    if source.policy == "expert":
-        from expert.policy import ExpertPolicy
-
-        return ExpertPolicy(env, time_limit=source.time_limit)
-    from training.policies import RandomMaskedPolicy
-
-    return RandomMaskedPolicy(env, seed=seed)
+class StagingMismatchError(UsageError):
+    """A partly generated dataset of this id was made with other options."""
 
 
 def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
@@ -147,44 +117,53 @@ def generate(
 ) -> GenerationReport:
     """Make (or finish) the dataset ``config.dataset_id`` and return what was done.
 
-    Raises :class:`UsageError` when the dataset exists (unless ``overwrite``) or when
-    a staging of the same id was made with other options. ``on_episode`` is called
-    after each episode is staged (tests use it to interrupt a run).
+    Holds the dataset id's lock for the whole run (:class:`DatasetBusyError` if another
+    run holds it). A dataset that is already complete with the same options is left as
+    it is (``already_complete`` in the report; a leftover staging is removed). Raises
+    :class:`DatasetExistsError` when another dataset has the id (unless ``overwrite``:
+    the new one is built aside and swapped in, so the old one stays until the new one is
+    whole) and :class:`StagingMismatchError` when a staging of the id was made with
+    other options. Staged episodes that cannot be read are set aside and made again
+    (``set_aside`` in the report). ``on_episode`` is called after each episode is
+    staged (tests use it to interrupt a run).
     """
-    from training.datasets import assemble, dataset_exists, delete_dataset, validate_dataset_id
-
     validate_dataset_id(config.dataset_id)
     if workers < 1:
-        raise UsageError(f"--workers must be at least 1, got {workers}")
-    staging = Staging(config.dataset_id)
-    if dataset_exists(config.dataset_id):
-        if not overwrite:
-            raise UsageError(
-                f"dataset {config.dataset_id!r} already exists; choose another id or pass --overwrite to replace it"
-            )
-        delete_dataset(config.dataset_id)
-        staging.remove()
-    _check_staging(staging, config, overwrite)
-
+        raise UsageError(f"the number of workers must be at least 1, got {workers}")
     started = time.perf_counter()
-    staging.start(config.manifest())
-    done = {k for k in staging.staged() if k < config.episodes}
-    missing = [k for k in range(config.episodes) if k not in done]
-    figures: list[dict[str, Any]] = []
-    with progress_bar(config.episodes, config.dataset_id, initial=len(done), enabled=progress) as bar:
-        for index, record in run_episodes(
-            config.source, missing, workers=workers, backend=backend, ray_address=ray_address
-        ):
-            staging.write(index, record)
-            figures.append(record.figures.to_dict())
-            bar.update(1)
-            bar.set_postfix_str(_postfix(figures), refresh=False)
-            if on_episode is not None:
-                on_episode(index, record)
-    assembly_started = time.perf_counter()
-    assemble(config, staging)
-    staging.remove()
-    assembly_s = time.perf_counter() - assembly_started
+    with DatasetLock(config.dataset_id):
+        staging = Staging(config.dataset_id)
+        recover_replaced(config.dataset_id, staging.path / REPLACED_FOLDER)
+        if dataset_exists(config.dataset_id) and not overwrite:
+            if finished_with(config.dataset_id, config.manifest(), config.episodes):
+                staging.remove()
+                return GenerationReport(
+                    config.dataset_id, config.episodes, config.episodes, 0, workers, backend,
+                    wall_s=time.perf_counter() - started, assembly_s=0.0, already_complete=True,
+                )  # fmt: skip
+            raise DatasetExistsError(f"dataset {config.dataset_id!r} already exists with other options")
+        _check_staging(staging, config, overwrite)
+        staging.start(config.manifest())
+        set_aside = [str(source) for source, _ in staging.set_aside_corrupt()]
+        done = {k for k in staging.staged() if k < config.episodes}
+        missing = [k for k in range(config.episodes) if k not in done]
+        figures: list[dict[str, Any]] = []
+        with progress_bar(config.episodes, config.dataset_id, initial=len(done), enabled=progress) as bar:
+            for index, record in run_episodes(
+                config.source, missing, workers=workers, backend=backend, ray_address=ray_address
+            ):
+                staging.write(index, record)
+                figures.append(record.figures.to_dict())
+                bar.update(1)
+                bar.set_postfix_str(_postfix(figures), refresh=False)
+                if on_episode is not None:
+                    on_episode(index, record)
+        assembly_started = time.perf_counter()
+        check_free_space(staging)
+        built = assemble(config, staging)
+        publish(built, config.dataset_id, staging.path / REPLACED_FOLDER)
+        staging.remove()
+        assembly_s = time.perf_counter() - assembly_started
     return GenerationReport(
         dataset_id=config.dataset_id,
         episodes=config.episodes,
@@ -195,11 +174,18 @@ def generate(
         wall_s=time.perf_counter() - started,
         assembly_s=assembly_s,
         figures=figures,
+        set_aside=set_aside,
     )
 
 
 def _check_staging(staging: Staging, config: GenerationConfig, overwrite: bool) -> None:
-    manifest = staging.manifest()
+    try:
+        manifest = staging.manifest()
+    except StagingError:
+        if not overwrite:
+            raise
+        staging.remove()
+        return
     if manifest is None or manifest == config.manifest():
         return
     if overwrite:
@@ -208,9 +194,8 @@ def _check_staging(staging: Staging, config: GenerationConfig, overwrite: bool) 
     differences = sorted(
         k for k in set(manifest) | set(config.manifest()) if manifest.get(k) != config.manifest().get(k)
     )
-    raise UsageError(
-        f"a partly generated {config.dataset_id!r} exists with other options ({', '.join(differences)} differ): "
-        "run the same command as before to resume it, or pass --overwrite to start again"
+    raise StagingMismatchError(
+        f"a partly generated {config.dataset_id!r} exists with other options ({', '.join(differences)} differ)"
     )
 
 
@@ -224,9 +209,9 @@ def run_episodes(
 ) -> Iterator[tuple[int, EpisodeRecord]]:
     """Episodes ``indices`` of ``source`` as ``(index, record)``, as they finish (not in order when parallel)."""
     if workers < 1:
-        raise UsageError(f"--workers must be at least 1, got {workers}")
+        raise UsageError(f"the number of workers must be at least 1, got {workers}")
     if backend not in BACKENDS:
-        raise UsageError(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+        raise UsageError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if not indices:
         return
     if backend == "ray":
@@ -241,15 +226,56 @@ def run_episodes(
 def _run_pool(source: EpisodeSource, indices: list[int], workers: int) -> Iterator[tuple[int, EpisodeRecord]]:
     # spawn: the workers start clean (no simulator or solver state inherited from this process).
     context = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=context, initializer=worker_setup, initargs=(os.getpid(),)
+    )
+    finished_cleanly = False
     try:
         pending = {pool.submit(run_indexed_episode, source, index): index for index in indices}
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
                 yield pending.pop(future), future.result()
+        finished_cleanly = True
     finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+        if not finished_cleanly:  # Ctrl-C, an error, or the caller stopped: do not wait for running episodes
+            _terminate_workers(pool)
+        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
+
+
+def worker_setup(parent: int) -> None:
+    """Initialise a pool worker: it ignores Ctrl-C (its parent stops it) and dies with its parent.
+
+    On Linux the kernel kills the worker when the parent dies, however it dies
+    (``PR_SET_PDEATHSIG``); elsewhere, and as a second guard, a daemon thread checks
+    every :data:`PARENT_CHECK_S` seconds that the parent is still there.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:  # the parent died before the line above took effect
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), name="watch-parent", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(PARENT_CHECK_S)
+    os._exit(1)
+
+
+def _terminate_workers(pool: ProcessPoolExecutor) -> None:
+    """Kill the pool's worker processes now (the executor has no public way to stop running calls)."""
+    processes = dict(getattr(pool, "_processes", None) or {})
+    for process in processes.values():
+        if process.is_alive():
+            process.kill()
+    for process in processes.values():
+        process.join(timeout=1.0)
 
 
 def _run_ray(
@@ -258,7 +284,7 @@ def _run_ray(
     try:
         import ray
     except ModuleNotFoundError:
-        raise UsageError("--backend ray needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
+        raise UsageError("the Ray backend needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
     started_here = not ray.is_initialized()
     if started_here:
         if address is None:

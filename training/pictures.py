@@ -11,8 +11,11 @@ The still (PNG, JPEG, SVG, PDF) has three parts under a title with the episode's
   state after each pick, place and push), each cropped around the robot and what its arm
   acted on, titled with the step's number and what it did.
 
-The colours are those of the plan plot (:mod:`expert.plot`). The GIF shows the env's
-frames, one per state. Headless (matplotlib's Agg canvas, Pillow for GIFs).
+The colours are those of the plan plot (:mod:`expert.plot`) and of the renders: objects
+red, goals green, clutter blue in the maps and in the 3-D renders alike. Labels that
+would overlap are moved apart. The GIF shows the env's frames, one per state, rendered
+at :data:`GIF_RENDER_SIZE`, each under a caption that says which step it is and what
+the step did. Headless (matplotlib's Agg canvas, Pillow for GIFs).
 """
 
 from __future__ import annotations
@@ -47,6 +50,9 @@ ROBOT_TOP = 1.0  # metres: the height of the robot's head, kept inside a crop
 STILL_DPI = 100
 # The env's render size for a still picture: the strip crops it, so it is rendered large.
 STILL_RENDER_SIZE = (1024, 768)  # pixels (width, height)
+GIF_RENDER_SIZE = (1024, 768)  # pixels (width, height) the env renders a GIF's frames at, before the crop
+GIF_WIDTH = 800  # pixels: a GIF's width (frames cropped to where the episode happens, then scaled to this)
+CAPTION_PX = 30  # pixels: the caption's font size; its band is twice as high
 
 
 def check_picture_path(path: str | Path) -> Path:
@@ -70,19 +76,65 @@ def save_episode_picture(record: EpisodeRecord, path: str | Path) -> Path:
     if not record.frames:
         raise ValueError("the episode has no frames: run it with render=True")
     if is_gif(path):
-        save_gif(record.frames, path)
+        scenario = Scenario.from_dict(record.scenario)
+        points = episode_points(scenario, record.states)
+        frames = [crop(np.asarray(frame), scenario, points) for frame in record.frames]
+        save_gif(frames, path, captions=gif_captions(record))
     else:
         save_story(record, path)
     return path
 
 
-def save_gif(frames: Sequence[np.ndarray], path: Path, frame_ms: int = GIF_FRAME_MS) -> None:
-    """An animated GIF of ``frames`` (uint8 rgb arrays), the last frame held twice as long."""
+def save_gif(
+    frames: Sequence[np.ndarray], path: Path, frame_ms: int = GIF_FRAME_MS, captions: Sequence[str] | None = None
+) -> None:
+    """An animated GIF of ``frames`` (uint8 rgb arrays), each under its caption; the last frame held twice as long."""
     from PIL import Image
 
     images = [Image.fromarray(np.asarray(frame, dtype=np.uint8)) for frame in frames]
+    images = [
+        image.resize((GIF_WIDTH, round(image.height * GIF_WIDTH / image.width)), Image.Resampling.LANCZOS)
+        for image in images
+    ]
+    if captions is not None:
+        images = [captioned(image, text) for image, text in zip(images, captions, strict=True)]
     durations = [frame_ms] * (len(images) - 1) + [2 * frame_ms]
     images[0].save(path, save_all=True, append_images=images[1:], duration=durations, loop=0)
+
+
+def episode_points(scenario: Scenario, states: Sequence[WorldState]) -> list[tuple[float, float, float]]:
+    """World points (metres) a GIF's crop must show: the robot at every state, every object and its goal, clutter."""
+    points: list[tuple[float, float, float]] = []
+    for state in states:
+        points += [(state.base[0], state.base[1], 0.0), (state.base[0], state.base[1], ROBOT_TOP)]
+        points += [(float(p[0]), float(p[1]), float(p[2]) if len(p) > 2 else 0.7) for p in state.objects.values()]
+        points += [(float(x), float(y), 0.7) for x, y in state.clutter.values()]
+    points += [(o.goal[0], o.goal[1], 0.7) for o in scenario.objects]
+    return points
+
+
+def gif_captions(record: EpisodeRecord) -> list[str]:
+    """One caption per state: the start, then each step's number, what it did and the objects delivered."""
+    steps = episode_steps(record.states, record.actions)
+    scenario = Scenario.from_dict(record.scenario)
+    total = len(steps)
+    captions = [f"start: {scenario.name}, {len(scenario.objects)} object(s) to deliver"]
+    for step in steps:
+        delivered = len(step.after.delivered(scenario))
+        captions.append(f"step {step.number}/{total}: {step.label().split(' ', 1)[1]}  ({delivered} delivered)")
+    return captions
+
+
+def captioned(image, text: str):
+    """``image`` (a Pillow image) under a white band with ``text`` in black."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    band = 2 * CAPTION_PX
+    out = Image.new("RGB", (image.width, image.height + band), "white")
+    out.paste(image.convert("RGB"), (0, band))
+    font = ImageFont.load_default(size=CAPTION_PX)
+    ImageDraw.Draw(out).text((CAPTION_PX // 2, band // 2), text, fill="black", font=font, anchor="lm")
+    return out
 
 
 # ---------------------------------------------------------------------------- what each step did
@@ -109,7 +161,7 @@ class Step:
         if self.target is not None:
             return f"{self.number} {self.mode.name.lower()} {self.target}"
         if self.mode != Mode.MOVE:
-            return f"{self.number} {self.mode.name.lower()} (refused)"
+            return f"{self.number} {self.mode.name.lower()} (invalid)"
         return f"{self.number} move"
 
 
@@ -182,6 +234,9 @@ def save_story(record: EpisodeRecord, path: Path) -> None:
     legend_axes.set_axis_off()
     legend_axes.legend(handles=legend_handles(scenario), loc="center", ncol=5, fontsize=8, frameon=False)
     figure.suptitle(title(record.figures), fontsize=11, family="monospace")
+    figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
+    drawing.separate_labels(whole)
+    drawing.separate_labels(close)
     figure.savefig(path, dpi=STILL_DPI)
 
 
@@ -193,7 +248,7 @@ def title(figures: EpisodeFigures) -> str:
         f"object(s) at the goal after {figures.steps} steps, return {figures.episode_return:.2f}"
     )
     second = (
-        f"path {figures.path_length_m:.2f} m, {figures.collisions} contacts, {figures.invalid_actions} refused "
+        f"path {figures.path_length_m:.2f} m, {figures.collisions} collisions, {figures.invalid_actions} invalid "
         f"actions; planning {figures.planning_s:.2f} s in {figures.plans} plan(s), {figures.replans} replans"
         f"{objective}; simulation {figures.simulation_s:.2f} s"
     )
@@ -255,19 +310,7 @@ def legend_handles(scenario: Scenario) -> list:
     if scenario.clutter:
         handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter (end)"))
         handles.append(Patch(facecolor="none", edgecolor=palette.clutter_edge, linestyle="--", label="clutter (start)"))
-    return handles + render_handles(scenario)
-
-
-def render_handles(scenario: Scenario) -> list:
-    """The colours of the env's renders (they are the simulator's, not the maps')."""
-    from fetchcarry_env.sim.bodies import CLUTTER_COLOR, GOAL_COLOR, OBJECT_COLOR
-
-    handles = [
-        Patch(facecolor=OBJECT_COLOR, label="renders: objects"),
-        Patch(facecolor=GOAL_COLOR, label="renders: goals"),
-    ]
-    if scenario.clutter:
-        handles.append(Patch(facecolor=CLUTTER_COLOR, label="renders: clutter"))
+    handles.append(Patch(facecolor=palette.goal, alpha=0.6, label="goal marker (green in the renders too)"))
     return handles
 
 

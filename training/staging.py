@@ -7,24 +7,37 @@ that records the options the episodes were made with. An interrupted run therefo
 loses no finished episode: running the same command again finds the staged episodes,
 makes only the missing ones, and assembles the Minari dataset when all are there.
 Minari ignores hidden folders, so the staging never shows up as a dataset.
+
+Every file error names the file: a manifest that is not JSON raises
+:class:`StagingError`; a staged episode that cannot be read is found by
+:meth:`Staging.set_aside_corrupt` (a resume calls it), moved to ``corrupt/`` and made
+again. :class:`DatasetLock` keeps two runs from working on one dataset id at once.
 """
 
 from __future__ import annotations
 
+import datetime
+import fcntl
 import json
 import os
 import re
 import shutil
+import sys
 import tempfile
+import zipfile
 from pathlib import Path
+from types import TracebackType
 from typing import Any
 
 import numpy as np
 
+from fetchcarry_env.errors import UsageError
 from training.rollout import EpisodeFigures, EpisodeRecord
 
 STAGING_FOLDER = ".staging"
 MANIFEST = "manifest.json"
+CORRUPT_FOLDER = "corrupt"  # staged episodes that could not be read, kept for a post-mortem
+LOCK_SUFFIX = ".lock"
 _EPISODE_FILE = re.compile(r"^episode_(\d{6,})\.npz$")
 
 
@@ -48,7 +61,15 @@ class Staging:
     def manifest(self) -> dict[str, Any] | None:
         """The options the staged episodes were made with, or ``None`` if nothing is staged."""
         file = self.path / MANIFEST
-        return json.loads(file.read_text()) if file.is_file() else None
+        if not file.is_file():
+            return None
+        try:
+            manifest = json.loads(file.read_text())
+        except (UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise StagingError(f"the staging manifest {file} is not valid JSON ({error})") from None
+        if not isinstance(manifest, dict):
+            raise StagingError(f"the staging manifest {file} is not a JSON object")
+        return manifest
 
     def start(self, manifest: dict[str, Any]) -> None:
         """Create the folder and record ``manifest`` (the generation options)."""
@@ -77,20 +98,67 @@ class Staging:
         }
         arrays.update({f"observations/{k}": v for k, v in record.observations.items()})
         arrays.update({f"infos/{k}": v for k, v in record.infos.items()})
-        handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
+        target = self.episode_path(index)
+        try:
+            handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
+        except OSError as error:
+            raise _naming(error, target) from error
         try:
             with os.fdopen(handle, "wb") as file:
                 np.savez(file, **arrays)
                 file.flush()
                 os.fsync(file.fileno())
-            os.replace(temporary, self.episode_path(index))
+            os.replace(temporary, target)
+        except OSError as error:
+            Path(temporary).unlink(missing_ok=True)
+            raise _naming(error, target) from error
         except BaseException:
             Path(temporary).unlink(missing_ok=True)
             raise
 
     def read(self, index: int) -> EpisodeRecord:
-        """Episode ``index`` as it was staged (without frames)."""
-        with np.load(self.episode_path(index), allow_pickle=False) as data:
+        """Episode ``index`` as it was staged (without frames); a file that cannot be read is a ``StagingError``."""
+        path = self.episode_path(index)
+        try:
+            return self._read(path)
+        except (OSError, EOFError, ValueError, KeyError, TypeError, zipfile.BadZipFile) as error:
+            raise StagingError(f"the staged episode {path} cannot be read ({type(error).__name__}: {error})") from None
+
+    def check(self, index: int) -> None:
+        """Raise ``StagingError`` unless episode ``index``'s file is whole (every CRC) and readable."""
+        path = self.episode_path(index)
+        try:
+            with zipfile.ZipFile(path) as archive:
+                broken = archive.testzip()
+            if broken is not None:
+                raise zipfile.BadZipFile(f"bad CRC in {broken}")
+        except (OSError, EOFError, zipfile.BadZipFile) as error:
+            raise StagingError(f"the staged episode {path} cannot be read ({type(error).__name__}: {error})") from None
+        self.read(index)
+
+    def set_aside_corrupt(self) -> list[tuple[Path, Path]]:
+        """Move every staged episode that cannot be read to ``corrupt/``; return (file, where it went) pairs."""
+        moved = []
+        for index in sorted(self.staged()):
+            try:
+                self.check(index)
+            except StagingError:
+                source = self.episode_path(index)
+                folder = self.path / CORRUPT_FOLDER
+                folder.mkdir(exist_ok=True)
+                stamp = datetime.datetime.now(datetime.UTC).strftime("%Y%m%dT%H%M%S%fZ")
+                target = folder / f"{source.name}.{stamp}"
+                os.replace(source, target)
+                moved.append((source, target))
+        return moved
+
+    def size_bytes(self) -> int:
+        """Bytes of the staged episode files."""
+        return sum(self.episode_path(k).stat().st_size for k in self.staged())
+
+    @staticmethod
+    def _read(path: Path) -> EpisodeRecord:
+        with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
             observations = {k.split("/", 1)[1]: data[k] for k in data.files if k.startswith("observations/")}
             infos = {k.split("/", 1)[1]: data[k] for k in data.files if k.startswith("infos/")}
@@ -112,8 +180,68 @@ class Staging:
             shutil.rmtree(self.path)
 
 
+class StagingError(UsageError):
+    """A staging file (the manifest, a staged episode) cannot be read; the message names it."""
+
+
+class DatasetBusyError(UsageError):
+    """Another run holds the lock of a dataset id."""
+
+
+class DatasetLock:
+    """An exclusive lock on one dataset id (``flock`` on ``.staging/<id>.lock``), held while a run works on it.
+
+    The operating system releases it when the holder exits, however it exits (even
+    ``SIGKILL``), so a stale lock never blocks a later run. The file records the holder's
+    process id, start time and command line, which the refusal quotes.
+    """
+
+    def __init__(self, dataset_id: str, root: Path | None = None) -> None:
+        self.dataset_id = dataset_id
+        self.path = (root or datasets_root()) / STAGING_FOLDER / f"{dataset_id}{LOCK_SUFFIX}"
+        self._file: Any = None
+
+    def __enter__(self) -> DatasetLock:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        file = open(self.path, "a+")  # held open for as long as the lock is
+        try:
+            fcntl.flock(file.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            file.seek(0)
+            holder = file.read().strip() or "unknown"
+            file.close()
+            raise DatasetBusyError(
+                f"another run is working on dataset {self.dataset_id!r} ({holder}); wait for it to finish "
+                f"(lock file {self.path})"
+            ) from None
+        file.seek(0)
+        file.truncate()
+        started = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
+        file.write(f"process {os.getpid()}, started {started}: {' '.join(sys.argv)}\n")
+        file.flush()
+        self._file = file
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, error: BaseException | None, traceback: TracebackType | None
+    ) -> None:
+        if self._file is not None:
+            self._file.close()  # closing releases the flock
+            self._file = None
+
+
+def _naming(error: OSError, path: Path) -> OSError:
+    """``error`` with ``path`` as its file name when it names none (a full disk names no file)."""
+    if error.filename is not None:
+        return error
+    return OSError(error.errno, error.strerror or str(error), str(path))
+
+
 def _atomic_write(path: Path, data: bytes) -> None:
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(handle, "wb") as file:
-        file.write(data)
-    os.replace(temporary, path)
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        with os.fdopen(handle, "wb") as file:
+            file.write(data)
+        os.replace(temporary, path)
+    except OSError as error:
+        raise _naming(error, path) from error

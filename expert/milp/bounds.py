@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 
-from expert.milp.grid import IndexBox, base_regions, point_in_region
+from expert.milp.deadline import NEVER, Deadline
+from expert.milp.grid import IndexBox, move_regions, point_in_move_region
 from expert.milp.problem import Problem
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
@@ -28,9 +30,34 @@ def counting_bound(problem: Problem) -> int:
     return 1 + 2 * len(problem.deliver) - holding + pushes
 
 
-def phase_lower_bound(problem: Problem) -> int:
-    """The best proven lower bound on N: the larger of the counting and the skeleton bounds."""
-    return max(3 if problem.deliver else 1, counting_bound(problem), skeleton(problem).phases)
+def settle(
+    start: Hashable,
+    expand: Callable[[Hashable], Iterable[tuple[float, Hashable]]],
+    deadline: Deadline = NEVER,
+    limit: float = math.inf,
+) -> Iterator[tuple[float, Hashable]]:
+    """Dijkstra's search: yield ``(cost, state)`` in order of least cost, each state once, up to ``limit``.
+
+    ``expand(state)`` gives ``(step cost, next state)`` pairs. The one search loop of
+    every bound in this module; callers stop iterating when they have what they need.
+    """
+    best = {start: 0.0}
+    queue = [(0.0, 0, start)]
+    counter = 0
+    while queue:
+        cost, _, state = heapq.heappop(queue)
+        if cost > best[state]:
+            continue
+        if cost > limit:
+            return
+        deadline.check()
+        yield cost, state
+        for step, nxt in expand(state):
+            total = cost + step
+            if total < best.get(nxt, math.inf) - 1e-12:
+                best[nxt] = total
+                counter += 1
+                heapq.heappush(queue, (total, counter, nxt))
 
 
 # ---------------------------------------------------------------------- the skeleton bound
@@ -51,41 +78,57 @@ MAX_PIECES = 256  # boxes listed for the points one move away before the two-mov
 
 
 class Connectivity:
-    """One-move connectivity between base sets under Eq. 18 (tables and obstacles grown by the radius)."""
+    """One-move connectivity between base sets under Eq. 18 (the octagons of :func:`move_regions`).
 
-    def __init__(self, problem: Problem) -> None:
+    Optimistic where it must approximate (a box cut by a diagonal region is replaced by
+    its bounding box), so that every bound built on it stays a lower bound.
+    """
+
+    def __init__(self, problem: Problem, deadline: Deadline = NEVER) -> None:
         scenario = problem.scenario
         radius = scenario.robot.radius
         self.start = scenario.robot.start
         self.domain = problem.grid.domain
+        self.deadline = deadline
         rects = [t.rect for t in scenario.tables] + [o.rect for o in scenario.obstacles]
         self.blockers = []
         for rect in rects:
-            planes = base_regions(problem.grid, rect, radius)
+            deadline.check()
+            planes = move_regions(problem.grid, rect, radius)
             if any(self.domain.inside(p) for p in planes):
                 continue  # the rectangle lies outside the domain: no move can hit it
-            at_start = tuple(n for n in range(4) if point_in_region(self.start, rect, radius, n))
+            at_start = tuple(n for n in range(len(planes)) if point_in_move_region(self.start, rect, radius, n))
             self.blockers.append((planes, at_start))
         self._memo: dict = {}
+
+    def _branches(self, a: IndexBox | None, w: IndexBox, depth: int):
+        """The ways past blocker ``depth``: one ``(a, w)`` pair per usable region (clipped), or ``[(a, w)]``."""
+        planes, at_start = self.blockers[depth]
+        regions = at_start if a is None else range(len(planes))
+        usable = [n for n in regions if w.meets(planes[n]) and (a is None or a.meets(planes[n]))]
+        if any(w.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
+            return [(a, w)]
+        return [(None if a is None else a.clip(planes[n]), w.clip(planes[n])) for n in usable]
+
+    def _walk(self, a: IndexBox | None, w: IndexBox) -> Iterator[IndexBox]:
+        """Depth-first over the blockers (no recursion: thousands of obstacles): the leaves' ``w`` boxes."""
+        stack = [(a, w, 0)]
+        while stack:
+            a, w, depth = stack.pop()
+            if w.empty or (a is not None and a.empty):
+                continue
+            if depth == len(self.blockers):
+                yield w
+                continue
+            self.deadline.check()
+            stack.extend((a2, w2, depth + 1) for a2, w2 in reversed(self._branches(a, w, depth)))
 
     def connectable(self, a: IndexBox | None, b: IndexBox) -> bool:
         """True when one straight move can join a point of ``a`` (None: the exact start) to a point of ``b``."""
         key = (a, b)
         if key not in self._memo:
-            self._memo[key] = self._search(a, b, 0)
+            self._memo[key] = next(self._walk(a, b), None) is not None
         return self._memo[key]
-
-    def _search(self, a: IndexBox | None, b: IndexBox, depth: int) -> bool:
-        if b.empty or (a is not None and a.empty):
-            return False
-        if depth == len(self.blockers):
-            return True
-        planes, at_start = self.blockers[depth]
-        regions = at_start if a is None else range(4)
-        usable = [n for n in regions if b.meets(planes[n]) and (a is None or a.meets(planes[n]))]
-        if any(b.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
-            return self._search(a, b, depth + 1)
-        return any(self._search(None if a is None else a.clip(planes[n]), b.clip(planes[n]), depth + 1) for n in usable)
 
     def connectable_in_two(self, a: IndexBox | None, b: IndexBox) -> bool:
         """True when two straight moves can join ``a`` to ``b``: some lattice point is one move from both.
@@ -106,25 +149,14 @@ class Connectivity:
         """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``)."""
         key = ("from", a)
         if key not in self._memo:
-            pieces: list[IndexBox] = []
-            complete = self._spread(a, self.domain, 0, pieces)
-            self._memo[key] = pieces if complete else None
+            pieces: list[IndexBox] | None = []
+            for piece in self._walk(a, self.domain):
+                pieces.append(piece)
+                if len(pieces) > MAX_PIECES:
+                    pieces = None
+                    break
+            self._memo[key] = pieces
         return self._memo[key]
-
-    def _spread(self, a: IndexBox | None, w: IndexBox, depth: int, pieces: list[IndexBox]) -> bool:
-        if w.empty or (a is not None and a.empty):
-            return True
-        if depth == len(self.blockers):
-            pieces.append(w)
-            return len(pieces) <= MAX_PIECES
-        planes, at_start = self.blockers[depth]
-        regions = at_start if a is None else range(4)
-        usable = [n for n in regions if w.meets(planes[n]) and (a is None or a.meets(planes[n]))]
-        if any(w.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
-            return self._spread(a, w, depth + 1, pieces)
-        return all(
-            self._spread(None if a is None else a.clip(planes[n]), w.clip(planes[n]), depth + 1, pieces) for n in usable
-        )
 
 
 @dataclass(frozen=True)
@@ -140,7 +172,7 @@ class Skeleton:
     earliest: tuple[int, ...]
 
 
-def skeleton(problem: Problem, free: Connectivity | None = None) -> Skeleton:
+def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> Skeleton:
     """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
 
     Shortest path over the states (delivered, held, pushed, last pose) where each
@@ -150,39 +182,28 @@ def skeleton(problem: Problem, free: Connectivity | None = None) -> Skeleton:
     acts from the previous phase's base). Poses are boxes of lattice points; taking
     any point of a box on entry and any on exit only makes the bound weaker, never wrong.
     """
-    actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
-    free = free or Connectivity(problem)
-    deliver = problem.deliver
-    pushable = problem.pushes.pushable
-    start_state = (frozenset(), problem.holding, frozenset(), None)
-    best = {start_state: 0}
-    queue = [(0, 0, start_state)]
-    counter = 0
-    earliest: dict[int, int] = {0: 0}
-    finished: int | None = None
-    while queue:
-        spent, _, state = heapq.heappop(queue)
-        if spent > best.get(state, spent):
-            continue
+    actions = _actions_by_key(problem)
+    free = free or Connectivity(problem, deadline)
+    count, pushes = len(problem.deliver), len(problem.pushes.pushable)
+
+    def expand(state):
         delivered, held, pushed, where = state
-        earliest.setdefault(len(delivered), spent)
-        if finished is None and len(delivered) == len(deliver) and len(pushed) == len(pushable):
-            finished = 1 + spent
-        if finished is not None and len(earliest) == len(deliver) + 1:
-            break
-        moves = _moves(problem, delivered, held, pushed)
-        for key, (d, h, p) in moves:
+        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
             action = actions[key]
             for entry, exit_box in action.poses:
-                total = spent + _step_cost(free, problem, where, action.kind, entry)
-                nxt = (d, h, p, exit_box)
-                if total < best.get(nxt, total + 1):
-                    best[nxt] = total
-                    counter += 1
-                    heapq.heappush(queue, (total, counter, nxt))
+                yield _step_cost(free, problem, where, action.kind, entry), (d, h, p, exit_box)
+
+    earliest: dict[int, int] = {0: 0}
+    finished: int | None = None
+    for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
+        earliest.setdefault(len(delivered), int(spent))
+        if finished is None and len(delivered) == count and len(pushed) == pushes:
+            finished = 1 + int(spent)
+        if finished is not None and len(earliest) == count + 1:
+            break
     if finished is None:  # unreachable with a consistent problem; the counting bound takes over
-        return Skeleton(1 + 2 * len(deliver), tuple(2 * d for d in range(len(deliver) + 1)))
-    return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(len(deliver) + 1)))
+        return Skeleton(1 + 2 * count, tuple(2 * d for d in range(count + 1)))
+    return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(count + 1)))
 
 
 def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
@@ -201,7 +222,11 @@ def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: fro
     return moves
 
 
-def min_travel(problem: Problem) -> float:
+def _finished(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
+    return len(delivered) == len(problem.deliver) and len(pushed) == len(problem.pushes.pushable)
+
+
+def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
     """A lower bound (metres) on the travel term of Eq. 1 of any plan: the cheapest order of actions.
 
     The same search as :func:`skeleton`, costing each step by ``travel_cost`` over the
@@ -209,36 +234,25 @@ def min_travel(problem: Problem) -> float:
     norm, so detours only add to it), plus a push's own stroke. The MILP states it as
     the valid inequality ``travel >= min_travel`` (``expert.milp.motion``).
     """
-    actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
-    grid = problem.grid
-    start = problem.scenario.robot.start
-    pushable = problem.pushes.pushable
-    start_state = (frozenset(), problem.holding, frozenset(), None)
-    best = {start_state: 0.0}
-    queue = [(0.0, 0, start_state)]
-    counter = 0
-    while queue:
-        spent, _, state = heapq.heappop(queue)
-        if spent > best.get(state, spent):
-            continue
+    actions = _actions_by_key(problem)
+    grid, start = problem.grid, problem.scenario.robot.start
+
+    def expand(state):
         delivered, held, pushed, where = state
-        if len(delivered) == len(problem.deliver) and len(pushed) == len(pushable):
-            return spent
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
             for entry, exit_box in actions[key].poses:
                 step = _gap_cost(grid, start, where, entry)
                 if key[0] == "push":
                     step += _gap_cost(grid, start, entry, exit_box, touching=True)
-                nxt = (d, h, p, exit_box)
-                total = spent + step
-                if total < best.get(nxt, math.inf) - 1e-12:
-                    best[nxt] = total
-                    counter += 1
-                    heapq.heappush(queue, (total, counter, nxt))
+                yield step, (d, h, p, exit_box)
+
+    for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
+        if _finished(problem, delivered, pushed):
+            return spent
     return 0.0
 
 
-def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None) -> float:
+def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER) -> float:
     """A lower bound on Eq. 1 for plans with ``n_phases`` phases (the skeleton search, timed).
 
     With ``t_i`` the phase of object ``i``'s delivery, Eq. 1 is
@@ -249,42 +263,31 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
     and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
     Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
     """
-    pair = pair or PairCosts(problem)
-    count = len(problem.deliver)
-    pushable = problem.pushes.pushable
-    start_state = (frozenset(), problem.holding, frozenset(), None, 0)
-    best = {start_state: 0.0}
-    queue = [(0.0, 0, start_state)]
-    counter = 0
-    constant = -DELIVERY_BONUS * (count * n_phases + len(problem.delivered) * n_phases)
-    while queue:
-        spent, _, state = heapq.heappop(queue)
-        if spent > best.get(state, spent):
-            continue
+    pair = pair or PairCosts(problem, deadline=deadline)
+    constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
+
+    def expand(state):
         delivered, held, pushed, last, phase = state
-        if len(delivered) == count and len(pushed) == len(pushable):
-            return spent + constant
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
             phases, travel = pair(last, key)
             reached = phase + phases
-            if reached > n_phases - 1:
-                continue
-            total = spent + travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0)
-            nxt = (d, h, p, key, reached)
-            if total < best.get(nxt, math.inf) - 1e-12:
-                best[nxt] = total
-                counter += 1
-                heapq.heappush(queue, (total, counter, nxt))
+            if reached <= n_phases - 1:
+                yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
+
+    start = (frozenset(), problem.holding, frozenset(), None, 0)
+    for spent, (delivered, _, pushed, _, _) in settle(start, expand, deadline):
+        if _finished(problem, delivered, pushed):
+            return spent + constant
     return -math.inf
 
 
 class PairCosts:
     """Least phases and least travel between two consecutive actions, over all their pose pairs (cached)."""
 
-    def __init__(self, problem: Problem, free: Connectivity | None = None) -> None:
+    def __init__(self, problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> None:
         self.problem = problem
-        self.actions = {(a.kind, a.target): a for a in _skeleton_actions(problem)}
-        self.free = free or Connectivity(problem)
+        self.actions = _actions_by_key(problem)
+        self.free = free or Connectivity(problem, deadline)
         self.cache: dict = {}
 
     def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
@@ -304,7 +307,7 @@ class PairCosts:
 
 
 def action_windows(
-    problem: Problem, n_phases: int, pair: PairCosts | None = None
+    problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER
 ) -> dict[tuple[str, str], tuple[int, int]]:
     """Per action ``(kind, target)``, the phases ``[first, last]`` at which any plan with ``n_phases`` can do it.
 
@@ -313,49 +316,51 @@ def action_windows(
     still needed after it. Both use lower bounds on the phases between two actions, so
     no plan does an action outside its window; the MILP creates no option binary there.
     """
-    pair = pair or PairCosts(problem)
-    count, pushable = len(problem.deliver), len(problem.pushes.pushable)
-    start_state = (frozenset(), problem.holding, frozenset(), None)
-    arrival = {start_state: 0}
-    queue = [(0, 0, start_state)]
-    counter = 0
-    while queue:
-        phase, _, state = heapq.heappop(queue)
-        if phase > arrival.get(state, phase):
-            continue
+    pair = pair or PairCosts(problem, deadline=deadline)
+
+    def expand(state):
         delivered, held, pushed, last = state
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
-            reached = phase + pair(last, key)[0]
-            nxt = (d, h, p, key)
-            if reached < arrival.get(nxt, n_phases + 1):
-                arrival[nxt] = reached
-                counter += 1
-                heapq.heappush(queue, (reached, counter, nxt))
-    remaining: dict = {}
+            yield pair(last, key)[0], (d, h, p, key)
 
-    def still_needed(state) -> int:
-        if state not in remaining:
-            delivered, held, pushed, last = state
-            if len(delivered) == count and len(pushed) == pushable:
-                remaining[state] = 0
-            else:
-                remaining[state] = min(
-                    (
-                        pair(last, key)[0] + still_needed((d, h, p, key))
-                        for key, (d, h, p) in _moves(problem, delivered, held, pushed)
-                    ),
-                    default=n_phases,
-                )
-        return remaining[state]
-
+    start = (frozenset(), problem.holding, frozenset(), None)
+    arrival = {state: int(phase) for phase, state in settle(start, expand, deadline, limit=n_phases)}
+    remaining = _phases_still_needed(problem, arrival, pair, n_phases, deadline)
     windows: dict[tuple[str, str], tuple[int, int]] = {}
     for state, phase in arrival.items():
         key = state[3]
         if key is None:
             continue
         first, last = windows.get(key, (n_phases, -1))
-        windows[key] = (min(first, phase), max(last, n_phases - 1 - still_needed(state)))
+        windows[key] = (min(first, phase), max(last, n_phases - 1 - remaining[state]))
     return windows
+
+
+def _phases_still_needed(
+    problem: Problem, states: Iterable, pair: PairCosts, n_phases: int, deadline: Deadline
+) -> dict:
+    """Per state, the least phases its remaining actions need (an explicit post-order walk: no recursion limit)."""
+    remaining: dict = {}
+    for root in states:
+        stack = [root]
+        while stack:
+            state = stack[-1]
+            if state in remaining:
+                stack.pop()
+                continue
+            deadline.check()
+            delivered, held, pushed, last = state
+            if _finished(problem, delivered, pushed):
+                remaining[stack.pop()] = 0
+                continue
+            nexts = [(key, (d, h, p, key)) for key, (d, h, p) in _moves(problem, delivered, held, pushed)]
+            todo = [nxt for _, nxt in nexts if nxt not in remaining]
+            if todo:
+                stack.extend(todo)
+                continue
+            stack.pop()
+            remaining[state] = min((pair(last, key)[0] + remaining[nxt] for key, nxt in nexts), default=n_phases)
+    return remaining
 
 
 def _gap_cost(grid, start, a: IndexBox | None, b: IndexBox, touching: bool = False) -> float:
@@ -374,6 +379,10 @@ def _gap_cost(grid, start, a: IndexBox | None, b: IndexBox, touching: bool = Fal
         dx = max(b.i_lo - a.i_hi, 0, a.i_lo - b.i_hi) * res
         dy = max(b.j_lo - a.j_hi, 0, a.j_lo - b.j_hi) * res
     return travel_cost((0.0, 0.0), (dx, dy))
+
+
+def _actions_by_key(problem: Problem) -> dict[tuple[str, str], _Action]:
+    return {(a.kind, a.target): a for a in _skeleton_actions(problem)}
 
 
 def _skeleton_actions(problem: Problem) -> list[_Action]:

@@ -25,6 +25,7 @@ from pyscipopt import SCIP_PARAMSETTING, Model
 
 from expert.milp.actions import add_action_constraints
 from expert.milp.collision import add_arm_constraints, add_collision_constraints
+from expert.milp.deadline import NEVER, Deadline
 from expert.milp.motion import add_motion_constraints, set_objective
 from expert.milp.objects import add_delivery_constraints
 from expert.milp.postures import add_posture_constraints
@@ -84,22 +85,24 @@ def build(
     settings: SolverSettings | None = None,
     objective_bound: float | None = None,
     windows: dict | None = None,
+    deadline: Deadline = NEVER,
 ) -> Milp:
     """The MILP of ``problem`` with ``n_phases`` phases (phase 0, the start, included).
 
     ``objective_bound``: a proven lower bound on Eq. 1 with this many phases
     (:func:`expert.milp.bounds.min_objective`), added as a valid inequality.
     ``windows``: the phases at which each action can happen (:func:`expert.milp.bounds.action_windows`).
+    ``deadline``: checked between groups and per rectangle of Eq. 18 (raises :class:`~expert.milp.deadline.TimeUp`).
     """
     model = Model(f"fetchcarry_{problem.scenario.name}_{n_phases}")
     (settings or SolverSettings()).apply(model)
     milp = create_variables(problem, n_phases, model, windows)
-    add_motion_constraints(milp)
-    add_action_constraints(milp)
-    add_delivery_constraints(milp)
-    add_posture_constraints(milp)
-    add_collision_constraints(milp)
-    add_arm_constraints(milp)
-    add_push_constraints(milp)
+    for add in (add_motion_constraints, add_action_constraints, add_delivery_constraints, add_posture_constraints):
+        deadline.check()
+        add(milp)
+    add_collision_constraints(milp, deadline)
+    for add in (add_arm_constraints, add_push_constraints):
+        deadline.check()
+        add(milp)
     set_objective(milp, objective_bound)
     return milp

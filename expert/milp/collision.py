@@ -1,7 +1,7 @@
 """Collision avoidance (the paper's Eq. 18) and the arm line (Eq. 19).
 
-Eq. 18: every table and obstacle ``j`` is grown by the robot's radius and defines four
-overlapping regions ``R_{j,1..4}`` (Fig. 2: the half-planes right of, left of, above and
+Eq. 18: every table and obstacle ``j`` is grown by the robot's radius and defines
+overlapping regions ``R_{j,n}`` (Fig. 2: the half-planes right of, left of, above and
 below it). Both ends of every move lie in one common region of every such rectangle:
 
     OR_n (p_{k-1} in R_{j,n}) AND (p_k in R_{j,n}),
@@ -10,7 +10,16 @@ linearised with one binary ``r_{k,j,n}`` per move, rectangle and region,
 ``sum_n r_{k,j,n} = 1`` and, per region, a big-M bound on both ends
 (``M`` = the distance from the bound to the far end of the base's domain, the tightest
 valid value). The segment then stays in a half-plane that the disc's centre must not
-leave, so the whole swept disc is clear. Pruned exactly:
+leave, so the whole swept disc is clear.
+
+The paper's four regions are the sides of the grown rectangle, whose square corners
+are not part of the disc-swept shape (the exact rule: the base disc swept along the
+move stays off the rectangle). We add four more regions that cut those corners at 45
+degrees (:func:`expert.milp.grid.move_regions`): the free side of each of the eight
+edges of an octagon that holds the rounded rectangle and touches it. Diagonal moves
+past a corner and diagonal gaps between two rectangles are then usable
+(``docs/formulation.md``, "Collision model", measures what is left to the exact rule).
+Pruned exactly:
 
 - regions that no lattice point of the domain (Eq. 27) lies in are dropped;
 - a rectangle with a region that holds the whole domain needs no constraint;
@@ -31,7 +40,8 @@ from typing import TYPE_CHECKING
 
 from pyscipopt import quicksum
 
-from expert.milp.grid import base_regions, point_in_region
+from expert.milp.deadline import NEVER, Deadline
+from expert.milp.grid import DiagonalPlane, Plane, move_regions, point_in_move_region
 
 if TYPE_CHECKING:
     from expert.milp.variables import Milp
@@ -41,8 +51,8 @@ class Infeasible(Exception):
     """Raised while building when the model is infeasible for a reason known without solving."""
 
 
-def add_collision_constraints(milp: Milp) -> None:
-    """Eq. 18 for every move and every table and obstacle (grown by the radius)."""
+def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
+    """Eq. 18 for every move and every table and obstacle, with the octagon's eight regions."""
     problem, model, grid = milp.problem, milp.model, milp.problem.grid
     scenario = problem.scenario
     radius = scenario.robot.radius
@@ -50,39 +60,46 @@ def add_collision_constraints(milp: Milp) -> None:
     domain = grid.domain
     rects = [(t.id, t.rect) for t in scenario.tables] + [(o.id, o.rect) for o in scenario.obstacles]
     for name, rect in rects:
-        planes = base_regions(grid, rect, radius)
+        deadline.check()
+        planes = move_regions(grid, rect, radius)
         usable = [n for n, plane in enumerate(planes) if domain.meets(plane)]
         if any(domain.inside(planes[n]) for n in usable):
             continue
-        at_start = [n for n in usable if point_in_region(start, rect, radius, n)]
+        at_start = [n for n in usable if point_in_move_region(start, rect, radius, n)]
         for k in range(1, milp.n_phases):
             regions = at_start if k == 1 else usable
             if not regions:
                 raise Infeasible(f"the base at the start touches {name!r}")
-            ends = [(milp.u, milp.v)[p.axis] for p in planes]
+            ends = (k - 1, k) if k > 1 else (k,)
             if len(regions) == 1:
-                plane = planes[regions[0]]
-                coords = ends[regions[0]]
-                for e in (k - 1, k) if k > 1 else (k,):
-                    if plane.upper:
-                        model.addCons(coords[e] <= grid.rhs(plane), name=f"eq18_{name}_{k}_{e}")
-                    else:
-                        model.addCons(coords[e] >= grid.rhs(plane), name=f"eq18_{name}_{k}_{e}")
+                milp.regions.append((k, [planes[regions[0]]], None))
+                for e in ends:
+                    model.addCons(_in_plane(milp, planes[regions[0]], e, None), name=f"eq18_{name}_{k}_{e}")
                 continue
             chosen = [model.addVar(f"r_{name}_{k}_{n}", vtype="B") for n in regions]
             model.addCons(quicksum(chosen) == 1, name=f"eq18_{name}_{k}")
+            milp.regions.append((k, [planes[n] for n in regions], chosen))
             for n, r in zip(regions, chosen, strict=True):
                 plane = planes[n]
-                coords = ends[n]
-                lo, hi = grid.var_bounds(plane.axis)
-                rhs = grid.rhs(plane)
-                for e in (k - 1, k) if k > 1 else (k,):
-                    if plane.upper:
-                        model.addCons(coords[e] <= rhs + (hi - rhs) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
-                    else:
-                        model.addCons(coords[e] >= rhs - (rhs - lo) * (1 - r), name=f"eq18_{name}_{k}_{n}_{e}")
+                for e in ends:
+                    model.addCons(_in_plane(milp, plane, e, r), name=f"eq18_{name}_{k}_{n}_{e}")
                     for group, terms in _poses_outside(milp, e, plane).items():
                         model.addCons(r + quicksum(terms) <= 1, name=f"eq18_link_{name}_{k}_{n}_{e}_{group}")
+
+
+def _in_plane(milp: Milp, plane: Plane, e: int, chosen):
+    """The row "base_e lies in ``plane``", relaxed by big-M when ``chosen`` (a binary) is 0; None: hard."""
+    grid = milp.problem.grid
+    rhs = grid.rhs(plane)
+    if isinstance(plane, DiagonalPlane):
+        value = plane.su * milp.u[e] + plane.sv * milp.v[e]
+        lowest = grid.plane_value_range(plane)[0]
+        return value >= rhs if chosen is None else value >= rhs - (rhs - lowest) * (1 - chosen)
+    coord = (milp.u, milp.v)[plane.axis][e]
+    lo, hi = grid.var_bounds(plane.axis)
+    if plane.upper:
+        return coord <= rhs if chosen is None else coord <= rhs + (hi - rhs) * (1 - chosen)
+    return coord >= rhs if chosen is None else coord >= rhs - (rhs - lo) * (1 - chosen)
 
 
 def _poses_outside(milp: Milp, e: int, plane) -> dict[str, list]:

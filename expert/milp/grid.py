@@ -52,6 +52,27 @@ class HalfPlane:
 
 
 @dataclass(frozen=True)
+class DiagonalPlane:
+    """``su * i + sv * j >= bound`` (``su``, ``sv`` in {-1, +1}), in lattice indices: a cut corner of an octagon."""
+
+    su: int
+    sv: int
+    bound: int
+
+    def value_range(self, box: IndexBox) -> tuple[int, int]:
+        """The least and the largest ``su * i + sv * j`` over the (non-empty) ``box``."""
+        i_lo, i_hi = (box.i_lo, box.i_hi) if self.su > 0 else (-box.i_hi, -box.i_lo)
+        j_lo, j_hi = (box.j_lo, box.j_hi) if self.sv > 0 else (-box.j_hi, -box.j_lo)
+        return i_lo + j_lo, i_hi + j_hi
+
+    def holds_at(self, i: float, j: float) -> bool:
+        return self.su * i + self.sv * j >= self.bound
+
+
+Plane = HalfPlane | DiagonalPlane
+
+
+@dataclass(frozen=True)
 class IndexBox:
     """Lattice points ``i_lo <= i <= i_hi``, ``j_lo <= j <= j_hi`` (empty when a range is)."""
 
@@ -78,23 +99,43 @@ class IndexBox:
             min(self.j_hi, other.j_hi),
         )
 
-    def clip(self, plane: HalfPlane) -> IndexBox:
-        """The part of the box inside ``plane``."""
+    def clip(self, plane: Plane) -> IndexBox:
+        """The part of the box inside ``plane`` (for a diagonal plane: the bounding box of that part)."""
         i_lo, i_hi, j_lo, j_hi = self.i_lo, self.i_hi, self.j_lo, self.j_hi
+        if isinstance(plane, DiagonalPlane):
+            if self.empty:
+                return self
+            # su * i >= bound - sv * j: the loosest j gives the bounding box's limit on i, and vice versa.
+            j_best = max(plane.sv * j_lo, plane.sv * j_hi)
+            i_best = max(plane.su * i_lo, plane.su * i_hi)
+            i_need, j_need = plane.bound - j_best, plane.bound - i_best
+            if plane.su > 0:
+                i_lo = max(i_lo, i_need)
+            else:
+                i_hi = min(i_hi, -i_need)
+            if plane.sv > 0:
+                j_lo = max(j_lo, j_need)
+            else:
+                j_hi = min(j_hi, -j_need)
+            return IndexBox(i_lo, i_hi, j_lo, j_hi)
         if plane.axis == 0:
             i_lo, i_hi = (i_lo, min(i_hi, plane.bound)) if plane.upper else (max(i_lo, plane.bound), i_hi)
         else:
             j_lo, j_hi = (j_lo, min(j_hi, plane.bound)) if plane.upper else (max(j_lo, plane.bound), j_hi)
         return IndexBox(i_lo, i_hi, j_lo, j_hi)
 
-    def inside(self, plane: HalfPlane) -> bool:
+    def inside(self, plane: Plane) -> bool:
         """True when the whole (non-empty) box lies in ``plane``."""
+        if isinstance(plane, DiagonalPlane):
+            return plane.value_range(self)[0] >= plane.bound
         return plane.holds(self.hi(plane.axis)) if plane.upper else plane.holds(self.lo(plane.axis))
 
-    def meets(self, plane: HalfPlane) -> bool:
+    def meets(self, plane: Plane) -> bool:
         """True when some point of the box lies in ``plane``."""
         if self.empty:
             return False
+        if isinstance(plane, DiagonalPlane):
+            return plane.value_range(self)[1] >= plane.bound
         return self.lo(plane.axis) <= plane.bound if plane.upper else self.hi(plane.axis) >= plane.bound
 
     def shifted(self, di: int, dj: int) -> IndexBox:
@@ -174,8 +215,23 @@ class Grid:
         """Right-hand side, in index units, of the MILP bound for ``index >= bound``."""
         return float(bound) if self.integral else bound - 0.5 + EPS_CELL
 
-    def rhs(self, plane: HalfPlane) -> float:
+    def rhs(self, plane: Plane) -> float:
+        """Right-hand side of the MILP row for ``plane`` (a diagonal plane reads ``su u + sv v >= rhs``)."""
+        if isinstance(plane, DiagonalPlane):
+            # Continuous u, v each move by less than 1/2 when snapped, so su u + sv v by less than 1.
+            return float(plane.bound) if self.integral else plane.bound + 1.0 - 2 * EPS_CELL
         return self.upper(plane.bound) if plane.upper else self.lower(plane.bound)
+
+    def diagonal_at_least(self, su: int, sv: int, value: float) -> DiagonalPlane:
+        """The lattice points with ``su * x + sv * y >= value`` (metres)."""
+        origin = self.lattice.origin
+        scaled = (value - su * origin[0] - sv * origin[1] - GEOM_TOL) / self.resolution
+        return DiagonalPlane(su, sv, math.ceil(scaled - 1e-12))
+
+    def plane_value_range(self, plane: DiagonalPlane) -> tuple[float, float]:
+        """The least and largest ``su u + sv v`` (index units) of MILP base variables over the domain."""
+        lo, hi = plane.value_range(self.domain)
+        return (float(lo), float(hi)) if self.integral else (lo - 1.0, hi + 1.0)
 
     def var_bounds(self, axis: int) -> tuple[float, float]:
         """Bounds (index units) of a base coordinate variable: the domain on ``axis``."""
@@ -194,6 +250,37 @@ def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]
         grid.at_least(1, rect.max_y + margin),
         grid.at_most(1, rect.min_y - margin),
     )
+
+
+SQRT2 = math.sqrt(2.0)
+CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # (su, sv) of the octagon's cut corners: NE, NW, SW, SE
+
+
+def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
+    """The eight regions of Eq. 18 in our tighter model: outside the octagon around ``rect`` grown by ``radius``.
+
+    The first four are :func:`base_regions` (the sides of the grown rectangle); the
+    last four cut its corners (NE, NW, SW, SE): ``su x + sv y >= su cx + sv cy + radius
+    sqrt(2)`` at corner ``(cx, cy)``, the tangent to the corner's quarter circle at 45
+    degrees. The octagon holds the rectangle's disc-swept shape (every point outside it
+    is ``radius`` or more from ``rect``) and touches it on all eight sides.
+    """
+    out: list[Plane] = list(base_regions(grid, rect, radius))
+    for su, sv in CORNERS:
+        cx = rect.max_x if su > 0 else rect.min_x
+        cy = rect.max_y if sv > 0 else rect.min_y
+        out.append(grid.diagonal_at_least(su, sv, su * cx + sv * cy + radius * SQRT2))
+    return tuple(out)
+
+
+def point_in_move_region(point: Point, rect: Rect, radius: float, region: int) -> bool:
+    """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
+    if region < 4:
+        return point_in_region(point, rect, radius, region)
+    su, sv = CORNERS[region - 4]
+    cx = rect.max_x if su > 0 else rect.min_x
+    cy = rect.max_y if sv > 0 else rect.min_y
+    return su * point[0] + sv * point[1] >= su * cx + sv * cy + radius * SQRT2 - GEOM_TOL
 
 
 def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:

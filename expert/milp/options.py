@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
@@ -232,19 +233,24 @@ def _rectangles(cells: set[tuple[int, int]]) -> list[IndexBox]:
 
 
 def pose_options(
-    scenario: Scenario, grid: Grid, deliver: tuple[str, ...], holding: str | None, pushes: PushPlan
+    scenario: Scenario,
+    grid: Grid,
+    deliver: tuple[str, ...],
+    holding: str | None,
+    pushes: PushPlan,
+    deadline: Deadline = NEVER,
 ) -> list[PoseOption]:
-    """Every pick, place and push pose option of the problem (see the module docstring)."""
+    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``."""
     blockers = _Blockers(scenario, grid, pushes, deliver, holding)
     out: list[PoseOption] = []
     for obj in scenario.objects:
         if obj.id not in deliver:
             continue
         if obj.id != holding:
-            out += _options(scenario, grid, blockers, "pick", obj.id, obj.start, None)
-        out += _options(scenario, grid, blockers, "place", obj.id, obj.goal, None)
+            out += _options(scenario, grid, blockers, "pick", obj.id, obj.start, None, deadline)
+        out += _options(scenario, grid, blockers, "place", obj.id, obj.goal, None, deadline)
     for candidate in pushes.candidates:
-        out += _options(scenario, grid, blockers, "push", candidate.clutter, candidate.contact, candidate)
+        out += _options(scenario, grid, blockers, "push", candidate.clutter, candidate.contact, candidate, deadline)
     return out
 
 
@@ -256,6 +262,7 @@ def _options(
     target: str,
     hand: Point,
     push: PushCandidate | None,
+    deadline: Deadline = NEVER,
 ) -> list[PoseOption]:
     """The options of one action: every heading and posture, each box cut by the static collision rules."""
     cells = push.cells if push else (0, 0)
@@ -267,6 +274,7 @@ def _options(
     others = blockers.others(kind, target, push.direction if push else None)
     out = []
     for heading in headings:
+        deadline.check()
         conditions = None
         for posture in scenario.robot.postures:
             box = reach_box(grid, hand, heading, posture).intersect(domain)

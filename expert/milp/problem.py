@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass, field
 
 from expert.milp.area import area_is_empty
+from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Grid
 from expert.milp.options import PoseOption, pose_options
 from expert.milp.strokes import PushPlan, plan_pushes
@@ -52,8 +53,17 @@ class Problem:
         return [n for n, o in enumerate(self.options) if o.kind == kind and (target is None or o.target == target)]
 
 
-def prepare(scenario: Scenario, lattice: Lattice, holding: str | None = None, integral: bool = True) -> Problem:
-    """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand."""
+def prepare(
+    scenario: Scenario,
+    lattice: Lattice,
+    holding: str | None = None,
+    integral: bool = True,
+    deadline: Deadline = NEVER,
+) -> Problem:
+    """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
+
+    Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
+    """
     robot = scenario.robot
     grid = Grid.for_area(lattice, scenario.area, robot.radius, integral)
     ids = {o.id for o in scenario.objects}
@@ -66,12 +76,14 @@ def prepare(scenario: Scenario, lattice: Lattice, holding: str | None = None, in
         for o in scenario.objects
         if o.id in deliver
     }
+    deadline.check()
     pushes = plan_pushes(scenario, grid, covers, holding)
+    deadline.check()
     blocking = _blocking_objects(scenario, deliver, holding)
     start_index = lattice.index(robot.start) if lattice.on_lattice(robot.start) else None
     if start_index is not None and not grid.domain.contains(*start_index):
         start_index = None
-    options = pose_options(scenario, grid, deliver, holding, pushes)
+    options = pose_options(scenario, grid, deliver, holding, pushes, deadline)
     problem = Problem(
         scenario=scenario,
         grid=grid,

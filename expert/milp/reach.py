@@ -1,12 +1,14 @@
 """Which lattice points the base can get to at all: a cheap proof that no number of phases helps.
 
-The free lattice points are those in one region of every table and obstacle grown by
-the radius (Eq. 18's per-point condition) inside the domain (Eq. 27). A straight move
-between two points that share a region of every rectangle stays in the box those
-regions bound, so every lattice point of the move's bounding box is free and the two
-points are 4-connected through free points. Hence the points reachable by any
-sequence of moves lie in the 4-connected components of the points one move from the
-start. Options outside them can never be used; if an action loses all its options,
+The free lattice points are those in one region of every table and obstacle (the
+eight regions outside its octagon, :func:`expert.milp.grid.move_regions`: Eq. 18's
+per-point condition) inside the domain (Eq. 27). A straight move between two points
+that share a region of every rectangle stays in the intersection of those regions, an
+octilinear convex set (edges along the axes and the diagonals, at whole lattice
+values); the lattice points of such a set are 8-connected (per column they form an
+interval whose ends move by at most one cell from column to column). Hence the points
+reachable by any sequence of moves lie in the 8-connected components of the points
+one move from the start. Options outside them can never be used; if an action loses all its options,
 the problem is infeasible for every number of phases. The planner runs this only when
 the first MILP it solves is infeasible, so the common case does not pay for it.
 """
@@ -14,12 +16,16 @@ the first MILP it solves is infeasible, so the common case does not pay for it.
 from __future__ import annotations
 
 import numpy as np
+from scipy import ndimage
 
-from expert.milp.grid import base_regions, point_in_region
+from expert.milp.deadline import NEVER, Deadline
+from expert.milp.grid import DiagonalPlane, move_regions, point_in_move_region
 from expert.milp.problem import Problem
 
+EIGHT_NEIGHBOURS = np.ones((3, 3), dtype=bool)
 
-def reachable_mask(problem: Problem) -> np.ndarray:
+
+def reachable_mask(problem: Problem, deadline: Deadline = NEVER) -> np.ndarray:
     """Boolean array over the domain's lattice points (``[i - i_lo, j - j_lo]``): reachable from the start."""
     scenario = problem.scenario
     grid, domain = problem.grid, problem.grid.domain
@@ -29,43 +35,28 @@ def reachable_mask(problem: Problem) -> np.ndarray:
     free = np.ones((ii.shape[0], jj.shape[1]), dtype=bool)
     seed = np.ones_like(free)
     for rect in (*(t.rect for t in scenario.tables), *(o.rect for o in scenario.obstacles)):
+        deadline.check()
         inside_any = np.zeros_like(free)
         with_start = np.zeros_like(free)
-        for n, plane in enumerate(base_regions(grid, rect, radius)):
-            index = ii if plane.axis == 0 else jj
-            member = np.broadcast_to(index <= plane.bound if plane.upper else index >= plane.bound, free.shape)
+        for n, plane in enumerate(move_regions(grid, rect, radius)):
+            if isinstance(plane, DiagonalPlane):
+                member = plane.su * ii + plane.sv * jj >= plane.bound
+            else:
+                index = ii if plane.axis == 0 else jj
+                member = np.broadcast_to(index <= plane.bound if plane.upper else index >= plane.bound, free.shape)
             inside_any |= member
-            if point_in_region(scenario.robot.start, rect, radius, n):
+            if point_in_move_region(scenario.robot.start, rect, radius, n):
                 with_start |= member
         free &= inside_any
         seed &= with_start
-    reached = seed & free
-    runs = (_runs(free), _runs(free.T).T)
-    while True:
-        grown = _spread(_spread(reached, runs[0]), runs[1])
-        if np.array_equal(grown, reached):
-            return reached
-        reached = grown
+    labels, _ = ndimage.label(free, structure=EIGHT_NEIGHBOURS)
+    hit = np.unique(labels[seed & free])
+    return np.isin(labels, hit[hit > 0])
 
 
-def _runs(free: np.ndarray) -> np.ndarray:
-    """Labels (1, 2, ...) of the runs of free cells along the last axis; 0 where not free."""
-    starts = free.copy()
-    starts[:, 1:] &= ~free[:, :-1]
-    return np.cumsum(starts.ravel()).reshape(free.shape) * free
-
-
-def _spread(reached: np.ndarray, runs: np.ndarray) -> np.ndarray:
-    """Every cell of a run that holds a reached cell (whole runs at once: few passes for a long corridor)."""
-    hit = np.zeros(int(runs.max()) + 1, dtype=bool)
-    hit[runs[reached]] = True
-    hit[0] = False
-    return hit[runs]
-
-
-def unreachable_reason(problem: Problem) -> str | None:
+def unreachable_reason(problem: Problem, deadline: Deadline = NEVER) -> str | None:
     """Why some action can never be done (all its poses unreachable), or None."""
-    mask = reachable_mask(problem)
+    mask = reachable_mask(problem, deadline)
     domain = problem.grid.domain
 
     def any_reached(box) -> bool:

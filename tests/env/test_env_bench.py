@@ -1,4 +1,4 @@
-"""``fetchcarry bench env`` / ``python -m fetchcarry_env.bench``: figures, goals, JSON and exit statuses."""
+"""``fetchcarry bench env``: figures, goals, JSON and exit statuses."""
 
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ def test_the_benchmark_prints_every_figure_as_json_on_a_clean_stdout(capfd):
 
 
 def test_the_table_names_goals_and_floors(capsys):
-    assert bench.main(TINY) == 0
+    assert fetchcarry(["bench", "env", *TINY]) == 0
     out = capsys.readouterr().out
     assert out.startswith("env benchmark: FetchCarryPush-v0 on PyBullet")
     for text in ("reset, same layout", "push step", "random masked policy", "PyBullet floor", "physics steps"):
@@ -59,14 +59,14 @@ def test_strict_exits_1_only_when_a_goal_is_missed(monkeypatch, capsys):
         "seed": 0,
         "wall_s": 1.0,
         "random_steps": 1,
-        "random_policy": {"episodes": 1, "refused": 0, "contacts": 0, "pushes": 0},
+        "random_policy": {"episodes": 1, "invalid_actions": 0, "collisions": 0, "pushes": 0},
         "figures": [
             {"name": "move step", "value": 10.0, "unit": "per s", "goal": "2,000 or more", "met": False, "floor": None}
         ],
     }
     monkeypatch.setattr(bench, "run_benchmark", lambda *args, **kwargs: report)
-    assert bench.main([]) == 0
-    assert bench.main(["--strict"]) == 1
+    assert fetchcarry(["bench", "env"]) == 0
+    assert fetchcarry(["bench", "env", "--strict"]) == 1
     assert "NO" in capsys.readouterr().out
 
 

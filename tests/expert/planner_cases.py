@@ -105,3 +105,66 @@ def check_plan(scenario: Scenario, plan: Plan, lattice: Lattice | None = None, h
     for key in ("solver", "phases_tried", "build_s", "solve_s", "total_s"):
         assert key in plan.stats
     assert validate_plan(scenario, plan, holding=holding) == []
+
+
+def many_obstacles(count: int, seed: int = 0) -> Scenario:
+    """The V-B layout with ``count`` small (0.1 m) obstacles scattered off the tables and the start."""
+    import numpy as np
+
+    from expert import bench_cases
+
+    rng = np.random.default_rng(seed)
+    base = bench_cases.basic("V", rng)
+    obstacles: list[Obstacle] = []
+    while len(obstacles) < count:
+        x, y = (float(v) for v in rng.uniform(-0.9, 5.9, 2))
+        rect = Rect(x - 0.05, y - 0.05, x + 0.05, y + 0.05)
+        if rect.distance_to_point((0.0, 0.0)) < 0.5 or any(
+            rect.overlaps_rect(t.rect.inflate(0.3)) for t in base.tables
+        ):
+            continue
+        obstacles.append(Obstacle(f"o{len(obstacles)}", rect))
+    return Scenario(
+        name=f"obstacles-{count}",
+        area=base.area,
+        robot=base.robot,
+        tables=base.tables,
+        obstacles=tuple(obstacles),
+        objects=base.objects,
+    )
+
+
+def largest_scenario(seed: int = 0) -> Scenario:
+    """As large as the scenario format allows: 64 objects, 256 clutter, 64 tables, 1,024 obstacles (48 m room)."""
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    tables = [
+        Table(f"t{a}{b}", Rect(3.2 + 6 * a, 3.2 + 6 * b, 4.8 + 6 * a, 4.8 + 6 * b)) for a in range(8) for b in range(8)
+    ]
+    objects = []
+    for k in range(64):
+        src, dst = tables[k].rect.center, tables[(k * 7 + 3) % 64].rect.center
+        objects.append(DeliveryObject(f"o{k}", (src[0] - 0.6, src[1]), (dst[0] + 0.6, dst[1])))
+    clutter = [Clutter("c0_0", Rect.around(objects[0].goal, 0.05, 0.05), 0.1)]
+    for k in range(64):
+        cx, cy = tables[k].rect.center
+        for m, (dx, dy) in enumerate(((0.0, 0.5), (0.0, -0.5), (0.3, 0.2), (-0.3, -0.2))):
+            if (k, m) != (0, 0):
+                clutter.append(Clutter(f"c{k}_{m}", Rect.around((cx + dx, cy + dy), 0.05, 0.05), 0.1))
+    obstacles: list[Obstacle] = []
+    while len(obstacles) < 1024:
+        x, y = (float(v) for v in rng.uniform(0.5, 47.5, 2))
+        rect = Rect.around((x, y), 0.05, 0.05)
+        if rect.distance_to_point((1.0, 1.0)) < 1.0 or any(rect.overlaps_rect(t.rect.inflate(0.8)) for t in tables):
+            continue
+        obstacles.append(Obstacle(f"w{len(obstacles)}", rect))
+    return Scenario(
+        name="largest",
+        area=Rect(0.0, 0.0, 48.0, 48.0),
+        robot=Robot((1.0, 1.0)),
+        tables=tuple(tables),
+        obstacles=tuple(obstacles),
+        objects=tuple(objects),
+        clutter=tuple(clutter),
+    )

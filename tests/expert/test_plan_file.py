@@ -158,3 +158,74 @@ def test_a_produced_plan_round_trips(tmp_path, spec_example):
     produced.save(path)
     assert Plan.load(path) == produced
     assert Plan.from_dict(json.loads(json.dumps(produced.to_dict()))) == produced
+
+
+# ---------------------------------------------------------------------- hostile files (issue 8, section 4)
+def load_error(tmp_path, content: str | bytes) -> str:
+    """The PlanFormatError message of loading a file with this content (any other outcome fails)."""
+    path = tmp_path / "hostile.plan.json"
+    if isinstance(content, str):
+        path.write_text(content, encoding="utf-8", errors="surrogatepass")
+    else:
+        path.write_bytes(content)
+    with pytest.raises(PlanFormatError) as info:
+        Plan.load(path)
+    message = str(info.value)
+    assert message.startswith(str(path)) and len(message) < 1000, message
+    message.encode("utf-8")  # printable: no lone surrogate in it
+    return message
+
+
+@pytest.mark.parametrize(
+    ("content", "expected"),
+    [
+        (bytes(range(256)) * 2, "not a text file: byte 128 is not UTF-8"),
+        (json.dumps(SPEC_EXAMPLE).encode("utf-16"), "looks like UTF-16"),
+        (json.dumps(SPEC_EXAMPLE).encode("utf-32"), "looks like UTF-16 or UTF-32"),
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
+        (
+            '{"format": "fetchcarry-plan/1", "status": "optimal", "phases": [{"heading": "+x", "action": "start", '
+            '"base": [' + "7" * 5000 + ", 0]}]}",
+            "phases[0].base must be a pair of finite numbers [x, y], got [inf, 0]",
+        ),
+        ("", "not valid JSON"),
+        ("null", "a plan must be a JSON object"),
+    ],
+    ids=["binary", "utf-16", "utf-32", "deep", "5000-digits", "empty", "null"],
+)
+def test_hostile_files_raise_plan_format_error(tmp_path, content, expected):
+    assert expected in load_error(tmp_path, content)
+
+
+@pytest.mark.parametrize(
+    ("data", "field"),
+    [
+        (_set(("objective",), 10**400), None),  # reads as inf: rule 8 of the validator refuses it
+        (_set(("phases", 1, "base"), [10**400, 0]), "phases[1].base"),
+        (_set(("phases", 1, "base"), [[[[[1.0]]]], 0]), "phases[1].base"),
+        (_set(("scenario",), 10**5000), "'scenario' must be a string"),
+        (_set(("scenario",), "basic\ud800"), "'scenario'"),
+        (_set(("phases", 1, "target"), "bottle\udc00"), "phases[1].target"),
+        (_set(("phases", 1, "objects"), {"\ud800": [2.0, 2.0]}), "phases[1].objects key"),
+        (_set(("phases", 1, "heading"), ["+x"]), "phases[1].heading"),
+        (_set(("phases", 1, "action"), {"pick": 1}), "phases[1].action"),
+        (_set(("status",), ["optimal"]), "'status'"),
+        (_set(("phases", 1, "objects", "\x1b[2J"), "x"), "phases[1].objects.'\\x1b[2J'"),
+    ],
+)
+def test_hostile_values_name_the_field(data, field):
+    if field is None:
+        assert Plan.from_dict(data).objective == float("inf")
+        return
+    with pytest.raises(PlanFormatError) as info:
+        Plan.from_dict(data)
+    assert str(info.value).startswith(field), str(info.value)
+    assert "\x1b" not in str(info.value) and len(str(info.value)) < 500
+    str(info.value).encode("utf-8")
+
+
+def test_a_plan_file_beyond_the_size_limit_is_not_read(tmp_path, monkeypatch):
+    import expert.plans
+
+    monkeypatch.setattr(expert.plans, "MAX_FILE_BYTES", 100)
+    assert "more than the 100 a file of this kind may have" in load_error(tmp_path, " " * 101)

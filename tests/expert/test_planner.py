@@ -79,9 +79,13 @@ def test_table_reachable_from_one_side_only():
 
 
 def test_two_objects_order_matters():
-    """``a`` stands by the start and goes to the far table, ``b`` comes back: fetch ``a`` first.
+    """``a`` stands by the start and goes to the far table, ``b`` comes back: the order decides the phases.
 
-    Starting with ``b`` means crossing 3 m empty-handed first; with ``a`` every crossing carries something.
+    Fetching ``a`` first from the west pose (1.5, 1.2) needs a detour round the first table
+    before its place at (4.5, 1.8): 7 phases. Fetching ``b`` first goes from the start past
+    the table's south-west corner (a diagonal move outside the octagon, not allowed by the
+    paper's square-cornered rule) to (2.0, 0.5), picks ``b`` at (4.5, 1.2), places it at
+    (2.5, 1.8), picks ``a`` at (2.5, 1.2) and places it at (4.5, 1.8): 6 phases, fewer.
     """
     scenario = two_tables(
         (DeliveryObject("b", (5.0, 1.2), (2.0, 1.8)), DeliveryObject("a", (2.0, 1.2), (5.0, 1.8))), "order"
@@ -89,8 +93,9 @@ def test_two_objects_order_matters():
     result = plan(scenario)
     check_plan(scenario, result)
     assert result.status == "optimal"
+    assert len(result.phases) == 6
     picks = [p.target for p in result.phases if p.action == "pick"]
-    assert picks == ["a", "b"]
+    assert picks == ["b", "a"]
 
 
 def test_object_standing_on_another_goal_is_moved_first():
@@ -364,3 +369,35 @@ def test_replanning_from_a_decoded_observation(k):
 def test_lattice_outside_the_area_is_infeasible():
     result = plan(one_table(), lattice=Lattice.over(Rect(10.0, 10.0, 12.0, 12.0), 0.05))
     assert result.status == "infeasible" and "Eq. 27" in result.stats["reason"]
+
+
+@pytest.mark.parametrize("extra", [1, 2])
+def test_extra_phases_never_worse_over_the_longer_horizon(extra):
+    """With ``extra_phases=k`` the answer is optimal over horizons up to N + k, warm-started from the N plan.
+
+    Compared over N + k phases (a shorter plan padded with idle phases gains W1 per
+    delivered object per idle phase), the answer is at least as good as the fewest-phases plan.
+    """
+    from fetchcarry_env.kinematics import DELIVERY_BONUS
+
+    scenario = bench_cases.multi(2, np.random.default_rng(4))
+    fewest = plan(scenario)
+    longer = plan(scenario, extra_phases=extra)
+    check_plan(scenario, longer)
+    assert longer.status == "optimal"
+    n = fewest.stats["phases_tried"][-1]
+    assert longer.stats["fewest_phases"] == n and f"N + {extra}" in longer.stats["optimality"]
+    assert longer.stats["solves"][-1]["phases"] == n + extra and longer.stats["solves"][-1]["warm_start"]
+    count = len(scenario.objects)
+
+    def padded(result):
+        return result.objective - DELIVERY_BONUS * count * (n + extra - len(result.phases))
+
+    assert len(longer.phases) <= n + extra
+    assert padded(longer) <= padded(fewest) + 1e-6
+    assert longer.stats["milp_objective"] == pytest.approx(padded(longer))
+
+
+def test_extra_phases_must_be_a_whole_number():
+    with pytest.raises(ValueError, match="extra_phases"):
+        plan(one_table(), extra_phases=-1)

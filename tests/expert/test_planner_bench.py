@@ -1,4 +1,4 @@
-"""The planner benchmark command: a tiny run prints the tables and every plan is optimal."""
+"""``fetchcarry bench planner``: a tiny run prints the tables and every plan is optimal."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ from argparse import Namespace
 
 import pytest
 
-from expert import bench
 from fetchcarry_env.errors import UsageError
+from training.cli import main as fetchcarry
+from training.cli.bench import run_planner
 
 
 def args(**changes) -> Namespace:
@@ -19,7 +20,7 @@ def args(**changes) -> Namespace:
 
 def test_tiny_run_prints_paper_and_goal_tables():
     out = io.StringIO()
-    assert bench.run(args(), out) == 0
+    assert run_planner(args(), out) == 0
     text = out.getvalue()
     for expected in ("V-B area III", "IV-F L corridor", "0.22 (0.20)", "median 20, p95 50", "where the time goes"):
         assert expected in text
@@ -28,7 +29,7 @@ def test_tiny_run_prints_paper_and_goal_tables():
 
 def test_json_lists_every_run():
     out = io.StringIO()
-    assert bench.run(args(json=True), out) == 0
+    assert run_planner(args(json=True), out) == 0
     data = json.loads(out.getvalue())
     assert len(data["runs"]) == 6  # five V-B areas and the corridor, one scenario each
     assert all(r["status"] == "optimal" and r["valid"] for r in data["runs"])
@@ -37,8 +38,17 @@ def test_json_lists_every_run():
 
 def test_unknown_group_is_a_usage_error():
     with pytest.raises(UsageError, match="nope"):
-        bench.run(args(only=["nope"]), io.StringIO())
+        run_planner(args(only=["nope"]), io.StringIO())
 
 
-def test_main_parses_its_options():
-    assert bench.main(["--scale", "0.05", "--only", "L", "--seed", "3"]) == 0
+def test_the_command_parses_its_options(capsys):
+    assert fetchcarry(["bench", "planner", "--scale", "0.05", "--only", "L", "--seed", "3"]) == 0
+    assert "IV-F L corridor" in capsys.readouterr().out
+
+
+def test_help_shows_no_docstring_markup(capsys):
+    for what in ("planner", "env", "generate"):
+        with pytest.raises(SystemExit):
+            fetchcarry(["bench", what, "--help"])
+        text = capsys.readouterr().out
+        assert ":mod:" not in text and ":func:" not in text and "``" not in text, what

@@ -6,16 +6,17 @@ fault put in; the test asserts the message a user would read.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from handmade import BOTTLE_START, with_phase
+from handmade import BOTTLE_START, HAND_OBJECTIVE, HAND_PHASES, eq1, with_phase, with_phases
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from expert.plans import PHASE_ACTIONS, STATUSES, Phase, Plan
-from expert.validate import validate_plan
+from expert.validate import plan_objective, validate_plan
 from fetchcarry_env.geometry import HEADINGS
 from fetchcarry_env.scenario import Scenario
 
@@ -27,7 +28,7 @@ def with_block(plan: Plan, from_k: int, center) -> Plan:
     phases = [
         replace(p, clutter={**p.clutter, "block": center}) if k >= from_k else p for k, p in enumerate(plan.phases)
     ]
-    return replace(plan, phases=tuple(phases))
+    return with_phases(plan, phases)
 
 
 def test_the_hand_written_plan_is_valid(spec_example, hand_plan):
@@ -103,7 +104,7 @@ def test_rule1_a_move_that_grazes_a_table(spec_example, hand_plan):
 
 
 def test_rule1_a_move_across_a_table_and_past_an_obstacle(spec_example, hand_plan):
-    plan = replace(hand_plan, phases=hand_plan.phases[:1] + hand_plan.phases[2:])  # straight on to (4.0, 3.28)
+    plan = with_phases(hand_plan, hand_plan.phases[:1] + hand_plan.phases[2:])  # straight on to (4.0, 3.28)
     violations = validate_plan(spec_example, plan)
     clearance = [m for m in violations if m.startswith("rule 1 (clearance): phase 1 move from [0.000, 0.000]")]
     assert len(clearance) == 2, violations
@@ -155,7 +156,7 @@ def test_rule4_target_off_to_the_side(spec_example, hand_plan):
 def test_rule4_placing_onto_clutter_across_the_arm_line(spec_example, hand_plan):
     # Skip the push: the block still stands on the goal when the bottle is placed there.
     phases = [p for k, p in enumerate(hand_plan.phases) if k not in (2, 3)]
-    plan = with_block(replace(hand_plan, phases=tuple(phases)), 0, (4.0, 4.0))
+    plan = with_block(with_phases(hand_plan, phases), 0, (4.0, 4.0))
     assert validate_plan(spec_example, plan) == [
         "rule 4 (arm line): phase 5 place 'bottle': the arm line from [4.000, 3.400] to [4.000, 4.000] "
         "crosses clutter 'block'",
@@ -203,7 +204,7 @@ def lateral_push_plan(hand_plan: Plan, stroke: float) -> Plan:
     # The contact for +x is the middle of the block's west face less the hand: (3.88, 4.0), 0.60 m ahead.
     push = replace(start, base=(3.9 + stroke, 3.4), action="push", target="block", posture="reach_far")
     phases = (*hand_plan.phases[:2], start, push, *hand_plan.phases[4:])
-    return with_block(replace(hand_plan, phases=phases), 3, (4.0 + stroke, 4.0))
+    return with_block(with_phases(hand_plan, phases), 3, (4.0 + stroke, 4.0))
 
 
 def test_rule5_a_lateral_push_is_valid(spec_example, hand_plan):
@@ -221,7 +222,7 @@ def test_rule5_pushing_clutter_into_other_clutter(spec_example_dict, hand_plan):
     spec_example_dict["clutter"].append({"id": "cube", "min": [3.95, 4.2], "max": [4.05, 4.28]})
     scenario = Scenario.from_dict(spec_example_dict)
     phases = tuple(replace(p, clutter={**p.clutter, "cube": (4.0, 4.24)}) for p in hand_plan.phases)
-    violations = validate_plan(scenario, replace(hand_plan, phases=phases))
+    violations = validate_plan(scenario, with_phases(hand_plan, phases))
     assert violations == ["rule 5 (push): phase 3 push 'block': the clutter runs into clutter 'cube'"]
 
 
@@ -231,7 +232,7 @@ def test_rule5_pushing_backwards(spec_example, hand_plan):
         "rule 5 (push): phase 3 push 'block': heading '-y' pushes backwards along '+y' (docs/design.md)" in violations
     )
     assert (
-        "rule 5 (push): phase 3 push 'block': the push contact is -0.600 m ahead, outside posture 'reach_far' "
+        "rule 9 (hand room): phase 3 push 'block': the push contact is -0.600 m ahead, outside posture 'reach_far' "
         "forward range [0.550, 0.700]"
     ) in violations
 
@@ -239,31 +240,28 @@ def test_rule5_pushing_backwards(spec_example, hand_plan):
 def test_rule5_push_contact_out_of_reach(spec_example, hand_plan):
     plan = with_phase(with_phase(hand_plan, 2, base=(4.0, 3.1)), 3, base=(4.0, 3.25))
     assert validate_plan(spec_example, plan) == [
-        "rule 5 (push): phase 3 push 'block': the push contact is 0.780 m ahead, outside posture 'reach_far' "
+        "rule 9 (hand room): phase 3 push 'block': the push contact is 0.780 m ahead, outside posture 'reach_far' "
         "forward range [0.550, 0.700]"
     ]
 
 
-def test_rule5_pushing_with_an_object_in_the_hand(spec_example, hand_plan):
+def test_rule5_pushing_with_an_object_in_the_hand_is_allowed(spec_example, hand_plan):
+    """The paper's push-aside while carrying: the held bottle moves with the base through the stroke."""
     p = hand_plan.phases
-    carry = {"holding": "bottle", "objects": {"bottle": (4.0, 2.6)}}
-    phases = (
+    phases = (  # the bottle, picked 0.6 m ahead, moves with the base facing +y
         p[0],
         replace(p[4], base=(2.6, 0.0), clutter={"block": (4.0, 4.0)}),  # south of table_src
         replace(p[5], clutter={"block": (4.0, 4.0)}),  # pick the bottle first
-        replace(p[2], **carry),
-        replace(p[3], **carry),
+        replace(p[2], holding="bottle", objects={"bottle": (4.0, 3.88)}),
+        replace(p[3], holding="bottle", objects={"bottle": (4.0, 4.03)}),
         p[7],
     )
-    violations = validate_plan(spec_example, replace(hand_plan, phases=phases))
-    assert violations == [
-        "rule 5 (push): phase 4 push 'block' with 'bottle' in the hand (docs/design.md: a push needs an empty hand)"
-    ]
+    assert validate_plan(spec_example, with_phases(hand_plan, phases)) == []
 
 
 # ---------------------------------------------------------------------- rule 6
 def test_rule6_a_plan_that_stops_short(spec_example, hand_plan):
-    violations = validate_plan(spec_example, replace(hand_plan, phases=hand_plan.phases[:7]))
+    violations = validate_plan(spec_example, with_phases(hand_plan, hand_plan.phases[:7]))
     assert violations == [
         "rule 6 (goal): in the last phase (6) object 'bottle' is at [4.000, 2.600], 1.400 m from its goal "
         "[4.000, 4.000]",
@@ -276,6 +274,170 @@ def test_every_violation_is_listed(spec_example, hand_plan):
     plan = with_phase(with_phase(hand_plan, 1, base=(4.0, -0.9)), 5, base=(2.8, 2.0))
     violations = validate_plan(spec_example, plan)
     assert [m.split(":")[0] for m in violations] == ["rule 1 (area)", "rule 4 (reach)"]
+
+
+# ---------------------------------------------------------------------- rule 7
+def test_rule7_a_held_object_reported_far_from_the_hand(spec_example, hand_plan):
+    """Issue 8: a carried object reported at (50, -50) was accepted."""
+    violations = validate_plan(spec_example, with_phase(hand_plan, 6, objects={"bottle": (50.0, -50.0)}))
+    assert violations == [
+        "rule 7 (held object): phase 6 move holding 'bottle': it is -52.000 m ahead, outside posture 'reach_far' "
+        "forward range [0.550, 0.700]",
+        "rule 7 (held object): phase 6 move holding 'bottle': it is 46.000 m to the right (lateral -46.000), outside "
+        "posture 'reach_far' lateral range [-0.050, 0.050]",
+        "rule 7 (held object): phase 6 move holding 'bottle': it is at [50.000, -50.000], not in the hand at "
+        "[4.000, 2.600] (it moves with the base, at the offset [0.600, 0.000] ahead/left it was picked with)",
+    ]
+
+
+def test_rule7_a_held_object_that_slides_in_the_hand(spec_example, hand_plan):
+    """Within the posture's ranges but not where the grasp put it: it must move with the base."""
+    violations = validate_plan(spec_example, with_phase(hand_plan, 6, objects={"bottle": (4.0, 2.68)}))
+    assert violations == [
+        "rule 7 (held object): phase 6 move holding 'bottle': it is at [4.000, 2.680], not in the hand at "
+        "[4.000, 2.600] (it moves with the base, at the offset [0.600, 0.000] ahead/left it was picked with)"
+    ]
+
+
+def test_rule7_a_held_object_turns_with_the_base(spec_example, hand_plan):
+    """Facing -y instead of +y after the pick, the hand (0.6 m ahead) is south of the base."""
+    plan = with_phase(hand_plan, 6, heading="-y", objects={"bottle": (4.0, 1.4)})
+    assert not [v for v in validate_plan(spec_example, plan) if v.startswith("rule 7")]
+
+
+def test_rule7_held_before_the_plan_starts(spec_example):
+    """A mid-episode plan (``holding=``): the object must lie within some posture's ranges."""
+    start = HAND_PHASES[0]
+    phases = (replace(start, holding="bottle", objects={"bottle": (0.6, 0.0)}),)
+    plan = Plan(spec_example.name, "feasible", eq1(phases), phases)
+    assert not [v for v in validate_plan(spec_example, plan, holding="bottle") if v.startswith("rule 7")]
+    phases = (replace(start, holding="bottle", objects={"bottle": (2.0, 0.0)}),)
+    plan = Plan(spec_example.name, "feasible", eq1(phases), phases)
+    assert (
+        "rule 7 (held object): phase 0 holding 'bottle': it is at [2.000, 0.000], [2.000, 0.000] ahead/left of the "
+        "base, within no posture's ranges"
+    ) in validate_plan(spec_example, plan, holding="bottle")
+
+
+# ---------------------------------------------------------------------- rule 8
+def test_rule8_the_hand_plan_objective_is_eq1(spec_example, hand_plan):
+    assert pytest.approx(4.366, abs=1e-12) == HAND_OBJECTIVE
+    assert plan_objective(spec_example, hand_plan.phases) == pytest.approx(HAND_OBJECTIVE, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("status", "objective", "message"),
+    [
+        (
+            "optimal",
+            -1000.0,
+            "rule 8 (objective): status 'optimal': the objective -1000 is not Eq. 1 recomputed from the phases, 4.366",
+        ),
+        (
+            "optimal",
+            math.nan,
+            "rule 8 (objective): status 'optimal': the objective nan is not a finite number (Eq. 1 of the phases is "
+            "4.366)",
+        ),
+        (
+            "feasible",
+            math.inf,
+            "rule 8 (objective): status 'feasible': the objective inf is not a finite number (Eq. 1 of the phases is "
+            "4.366)",
+        ),
+        (
+            "optimal",
+            None,
+            "rule 8 (objective): status 'optimal' has a plan, so the objective must be Eq. 1 of its phases (4.366), "
+            "not null",
+        ),
+        (
+            "optimal",
+            4.366 * (1 + 3e-6),
+            "rule 8 (objective): status 'optimal': the objective 4.36601 is not Eq. 1 recomputed from the phases, "
+            "4.366",
+        ),
+    ],
+)
+def test_rule8_a_lying_objective(spec_example, hand_plan, status, objective, message):
+    """Issue 8: an objective of -1000 with status optimal, and NaN, were accepted."""
+    assert validate_plan(spec_example, replace(hand_plan, status=status, objective=objective)) == [message]
+
+
+def test_rule8_within_a_millionth_is_equal(spec_example, hand_plan):
+    plan = replace(hand_plan, objective=HAND_OBJECTIVE * (1 + 5e-7))
+    assert validate_plan(spec_example, plan) == []
+
+
+def test_rule8_no_plan_no_objective(spec_example):
+    plan = Plan(spec_example.name, "infeasible", -12.5, (), {"total_s": 0.1})
+    assert validate_plan(spec_example, plan) == [
+        "structure: the plan has no phases to check (status 'infeasible')",
+        "rule 8 (objective): status 'infeasible' has no plan, so the objective must be null, not -12.5",
+    ]
+
+
+@settings(max_examples=100, deadline=None, derandomize=True, database=None)
+@given(
+    bases=st.lists(st.tuples(st.floats(-1, 6), st.floats(-1, 6)), min_size=1, max_size=6),
+    at_goal=st.lists(st.booleans(), min_size=6, max_size=6),
+    held=st.lists(st.booleans(), min_size=6, max_size=6),
+)
+def test_rule8_eq1_matches_the_planners_own(bases, at_goal, held):
+    """The validator's Eq. 1 and the planner's (expert.milp.decode) agree, and both agree with handmade.eq1."""
+    from expert.milp.decode import plan_objective as planner_objective
+
+    spec_example = Scenario.load(EXAMPLE)
+    phases = tuple(
+        Phase(
+            base,
+            "+x",
+            "move",
+            holding="bottle" if held[k] else None,
+            objects={"bottle": (4.0, 4.0) if at_goal[k] else (2.0, 2.0)},
+        )
+        for k, base in enumerate(bases)
+    )
+    ours = plan_objective(spec_example, phases)
+    assert ours == planner_objective(spec_example, phases)
+    assert ours == pytest.approx(eq1(phases), rel=1e-12, abs=1e-12)
+
+
+# ---------------------------------------------------------------------- rule 9
+def test_rule9_no_room_for_the_hand_behind_the_block(spec_example_dict, hand_plan):
+    """A cube standing where the hand must go (south of the block) leaves no room to push it north."""
+    spec_example_dict["clutter"].append({"id": "cube", "min": [4.015, 3.84], "max": [4.08, 3.895]})  # off the arm line
+    scenario = Scenario.from_dict(spec_example_dict)
+    phases = tuple(replace(p, clutter={**p.clutter, "cube": (4.0475, 3.8675)}) for p in hand_plan.phases)
+    violations = validate_plan(scenario, with_phases(hand_plan, phases))
+    assert violations == [
+        "rule 9 (hand room): phase 3 push 'block': no room for the hand at the push contact [4.000, 3.880]: "
+        "clutter 'cube' is there"
+    ]
+
+
+def test_rule9_an_object_where_the_hand_goes(spec_example_dict, hand_plan):
+    spec_example_dict["objects"].append({"id": "cup", "start": [4.03, 3.86], "goal": [4.03, 3.86], "radius": 0.02})
+    scenario = Scenario.from_dict(spec_example_dict)
+    phases = tuple(replace(p, objects={**p.objects, "cup": (4.03, 3.86)}) for p in hand_plan.phases)
+    plan = with_phases(hand_plan, phases)
+    plan = replace(plan, objective=plan_objective(scenario, plan.phases))  # the cup is delivered all along
+    violations = validate_plan(scenario, plan)
+    assert violations == [
+        "rule 9 (hand room): phase 3 push 'block': no room for the hand at the push contact [4.000, 3.880]: "
+        "object 'cup' is there"
+    ]
+
+
+def test_rule9_is_the_env_rule(spec_example_dict):
+    """The validator refuses exactly what the env refuses: the same hand_blocker on the same positions."""
+    import inspect
+
+    from expert import validate
+    from fetchcarry_env import rules
+
+    assert "hand_blocker(" in inspect.getsource(validate._rule9_hand_room)
+    assert "hand_blocker(" in inspect.getsource(rules._check_push)
 
 
 # ---------------------------------------------------------------------- robustness

@@ -31,8 +31,8 @@ def test_each_step_says_what_the_arm_did(record) -> None:
     steps = episode_steps(record.states, record.actions)
     acted = [step.label() for step in steps if step.acted]
     assert len(acted) == 3
-    assert acted[0].endswith("push block 15 cm")
-    assert acted[1].endswith("pick bottle") and acted[2].endswith("place bottle")
+    assert acted[0].endswith("pick bottle")  # the paper's push-aside: carried to the goal, pushed, placed
+    assert acted[1].endswith("push block 15 cm") and acted[2].endswith("place bottle")
     assert [step.number for step in steps] == list(range(1, len(record.actions) + 1))
     assert key_states(steps) == [0, *(step.number for step in steps if step.acted)]  # the last step is the place
 
@@ -63,3 +63,54 @@ def test_a_picture_needs_frames(record, tmp_path: Path) -> None:
         save_episode_picture(replace(record, frames=[]), tmp_path / "x.png")
     with pytest.raises(ValueError, match="cannot write a picture"):
         save_episode_picture(record, tmp_path / "x.bmp")
+
+
+def test_maps_and_renders_share_the_colours_of_objects_goals_and_clutter() -> None:
+    from matplotlib import colors
+
+    from fetchcarry_env import drawing
+    from fetchcarry_env.sim.bodies import CLUTTER_COLOR, GOAL_COLOR, OBJECT_COLOR
+
+    for map_colour, render_colour in (
+        (drawing.PALETTE.object, OBJECT_COLOR),
+        (drawing.PALETTE.goal, GOAL_COLOR),
+        (drawing.PALETTE.clutter, CLUTTER_COLOR),
+    ):
+        assert colors.to_rgb(map_colour) == pytest.approx(render_colour[:3], abs=1 / 255)
+
+
+def test_labels_are_moved_apart() -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from fetchcarry_env import drawing
+
+    figure = Figure(figsize=(3, 3))
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    axes.set_xlim(0, 10)
+    axes.set_ylim(0, 10)
+    for text in ("small_1", "bottle", "block", "2,3,5"):
+        axes.text(5.0, 5.0, text, ha="center", va="center", fontsize=8)
+    figure.canvas.draw()
+    drawing.separate_labels(axes)
+    renderer = figure.canvas.get_renderer()
+    boxes = [t.get_window_extent(renderer) for t in axes.texts]
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
+
+
+def test_the_gif_is_large_and_captions_every_state(record, tmp_path: Path) -> None:
+    from PIL import Image
+
+    from training.pictures import CAPTION_PX, GIF_WIDTH, gif_captions
+
+    path = save_episode_picture(record, tmp_path / "episode.gif")
+    captions = gif_captions(record)
+    assert captions[0].startswith("start: ") and captions[-1].startswith(f"step {len(record.actions)}/")
+    assert "push block 15 cm" in " ".join(captions)
+    with Image.open(path) as image:
+        assert image.width == GIF_WIDTH and image.n_frames == len(record.frames) == len(captions)
+        for k in range(image.n_frames):
+            image.seek(k)
+            band = np.asarray(image.convert("RGB"))[: 2 * CAPTION_PX]
+            assert (band < 100).any() and (band > 200).mean() > 0.8  # dark text on a white band

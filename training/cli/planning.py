@@ -1,10 +1,9 @@
-"""The expert's commands: ``fetchcarry plan``, ``fetchcarry validate`` and ``fetchcarry bench planner``.
+"""The planner's commands: ``fetchcarry plan`` and ``fetchcarry validate``.
 
-Registered into ``training/cli.py`` by :func:`register`. Exit statuses follow
-``spec/interfaces.md``: ``plan`` 0 when a plan was found and 1 when none
-(infeasible, time limit); ``validate`` 0 for a valid plan and 1 for an invalid one;
-2 for bad input (raised here as ``UsageError``, ``ScenarioError`` or
-``PlanFormatError`` and turned into one short message by the CLI's ``main``).
+Exit statuses: ``plan`` 0 when a plan was found and 1 when none (infeasible, time
+limit); ``validate`` 0 for a valid plan and 1 for an invalid one; 2 for bad input
+(raised here as ``UsageError``, ``ScenarioError`` or ``PlanFormatError`` and turned
+into one short message by :func:`training.cli.main`).
 """
 
 from __future__ import annotations
@@ -15,26 +14,26 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from expert.plans import Plan, PlanFormatError
+from expert.plans import Plan
 from expert.validate import validate_plan
-from fetchcarry_env.arguments import positive_float, positive_int
 from fetchcarry_env.errors import UsageError
-from fetchcarry_env.scenario import Scenario, ScenarioError
+from training.cli.arguments import positive_float, positive_int
+from training.cli.files import check_plot_format, check_writable, file_format, load_plan, load_scenario
+from training.cli.text import echo
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
 MAX_SUMMARY_PHASES = 30  # phases listed in the one-screen summary
 MAX_SUMMARY_VIOLATIONS = 5  # validator messages repeated in the plan summary
 
 PLAN_SUFFIX = ".plan.json"
+PLAN_FORMAT = "fetchcarry-plan/1"
+SCENARIO_FORMAT = "fetchcarry-scenario/1"
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``plan``, ``validate`` and ``bench planner`` to the ``fetchcarry`` parser."""
+    """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
     _register_plan(commands)
     _register_validate(commands)
-    from expert import bench as planner_bench  # the planner benchmark's own options and handler
-
-    planner_bench.register(bench)
 
 
 # ---------------------------------------------------------------------- plan
@@ -46,7 +45,7 @@ def _register_plan(commands: argparse._SubParsersAction) -> None:
         "one-screen summary (status, objective, the phases, timings) and write the plan as "
         "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
         "records the status (infeasible, time_limit) and the timings. The command also checks the "
-        "plan with the validator and warns on stderr if it breaks spec/plan.md.",
+        "plan with the validator and warns on stderr if it breaks the plan rules (see fetchcarry validate --help).",
         epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
@@ -80,11 +79,11 @@ def run_plan(args: argparse.Namespace) -> int:
     scenario_path = Path(args.scenario)
     scenario = load_scenario(scenario_path)
     output = Path(args.output) if args.output else Path.cwd() / (scenario_path.stem + PLAN_SUFFIX)
-    _check_writable(output, "plan output")
+    check_writable(output, "plan output")
     plot_path = Path(args.plot) if args.plot else None
     if plot_path is not None:
-        _check_writable(plot_path, "plot")
-        _check_picture_format(plot_path)
+        check_writable(plot_path, "plot")
+        check_plot_format(plot_path)
 
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
@@ -99,20 +98,24 @@ def run_plan(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(_plan_summary_json(scenario_path, result, output, plot_path, violations), indent=2))
     else:
-        print(_plan_summary_text(scenario_path, result, output, plot_path))
+        echo(_plan_summary_text(scenario_path, result, output, plot_path, args.time_limit))
     if violations:
         shown = "\n".join(f"  - {v}" for v in violations[:MAX_SUMMARY_VIOLATIONS])
         more = len(violations) - MAX_SUMMARY_VIOLATIONS
         tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
-        print(f"fetchcarry: warning: the plan breaks spec/plan.md:\n{shown}{tail}", file=sys.stderr)
+        echo(f"fetchcarry: warning: the plan breaks the plan rules:\n{shown}{tail}", file=sys.stderr)
     return 0 if result.found else 1
 
 
-def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None) -> str:
+def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None, time_limit: float) -> str:
     objective = "-" if plan.objective is None else f"{plan.objective:.3f}"
     lines = [
         f"scenario   {plan.scenario} ({scenario_path})",
         f"status     {plan.status}    objective {objective}",
+    ]
+    if not plan.found:
+        lines.append(f"why        {no_plan_reason(plan, time_limit)}")
+    lines += [
         f"phases     {len(plan.phases)}" + _phases_tried(plan),
         f"timings    {_timings(plan)}",
     ]
@@ -122,6 +125,24 @@ def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path:
     if plot_path is not None:
         lines.append(f"plot written to {plot_path}")
     return "\n".join(lines)
+
+
+def no_plan_reason(plan: Plan, time_limit: float) -> str:
+    """Why ``plan`` has no phases, in words: the planner's own reason when it gives one."""
+    reason = plan.stats.get("reason")
+    tried = plan.stats.get("phases_tried") or []
+    if plan.status == "time_limit":
+        where = (
+            f"after trying {', '.join(str(n) for n in tried)} phases" if tried else "before any phase count was tried"
+        )
+        text = f"the time limit of {time_limit:g} s ran out {where} (--time-limit gives it more)"
+        return f"{text}; {reason}" if isinstance(reason, str) else text
+    if isinstance(reason, str):
+        return reason.replace("max_phases=", "--max-phases ")
+    if plan.status == "infeasible":
+        tried_text = f" ({', '.join(str(n) for n in tried)} phases tried)" if tried else ""
+        return f"no plan delivers every object within the phases the planner may use{tried_text}"
+    return f"the solver ended with status {plan.status}"
 
 
 def _phase_table(plan: Plan) -> str:
@@ -174,14 +195,14 @@ def _plan_summary_json(
 def _register_validate(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "validate",
-        help="check a plan against spec/plan.md and list every violation",
-        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of spec/plan.md "
+        help="check a plan against the plan rules and list every violation",
+        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of a valid plan "
         "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
         "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
         "an empty hand, a forward or lateral stroke and the contact within reach). Every violation is "
         "listed, one line each, naming the rule, the phase and the ids.",
         epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
-        "that breaks spec/scenario.md, a plan file that is not fetchcarry-plan/1).",
+        "that breaks the scenario rules, a plan file that is not fetchcarry-plan/1).",
     )
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
     parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")
@@ -193,6 +214,7 @@ def _register_validate(commands: argparse._SubParsersAction) -> None:
 
 def run_validate(args: argparse.Namespace) -> int:
     """``fetchcarry validate``: 0 valid, 1 invalid."""
+    _check_not_swapped(Path(args.scenario), Path(args.plan))
     scenario = load_scenario(Path(args.scenario))
     plan = load_plan(Path(args.plan))
     violations = validate_plan(scenario, plan)
@@ -200,50 +222,18 @@ def run_validate(args: argparse.Namespace) -> int:
         report = {"scenario": args.scenario, "plan": args.plan, "valid": not violations, "violations": violations}
         print(json.dumps(report, indent=2))
     elif violations:
-        print(f"{args.plan}: INVALID for {args.scenario}: {len(violations)} violation(s)")
-        print("\n".join(f"  - {v}" for v in violations))
+        echo(f"{args.plan}: INVALID for {args.scenario}: {len(violations)} violation(s)")
+        echo("\n".join(f"  - {v}" for v in violations))
     else:
         steps = len(plan.phases) - 1
-        print(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
+        echo(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
     return 1 if violations else 0
 
 
-# ---------------------------------------------------------------------- input
-def load_scenario(path: Path) -> Scenario:
-    """Read a scenario file; a missing or unreadable file is a ``UsageError``, a bad one a ``ScenarioError``."""
-    _check_readable(path, "scenario file")
-    try:
-        return Scenario.load(path)
-    except UnicodeDecodeError:
-        raise ScenarioError(["not a text file (expected JSON)"], str(path)) from None
-
-
-def load_plan(path: Path) -> Plan:
-    """Read a plan file; a missing file is a ``UsageError``, a malformed one a ``PlanFormatError``."""
-    _check_readable(path, "plan file")
-    try:
-        return Plan.load(path)
-    except UnicodeDecodeError:
-        raise PlanFormatError(f"{path}: not a text file (expected JSON)") from None
-
-
-def _check_readable(path: Path, what: str) -> None:
-    if not path.exists():
-        raise UsageError(f"{what} not found: {path}")
-    if path.is_dir():
-        raise UsageError(f"{what} is a directory, not a file: {path}")
-
-
-def _check_writable(path: Path, what: str) -> None:
-    if path.is_dir():
-        raise UsageError(f"{what} {path} is a directory; give a file name")
-    if not path.parent.is_dir():
-        raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
-
-
-def _check_picture_format(path: Path) -> None:
-    from matplotlib.backend_bases import FigureCanvasBase
-
-    formats = FigureCanvasBase.get_supported_filetypes()
-    if path.suffix.lower().lstrip(".") not in formats:
-        raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
+def _check_not_swapped(scenario_path: Path, plan_path: Path) -> None:
+    """Raise ``UsageError`` when the scenario argument holds a plan and the plan argument a scenario."""
+    if file_format(scenario_path) == PLAN_FORMAT and file_format(plan_path) == SCENARIO_FORMAT:
+        raise UsageError(
+            f"the two files look swapped: {scenario_path} is a plan and {plan_path} a scenario; "
+            "give the scenario first: fetchcarry validate SCENARIO PLAN"
+        )

@@ -1,0 +1,99 @@
+"""Reading a JSON file that a person or a stranger wrote, with one kind of error for every way it can be bad.
+
+Scenario and plan files go through :func:`read_json`: a file that is too large, not
+UTF-8 text (binary, UTF-16), not JSON, nested too deeply or holding a number literal
+too long to convert raises :class:`JsonInputError` (a ``ValueError``) with a short
+message, never ``UnicodeDecodeError``, ``RecursionError`` or ``OverflowError``. The
+caller wraps it in its own error (``ScenarioError``, ``PlanFormatError``).
+
+:func:`describe` shows a value in a message without printing megabytes of it or
+recursing into deep nesting.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import reprlib
+from pathlib import Path
+from typing import Any
+
+MAX_INT_DIGITS = 300  # digits: a longer integer literal is read as a float (inf beyond about 1e308)
+
+
+class JsonInputError(ValueError):
+    """A file is not readable as the JSON text it should be; the message says why."""
+
+
+def read_json(path: str | Path, max_bytes: int) -> Any:
+    """The JSON value in the file at ``path``; :class:`JsonInputError` if the file is not sane JSON text.
+
+    The size (bytes) is checked before anything is read. ``OSError`` (a missing or
+    unreadable file) passes through unchanged.
+    """
+    path = Path(path)
+    size = path.stat().st_size
+    if size > max_bytes:
+        raise JsonInputError(f"the file is {size:,} bytes, more than the {max_bytes:,} a file of this kind may have")
+    with path.open("rb") as stream:
+        raw = stream.read(max_bytes + 1)
+    if len(raw) > max_bytes:  # a special file whose size stat did not report
+        raise JsonInputError(f"the file is more than the {max_bytes:,} bytes a file of this kind may have")
+    return parse_json(decode_text(raw))
+
+
+def decode_text(raw: bytes) -> str:
+    """``raw`` as UTF-8 text (a UTF-8 byte order mark is allowed); :class:`JsonInputError` otherwise."""
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")) or _ascii_and_nul(raw[:2]) or _ascii_and_nul(raw[1::-1]):
+        raise JsonInputError("not a UTF-8 text file (it looks like UTF-16 or UTF-32): save it as UTF-8")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise JsonInputError(f"not a text file: byte {error.start} is not UTF-8 (expected JSON text)") from None
+    if "\x00" in text:
+        raise JsonInputError("not a text file: it holds NUL bytes (expected JSON text)")
+    return text
+
+
+def _ascii_and_nul(pair: bytes) -> bool:
+    """True for a printable ASCII byte (or whitespace) then a NUL: how UTF-16 (no byte order mark) starts."""
+    return len(pair) == 2 and (32 <= pair[0] < 127 or pair[0] in b"\t\n\r") and pair[1] == 0
+
+
+def parse_json(text: str) -> Any:
+    """The JSON value of ``text``; :class:`JsonInputError` for broken JSON, deep nesting or absurd numbers.
+
+    ``NaN`` and ``Infinity`` are read as floats (the format's rules then reject them
+    with the field's name). An integer literal of more than ``MAX_INT_DIGITS`` digits
+    is read as a float, so it is refused as out of range instead of failing to convert.
+    """
+    try:
+        return json.loads(text, parse_int=_parse_int)
+    except json.JSONDecodeError as error:
+        raise JsonInputError(f"not valid JSON: {error}") from None
+    except RecursionError:
+        raise JsonInputError("not valid JSON for this format: nested too deeply") from None
+    except (ValueError, OverflowError) as error:
+        raise JsonInputError(f"not valid JSON: {str(error)[:200]}") from None
+
+
+def _parse_int(literal: str) -> int | float:
+    digits = len(literal.lstrip("-"))
+    return int(literal) if digits <= MAX_INT_DIGITS else float(literal)
+
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel = 2
+_REPR.maxstring = 40
+_REPR.maxother = 40
+_REPR.maxlist = _REPR.maxdict = _REPR.maxtuple = 4
+
+
+def describe(value: Any) -> str:
+    """A short, printable ``repr`` of ``value`` for an error message (long or deep values are cut)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 128:
+        return f"<an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits>"
+    try:
+        return _REPR.repr(value)
+    except (ValueError, RecursionError):  # an integer too long for str() inside a container
+        return f"<a {type(value).__name__}>"

@@ -1,0 +1,358 @@
+"""Hardening (issue 8, sections 1-3): no code from a data file, exit statuses, datasets never corrupted.
+
+Every test here reproduces one attack or fault of the issue through the command line
+(in-process through ``training.cli.main``, or a subprocess where signals are involved).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from training.cli import main
+from training.datasets import dataset_path
+from training.staging import DatasetLock, Staging
+
+DATASET_ID = "fetchcarry/hard-v0"
+
+
+def run(capsys: pytest.CaptureFixture, *argv: str) -> tuple[int, str, str]:
+    """``fetchcarry argv...`` in-process: (exit status, stdout, stderr); never a traceback."""
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as exit_:
+        status = exit_.code
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+def generate_random(capsys: pytest.CaptureFixture, dataset_id: str = DATASET_ID, episodes: int = 2, *extra: str):
+    """A small dataset of the random policy (fast: no planner)."""
+    return run(
+        capsys, "generate", "--family", "basic", "--policy", "random", "--episodes", str(episodes),
+        "--dataset-id", dataset_id, "--no-progress", *extra,
+    )  # fmt: skip
+
+
+@pytest.fixture
+def dataset(capsys: pytest.CaptureFixture) -> str:
+    status, _, err = generate_random(capsys)
+    assert status == 0, err
+    return DATASET_ID
+
+
+def edit_env_spec(dataset_id: str, **changes) -> None:
+    metadata_file = dataset_path(dataset_id) / "data" / "metadata.json"
+    metadata = json.loads(metadata_file.read_text())
+    spec = json.loads(metadata["env_spec"])
+    spec.update(changes)
+    metadata["env_spec"] = json.dumps(spec)
+    metadata_file.write_text(json.dumps(metadata))
+
+
+# ---------------------------------------------------------------------------- 1. a dataset runs no code
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"entry_point": "os:system"},  # the issue's attack: the "env" is a shell command
+        {"id": "Evil-v0", "entry_point": "os:system"},
+        {"id": "CartPole-v1", "entry_point": "gymnasium.envs.classic_control.cartpole:CartPoleEnv", "kwargs": {}},
+        {"kwargs": {"family": "basic", "capacity": "x"}},  # a keyword the env is not given from a dataset
+        {"kwargs": {"scenario": "/etc/passwd"}},  # a path: the dataset would make the env read another file
+        {"additional_wrappers": [{"name": "W", "entry_point": "os:system", "kwargs": {}}]},
+    ],
+    ids=["entry-point", "unknown-id", "foreign-env", "extra-kwarg", "scenario-path", "wrapper"],
+)
+def test_replay_refuses_a_dataset_that_names_an_unknown_env(capsys, tmp_path: Path, dataset: str, changes) -> None:
+    marker = tmp_path / "ran"
+    if changes.get("entry_point") == "os:system":
+        changes = {**changes, "kwargs": {"command": f"touch {marker}"}}
+    edit_env_spec(dataset, **changes)
+    status, out, err = run(capsys, "dataset", "replay", dataset, "--episode", "0")
+    assert status == 2 and out == ""
+    assert "names an unknown env" in err
+    assert not marker.exists()
+
+
+def test_replay_of_an_untouched_dataset_still_works(capsys, dataset: str) -> None:
+    status, out, _ = run(capsys, "dataset", "replay", dataset, "--episode", "1")
+    assert status == 0 and ": reproduced" in out
+
+
+# ---------------------------------------------------------------------------- 2. interrupts and exit statuses
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE = ROOT / "examples" / "push_basic.json"
+
+
+def cli_process(*argv: str, minari_root: Path, **options) -> subprocess.Popen:
+    """``python -m training.cli argv...`` in a subprocess of this worktree, its datasets under ``minari_root``."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)}
+    return subprocess.Popen(
+        [sys.executable, "-m", "training.cli", *argv], env=env, cwd=options.pop("cwd", ROOT), text=True, **options
+    )
+
+
+def interrupted_solve(*args, **kwargs):
+    """What ``expert.plan`` does when Ctrl-C arrives during a SCIP solve: raise ``KeyboardInterrupt``."""
+    raise KeyboardInterrupt
+
+
+def test_ctrl_c_during_a_solve_of_plan_writes_no_plan_and_exits_130(capsys, monkeypatch, tmp_path: Path) -> None:
+    import expert.planner
+
+    monkeypatch.setattr(expert.planner, "plan", interrupted_solve)
+    output = tmp_path / "out.plan.json"
+    status, _, err = run(capsys, "plan", EXAMPLE, "-o", output)
+    assert status == 130 and "interrupted" in err
+    assert not output.exists()
+
+
+def test_ctrl_c_during_a_solve_of_generate_records_no_episode(capsys, monkeypatch) -> None:
+    """One worker: the first episode is staged, Ctrl-C arrives in the second episode's solve."""
+    import expert.planner
+
+    real_plan = expert.planner.plan
+    calls = {"n": 0}
+
+    def plan_then_interrupt(*args, **kwargs):
+        calls["n"] += 1
+        if calls["n"] > 1:
+            raise KeyboardInterrupt
+        return real_plan(*args, **kwargs)
+
+    monkeypatch.setattr(expert.planner, "plan", plan_then_interrupt)
+    argv = ["generate", "--scenario", EXAMPLE, "--episodes", "3", "--dataset-id", DATASET_ID, "--no-progress"]
+    status, _, err = run(capsys, *argv)
+    assert status == 130 and "1 of 3 episodes are staged" in err
+    assert Staging(DATASET_ID).staged() == {0}  # the interrupted episode was not recorded
+    assert not dataset_path(DATASET_ID).exists()
+
+
+def test_ctrl_c_during_a_rollout_exits_130(capsys, monkeypatch) -> None:
+    import expert.planner
+
+    monkeypatch.setattr(expert.planner, "plan", interrupted_solve)
+    status, out, err = run(capsys, "rollout", "--scenario", EXAMPLE)
+    assert status == 130 and out == "" and "interrupted" in err
+
+
+def test_sigint_stops_generate_within_a_second(tmp_path: Path) -> None:
+    """A real SIGINT to a running ``generate`` (random policy: no solver to swallow it)."""
+    process = cli_process(
+        "generate", "--family", "basic", "--policy", "random", "--episodes", "100000", "--dataset-id", DATASET_ID,
+        minari_root=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    staging = tmp_path / ".staging" / DATASET_ID
+    deadline = time.monotonic() + 60
+    while not list(staging.glob("episode_*.npz")) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    sent = time.monotonic()
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=30)
+    stopped = time.monotonic() - sent
+    assert process.returncode == 130 and "Traceback" not in err and "run the same command again" in err
+    assert stopped < 1.0 + 0.5  # within a second, plus the poll of a loaded machine
+
+
+def test_an_internal_error_exits_3_with_the_path_of_a_full_report(capsys, monkeypatch) -> None:
+    import training.cli.planning
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(training.cli.planning, "load_plan", broken)
+    status, _, err = run(capsys, "validate", EXAMPLE, EXAMPLE)
+    assert status == 3 and "internal error: RuntimeError: a bug" in err
+    report = Path(err.split("the full report is in ")[1].strip())
+    assert "Traceback" in report.read_text() and "a bug" in report.read_text()
+
+
+def test_a_closed_pipe_ends_quietly(tmp_path: Path) -> None:
+    process = cli_process("plan", EXAMPLE, "-o", tmp_path / "p.json", minari_root=tmp_path, stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE)  # fmt: skip
+    process.stdout.close()  # the reader (| head) went away before anything was written
+    err = process.stderr.read()
+    process.wait(timeout=60)
+    assert "Traceback" not in err and "BrokenPipeError" not in err and "Exception ignored" not in err
+    assert process.returncode == 141
+
+
+def test_workers_die_with_their_parent(tmp_path: Path) -> None:
+    """SIGKILL of ``generate --workers 2``: both workers and the resource tracker are gone soon after."""
+    psutil = pytest.importorskip("psutil")
+    process = cli_process(
+        "generate", "--family", "push", "--episodes", "100000", "--workers", "2", "--dataset-id", DATASET_ID,
+        "--no-progress", minari_root=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    parent = psutil.Process(process.pid)
+    deadline = time.monotonic() + 60
+    children: list = []
+    while time.monotonic() < deadline:
+        children = parent.children(recursive=True)
+        if len([c for c in children if "resource_tracker" not in " ".join(c.cmdline())]) >= 2:
+            break
+        time.sleep(0.1)
+    assert len(children) >= 2
+    process.kill()
+    process.wait()
+    _, alive = psutil.wait_procs(children, timeout=5)
+    assert alive == []
+
+
+# ---------------------------------------------------------------------------- 3. datasets never corrupted
+def test_a_second_run_on_a_locked_dataset_id_exits_2_naming_the_holder(capsys) -> None:
+    with DatasetLock(DATASET_ID):
+        status, _, err = generate_random(capsys)
+    assert status == 2 and "another run is working on dataset 'fetchcarry/hard-v0'" in err
+    assert f"process {os.getpid()}" in err
+    assert not dataset_path(DATASET_ID).exists()
+    status, _, err = generate_random(capsys)  # the lock goes with its holder
+    assert status == 0, err
+
+
+def test_a_lock_held_by_another_process_refuses_a_run(capsys, tmp_path: Path, minari_root: Path) -> None:
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from training.staging import DatasetLock\n"
+         f"with DatasetLock({DATASET_ID!r}):\n    print('held', flush=True); time.sleep(60)"],
+        env={**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)},
+        stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        status, _, err = generate_random(capsys)
+        assert status == 2 and f"process {holder.pid}" in err
+    finally:
+        holder.kill()
+        holder.wait()
+
+
+def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
+    status, _, _ = run(capsys, "generate", "--family", "basic", "--policy", "random", "--episodes", "3",
+                       "--dataset-id", DATASET_ID, "--no-progress", "--json")  # fmt: skip
+    assert status == 0
+    # Stage two episodes of another dataset, then spoil one, as an interrupted run with a bad disk would leave it.
+    other = "fetchcarry/hard-v1"
+    staging = Staging(other)
+    from training.generate import EpisodeSource, GenerationConfig, run_indexed_episode
+
+    config = GenerationConfig(other, 3, EpisodeSource(family="basic", policy="random"))
+    staging.start(config.manifest())
+    for index in (0, 1):
+        staging.write(index, run_indexed_episode(config.source, index))
+    staging.episode_path(1).write_bytes(staging.episode_path(1).read_bytes()[:200])
+    status, out, err = generate_random(capsys, other, 3)
+    assert status == 0, err
+    assert f"the staged episode {staging.episode_path(1)} could not be read" in err
+    assert "1 resumed, 2 generated" in out
+    assert len(list((dataset_path(other)).glob("data/*.hdf5"))) == 1
+
+
+def test_a_staged_episode_that_cannot_be_read_names_its_file() -> None:
+    from training.staging import StagingError
+
+    staging = Staging(DATASET_ID)
+    staging.start({})
+    staging.episode_path(0).write_bytes(b"not a zip file")
+    with pytest.raises(StagingError, match=r"episode_000000\.npz cannot be read"):
+        staging.read(0)
+
+
+def test_a_corrupt_manifest_names_the_file(capsys) -> None:
+    staging = Staging(DATASET_ID)
+    staging.start({})
+    (staging.path / "manifest.json").write_text("{not json")
+    status, _, err = generate_random(capsys)
+    assert status == 2 and f"the staging manifest {staging.path / 'manifest.json'} is not valid JSON" in err
+    assert "--overwrite" in err
+    status, _, err = generate_random(capsys, DATASET_ID, 2, "--overwrite")
+    assert status == 0, err
+
+
+def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monkeypatch, dataset: str) -> None:
+    import training.generate
+
+    before = json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text())
+
+    def killed(*args, **kwargs):
+        raise KeyboardInterrupt  # the run is stopped after the new dataset was written, before the swap
+
+    with monkeypatch.context() as patch:
+        patch.setattr(training.generate, "publish", killed)
+        status, _, _ = generate_random(capsys, dataset, 3, "--overwrite")
+    assert status == 130
+    assert json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text()) == before
+    status, _, err = generate_random(capsys, dataset, 3, "--overwrite")
+    assert status == 0, err
+    assert json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text())["total_episodes"] == 3
+
+
+def test_an_interrupted_two_step_replacement_is_repaired(dataset: str) -> None:
+    """Where folders cannot be exchanged atomically: a kill between the two renames loses nothing."""
+    from training.datasets import recover_replaced
+
+    aside = Staging(dataset).path / "replaced"
+    aside.parent.mkdir(parents=True)
+    os.rename(dataset_path(dataset), aside)  # the first rename happened, the second did not
+    recover_replaced(dataset, aside)
+    assert (dataset_path(dataset) / "data" / "metadata.json").is_file() and not aside.exists()
+
+
+def test_no_space_to_assemble_exits_2_and_keeps_the_staged_episodes(capsys, monkeypatch) -> None:
+    import shutil as shutil_module
+
+    import training.datasets
+
+    usage = shutil_module.disk_usage(".")
+    with monkeypatch.context() as patch:
+        patch.setattr(training.datasets.shutil, "disk_usage", lambda path: usage._replace(free=1000))
+        status, _, err = generate_random(capsys)
+    assert status == 2 and "not enough free space to assemble 'fetchcarry/hard-v0'" in err
+    assert Staging(DATASET_ID).staged() == {0, 1}
+    status, out, _ = generate_random(capsys)
+    assert status == 0 and "2 resumed" in out
+
+
+def test_an_unwritable_target_is_exit_2_with_the_path(capsys, minari_root: Path) -> None:
+    (minari_root / ".staging").write_text("a file where a folder must be")
+    status, _, err = generate_random(capsys)
+    assert status == 2 and str(minari_root / ".staging") in err
+
+
+def test_a_finished_dataset_cleans_its_staging_and_a_rerun_says_complete(capsys, dataset: str) -> None:
+    assert not Staging(dataset).exists()
+    # a kill right after the final rename leaves the staging behind
+    Staging(dataset).start({"left": "over"})
+    status, out, err = generate_random(capsys)
+    assert status == 0 and "is already complete (2 episodes)" in out, err
+    assert not Staging(dataset).exists()
+    status, _, err = generate_random(capsys, dataset, 5)  # other options: not the same dataset
+    assert status == 2 and "already exists" in err and "--overwrite" in err
+
+
+@pytest.mark.parametrize("dataset_id", ["badid", "fetchcarry/push", "fetchcarry/push-vX", "../escape-v0", ""])
+def test_a_bad_dataset_id_is_exit_2(capsys, dataset_id: str) -> None:
+    status, _, err = generate_random(capsys, dataset_id)
+    assert status == 2 and "is not a Minari id" in err
+    status, _, err = run(capsys, "dataset", "info", dataset_id)
+    assert status == 2 and "is not a Minari id" in err
+
+
+def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) -> None:
+    import training.staging
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(training.staging.np, "savez", full)
+    status, _, err = generate_random(capsys)
+    assert status == 2 and "No space left on device" in err
+    assert str(Staging(DATASET_ID).episode_path(0)) in err
+    assert not list(Staging(DATASET_ID).path.glob(".episode_*"))  # no temporary file left behind

@@ -1,0 +1,83 @@
+"""Small usability fixes of issue 8, section 6: reasons, swapped files, help texts, names, escaping."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from training.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLE = ROOT / "examples" / "push_basic.json"
+
+
+def run(capsys: pytest.CaptureFixture, *argv: object) -> tuple[int, str, str]:
+    try:
+        status = main([str(a) for a in argv])
+    except SystemExit as exit_:
+        status = exit_.code
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err
+
+
+@pytest.mark.parametrize(
+    ("options", "why"),
+    [
+        (["--max-phases", "3"], "why        --max-phases 3 is below the lower bound"),
+        (["--time-limit", "0.0001"], "why        the time limit of 0.0001 s ran out"),
+    ],
+)
+def test_plan_says_why_there_is_no_plan(capsys, tmp_path: Path, options: list[str], why: str) -> None:
+    status, out, _ = run(capsys, "plan", EXAMPLE, "-o", tmp_path / "p.json", *options)
+    assert status == 1 and why in out
+
+
+def test_rollout_says_why_the_expert_could_not_act(capsys) -> None:
+    status, out, _ = run(capsys, "rollout", "--scenario", EXAMPLE, "--time-limit", "0.0001")
+    assert status == 1 and "why        the planner found no plan within its time limit of 0.0001 s" in out
+
+
+def test_validate_with_the_files_swapped_says_so(capsys, tmp_path: Path) -> None:
+    plan_file = tmp_path / "p.json"
+    assert run(capsys, "plan", EXAMPLE, "-o", plan_file)[0] == 0
+    status, out, err = run(capsys, "validate", plan_file, EXAMPLE)
+    assert status == 2 and out == "" and "the two files look swapped" in err
+
+
+def test_demo_help_shows_the_defaults(capsys) -> None:
+    status, out, _ = run(capsys, "demo", "--help")
+    assert status == 0 and "default episode.png" in out and "default 7" in out
+
+
+@pytest.mark.parametrize("command", [["plan"], ["validate"], ["rollout"], ["generate"], ["demo"], ["bench", "env"]])
+def test_help_texts_point_to_no_private_documents(capsys, command: list[str]) -> None:
+    status, out, _ = run(capsys, *command, "--help")
+    assert status == 0 and "spec/" not in out and "``" not in out and ":mod:" not in out
+
+
+def test_the_figures_use_the_env_info_names_and_explain_return_and_objective(capsys) -> None:
+    status, out, _ = run(capsys, "rollout", "--family", "multi", "--seed", "3")
+    assert status == 0
+    assert "collisions 0, invalid actions 0" in out and "contacts" not in out and "refused" not in out
+    (ret,) = [line for line in out.splitlines() if line.startswith("return ")]
+    (objective,) = [line for line in out.splitlines() if line.startswith("objective ")]
+    assert "+40.00 for 4 object(s) delivered" in ret and "a gain" in ret
+    assert "a cost" in objective and "for each phase it stands at its goal" in objective
+    status, out, _ = run(capsys, "rollout", "--family", "multi", "--seed", "3", "--json")
+    figures = json.loads(out)
+    assert {"collisions", "invalid_actions", "episode_return", "objective"} <= set(figures)
+
+
+def test_control_characters_in_names_are_shown_escaped(capsys, tmp_path: Path) -> None:
+    scenario = json.loads(EXAMPLE.read_text())
+    scenario["name"] = "evil\x1b[2J\x1b[31mred\u202e"
+    path = tmp_path / "evil.json"
+    path.write_text(json.dumps(scenario))
+    status, out, _ = run(capsys, "plan", path, "-o", tmp_path / "p.json")
+    assert status == 0 and "\x1b" not in out and "\u202e" not in out
+    assert "evil\\x1b[2J\\x1b[31mred\\u202e" in out
+    status, out, _ = run(capsys, "rollout", "--scenario", path)
+    assert "\x1b" not in out and "evil\\x1b[2J" in out

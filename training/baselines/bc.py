@@ -1,0 +1,224 @@
+"""Behaviour cloning on the candidate-phase interface: the expert's choices as a classification.
+
+The expert's actions, labelled as candidates of ``FetchCarryPushPhases-v0``
+(:func:`record_demonstrations`), train a network that scores every candidate from
+the observation; the scores of masked candidates are set to minus infinity, in the
+loss and when acting, so the policy always picks an allowed candidate (never a phase
+the env would refuse). Two encoders (:mod:`training.baselines.encoders`): ``mlp``, a
+flat MLP over the observation vector, and ``set``, an object-centric set encoder.
+
+A run folder holds ``config.json`` (:class:`BCConfig` and the interface's sizes),
+``metrics.csv`` (one row per epoch) and ``model.pt`` (the weights); :func:`load_bc`
+reads one back as a :class:`BCPolicy` (stable-baselines3's ``predict`` protocol).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from fetchcarry_env.observation import Capacity
+from training.baselines.encoders import build_network
+
+CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE = "config.json", "metrics.csv", "model.pt"
+KIND = "bc"
+
+
+@dataclass(frozen=True)
+class BCConfig:
+    """What a BC run trains (every field is saved in the run folder's ``config.json``)."""
+
+    encoder: str = "mlp"  # "mlp" or "set"
+    hidden: int = 256  # units per hidden layer (mlp) or token width (set)
+    epochs: int = 60
+    batch_size: int = 128
+    learning_rate: float = 1e-3
+    weight_decay: float = 1e-5
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.encoder not in ("mlp", "set"):
+            raise ValueError(f"encoder must be 'mlp' or 'set', got {self.encoder!r}")
+        if min(self.hidden, self.epochs, self.batch_size) < 1 or self.learning_rate <= 0:
+            raise ValueError("hidden, epochs and batch_size must be positive, learning_rate > 0")
+
+
+@dataclass
+class Demonstrations:
+    """Labelled states: flat observation vectors, candidate masks and the expert's candidate."""
+
+    observations: np.ndarray  # (N, D) float32, the env's observation["observation"]
+    masks: np.ndarray  # (N, K) bool
+    labels: np.ndarray  # (N,) int64 candidate indices
+    stats: dict[str, Any] = field(default_factory=dict)  # episodes, steps, labelled steps, expert successes
+
+    def __len__(self) -> int:
+        return len(self.labels)
+
+
+def record_demonstrations(family: str, seeds: range | list[int], **env_options: Any) -> Demonstrations:
+    """The expert's episodes on ``seeds`` of ``family``, its expressible actions as labels."""
+    from expert import ExpertPolicy
+    from training.learning.evaluate import make_env
+    from training.learning.expert_phases import NOT_EXPRESSIBLE, expert_episode
+
+    env = make_env(family, **env_options)
+    expert = ExpertPolicy(env)
+    observations, masks, labels = [], [], []
+    steps = successes = 0
+    for seed in seeds:
+        record = expert_episode(env, expert, seed)
+        successes += record.success
+        steps += record.steps
+        for observation, mask, label in zip(record.observations, record.masks, record.labels, strict=True):
+            if label != NOT_EXPRESSIBLE:
+                observations.append(observation["observation"])
+                masks.append(mask)
+                labels.append(label)
+    env.close()
+    size = env.action_space.n
+    return Demonstrations(
+        np.asarray(observations, dtype=np.float32).reshape(len(labels), -1),
+        np.asarray(masks, dtype=bool).reshape(len(labels), size),
+        np.asarray(labels, dtype=np.int64),
+        {"episodes": len(seeds), "steps": steps, "labelled": len(labels), "expert_successes": successes},
+    )
+
+
+class BCPolicy:
+    """A trained scorer of candidates behind stable-baselines3's ``predict`` protocol.
+
+    ``predict(observation, action_masks=mask)`` returns the allowed candidate with the
+    highest score (``deterministic=True``) or one drawn from the softmax over allowed
+    candidates; without ``action_masks`` it asks ``env`` (if given) for them.
+    """
+
+    def __init__(self, network: nn.Module, config: BCConfig, capacity: Capacity, env: Any = None) -> None:
+        self.network = network.eval()
+        self.config = config
+        self.capacity = capacity
+        self.env = env
+        self.rng = torch.Generator().manual_seed(config.seed)
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+        action_masks: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, Any]:
+        flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, np.float32)
+        batched = flat.ndim == 2
+        if action_masks is None:
+            if self.env is None:
+                raise ValueError("give action_masks= or build the policy with an env")
+            action_masks = self.env.get_wrapper_attr("action_masks")()
+        masks = torch.as_tensor(np.asarray(action_masks, dtype=bool).reshape(len(flat) if batched else 1, -1))
+        with torch.no_grad():
+            logits = self.network(torch.as_tensor(flat.reshape(masks.shape[0], -1)))
+            logits = logits.masked_fill(~masks, -torch.inf)
+            if deterministic:
+                actions = logits.argmax(dim=1)
+            else:
+                actions = torch.multinomial(torch.softmax(logits, dim=1), 1, generator=self.rng)[:, 0]
+        actions = actions.numpy().astype(np.int64)
+        return (actions if batched else actions[0]), state
+
+
+def train_bc(
+    demonstrations: Demonstrations,
+    config: BCConfig,
+    capacity: Capacity,
+    out: str | Path | None = None,
+    progress: Any = None,
+) -> BCPolicy:
+    """Train on ``demonstrations`` (cross-entropy over the allowed candidates); write a run folder to ``out``.
+
+    Deterministic on CPU for one ``config.seed``. ``progress``, if given, is called
+    with each epoch's metrics (a dict).
+    """
+    if len(demonstrations) == 0:
+        raise ValueError("no labelled demonstrations to learn from")
+    torch.manual_seed(config.seed)
+    observations = torch.as_tensor(demonstrations.observations)
+    masks = torch.as_tensor(demonstrations.masks)
+    labels = torch.as_tensor(demonstrations.labels)
+    network = build_network(config, capacity, masks.shape[1], observations)
+    optimiser = torch.optim.Adam(network.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay)
+    order = torch.Generator().manual_seed(config.seed)
+    metrics = []
+    start = time.perf_counter()
+    for epoch in range(config.epochs):
+        network.train()
+        total = correct = 0
+        loss_sum = 0.0
+        for batch in torch.randperm(len(labels), generator=order).split(config.batch_size):
+            logits = network(observations[batch]).masked_fill(~masks[batch], -1e9)
+            loss = nn.functional.cross_entropy(logits, labels[batch])
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+            loss_sum += loss.item() * len(batch)
+            correct += int((logits.argmax(dim=1) == labels[batch]).sum())
+            total += len(batch)
+        row = {
+            "epoch": epoch + 1,
+            "loss": loss_sum / total,
+            "accuracy": correct / total,
+            "seconds": time.perf_counter() - start,
+        }
+        metrics.append(row)
+        if progress is not None:
+            progress(row)
+    policy = BCPolicy(network, config, capacity)
+    if out is not None:
+        save_run(Path(out), policy, masks.shape[1], observations.shape[1], metrics, demonstrations.stats)
+    return policy
+
+
+def save_run(
+    out: Path, policy: BCPolicy, candidates: int, features: int, metrics: list[dict], data: dict[str, Any]
+) -> None:
+    """Write ``config.json``, ``metrics.csv`` and ``model.pt`` into ``out`` (created if needed)."""
+    out.mkdir(parents=True, exist_ok=True)
+    config = {
+        "kind": KIND,
+        "config": asdict(policy.config),
+        "capacity": asdict(policy.capacity),
+        "candidates": candidates,
+        "features": features,
+        "data": data,
+    }
+    (out / CONFIG_FILE).write_text(json.dumps(config, indent=2) + "\n")
+    with open(out / METRICS_FILE, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(metrics[0]))
+        writer.writeheader()
+        writer.writerows(metrics)
+    torch.save(policy.network.state_dict(), out / WEIGHTS_FILE)
+
+
+def load_bc(path: str | Path, env: Any = None) -> BCPolicy:
+    """The :class:`BCPolicy` of a run folder; ``ValueError`` if it is not a BC run folder."""
+    path = Path(path)
+    try:
+        saved = json.loads((path / CONFIG_FILE).read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{path} is not a run folder: no {CONFIG_FILE}") from None
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path / CONFIG_FILE} is not valid JSON: {error}") from None
+    if saved.get("kind") != KIND:
+        raise ValueError(f"{path} holds a {saved.get('kind')!r} run, not a {KIND!r} run")
+    config = BCConfig(**saved["config"])
+    capacity = Capacity(**saved["capacity"])
+    network = build_network(config, capacity, saved["candidates"], torch.zeros(1, saved["features"]))
+    network.load_state_dict(torch.load(path / WEIGHTS_FILE, weights_only=True))
+    return BCPolicy(network, config, capacity, env)

@@ -1,0 +1,118 @@
+"""Networks that score every candidate phase from the flat observation vector.
+
+``mlp``
+    The observation vector, standardised with the demonstrations' mean and spread,
+    through two hidden layers to one score per candidate.
+``set``
+    Object-centric: one token per slot of the observation (a robot token holding the
+    area and the base, then each posture, object, piece of clutter, table and
+    obstacle; :func:`fetchcarry_env.observation.observation_layout` names the slices),
+    each kind projected by its own layer, mixed by a small Transformer in which absent
+    slots (presence flag 0) are masked out. Each token scores its own candidates: an
+    object token its pick and place poses, a clutter token its pushes and approach
+    poses, a table or obstacle token its waypoints; so the weights do not depend on
+    how many slots there are, and a network built for a larger capacity loads them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+
+from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
+from fetchcarry_env.phases import PhaseLayout
+
+COORD_SCALE = 5.0  # metres: coordinates are divided by this in the set encoder (the families' floor is 7 m)
+SET_HEADS = 4  # attention heads of the set encoder
+SET_LAYERS = 2  # Transformer layers of the set encoder
+
+
+def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:
+    """The network ``config.encoder`` names, for ``candidates`` scores; ``observations`` set the MLP's scaling."""
+    if config.encoder == "mlp":
+        return FlatMLP(observations, candidates, config.hidden)
+    layout = PhaseLayout.for_postures(capacity=capacity)
+    if layout.size != candidates:
+        raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
+    return SetScorer(capacity, layout, width=min(config.hidden, 128))
+
+
+class FlatMLP(nn.Module):
+    """Standardised observation vector -> two ReLU layers -> one score per candidate."""
+
+    def __init__(self, observations: torch.Tensor, candidates: int, hidden: int) -> None:
+        super().__init__()
+        mean = observations.mean(dim=0) if len(observations) > 1 else torch.zeros(observations.shape[1])
+        spread = observations.std(dim=0) if len(observations) > 1 else torch.ones(observations.shape[1])
+        self.register_buffer("mean", mean)
+        self.register_buffer("spread", torch.clamp(spread, min=1e-3))
+        self.layers = nn.Sequential(
+            nn.Linear(observations.shape[1], hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, candidates),
+        )
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        return self.layers((flat - self.mean) / self.spread)
+
+
+class SetScorer(nn.Module):
+    """Tokens per slot, a masked Transformer, and per-token heads scoring each token's candidates."""
+
+    def __init__(self, capacity: Capacity, layout: PhaseLayout, width: int = 64) -> None:
+        super().__init__()
+        self.capacity, self.layout = capacity, layout
+        self.slices = observation_layout(capacity)
+        self.robot_width = len(FIELDS["area"]) + len(FIELDS["robot"])
+        self.embed = nn.ModuleDict(
+            {
+                kind: nn.Linear(len(FIELDS[kind]), width)
+                for kind in ("posture", "object", "clutter", "table", "obstacle")
+            }
+        )
+        self.embed["robot"] = nn.Linear(self.robot_width, width)
+        block = nn.TransformerEncoderLayer(width, SET_HEADS, 2 * width, dropout=0.0, batch_first=True)
+        self.mixer = nn.TransformerEncoder(block, SET_LAYERS, enable_nested_tensor=False)
+        per_object = int(np.prod(layout.shape("pick")[1:]))
+        per_clutter = (int(np.prod(layout.shape("push")[1:])), int(np.prod(layout.shape("approach")[1:])))
+        per_blocker = (int(np.prod(layout.shape("waypoint")[1:])), int(np.prod(layout.shape("edge")[1:])))
+        self.splits = {"object": (per_object, per_object), "clutter": per_clutter, "blocker": per_blocker}
+        self.heads = nn.ModuleDict(
+            {kind: nn.Linear(2 * width, sum(self.splits[kind])) for kind in ("object", "clutter", "blocker")}
+        )
+
+    def _tokens(self, flat: torch.Tensor, group: str, kind: str) -> tuple[torch.Tensor, torch.Tensor]:
+        """``(tokens, present)`` of one group of slots: embedded features and presence flags."""
+        count = getattr(self.capacity, group)
+        rows = flat[:, self.slices[group]].reshape(len(flat), count, len(FIELDS[kind]))
+        scaled = torch.cat([rows[..., :1], rows[..., 1:] / COORD_SCALE], dim=-1)
+        return self.embed[kind](scaled), rows[..., 0] > 0.5
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        batch = len(flat)
+        robot = self.embed["robot"](flat[:, : self.robot_width] / COORD_SCALE)[:, None, :]
+        groups = [("postures", "posture"), ("objects", "object"), ("clutter", "clutter")]
+        groups += [("tables", "table"), ("obstacles", "obstacle")]
+        tokens, present = [robot], [torch.ones(batch, 1, dtype=torch.bool)]
+        for group, kind in groups:
+            t, p = self._tokens(flat, group, kind)
+            tokens.append(t)
+            present.append(p)
+        mixed = self.mixer(torch.cat(tokens, dim=1), src_key_padding_mask=~torch.cat(present, dim=1))
+        context = mixed[:, :1, :]  # the robot token, after mixing: what every head also sees
+        bounds = np.cumsum([1, *(getattr(self.capacity, g) for g, _ in groups)])
+        objects = mixed[:, bounds[1] : bounds[2]]
+        clutter = mixed[:, bounds[2] : bounds[3]]
+        blockers = mixed[:, bounds[3] : bounds[5]]
+        scores = {}
+        for name, tokens_of in (("object", objects), ("clutter", clutter), ("blocker", blockers)):
+            joined = torch.cat([tokens_of, context.expand(-1, tokens_of.shape[1], -1)], dim=-1)
+            first, second = self.heads[name](joined).split(self.splits[name], dim=-1)
+            scores[name] = (first.reshape(batch, -1), second.reshape(batch, -1))
+        # The layout's order: pick, place, push, approach, waypoint, edge.
+        return torch.cat([*scores["object"], *scores["clutter"], *scores["blocker"]], dim=1)

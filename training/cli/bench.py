@@ -1,0 +1,341 @@
+"""``fetchcarry bench env|planner|generate``: the benchmarks' options and printed tables.
+
+The measurements live next to what they measure (``fetchcarry_env.bench``,
+``expert.bench``, ``training.generate.bench_generation``); this module parses the
+options, runs them and prints the figures for people (or as JSON with ``--json``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from dataclasses import asdict
+from typing import Any, TextIO
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.episodes import families
+
+ENV_DESCRIPTION = (
+    "Run, in this process, the example scenario of the scenario format and the MILP expert's optimal plan for it "
+    "(two moves, a push, a move, a pick, a move, a place), episode after episode, and time every reset and step. "
+    "Prints, with the project's goal for each: reset of an unchanged layout, move, pick and place steps per second, "
+    "a push step as a multiple of the physics steps it simulates, a random masked policy's steps per second "
+    "(random scenarios of the default family, resets included) and the peak memory; next to each figure, the cost "
+    "of the PyBullet calls that step cannot avoid, measured on the same world."
+)
+PLANNER_DESCRIPTION = (
+    "Plan seeded scenarios of the paper's Section V in this process (one planning call each, model building "
+    "included; one untimed warm-up call first pays for the imports) and print, per case, the median, 95th "
+    "percentile, mean (SD) and maximum of the planning time, the statuses (every plan must be optimal), the "
+    "phases of the plans, the paper's mean (SD) and our goal; then where the time goes: preprocessing, the lower "
+    "bound and the reachability check, model building, SCIP proving smaller phase counts infeasible, and SCIP "
+    "solving the final one. Every plan is also checked by the validator."
+)
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``env``, ``planner`` and ``generate`` to ``fetchcarry bench``."""
+    _register_env(bench)
+    _register_planner(bench)
+    _register_generate(bench)
+
+
+# ---------------------------------------------------------------------------- bench env
+def _register_env(bench: argparse._SubParsersAction) -> None:
+    from fetchcarry_env import bench as env_bench
+
+    parser = bench.add_parser(
+        "env",
+        help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
+        description=ENV_DESCRIPTION,
+        epilog="Exit status: 0, or 1 with --strict when a goal is missed.",
+    )
+    counts = (
+        ("--episodes", env_bench.DEFAULT_EPISODES, "episodes of the plan"),
+        ("--resets", env_bench.DEFAULT_RESETS, "resets of the same layout"),
+        ("--random-steps", env_bench.DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
+    )
+    for flag, default, meaning in counts:
+        parser.add_argument(
+            flag, type=positive_int, default=default, metavar="N", help=f"{meaning} (default {default})"
+        )
+    parser.add_argument(
+        "--seed",
+        type=whole_number,
+        default=env_bench.DEFAULT_SEED,
+        metavar="S",
+        help=f"seed of the resets and the policy (default {env_bench.DEFAULT_SEED})",
+    )
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
+    parser.set_defaults(handler=run_env)
+
+
+def run_env(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Run the env benchmark and print it on ``out`` (stdout); exit 1 only with ``--strict`` and a missed goal."""
+    from fetchcarry_env import bench as env_bench
+
+    out = out if out is not None else sys.stdout
+    report = env_bench.run_benchmark(
+        args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress
+    )
+    print(json.dumps(report, indent=2) if args.json else format_env_report(report), file=out)
+    missed = [f["name"] for f in report["figures"] if f["met"] is False]
+    return 1 if args.strict and missed else 0
+
+
+def format_env_report(report: dict[str, Any]) -> str:
+    """The env benchmark's figures as a table for people."""
+    lines = [
+        f"env benchmark: {report['env']} on PyBullet {report['pybullet']} (DIRECT), scenario {report['scenario']}, "
+        f"{report['episodes']} episodes of the expert's plan, seed {report['seed']}, {report['wall_s']:.1f} s",
+        "",
+        f"{'figure':<58} {'value':>10}  {'unit':<11} {'goal':<13} {'met':<4} PyBullet floor",
+        "-" * 130,
+    ]
+    for f in report["figures"]:
+        value = f"{f['value']:,.0f}" if f["value"] >= 100 else f"{f['value']:.2f}"
+        met = "-" if f["met"] is None else ("yes" if f["met"] else "NO")
+        lines.append(
+            f"{f['name']:<58} {value:>10}  {f['unit']:<11} {f['goal'] or '-':<13} {met:<4} {f['floor'] or '-'}"
+        )
+    counts = report["random_policy"]
+    lines.append("")
+    lines.append(
+        f"random policy: {report['random_steps']} steps in {counts['episodes']} episodes, "
+        f"{counts['invalid_actions']} invalid actions, {counts['collisions']} collisions, {counts['pushes']} pushes"
+    )
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------- bench planner
+def _register_planner(bench: argparse._SubParsersAction) -> None:
+    from expert import bench as planner_bench
+
+    parser = bench.add_parser(
+        "planner",
+        help="the paper's Section V timings: V-B, V-C, L corridor, 2-4 objects",
+        description=PLANNER_DESCRIPTION,
+        epilog="Exit status: 0 every plan optimal and valid, 1 not, 2 bad input. Times are printed in ms.",
+    )
+    parser.add_argument(
+        "--seed",
+        type=whole_number,
+        default=planner_bench.DEFAULT_SEED,
+        metavar="S",
+        help=f"seed of every case's generator (default {planner_bench.DEFAULT_SEED})",
+    )
+    parser.add_argument(
+        "--scale",
+        type=positive_float,
+        default=1.0,
+        metavar="X",
+        help="multiply the scenarios per case (default 1: 20 per V-B area, 5 per V-C pattern and corridor, "
+        "10 for 2 and 3 objects, 5 for 4)",
+    )
+    parser.add_argument(
+        "--only", nargs="+", metavar="GROUP", help="run only these groups (V-B V-C L '2 obj' '3 obj' '4 obj')"
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=positive_float,
+        default=planner_bench.DEFAULT_TIME_LIMIT,
+        metavar="S",
+        help=f"seconds per planning call (default {planner_bench.DEFAULT_TIME_LIMIT:g})",
+    )
+    parser.add_argument(
+        "--baseline",
+        action="store_true",
+        help="SCIP's default settings and the paper's deepening from N = 3, without the lower bounds and cuts",
+    )
+    parser.add_argument("--json", action="store_true", help="print every run and the summaries as JSON")
+    parser.set_defaults(handler=run_planner)
+
+
+def run_planner(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Run the planner benchmark; exit status 0 when every plan is optimal and valid, 1 otherwise."""
+    import numpy as np
+
+    from expert import bench as planner_bench
+    from expert import bench_cases
+
+    out = out if out is not None else sys.stdout
+    rows = planner_bench.cases(args.scale)
+    if args.only:
+        known = {c.group for c in rows}
+        unknown = [g for g in args.only if g not in known]
+        if unknown:
+            raise UsageError(f"unknown benchmark group(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+        rows = [c for c in rows if c.group in args.only]
+    from expert.planner import plan, solver_name  # here, so that the CLI starts without the solver
+
+    plan(bench_cases.basic("I", np.random.default_rng(0)))  # warm-up: imports, first SCIP model
+    options = planner_bench.BASELINE_OPTIONS if args.baseline else None
+    started = time.perf_counter()
+    runs: list[Any] = []
+    for case in rows:
+        runs.extend(planner_bench.run_case(case, args.seed, args.time_limit, options))
+    wall = time.perf_counter() - started
+    ok = all(r.status == "optimal" and r.valid for r in runs)
+    if args.json:
+        data = {
+            "solver": solver_name(),
+            "seed": args.seed,
+            "baseline": bool(args.baseline),
+            "wall_s": wall,
+            "cases": {
+                c.name: {**planner_bench.summary([r for r in runs if r.case == c.name]), "paper": c.paper} for c in rows
+            },
+            "runs": [asdict(r) for r in runs],
+        }
+        print(json.dumps(data, indent=2), file=out)
+        return 0 if ok else 1
+    settings = "baseline: SCIP defaults, N from 3" if args.baseline else "tuned settings"
+    print(
+        f"planner benchmark: {solver_name()}, {settings}, seed {args.seed}, {len(runs)} plans in {wall:.1f} s", file=out
+    )
+    print(file=out)
+    print_tables(rows, runs, out)
+    if not ok:
+        bad = [
+            f"{r.scenario} ({r.status}{', invalid' if not r.valid else ''})"
+            for r in runs
+            if r.status != "optimal" or not r.valid
+        ]
+        print(f"\nnot optimal or invalid: {', '.join(bad)}", file=out)
+    return 0 if ok else 1
+
+
+def _ms(seconds: float) -> str:
+    return f"{seconds * 1000:.0f}" if seconds >= 0.0095 else f"{seconds * 1000:.1f}"
+
+
+def _goal(case_or_group: Any) -> str:
+    if case_or_group.goal_median_s is None:
+        return "-"
+    text = f"median {_ms(case_or_group.goal_median_s)}"
+    if case_or_group.goal_p95_s is not None:
+        text += f", p95 {_ms(case_or_group.goal_p95_s)}"
+    return text
+
+
+def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
+    """The results table, the per-goal table and the time breakdown, in milliseconds."""
+    from expert import bench as planner_bench
+
+    head = (
+        f"{'case':<16} {'n':>3} {'median':>7} {'p95':>7} {'mean (SD)':>14} {'max':>7}  "
+        f"{'statuses':<14} {'phases':<8} {'paper s mean (SD)':<18}"
+    )
+    print(head, file=out)
+    print("-" * len(head), file=out)
+    for case in rows:
+        s = planner_bench.summary([r for r in runs if r.case == case.name])
+        statuses = " ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))
+        phases = ",".join(str(p) for p in s["phases"])
+        mean_sd = f"{_ms(s['mean_s'])} ({_ms(s['sd_s'])})"
+        print(
+            f"{case.name:<16} {s['count']:>3} {_ms(s['median_s']):>7} {_ms(s['p95_s']):>7} {mean_sd:>14} "
+            f"{_ms(s['max_s']):>7}  {statuses:<14} {phases:<8} {case.paper:<18}",
+            file=out,
+        )
+    print("(times in ms; paper in s)", file=out)
+    print(file=out)
+    print(f"{'group':<8} {'n':>3} {'median':>7} {'p95':>7}  {'goal (ms)':<20} {'met':<4} {'optimal':>8}", file=out)
+    for group in dict.fromkeys(c.group for c in rows):
+        first = next(c for c in rows if c.group == group)
+        s = planner_bench.summary([r for r in runs if r.group == group])
+        met = "-"
+        if first.goal_median_s is not None:
+            ok = s["median_s"] <= first.goal_median_s
+            if first.goal_p95_s is not None:
+                ok = ok and s["p95_s"] <= first.goal_p95_s
+            met = "yes" if ok else "no"
+        optimal = f"{s['statuses'].get('optimal', 0)}/{s['count']}"
+        print(
+            f"{group:<8} {s['count']:>3} {_ms(s['median_s']):>7} {_ms(s['p95_s']):>7}  {_goal(first):<20} {met:<4} "
+            f"{optimal:>8}",
+            file=out,
+        )
+    print(file=out)
+    print("where the time goes (share of the summed total_s):", file=out)
+    print(
+        f"{'group':<8} {'prepare+bound':>13} {'build':>7} {'prove N<N*':>10} {'solve N*':>9} {'other':>6} "
+        f"{'extra N tried':>13}",
+        file=out,
+    )
+    for group in dict.fromkeys(c.group for c in rows):
+        selected = [r for r in runs if r.group == group]
+        total = sum(r.total_s for r in selected)
+        parts = [
+            sum(getattr(r, name) for r in selected)
+            for name in ("prepare_s", "build_s", "infeasible_solve_s", "final_solve_s")
+        ]
+        other = total - sum(parts)
+        extra = sum(len(r.phases_tried) - 1 for r in selected) / len(selected)
+        shares = " ".join(f"{100 * p / total:>{w}.0f}%" for p, w in zip([*parts, other], (12, 6, 9, 8, 5), strict=True))
+        print(f"{group:<8} {shares} {extra:>13.2f}", file=out)
+
+
+# ---------------------------------------------------------------------------- bench generate
+def _register_generate(bench: argparse._SubParsersAction) -> None:
+    from training.evaluate_expert import DEFAULT_FAMILIES
+
+    parser = bench.add_parser(
+        "generate",
+        help="episodes per second per worker, planning vs simulation, speed-up with more workers",
+        description="Run the same seeded expert episodes of each family with each worker count (the process "
+        "pool of dataset generation, start-up included) and print episodes per second, episodes per second "
+        "per worker, the seconds per episode in the planner, in the rest of the policy and in the simulation, "
+        "and the speed-up over the first worker count.",
+    )
+    parser.add_argument(
+        "--families",
+        default=",".join(DEFAULT_FAMILIES),
+        metavar="A,B",
+        help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
+    )
+    parser.add_argument(
+        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
+    )
+    parser.add_argument(
+        "--policy", choices=("expert", "random"), default="expert", help="the MILP expert (default) or random"
+    )
+    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help="per planning call")
+    parser.add_argument("--episodes", type=positive_int, default=100, metavar="N", help="episodes per run")
+    parser.add_argument(
+        "--workers", type=positive_int, nargs="+", default=[1, 2], metavar="W", help="worker counts (default 1 2)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.set_defaults(handler=run_bench_generate)
+
+
+def run_bench_generate(args: argparse.Namespace) -> int:
+    from training.generate import EpisodeSource, bench_generation
+
+    rows = []
+    for family in families(args.families):
+        source = EpisodeSource(family=family, seed=args.seed, policy=args.policy, time_limit=args.time_limit)
+        rows += bench_generation(source, args.episodes, args.workers)
+    if args.json:
+        print(json.dumps({"policy": args.policy, "episodes": args.episodes, "runs": rows}, indent=2))
+        return 0
+    print(f"policy {args.policy}, {args.episodes} episodes per run (seeds {args.seed}..), process pool")
+    header = (
+        f"{'family':<9} {'workers':>7} {'ep/s':>7} {'ep/s/worker':>11} {'plan s/ep':>9} {'policy s/ep':>11} "
+        f"{'sim s/ep':>8} {'plan %':>6} {'speed-up':>8}"
+    )
+    print(header)
+    print("-" * len(header))
+    for row in rows:
+        print(
+            f"{row['family']:<9} {row['workers']:>7} {row['episodes_per_s']:>7.2f} "
+            f"{row['episodes_per_s_per_worker']:>11.2f} {row['planning_s_per_episode']:>9.4f} "
+            f"{row['policy_s_per_episode']:>11.4f} {row['simulation_s_per_episode']:>8.4f} "
+            f"{100 * row['planning_share']:>6.1f} {row['speed_up']:>8.2f}"
+        )
+    return 0

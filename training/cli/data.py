@@ -1,0 +1,193 @@
+"""The dataset commands: ``fetchcarry generate`` and ``fetchcarry dataset info|replay``.
+
+Exit statuses: 0 success; 1 a replay that did not reproduce; 2 bad input (raised as
+``UsageError`` and friends, turned into one short message by :func:`training.cli.main`);
+130 interrupted (``generate`` resumes when run again).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_int, whole_number
+from training.cli.episodes import add_source_arguments, episode_source
+from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.text import echo
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``generate`` and ``dataset`` to the ``fetchcarry`` parser."""
+    _register_generate(commands)
+    _register_dataset(commands)
+
+
+# ---------------------------------------------------------------------------- generate
+def _register_generate(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "generate",
+        help="generate a Minari dataset of episodes (resumable)",
+        description="Generate a Minari dataset under MINARI_DATASETS_PATH (default ~/.minari/datasets), "
+        "no network. Episode k uses seed SEED + k; every episode stores its seed and scenario JSON (episode "
+        "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
+        "interrupted run resumes where it stopped when the same command is run again. An existing dataset id "
+        "is never overwritten without --overwrite.",
+        epilog="Exit status: 0 the dataset is complete, 2 bad input (existing id, other options than a "
+        "partial run), 130 interrupted (run again to resume).",
+    )
+    add_source_arguments(parser)
+    parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
+    parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument(
+        "--backend",
+        choices=("process", "ray"),
+        default="process",
+        help="a local process pool (default) or Ray (optional extra: pip install ray)",
+    )
+    parser.add_argument("--ray-address", metavar="ADDR", help="a Ray cluster to join (default: start a local one)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset with this id")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    parser.set_defaults(handler=run_generate)
+
+
+def run_generate(args: argparse.Namespace) -> int:
+    from training.datasets import dataset_path
+    from training.generate import DatasetExistsError, GenerationConfig, StagingMismatchError, generate
+    from training.staging import Staging, StagingError
+
+    config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
+    try:
+        report = generate(
+            config,
+            workers=args.workers,
+            backend=args.backend,
+            overwrite=args.overwrite,
+            progress=not args.no_progress,
+            ray_address=args.ray_address,
+        )
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
+        staged = len(Staging(config.dataset_id).staged())
+        say(f"interrupted: {staged} of {config.episodes} episodes are staged; run the same command again to resume")
+        return INTERRUPTED
+    except DatasetExistsError as error:
+        raise UsageError(f"{error}: choose another id, or pass --overwrite to replace it") from None
+    except StagingMismatchError as error:
+        raise UsageError(
+            f"{error}: run the same command as before to resume it, or pass --overwrite to start again"
+        ) from None
+    except StagingError as error:
+        raise UsageError(f"{error}; pass --overwrite to start the dataset again") from None
+    for file in report.set_aside:
+        say(f"warning: the staged episode {file} could not be read: set aside in its folder's corrupt/ and made again")
+    if report.already_complete:
+        message = f"dataset {report.dataset_id} is already complete ({report.episodes} episodes): nothing to do"
+        if args.json:
+            print(json.dumps({"dataset_id": report.dataset_id, "already_complete": True, "message": message}))
+        else:
+            echo(f"{message}\nit is in {dataset_path(report.dataset_id)}")
+        return 0
+
+    summary = {
+        "dataset_id": report.dataset_id,
+        "path": str(dataset_path(report.dataset_id)),
+        "episodes": report.episodes,
+        "resumed": report.resumed,
+        "generated": report.generated,
+        "successes_generated": sum(f["success"] for f in report.figures),
+        "workers": report.workers,
+        "backend": report.backend,
+        "wall_s": report.wall_s,
+        "assembly_s": report.assembly_s,
+        "planning_s": sum(f["planning_s"] for f in report.figures),
+        "simulation_s": sum(f["simulation_s"] for f in report.figures),
+        "set_aside": report.set_aside,
+        "already_complete": False,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        echo(
+            f"dataset {report.dataset_id}: {report.episodes} episodes ({report.resumed} resumed, "
+            f"{report.generated} generated: {summary['successes_generated']} delivered everything) "
+            f"in {report.wall_s:.1f} s with {report.workers} {report.backend} worker(s) "
+            f"({report.assembly_s:.1f} s of it writing the dataset)\n"
+            f"written to {summary['path']}"
+        )
+    return 0
+
+
+# ---------------------------------------------------------------------------- dataset
+def _register_dataset(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "dataset", help="inspect and replay Minari datasets", description="Inspect and replay Minari datasets."
+    )
+    actions = parser.add_subparsers(dest="dataset_command", metavar="ACTION", required=True)
+    info = actions.add_parser(
+        "info",
+        help="summary of a dataset",
+        description="Summary of a dataset: episodes, steps, env, policy, outcomes and the planner's figures.",
+    )
+    info.add_argument("dataset_id", metavar="ID")
+    info.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    info.set_defaults(handler=run_dataset_info)
+    replay = actions.add_parser(
+        "replay",
+        help="replay an episode and check that the env reproduces it",
+        description="Recover the env from the dataset, reset it with the episode's seed, check that it draws "
+        "the recorded scenario, step the recorded actions and compare every observation and reward.",
+        epilog="Exit status: 0 reproduced, 1 not reproduced, 2 bad input.",
+    )
+    replay.add_argument("dataset_id", metavar="ID")
+    replay.add_argument("--episode", type=whole_number, required=True, metavar="K", help="episode index (0-based)")
+    replay.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    replay.set_defaults(handler=run_dataset_replay)
+
+
+def run_dataset_info(args: argparse.Namespace) -> int:
+    from training.datasets import info
+
+    summary = info(args.dataset_id)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    source = f"family {summary['family']}" if summary["family"] else f"scenario {summary['scenario']}"
+    outcomes = ", ".join(f"{k} {v}" for k, v in sorted(summary["outcomes"].items()))
+    echo(
+        "\n".join(
+            [
+                f"dataset     {summary['dataset_id']} ({summary['path']}, {summary['size_mb']:.1f} MB)",
+                f"env         {summary['env_id']} ({source}), seeds {summary['seeds'][0]}..{summary['seeds'][1]}",
+                f"policy      {summary['algorithm']}",
+                f"episodes    {summary['episodes']} ({summary['steps']} steps, "
+                f"{summary['mean_steps']:.1f} per episode)",
+                f"outcomes    {outcomes}; success rate {summary['success_rate']:.1%}",
+                f"planning    {summary['mean_planning_s']:.3f} s per episode (max {summary['max_planning_s']:.2f} s), "
+                f"{summary['replans']} replans, {summary['repairs']} repairs, "
+                f"{summary['planner_failures']} planner failures",
+            ]
+        )
+    )
+    return 0
+
+
+def run_dataset_replay(args: argparse.Namespace) -> int:
+    from training.datasets import replay
+
+    report = replay(args.dataset_id, args.episode)
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        verdict = "reproduced" if report.reproduced else "NOT reproduced"
+        divergence = "" if report.first_divergence is None else f", first divergence at state {report.first_divergence}"
+        echo(
+            f"episode {report.episode} of {report.dataset_id} (seed {report.seed}, {report.steps} steps): {verdict}\n"
+            f"scenario {'same' if report.same_scenario else 'DIFFERENT'}, rewards "
+            f"{'same' if report.same_rewards else 'DIFFERENT'}, largest observation difference "
+            f"{report.max_observation_error:.2e}{divergence}"
+        )
+    return 0 if report.reproduced else 1

@@ -1,0 +1,288 @@
+"""The episode commands: ``fetchcarry rollout``, ``fetchcarry demo`` and ``fetchcarry evaluate-expert``.
+
+Exit statuses: 0 success; 1 a negative answer (an episode that did not deliver
+everything, an expert below its success goal); 2 bad input (raised as ``UsageError``
+and friends, turned into one short message by :func:`training.cli.main`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.files import check_picture, load_scenario
+from training.cli.text import echo
+
+DEFAULT_DEMO_PICTURE = "episode.png"
+DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``rollout``, ``demo`` and ``evaluate-expert`` to the ``fetchcarry`` parser."""
+    _register_rollout(commands)
+    _register_demo(commands)
+    _register_evaluate(commands)
+
+
+# ---------------------------------------------------------------------------- helpers
+def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True) -> None:
+    """``--scenario``/``--family``, ``--seed``, ``--policy`` and ``--time-limit``: where episodes come from."""
+    source = parser.add_mutually_exclusive_group(required=True)
+    source.add_argument("--scenario", metavar="FILE", help="one fixed scenario (fetchcarry-scenario/1 JSON)")
+    source.add_argument("--family", metavar="NAME", help="random scenarios of this family (basic, push, ...)")
+    parser.add_argument("--seed", type=whole_number, default=0, metavar="N", help="reset seed (default 0)")
+    if policy:
+        parser.add_argument(
+            "--policy",
+            choices=("expert", "random"),
+            default="expert",
+            help="the MILP expert or the masked random policy (default expert)",
+        )
+    parser.add_argument(
+        "--time-limit",
+        type=positive_float,
+        default=10.0,
+        metavar="S",
+        help="seconds per planning call of the expert (default 10)",
+    )
+
+
+def episode_source(args: argparse.Namespace, policy: str | None = None):
+    """The ``EpisodeSource`` the options of :func:`add_source_arguments` describe."""
+    from training.generate import EpisodeSource
+
+    scenario = None if args.scenario is None else load_scenario(Path(args.scenario)).to_dict()
+    return EpisodeSource(
+        family=args.family,
+        scenario=scenario,
+        seed=args.seed,
+        policy=policy or args.policy,
+        time_limit=args.time_limit,
+    )
+
+
+def _figures_text(figures: Any, label: str, policy: str, time_limit: float) -> str:
+    lines = [
+        f"scenario   {figures.scenario} ({label}, seed {figures.seed}), policy {policy}",
+        f"outcome    {figures.outcome}: {figures.delivered}/{figures.objects} object(s) at the goal after "
+        f"{figures.steps} steps",
+    ]
+    if figures.failure is not None:
+        lines.append(f"failure    {figures.failure}")
+        why = failure_reason(figures.failure, time_limit)
+        if why is not None:
+            lines.append(f"why        {why}")
+    lines += return_and_objective(figures)
+    lines += [
+        f"motion     path {figures.path_length_m:.2f} m, collisions {figures.collisions}, "
+        f"invalid actions {figures.invalid_actions}",
+        f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
+        f"{figures.repairs} repairs, {figures.planner_failures} failures",
+        f"timings    policy {figures.policy_s:.3f} s (planning included), simulation {figures.simulation_s:.3f} s",
+    ]
+    return "\n".join(lines)
+
+
+def return_and_objective(figures: Any) -> list[str]:
+    """The episode's return and the planner's objective, each split into what it is made of.
+
+    The return is the env's reward summed (+10 per object delivered, minus the travel
+    cost and 1 per collision or invalid action: a gain); the objective is the paper's
+    Eq. 1 of the expert's first plan (the travel cost minus 10 per object for every
+    phase it stands at its goal: a cost the planner minimises, so an earlier delivery
+    counts more). They share the travel cost and differ in how delivery counts.
+    """
+    from fetchcarry_env.kinematics import DELIVERY_BONUS
+
+    bonus = DELIVERY_BONUS * figures.delivered
+    lines = [
+        f"return     {figures.episode_return:.2f} (the env's rewards summed, a gain: +{bonus:.2f} for "
+        f"{figures.delivered} object(s) delivered, -{bonus - figures.episode_return:.2f} travel cost and penalties)"
+    ]
+    if figures.objective is not None:
+        lines.append(
+            f"objective  {figures.objective:.3f} (Eq. 1 of the expert's first plan, a cost: its travel cost, "
+            f"-{DELIVERY_BONUS:g} per object for each phase it stands at its goal)"
+        )
+    return lines
+
+
+def failure_reason(failure: str, time_limit: float) -> str | None:
+    """Why an expert could not act, in words, from its failure message."""
+    if failure.startswith("no plan (time_limit)"):
+        return (
+            f"the planner found no plan within its time limit of {time_limit:g} s per planning call "
+            "(--time-limit gives it more)"
+        )
+    if failure.startswith("no plan (infeasible)"):
+        return "the planner proved that no plan delivers every object from this state within the phases it tried"
+    if failure.startswith("stuck"):
+        return "the env would refuse the expert's next action and no nearby repair is allowed"
+    return None
+
+
+def _run_one(source: Any, picture: Path | None) -> Any:
+    from training.generate import make_env, make_policy
+    from training.rollout import run_episode
+
+    if picture is None:
+        env = make_env(source)
+    else:
+        from training.pictures import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
+
+        size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
+        env = make_env(source, render_mode="rgb_array", width=size[0], height=size[1])
+    try:
+        record = run_episode(env, make_policy(source, env, source.seed), source.seed, render=picture is not None)
+    finally:
+        env.close()
+    if picture is not None:
+        from training.pictures import save_episode_picture
+
+        save_episode_picture(record, picture)
+    return record
+
+
+# ---------------------------------------------------------------------------- rollout
+def _register_rollout(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "rollout",
+        help="run one episode in the physics env and print its figures",
+        description="Run one episode of FetchCarryPush-v0 (a fixed scenario, or a family's scenario drawn from "
+        "the seed) with the expert or the random policy, and print its figures: objects delivered, steps, "
+        "return, path length, collisions, invalid actions, planning time and replans; when the expert cannot "
+        "act, why.",
+        epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
+    )
+    add_source_arguments(parser)
+    parser.add_argument("--render", metavar="PICTURE", help="write the episode as a .gif (every state) or .png")
+    parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
+    parser.set_defaults(handler=run_rollout)
+
+
+def run_rollout(args: argparse.Namespace) -> int:
+    picture = check_picture(args.render)
+    source = episode_source(args)
+    record = _run_one(source, picture)
+    if args.json:
+        print(json.dumps({**record.figures.to_dict(), "picture": str(picture) if picture else None}, indent=2))
+    else:
+        echo(_figures_text(record.figures, source.label, source.policy, source.time_limit))
+        if picture is not None:
+            echo(f"picture    {picture}")
+    return 0 if record.figures.success else 1
+
+
+# ---------------------------------------------------------------------------- demo
+def _register_demo(commands: argparse._SubParsersAction) -> None:
+    parser = commands.add_parser(
+        "demo",
+        help="the expert delivers an object whose goal is covered: a picture and the figures",
+        description="Make FetchCarryPush-v0 with a push-family scenario (the goal is covered by clutter that "
+        "must be pushed aside), run the MILP expert in the physics env, write a picture of the episode "
+        "(.png: key states; .gif: every state) and print the episode's figures.",
+        epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
+    )
+    parser.add_argument(
+        "--out",
+        default=DEFAULT_DEMO_PICTURE,
+        metavar="PICTURE",
+        help=f"picture to write: .png (key states) or .gif (every state) (default {DEFAULT_DEMO_PICTURE})",
+    )
+    parser.add_argument(
+        "--seed",
+        type=whole_number,
+        default=DEFAULT_DEMO_SEED,
+        metavar="N",
+        help=f"the push-family scenario's seed (default {DEFAULT_DEMO_SEED}: its goal is covered by a block)",
+    )
+    parser.add_argument(
+        "--scenario", metavar="FILE", help="a scenario file instead of the push family (default: the push family)"
+    )
+    parser.add_argument("--time-limit", type=positive_float, default=10.0, metavar="S", help=argparse.SUPPRESS)
+    parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
+    parser.set_defaults(handler=run_demo, family=None)
+
+
+def run_demo(args: argparse.Namespace) -> int:
+    picture = check_picture(args.out)
+    if args.scenario is None:
+        args.family = "push"
+    source = episode_source(args, policy="expert")
+    record = _run_one(source, picture)
+    if args.json:
+        print(json.dumps({**record.figures.to_dict(), "picture": str(picture)}, indent=2))
+    else:
+        echo(_figures_text(record.figures, source.label, "expert", source.time_limit))
+        echo(f"picture    {picture}")
+    return 0 if record.figures.success else 1
+
+
+# ---------------------------------------------------------------------------- evaluate-expert
+def _register_evaluate(commands: argparse._SubParsersAction) -> None:
+    from training.evaluate_expert import DEFAULT_FAMILIES
+
+    parser = commands.add_parser(
+        "evaluate-expert",
+        help="success rate and speed of the expert in physics, per family",
+        description="Run the MILP expert on seeded scenarios of each family in the physics env, report the "
+        "success rate, replans, planning and simulation time and episodes per second per worker, and write "
+        "every failure as a scenario file plus a sidecar with its seed and figures.",
+        epilog="Exit status: 0 every family at or above the success goal (99%), 1 not, 2 bad input.",
+    )
+    parser.add_argument(
+        "--families",
+        default=",".join(DEFAULT_FAMILIES),
+        metavar="A,B",
+        help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
+    )
+    parser.add_argument("--episodes", type=positive_int, default=500, metavar="N", help="per family (default 500)")
+    parser.add_argument(
+        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
+    )
+    parser.add_argument("--start", type=whole_number, default=0, metavar="K", help="first episode index (default 0)")
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument(
+        "--time-limit", type=positive_float, default=10.0, metavar="S", help="seconds per planning call (default 10)"
+    )
+    parser.add_argument("--failures-dir", metavar="DIR", help="write failed scenarios and their sidecars here")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.set_defaults(handler=run_evaluate)
+
+
+def families(text: str) -> tuple[str, ...]:
+    from fetchcarry_env.families import FAMILY_NAMES
+
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in FAMILY_NAMES]
+    if not names or unknown:
+        raise UsageError(f"unknown family {', '.join(unknown) or '(none)'}: choose from {', '.join(FAMILY_NAMES)}")
+    return names
+
+
+def run_evaluate(args: argparse.Namespace) -> int:
+    from training.evaluate_expert import SUCCESS_GOAL, evaluate_expert, results_table
+
+    results = evaluate_expert(
+        families(args.families),
+        episodes=args.episodes,
+        seed=args.seed,
+        start=args.start,
+        workers=args.workers,
+        time_limit=args.time_limit,
+        failures_dir=Path(args.failures_dir) if args.failures_dir else None,
+        progress=not args.no_progress,
+    )
+    if args.json:
+        print(json.dumps([r.to_dict() for r in results], indent=2))
+    else:
+        echo(results_table(results))
+        for result in results:
+            for failure in result.failures:
+                echo(f"failed: {failure['family']} seed {failure['seed']}: {failure['outcome']} ({failure['replay']})")
+    return 0 if all(r.success_rate >= SUCCESS_GOAL for r in results) else 1

@@ -1,0 +1,101 @@
+"""How a command ends: exceptions become a short message on stderr and an exit status.
+
+- 2, bad input: ``UsageError``, ``ScenarioError``, ``PlanFormatError``, broken JSON,
+  and an ``OSError`` on a file (named in the message: a missing or read-only file, a
+  full disk).
+- 130, Ctrl-C: ``KeyboardInterrupt`` wherever it arrives.
+- 3, an unexpected internal error: one line naming the error and the path of a full
+  report (the traceback) written under the temporary folder.
+- A closed output pipe (``fetchcarry dataset info ID | head``) ends quietly, the way
+  the Python documentation recommends: stdout is pointed at ``/dev/null`` so that the
+  interpreter's final flush does not fail again.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import sys
+import tempfile
+import traceback
+from collections.abc import Callable
+from pathlib import Path
+
+from expert.plans import PlanFormatError
+from fetchcarry_env.errors import UsageError
+from fetchcarry_env.scenario import ScenarioError
+from training.cli.text import printable
+
+BAD_INPUT = 2
+INTERNAL_ERROR = 3
+INTERRUPTED = 130
+BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a tool whose reader went away
+REPORT_FOLDER = "fetchcarry-crash-reports"  # under the system's temporary folder
+
+
+def run_command(handler: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
+    """``handler(args)``'s exit status, or the status of the exception it raised (and a message on stderr)."""
+    try:
+        status = int(handler(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's last flush
+        return status
+    except KeyboardInterrupt:
+        # Objects whose construction Ctrl-C cut short (a PyBullet client half connected) complain from
+        # their finalizers as the program winds down: that is noise after an interrupt, not a report.
+        sys.unraisablehook = ignore_unraisable
+        say("interrupted")
+        return INTERRUPTED
+    except BrokenPipeError:
+        return quiet_broken_pipe()
+    except (ScenarioError, PlanFormatError, UsageError) as error:
+        say(str(error))
+    except json.JSONDecodeError as error:
+        say(f"not valid JSON: {error}")
+    except OSError as error:
+        say(describe_os_error(error))
+    except Exception as error:  # every other error is a bug: report it, exit 3
+        say(f"internal error: {type(error).__name__}: {error}")
+        say(f"the full report is in {write_report(error, args)}")
+        return INTERNAL_ERROR
+    return BAD_INPUT
+
+
+def ignore_unraisable(unraisable: object) -> None:
+    """An ``sys.unraisablehook`` that prints nothing."""
+
+
+def say(message: str) -> None:
+    """One message on stderr, prefixed with the program's name."""
+    print("\n".join(printable(line) for line in f"fetchcarry: {message}".split("\n")), file=sys.stderr, flush=True)
+
+
+def describe_os_error(error: OSError) -> str:
+    """An ``OSError`` in words, with the file it concerns."""
+    reason = error.strerror or str(error)
+    files = [f for f in (error.filename, error.filename2) if f is not None]
+    return f"{reason}: {' -> '.join(str(f) for f in files)}" if files else reason
+
+
+def quiet_broken_pipe() -> int:
+    """The reader of stdout went away: stop quietly (Python's documented recipe for SIGPIPE)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+    return BROKEN_PIPE
+
+
+def write_report(error: BaseException, args: argparse.Namespace) -> Path:
+    """Write the traceback and the command's options to a new file; return its path."""
+    folder = Path(tempfile.gettempdir()) / REPORT_FOLDER
+    folder.mkdir(parents=True, exist_ok=True)
+    stamp = datetime.datetime.now(datetime.UTC).strftime("%Y%m%dT%H%M%SZ")
+    handle, name = tempfile.mkstemp(dir=folder, prefix=f"crash-{stamp}-", suffix=".txt")
+    options = {k: v for k, v in vars(args).items() if k != "handler"}
+    with os.fdopen(handle, "w") as file:
+        file.write(f"fetchcarry {' '.join(sys.argv[1:])}\noptions: {options!r}\npython {sys.version}\n\n")
+        file.write("".join(traceback.format_exception(error)))
+    return Path(name)

@@ -1,0 +1,82 @@
+"""Reading and writing the files a command names: a missing, unreadable or misplaced file is a ``UsageError``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from expert.plans import Plan, PlanFormatError
+from fetchcarry_env.errors import UsageError
+from fetchcarry_env.scenario import Scenario, ScenarioError
+
+MAX_PEEK_BYTES = 50_000_000  # files larger than this are not opened just to guess what they are
+
+
+def load_scenario(path: Path) -> Scenario:
+    """Read a scenario file; a missing or unreadable file is a ``UsageError``, a bad one a ``ScenarioError``."""
+    check_readable(path, "scenario file")
+    try:
+        return Scenario.load(path)
+    except UnicodeDecodeError:
+        raise ScenarioError(["not a text file (expected JSON)"], str(path)) from None
+
+
+def load_plan(path: Path) -> Plan:
+    """Read a plan file; a missing file is a ``UsageError``, a malformed one a ``PlanFormatError``."""
+    check_readable(path, "plan file")
+    try:
+        return Plan.load(path)
+    except UnicodeDecodeError:
+        raise PlanFormatError(f"{path}: not a text file (expected JSON)") from None
+
+
+def file_format(path: Path) -> str | None:
+    """The ``format`` field of a JSON file, or ``None`` when the file is not a readable JSON object with one."""
+    try:
+        if path.stat().st_size > MAX_PEEK_BYTES:
+            return None
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    value = data.get("format") if isinstance(data, dict) else None
+    return value if isinstance(value, str) else None
+
+
+def check_readable(path: Path, what: str) -> None:
+    """Raise ``UsageError`` unless ``path`` is an existing file."""
+    if not path.exists():
+        raise UsageError(f"{what} not found: {path}")
+    if path.is_dir():
+        raise UsageError(f"{what} is a directory, not a file: {path}")
+
+
+def check_writable(path: Path, what: str) -> None:
+    """Raise ``UsageError`` unless ``path`` names a file in an existing folder."""
+    if path.is_dir():
+        raise UsageError(f"{what} {path} is a directory; give a file name")
+    if not path.parent.is_dir():
+        raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
+
+
+def check_plot_format(path: Path) -> None:
+    """Raise ``UsageError`` unless matplotlib can write ``path``'s format."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lower().lstrip(".") not in formats:
+        raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
+
+
+def check_picture(path: str | None) -> Path | None:
+    """The episode picture's path (a .png or .gif in an existing folder), or ``None`` when none is asked for."""
+    if path is None:
+        return None
+    from training.pictures import check_picture_path
+
+    try:
+        picture = check_picture_path(path)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    if not picture.parent.is_dir():
+        raise UsageError(f"cannot write {picture}: folder {picture.parent} does not exist")
+    return picture

@@ -1,0 +1,1 @@
+"""Learning on the candidate-phase interface: the expert through it, masked baselines, learning checks."""

@@ -1,0 +1,119 @@
+"""Evaluate policies on the candidate-phase interface against the MILP expert, seed by seed.
+
+:func:`evaluate` runs a policy (stable-baselines3's ``predict`` protocol, given the
+masks as ``action_masks=``) for one episode per seed on ``FetchCarryPushPhases-v0``
+and reports success, the paper's travel cost, phases and refusals; :func:`expert_costs`
+runs the expert on the same seeds so that costs compare scenario by scenario.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from expert import ExpertPolicy
+from training.learning.expert_phases import expert_episode
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """One episode of a policy."""
+
+    seed: int
+    success: bool
+    travel_cost: float  # the paper's cost of the episode's moves (metres, Manhattan plus 0.1 x the diagonal term)
+    phases: int  # steps taken
+    refused: int  # steps the env refused
+
+
+@dataclass(frozen=True)
+class Summary:
+    """A policy's results over a set of seeds (the cost ratio over seeds both it and the expert solved)."""
+
+    episodes: int
+    success: float
+    success_low: float  # 95 % Wilson interval
+    success_high: float
+    cost_ratio: float  # mean over successful seeds of cost / expert's cost on the same seed (nan if none)
+    phases: float  # mean phases per episode
+    refused: float  # mean refused steps per episode
+
+    def line(self, name: str) -> str:
+        return (
+            f"{name:10} success {self.success:6.1%} [{self.success_low:.0%}, {self.success_high:.0%}]  "
+            f"cost ratio {self.cost_ratio:5.2f}  phases {self.phases:5.1f}  refused {self.refused:4.1f}"
+        )
+
+
+def make_env(family: str, **options: Any) -> gym.Env:
+    return gym.make("FetchCarryPushPhases-v0", family=family, **options)
+
+
+def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases."""
+    env = make_env(family)
+    masks = env.get_wrapper_attr("action_masks")
+    results = []
+    for seed in seeds:
+        if hasattr(policy, "reset"):
+            policy.reset()
+        observation, info = env.reset(seed=seed)
+        refused, steps, start = 0, 0, True
+        while True:
+            action, _ = policy.predict(
+                observation, episode_start=np.array([start]), deterministic=deterministic, action_masks=masks()
+            )
+            start = False
+            observation, _reward, terminated, truncated, info = env.step(int(np.asarray(action).reshape(-1)[0]))
+            steps += 1
+            refused += info["invalid_action"] is not None
+            if terminated or truncated:
+                break
+        results.append(EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused))
+    env.close()
+    return results
+
+
+def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
+    """The expert's travel cost per seed it solves (through the same interface, its own env actions)."""
+    env = make_env(family)
+    expert = ExpertPolicy(env)
+    costs = {}
+    for seed in seeds:
+        record = expert_episode(env, expert, seed)
+        if record.success:
+            costs[seed] = record.travel_cost
+    env.close()
+    return costs
+
+
+def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary:
+    """Success (with a 95 % Wilson interval), cost ratio to the expert, phases and refusals."""
+    n = len(results)
+    wins = sum(r.success for r in results)
+    low, high = wilson(wins, n)
+    ratios = [r.travel_cost / expert[r.seed] for r in results if r.success and expert.get(r.seed, 0.0) > 0]
+    return Summary(
+        episodes=n,
+        success=wins / n if n else math.nan,
+        success_low=low,
+        success_high=high,
+        cost_ratio=float(np.mean(ratios)) if ratios else math.nan,
+        phases=float(np.mean([r.phases for r in results])) if results else math.nan,
+        refused=float(np.mean([r.refused for r in results])) if results else math.nan,
+    )
+
+
+def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """The Wilson score interval of a success rate (95 % with the default ``z``)."""
+    if n == 0:
+        return (math.nan, math.nan)
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return (max(0.0, centre - half), min(1.0, centre + half))

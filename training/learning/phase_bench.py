@@ -1,0 +1,118 @@
+"""Benchmark of the candidate-phase interface: the expert's actions in it, and its speed.
+
+``python -m training.learning.phase_bench`` prints, per scenario family, how many of
+the MILP expert's actions an allowed candidate stands for (by mode, and whole episodes),
+then the speed of the interface: a step of ``FetchCarryPushPhases-v0`` with its mask
+(a random masked policy over the candidates) next to a step of ``FetchCarryPush-v0``
+(the random masked ``MultiDiscrete`` policy) measured in the same run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import Counter
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import fetchcarry_env  # noqa: F401  (registers the ids)
+from expert import ExpertPolicy
+from training.learning.expert_phases import NOT_EXPRESSIBLE, expert_episode, mode_name
+from training.policies import RandomMaskedPolicy
+
+FAMILIES = ("basic", "push", "corridor", "multi-2")
+
+
+def expressibility(family: str, episodes: int, first_seed: int = 0) -> dict[str, Any]:
+    """The expert on ``episodes`` seeds of ``family``: its actions that a candidate stands for."""
+    env = gym.make("FetchCarryPushPhases-v0", family=family)
+    expert = ExpertPolicy(env)
+    by_mode, expressible_by_mode = Counter(), Counter()
+    whole, successes, steps, mask_s = 0, 0, 0, 0.0
+    for seed in range(first_seed, first_seed + episodes):
+        record = expert_episode(env, expert, seed)
+        for mode, label in zip(record.modes, record.labels, strict=True):
+            by_mode[mode_name(mode)] += 1
+            expressible_by_mode[mode_name(mode)] += label != NOT_EXPRESSIBLE
+        whole += record.expressible == record.steps
+        successes += record.success
+        steps += record.steps
+        mask_s += record.mask_s
+    env.close()
+    return {
+        "family": family,
+        "episodes": episodes,
+        "expert_success": successes / episodes,
+        "actions": steps,
+        "expressible": sum(expressible_by_mode.values()) / max(steps, 1),
+        "by_mode": {m: (expressible_by_mode[m], n) for m, n in sorted(by_mode.items())},
+        "whole_episodes": whole / episodes,
+        "mask_ms": 1e3 * mask_s / max(steps, 1),
+    }
+
+
+def speed(family: str, steps: int, seed: int = 0) -> dict[str, float]:
+    """Steps per second of the phase env (random masked candidates) and of the plain env (random masked components)."""
+    rates = {}
+    env = gym.make("FetchCarryPushPhases-v0", family=family)
+    rng = np.random.default_rng(seed)
+    env.reset(seed=seed)
+    masks = env.get_wrapper_attr("action_masks")
+    mask_s = 0.0
+    start = time.perf_counter()
+    for _ in range(steps):
+        t0 = time.perf_counter()
+        mask = masks()
+        mask_s += time.perf_counter() - t0
+        _obs, _r, terminated, truncated, _info = env.step(int(rng.choice(np.flatnonzero(mask))))
+        if terminated or truncated:
+            env.reset()
+    rates["phases_steps_per_s"] = steps / (time.perf_counter() - start)
+    rates["mask_ms"] = 1e3 * mask_s / steps
+    env.close()
+    plain = gym.make("FetchCarryPush-v0", family=family)
+    policy = RandomMaskedPolicy(plain, seed=seed)
+    observation, _ = plain.reset(seed=seed)
+    start = time.perf_counter()
+    for _ in range(steps):
+        action, _ = policy.predict(observation)
+        observation, _r, terminated, truncated, _info = plain.step(action)
+        if terminated or truncated:
+            observation, _ = plain.reset()
+    rates["plain_steps_per_s"] = steps / (time.perf_counter() - start)
+    plain.close()
+    return rates
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--families", nargs="+", default=list(FAMILIES), help="scenario families (default: %(default)s)"
+    )
+    parser.add_argument("--episodes", type=int, default=100, help="expert episodes per family (default: %(default)s)")
+    parser.add_argument("--steps", type=int, default=1000, help="steps per speed figure (default: %(default)s)")
+    args = parser.parse_args(argv)
+    print(f"expert actions expressible as candidates ({args.episodes} episodes per family, seeds from 0)")
+    print(f"{'family':10} {'success':>8} {'actions':>8} {'expressible':>12} {'episodes':>9} {'mask ms':>8}  by mode")
+    for family in args.families:
+        r = expressibility(family, args.episodes)
+        modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
+        print(
+            f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
+            f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}"
+        )
+    print(f"\nspeed ({args.steps} random masked steps per family; the machine is shared: compare the ratio)")
+    print(f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'plain steps/s':>14} {'ratio':>6}")
+    for family in args.families:
+        r = speed(family, args.steps)
+        ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
+        print(
+            f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} "
+            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,93 @@
+"""Where a dataset's episodes come from: the env (a family or one scenario), the policy and the seeds.
+
+Shared by generation (:mod:`training.generate`), assembly (:mod:`training.datasets`)
+and the commands that run single episodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from fetchcarry_env.errors import UsageError
+
+ENV_ID = "FetchCarryPush-v0"
+POLICIES = ("expert", "random")
+DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
+
+
+@dataclass(frozen=True)
+class EpisodeSource:
+    """Where episodes come from: the env (a family or one scenario), the policy and the seeds.
+
+    Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
+    """
+
+    family: str | None = None  # a scenario family name, or
+    scenario: dict[str, Any] | None = None  # one fixed scenario (fetchcarry-scenario/1 JSON)
+    seed: int = 0  # episode k uses seed + k
+    policy: str = "expert"
+    time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
+    env_id: str = ENV_ID
+
+    def __post_init__(self) -> None:
+        if (self.family is None) == (self.scenario is None):
+            raise UsageError("give exactly one of a scenario family and a fixed scenario")
+        if self.family is not None:
+            from fetchcarry_env.families import FAMILY_NAMES
+
+            if self.family not in FAMILY_NAMES:
+                raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
+        if self.policy not in POLICIES:
+            raise UsageError(f"unknown policy {self.policy!r}: choose one of {', '.join(POLICIES)}")
+        if self.time_limit <= 0:
+            raise UsageError(f"the time limit must be a positive number of seconds, got {self.time_limit}")
+
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
+        return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+
+    @property
+    def label(self) -> str:
+        return f"family {self.family}" if self.family is not None else f"scenario {self.scenario['name']}"
+
+    def episode_seed(self, index: int) -> int:
+        return self.seed + index
+
+
+@dataclass(frozen=True)
+class GenerationConfig:
+    """A dataset to make: its id, how many episodes, and where they come from."""
+
+    dataset_id: str
+    episodes: int
+    source: EpisodeSource
+
+    def __post_init__(self) -> None:
+        if self.episodes < 1:
+            raise UsageError(f"a dataset needs at least 1 episode, got {self.episodes}")
+
+    def manifest(self) -> dict[str, Any]:
+        """The options that identify the staged episodes (everything but how many there are)."""
+        return {"dataset_id": self.dataset_id, **asdict(self.source)}
+
+
+def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
+    """A fresh env for ``source`` (``render_options``: the env's ``camera``, ``width``, ``height``)."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+
+    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs, **render_options)
+
+
+def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
+    """The policy named by ``source.policy`` for ``env``."""
+    if source.policy == "expert":
+        from expert.policy import ExpertPolicy
+
+        return ExpertPolicy(env, time_limit=source.time_limit)
+    from training.policies import RandomMaskedPolicy
+
+    return RandomMaskedPolicy(env, seed=seed)
