@@ -23,7 +23,7 @@ import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from expert import bench_cases
 from expert.milp.problem import prepare
 from expert.planner import plan
-from expert.plans import Phase, Plan
+from expert.plans import Phase
 from expert.policy import BASE_TOLERANCE, ITEM_TOLERANCE
 from expert.to_actions import plan_to_actions
 from expert.tracking import departure
@@ -52,17 +52,6 @@ CASES = {
     "pattern E": lambda: bench_cases.push("E", np.random.default_rng(1)),
 }
 
-EMPTY_HAND_RULE = "a push needs an empty hand"  # a rule expert/validate.py still applies; docs/design.md dropped it
-
-
-def violations(scenario: Scenario, result: Plan) -> list[str]:
-    """The validator's findings, but for its old rule that a push needs an empty hand.
-
-    docs/design.md (and the env) allow a push while holding an object, as the paper does;
-    the validator still refuses it. Every other rule is checked.
-    """
-    return [v for v in validate_plan(scenario, result) if EMPTY_HAND_RULE not in v]
-
 
 def state_of(scenario: Scenario, phase: Phase) -> WorldState:
     """The world a plan phase describes (objects standing where it puts them, a held one lifted)."""
@@ -86,7 +75,7 @@ def test_the_plan_delivers_every_object_in_the_env(case):
         lattice = env.unwrapped.lattice
         result = plan(scenario, time_limit=TIME_LIMIT, lattice=lattice)
         assert result.found, (case, result.status)
-        assert violations(scenario, result) == []
+        assert validate_plan(scenario, result) == []
         if case in PUSH_ASIDE:  # clutter stands on a goal: the plan must push it aside
             assert any(p.action == "push" for p in result.phases)
         actions = plan_to_actions(result, scenario, lattice)
@@ -142,7 +131,7 @@ def test_a_push_whose_hand_stands_on_another_goal_comes_before_that_object_is_pl
     candidates = {c.direction: c for c in prepare(scenario, lattice).pushes.candidates}
     assert candidates["+x"].hand_goals == ("cup",)
     result = plan(scenario, time_limit=TIME_LIMIT, lattice=lattice)
-    assert result.found and violations(scenario, result) == []
+    assert result.found and validate_plan(scenario, result) == []
     actions = [(p.action, p.target) for p in result.phases]
     assert actions.index(("push", "block")) < actions.index(("place", "cup"))
     for k, action in enumerate(plan_to_actions(result, scenario, lattice), start=1):
