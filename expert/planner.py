@@ -45,22 +45,15 @@ from fetchcarry_env.scenario import Scenario
 DEFAULT_RESOLUTION = 0.05  # metres: the env's default lattice
 EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not given
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
-DECOUPLED_FROM = (
-    4  # objects (3 with pushes): from this many the decoupled plan is made first (5-10 % of the proof's time)
-)
+DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 _PLANNER_OPTIONS = {"integral", "lower_bound"}
 
-OPTIMALITY = {
-    0: "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)",
-}
-"""What ``optimal`` means, by ``extra_phases`` (stored as ``stats["optimality"]``); see :func:`plan`."""
-
 
 def optimality(extra_phases: int) -> str:
-    """The sentence ``stats["optimality"]`` gives for a plan made with ``extra_phases``."""
+    """What ``optimal`` means for a plan made with ``extra_phases`` (the sentence in ``stats["optimality"]``)."""
     if extra_phases == 0:
-        return OPTIMALITY[0]
+        return "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)"
     return (
         f"optimal for Eq. 1 among all plans of at most N + {extra_phases} phases (N: the fewest that admit a plan), "
         "each counted over N + extra_phases phases with idle phases at its end"
@@ -97,6 +90,10 @@ def plan(
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
+
+    From four objects (three with pushes) a decoupled plan (:mod:`expert.decoupled`) is
+    made first: the answer if time runs out before SCIP finds better, and SCIP's first
+    incumbent when it has no more phases than the model.
 
     Returns:
         a :class:`~expert.plans.Plan` with ``status`` ``optimal`` (SCIP proved it, gap 0,
