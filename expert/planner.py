@@ -192,11 +192,7 @@ class _Run:
             first = max(3, counting_bound(problem))
         stats["lower_bound"] = first
         stats["lower_bound_s"] += time.perf_counter() - t_bound
-        if (
-            holding is None
-            and (len(problem.deliver) >= DECOUPLED_FROM or problem.pushes.pushable)
-            and len(problem.deliver) > 1
-        ):
+        if holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0):
             self.first_plan(problem, lattice, pairs, first)
         last = max_phases if max_phases is not None else first + EXTRA_PHASES
         for n_phases in range(first, last + 1):
