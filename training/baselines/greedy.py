@@ -78,7 +78,10 @@ class GreedyPolicy:
         poses = self._task_poses(scenario, world)
         if not poses:
             return self._idle(world)
-        cost, previous = self._search(scenario, world)
+        extra: dict[tuple[int, int], float] = {}
+        for pose, added, _push in poses:
+            extra[pose.cell] = min(extra.get(pose.cell, math.inf), added)
+        cost, previous = self._search(scenario, world, extra)
         best = min(poses, key=lambda p: (cost.get(p[0].cell, math.inf) + p[1], p[0].cell, p[0].heading))
         action = best[0]
         if cost.get(action.cell, math.inf) == math.inf:
@@ -183,31 +186,41 @@ class GreedyPolicy:
             self._free_for, self._free = key, free
         return self._free
 
-    def _search(self, scenario: Scenario, world: WorldState) -> tuple[dict, dict]:
-        """Dijkstra on the free lattice from the base's cell: cost (paper's travel cost) and predecessor per cell."""
-        free = self._free_cells(scenario)
-        nx, ny = free.shape
+    def _search(self, scenario: Scenario, world: WorldState, goals: dict[tuple[int, int], float]) -> tuple[dict, dict]:
+        """Dijkstra on the free lattice from the base's cell: cost (paper's travel cost) and predecessor per cell.
+
+        It stops once no cell left can beat the best goal cell found, counting each goal's
+        ``goals[cell]`` extra cost: the costs of the goal cells it settled are then final.
+        """
+        free = self._free_cells(scenario).tolist()  # plain lists: element access is much cheaper than numpy's
+        nx, ny = len(free), len(free[0])
         res = self.lattice.resolution
         start = self.lattice.index(world.base)
         cost = {start: travel_cost(world.base, self.lattice.point(*start))}
         previous: dict = {start: None}
         queue = [(cost[start], start)]
         axis, diagonal = res * (1 + DIAGONAL_WEIGHT), 2 * res
+        best = math.inf
         while queue:
-            c, (i, j) = heapq.heappop(queue)
-            if c > cost[(i, j)]:
+            c, cell = heapq.heappop(queue)
+            if c > cost[cell] or c > best:
+                if c > best:
+                    break
                 continue
+            if cell in goals:
+                best = min(best, c + goals[cell])
+            i, j = cell
             for di, dj in _STEPS:
                 ni, nj = i + di, j + dj
-                if not (0 <= ni < nx and 0 <= nj < ny and free[ni, nj]):
+                if not (0 <= ni < nx and 0 <= nj < ny) or not free[ni][nj]:
                     continue
-                if di and dj and not (free[i + di, j] and free[i, j + dj]):
+                if di and dj and not (free[ni][j] and free[i][nj]):
                     continue  # no cutting corners
-                step = diagonal if di and dj else axis
-                if c + step < cost.get((ni, nj), math.inf):
-                    cost[(ni, nj)] = c + step
-                    previous[(ni, nj)] = (i, j)
-                    heapq.heappush(queue, (c + step, (ni, nj)))
+                total = c + (diagonal if di and dj else axis)
+                if total < cost.get((ni, nj), math.inf):
+                    cost[(ni, nj)] = total
+                    previous[(ni, nj)] = cell
+                    heapq.heappush(queue, (total, (ni, nj)))
         return cost, previous
 
     def _step_along(self, scenario: Scenario, world: WorldState, goal: tuple[int, int], previous: dict) -> Action:
