@@ -2,7 +2,8 @@
 
 ``python -m training.learning.checks bc --family basic --episodes 300`` records the
 expert's episodes through ``FetchCarryPushPhases-v0``, trains BC (both encoders) and
-evaluates it on held-out seeds next to the masked random policy and the expert.
+evaluates it on held-out seeds next to the masked random policy, the greedy baseline
+and the expert.
 ``python -m training.learning.checks ppo --family basic --steps 20000`` trains
 sb3-contrib's MaskablePPO (``MultiInputPolicy``) through the interface with the
 learning reward and evaluates it the same way. Held-out seeds start at 100,000, far
@@ -20,8 +21,9 @@ import numpy as np
 import torch
 
 from training.baselines.bc import BCConfig, record_demonstrations, train_bc
+from training.baselines.greedy import GreedyPolicy
 from training.baselines.random_phases import RandomPhasePolicy
-from training.learning.evaluate import evaluate, expert_costs, make_env, summarise
+from training.learning.evaluate import evaluate, evaluate_env_actions, expert_costs, make_env, summarise
 
 HELD_OUT = 100_000  # first evaluation seed
 
@@ -37,6 +39,10 @@ def check_bc(
     expert = expert_costs(family, seeds)
     print(f"expert: {len(expert)}/{eval_episodes} held-out seeds solved")
     print(summarise(evaluate(RandomPhasePolicy(seed=0), family, seeds), expert).line("random"))
+    start = time.perf_counter()
+    greedy = evaluate_env_actions(GreedyPolicy(make_env(family)), family, seeds)
+    decision_ms = 1e3 * (time.perf_counter() - start) / sum(r.phases for r in greedy)
+    print(summarise(greedy, expert).line("greedy") + f"  ({decision_ms:.0f} ms/step)")
     for encoder in encoders:
         start = time.perf_counter()
         config = BCConfig(encoder=encoder, epochs=epochs)

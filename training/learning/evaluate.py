@@ -79,6 +79,28 @@ def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool
     return results
 
 
+def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
+    """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
+    env = gym.make("FetchCarryPush-v0", family=family)
+    results = []
+    for seed in seeds:
+        if hasattr(policy, "reset"):
+            policy.reset()
+        observation, info = env.reset(seed=seed)
+        refused, steps, start = 0, 0, True
+        while True:
+            action, _ = policy.predict(observation, episode_start=np.array([start]), deterministic=True)
+            start = False
+            observation, _reward, terminated, truncated, info = env.step(action)
+            steps += 1
+            refused += info["invalid_action"] is not None
+            if terminated or truncated:
+                break
+        results.append(EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused))
+    env.close()
+    return results
+
+
 def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
     """The expert's travel cost per seed it solves (through the same interface, its own env actions)."""
     env = make_env(family)
