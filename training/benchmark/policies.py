@@ -90,6 +90,8 @@ def resolve(name: str) -> PolicySpec:
         return PolicySpec(name, factory.interface, factory=name)
     path = Path(name)
     if not path.exists():
+        if "/" in name or "\\" in name:
+            raise BenchmarkError(f"no run folder at {name}")
         known = ", ".join(available())
         raise BenchmarkError(f"unknown policy {name!r}: give one of {known} or a run folder")
     return _run_spec(path)

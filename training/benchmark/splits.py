@@ -105,7 +105,7 @@ SPLITS: dict[str, Split] = {
         Split("layouts-v0", "room and corridor layouts held out", _families(*HELD_OUT_FAMILIES), 2 * SPLIT_BLOCK),
         Split(
             "push-required-v0",
-            "every scenario needs a push (Table I A-E)",
+            "every scenario needs a push, Table I patterns A-E",
             tuple(_push_pattern(p) for p in "ABCDE"),
             3 * SPLIT_BLOCK,
         ),
