@@ -24,10 +24,11 @@ phases         decisions taken (env steps)
 pushes         steps that pushed a piece of clutter (``info["push"]`` present)
 invalid_actions steps the env refused (``info["invalid_action"]`` not ``None``)
 contacts       stops at a contact (the env's ``info["collisions"]`` at the end)
-decision_ms    mean wall time per decision, milliseconds: the policy's ``predict``
-               plus the masks it is given (``action_masks=``, for a policy whose
-               ``predict`` takes them; the expert reads what it needs from the
-               env), so for the expert this is the planner's time
+decision_ms    mean wall time of the policy's ``predict`` per decision, milliseconds
+               (for the expert: the planner's time per decision)
+mask_ms        mean wall time per decision of the env's ``action_masks()`` handed to
+               the policy, milliseconds (0 for a policy whose ``predict`` takes no
+               ``action_masks=``: the expert reads what it needs from the env)
 ============== =====================================================================
 """
 
@@ -83,14 +84,16 @@ def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True
     start_episode(spec, policy, item.seed)
     phases = pushes = invalid = 0
     total_return = 0.0
-    decision_s = 0.0
+    decision_s = mask_s = 0.0
     while True:
         started = time.perf_counter()
         given = {"action_masks": masks()} if takes_masks else {}
+        asked = time.perf_counter()
+        mask_s += asked - started
         action, _ = policy.predict(
             observation, episode_start=np.array([phases == 0]), deterministic=deterministic, **given
         )
-        decision_s += time.perf_counter() - started
+        decision_s += time.perf_counter() - asked
         if spec.interface == "phases":
             action = int(np.asarray(action).reshape(-1)[0])
         observation, reward, terminated, truncated, info = env.step(action)
@@ -117,6 +120,7 @@ def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True
         "invalid_actions": invalid,
         "contacts": int(info["collisions"]),
         "decision_ms": 1000.0 * decision_s / phases,
+        "mask_ms": 1000.0 * mask_s / phases,
     }
 
 

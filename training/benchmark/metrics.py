@@ -11,7 +11,8 @@ Every figure compares a policy with the MILP expert *on the same scenarios*:
   SPL with path length replaced by the paper's travel cost);
 - phases and pushes per episode, next to the expert's on the same scenarios;
 - invalid actions and contacts per episode;
-- time per decision, next to the planner's (the expert's time per decision);
+- time per decision, next to the planner's (the expert's time per decision), and the
+  time of the action masks the policy is given, apart;
 - the normalised score ``100 * (R - R_random) / (R_expert - R_random)``, ``R`` the mean
   episode return (the paper's reward summed) over the split.
 """
@@ -72,7 +73,8 @@ class Row:
     expert_pushes: float
     invalid_actions: float
     contacts: float
-    decision_ms: float  # mean time per decision
+    decision_ms: float  # mean time of the policy's predict per decision
+    mask_ms: float  # mean time of the env's action masks per decision
     planner_ms: float  # the expert's time per decision on the same scenarios
     score: float  # 100 (R - R_random) / (R_expert - R_random); nan if the expert and random tie
 
@@ -128,6 +130,7 @@ def _row(policy: str, split: str, group: list[dict], groups: dict[tuple[str, str
         invalid_actions=_mean(r["invalid_actions"] for r in group),
         contacts=_mean(r["contacts"] for r in group),
         decision_ms=_mean(r["decision_ms"] for r in group),
+        mask_ms=_mean(r.get("mask_ms", 0.0) for r in group),
         planner_ms=_mean(r["decision_ms"] for r in same),
         score=100.0 * (r_policy - r_random) / span if abs(span) > 1e-12 else math.nan,
     )

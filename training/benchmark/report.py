@@ -31,6 +31,7 @@ COLUMNS = (
     ("invalid_actions", "invalid / ep", "{:.2f}"),
     ("contacts", "contacts / ep", "{:.2f}"),
     ("decision_ms", "ms / decision (planner)", None),
+    ("mask_ms", "mask ms", "{:.2f}"),
     ("score", "score", "{:.1f}"),
 )
 
@@ -67,8 +68,8 @@ def summary_markdown(rows: Sequence[Row], title: str = "Benchmark") -> str:
         "mean over episodes the expert solved.",
         "- phases and pushes per episode, the expert's on the same scenarios in brackets; "
         "contacts: stops at a contact (the env's `collisions`).",
-        "- ms / decision: wall time of one decision (the policy plus its action masks), "
-        "the expert's (the planner's) in brackets; timings depend on the machine's load.",
+        "- ms / decision: wall time of the policy's decision, the expert's (the planner's) in brackets; "
+        "mask ms: the env's action masks handed to the policy, per decision. Timings depend on the machine's load.",
         "- score: 100 x (R - R_random) / (R_expert - R_random), R the mean episode return "
         "(the paper's reward: +10 per delivery, minus travel cost and penalties).",
         "",
