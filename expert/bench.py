@@ -66,7 +66,11 @@ def cases(scale: float = 1.0) -> list[Case]:
     out.append(Case("IV-F L corridor", "L", bench_cases.corridor, n(5), "0.2", 0.030))
     out.append(Case("2 objects", "2 obj", lambda rng: bench_cases.multi(2, rng), n(10), "under 1", 0.3))
     out.append(Case("3 objects", "3 obj", lambda rng: bench_cases.multi(3, rng), n(10), "-", 1.0))
-    out.append(Case("4 objects", "4 obj", lambda rng: bench_cases.multi(4, rng), n(5), "-"))
+    out.append(Case("4 objects", "4 obj", lambda rng: bench_cases.multi(4, rng), n(5), "-", 0.3, 1.0))
+    out.append(Case("5 objects", "5 obj", lambda rng: bench_cases.multi(5, rng), n(5), "-", 1.0, 5.0))
+    out.append(Case("6 objects", "6 obj", lambda rng: bench_cases.multi(6, rng), n(3), "-", 5.0))
+    out.append(Case("covered 2 obj", "cov 2", lambda rng: bench_cases.covered(2, rng), n(5), "-"))
+    out.append(Case("covered 3 obj", "cov 3", lambda rng: bench_cases.covered(3, rng), n(5), "-", 1.0))
     return out
 
 

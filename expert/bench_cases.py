@@ -30,8 +30,9 @@ corridor 1 m wide from the start at the bottom-left, along the bottom and up the
 right; the rest is obstacles. The source table stands in the corridor's lower leg, the
 goal table at the top of the upper leg.
 
-Multi (2, 3, 4 objects): tables at (2, 2), (4, 4) and (4, 1), each object on one
-table and its goal on another.
+Multi (2-6 objects): tables at (2, 2), (4, 4) and (4, 1), each object on one
+table and its goal on another. Covered (2, 3 objects): the same with a 0.08 m block
+standing on every goal, so every delivery needs a push first.
 """
 
 from __future__ import annotations
@@ -201,3 +202,33 @@ def _spot(rng: np.random.Generator, table: Rect, taken: list[Point]) -> Point:
         if near_edge and not any(discs_overlap(p, 0.04, q, 0.04) for q in taken):
             taken.append(p)
             return p
+
+
+COVER_SIZE = 0.08  # metres: the block standing on each goal in the covered cases
+
+
+def covered(count: int, rng: np.random.Generator) -> Scenario:
+    """``count`` objects as in :func:`multi`, and a block (0.08 m) standing on every goal: each is pushed first."""
+    while True:
+        base = multi(count, rng)
+        clutter = tuple(
+            Clutter(
+                f"block_{k + 1}",
+                _square(
+                    (o.goal[0] + float(rng.uniform(-0.01, 0.01)), o.goal[1] + float(rng.uniform(-0.01, 0.01))),
+                    COVER_SIZE,
+                ),
+                0.10,
+            )
+            for k, o in enumerate(base.objects)
+        )
+        scenario = Scenario(
+            name=f"covered-{count}",
+            area=base.area,
+            robot=base.robot,
+            tables=base.tables,
+            objects=base.objects,
+            clutter=clutter,
+        )
+        if not check_rules(scenario):
+            return scenario

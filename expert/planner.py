@@ -20,10 +20,12 @@ from typing import Any
 
 import pyscipopt
 
+from expert.decoupled import decoupled_plan, steps_of
 from expert.milp.bounds import (
     Connectivity,
     PairCosts,
     action_windows,
+    cheapest_schedule,
     counting_bound,
     min_objective,
     min_travel,
@@ -43,18 +45,15 @@ from fetchcarry_env.scenario import Scenario
 DEFAULT_RESOLUTION = 0.05  # metres: the env's default lattice
 EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not given
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
+DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
+DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 _PLANNER_OPTIONS = {"integral", "lower_bound"}
-
-OPTIMALITY = {
-    0: "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)",
-}
-"""What ``optimal`` means, by ``extra_phases`` (stored as ``stats["optimality"]``); see :func:`plan`."""
 
 
 def optimality(extra_phases: int) -> str:
-    """The sentence ``stats["optimality"]`` gives for a plan made with ``extra_phases``."""
+    """What ``optimal`` means for a plan made with ``extra_phases`` (the sentence in ``stats["optimality"]``)."""
     if extra_phases == 0:
-        return OPTIMALITY[0]
+        return "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)"
     return (
         f"optimal for Eq. 1 among all plans of at most N + {extra_phases} phases (N: the fewest that admit a plan), "
         "each counted over N + extra_phases phases with idle phases at its end"
@@ -91,6 +90,10 @@ def plan(
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
+
+    From four objects (three with pushes) a decoupled plan (:mod:`expert.decoupled`) is
+    made first: the answer if time runs out before SCIP finds better, and SCIP's first
+    incumbent when it has no more phases than the model.
 
     Returns:
         a :class:`~expert.plans.Plan` with ``status`` ``optimal`` (SCIP proved it, gap 0,
@@ -132,6 +135,7 @@ class _Run:
     extra_phases: int
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
+    warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -150,9 +154,14 @@ class _Run:
         return Plan(self.scenario.name, status, objective, tuple(phases), self.stats)
 
     def out_of_time(self) -> Plan:
-        """The answer when the deadline passed outside a solve: the best plan so far, or ``time_limit``."""
+        """The answer when time ran out before a solve gave a plan: the best plan so far, or ``time_limit``.
+
+        The decoupled plan comes with no proven gap (``stats["gap"]`` is None): SCIP's
+        bound, if any, is for a model with another number of phases.
+        """
         self.stats["timed_out"] = True
         if self.best is not None:
+            self.stats["gap"] = None
             return self.finish("feasible", self.best[1])
         return self.finish("time_limit")
 
@@ -183,6 +192,8 @@ class _Run:
             first = max(3, counting_bound(problem))
         stats["lower_bound"] = first
         stats["lower_bound_s"] += time.perf_counter() - t_bound
+        if holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0):
+            self.first_plan(problem, lattice, pairs, first)
         last = max_phases if max_phases is not None else first + EXTRA_PHASES
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
@@ -197,7 +208,7 @@ class _Run:
                         return self.finish("infeasible")
                 continue
             if outcome == "time_limit":
-                return self.finish("time_limit")
+                return self.out_of_time()
             status, steps = outcome
             self.best = (status, phases_of(problem, steps))
             if self.extra_phases and status == "optimal":
@@ -212,6 +223,27 @@ class _Run:
         if not stats["phases_tried"]:
             stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
         return self.finish("infeasible")
+
+    def first_plan(self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int) -> None:
+        """The decoupled plan (:mod:`expert.decoupled`) in ``DECOUPLED_SHARE`` of the time left: the last resort."""
+        t0 = time.perf_counter()
+        order = list(problem.deliver)
+        if pairs is not None:
+            _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
+            picks = [key[1] for key, _ in schedule if key[0] == "pick"]
+            order = picks + [i for i in order if i not in picks]
+        budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
+        try:
+            phases = decoupled_plan(self.scenario, order, lattice, budget, plan)
+        except TimeUp:
+            phases = None
+        self.stats["decoupled_s"] = time.perf_counter() - t0
+        if phases is None:
+            return
+        self.best = ("feasible", phases)
+        self.stats["decoupled_phases"] = len(phases)
+        self.stats["decoupled_objective"] = plan_objective(self.scenario, phases)
+        self.warm = steps_of(problem, phases)
 
     def solve(self, problem: Problem, n_phases: int, pairs: PairCosts | None, warm: list[Step] | None = None):
         """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``."""
@@ -235,6 +267,8 @@ class _Run:
         t1 = time.perf_counter()
         record["build_s"] = t1 - t0
         stats["build_s"] += t1 - t0
+        if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
+            warm = self.warm
         if warm is not None:
             record["warm_start"] = add_warm_start(milp, warm)
         remaining = deadline.left() - RESERVE_S

@@ -19,6 +19,14 @@ multi      2 to 4 objects between two or three tables (``multi-2`` ... ``multi-4
 mixed      one of basic, push, corridor and multi, uniformly
 =========  ==============================================================================
 
+Held-out layouts (for evaluation, never drawn by the families above): ``turned-room``
+and ``turned-corridor`` draw a basic or push room, or a corridor, and turn the whole
+scenario a quarter turn counter-clockwise about the centre of the extent
+(:func:`turn_quarter`). The robot then starts in the bottom-right corner, the rooms and
+corridors run the other way, and no training family ever draws such a layout; the
+lattice maps onto itself, so every action stays on it. The training families' draws do
+not change (the same seed gives the same scenario as before these families existed).
+
 All families share one extent, so that ``mixed`` and a fixed action lattice work.
 Units are metres.
 """
@@ -26,7 +34,7 @@ Units are metres.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -328,6 +336,50 @@ def draw_multi(rng: np.random.Generator, count: int | None = None) -> Scenario:
     )
 
 
+# ---------------------------------------------------------------------- held-out layouts
+TURNED_HEADING: dict[Heading, Heading] = {"+x": "+y", "+y": "-x", "-x": "-y", "-y": "+x"}
+"""Where each heading points after a quarter turn counter-clockwise."""
+
+
+def turn_quarter(scenario: Scenario, extent: Rect = EXTENT) -> Scenario:
+    """``scenario`` turned a quarter turn counter-clockwise about the centre of the square ``extent``.
+
+    A point ``(x, y)`` goes to ``(cx + cy - y, cy - cx + x)``; rectangles, headings and the
+    area turn with it; sizes, heights and the robot's postures (relative to its heading) are unchanged.
+    """
+    cx, cy = extent.center
+
+    def point(p: Point) -> Point:
+        return (cx + cy - p[1], cy - cx + p[0])
+
+    def rect(r: Rect) -> Rect:
+        (x0, y0), (x1, y1) = point((r.min_x, r.max_y)), point((r.max_x, r.min_y))
+        return Rect(x0, y0, x1, y1)
+
+    return replace(
+        scenario,
+        name=f"turned-{scenario.name}",
+        area=rect(scenario.area),
+        robot=replace(
+            scenario.robot, start=point(scenario.robot.start), heading=TURNED_HEADING[scenario.robot.heading]
+        ),
+        tables=tuple(replace(t, rect=rect(t.rect)) for t in scenario.tables),
+        obstacles=tuple(replace(o, rect=rect(o.rect)) for o in scenario.obstacles),
+        objects=tuple(replace(o, start=point(o.start), goal=point(o.goal)) for o in scenario.objects),
+        clutter=tuple(replace(c, rect=rect(c.rect)) for c in scenario.clutter),
+    )
+
+
+def draw_turned_room(rng: np.random.Generator) -> Scenario:
+    """A basic or push room (even odds), turned a quarter turn: a held-out layout."""
+    return turn_quarter((draw_basic, draw_push)[int(rng.integers(2))](rng))
+
+
+def draw_turned_corridor(rng: np.random.Generator) -> Scenario:
+    """An L-shaped or straight corridor, turned a quarter turn: a held-out layout."""
+    return turn_quarter(draw_corridor(rng))
+
+
 # ---------------------------------------------------------------------- registry
 def draw_mixed(rng: np.random.Generator) -> Scenario:
     """One of basic, push, corridor and multi, uniformly."""
@@ -346,8 +398,12 @@ FAMILIES: dict[str, Family] = {
             for n in (2, 3, 4)
         ),
         Family("mixed", "basic, push, corridor or multi, uniformly", EXTENT, draw_mixed),
+        Family("turned-room", "held out: a basic or push room turned a quarter turn", EXTENT, draw_turned_room),
+        Family("turned-corridor", "held out: a corridor turned a quarter turn", EXTENT, draw_turned_corridor),
     )
 }
+HELD_OUT_FAMILIES: tuple[str, ...] = ("turned-room", "turned-corridor")
+"""Families whose layouts no training family draws (for the benchmark's ``layouts`` split)."""
 FAMILY_NAMES: tuple[str, ...] = tuple(FAMILIES)
 DEFAULT_FAMILY = "push"
 

@@ -35,11 +35,13 @@ def settle(
     expand: Callable[[Hashable], Iterable[tuple[float, Hashable]]],
     deadline: Deadline = NEVER,
     limit: float = math.inf,
+    parents: dict | None = None,
 ) -> Iterator[tuple[float, Hashable]]:
     """Dijkstra's search: yield ``(cost, state)`` in order of least cost, each state once, up to ``limit``.
 
     ``expand(state)`` gives ``(step cost, next state)`` pairs. The one search loop of
     every bound in this module; callers stop iterating when they have what they need.
+    ``parents``, if given, receives each settled state's predecessor on its cheapest path.
     """
     best = {start: 0.0}
     queue = [(0.0, 0, start)]
@@ -56,6 +58,8 @@ def settle(
             total = cost + step
             if total < best.get(nxt, math.inf) - 1e-12:
                 best[nxt] = total
+                if parents is not None:
+                    parents[nxt] = state
                 counter += 1
                 heapq.heappush(queue, (total, counter, nxt))
 
@@ -263,6 +267,18 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
     and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
     Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
     """
+    value, _ = cheapest_schedule(problem, n_phases, pair, deadline)
+    return value
+
+
+def cheapest_schedule(
+    problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER
+) -> tuple[float, list[tuple[tuple[str, str], int]]]:
+    """:func:`min_objective` and the schedule that attains it: ``[((kind, target), phase), ...]`` in order.
+
+    The schedule is a relaxation's (phases and travel between actions are lower bounds),
+    so it may not be feasible; the planner uses its order of actions as a first guess.
+    """
     pair = pair or PairCosts(problem, deadline=deadline)
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
 
@@ -275,10 +291,15 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
                 yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
 
     start = (frozenset(), problem.holding, frozenset(), None, 0)
-    for spent, (delivered, _, pushed, _, _) in settle(start, expand, deadline):
-        if _finished(problem, delivered, pushed):
-            return spent + constant
-    return -math.inf
+    parents: dict = {}
+    for spent, state in settle(start, expand, deadline, parents=parents):
+        if _finished(problem, state[0], state[2]):
+            schedule = []
+            while state != start:
+                schedule.append((state[3], state[4]))
+                state = parents[state]
+            return spent + constant, schedule[::-1]
+    return -math.inf, []
 
 
 class PairCosts:

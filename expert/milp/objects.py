@@ -22,9 +22,10 @@ Eq. 10-13 (delivery):
 
 Also here: an object standing on another's goal is picked before that goal is used,
 and a pick takes its target (the env takes the object within reach nearest the middle
-of the posture's ranges, ``fetchcarry_env.rules``): a pick option whose base has another
-object within the ranges in some state (:attr:`expert.milp.options.PoseOption.confusers`)
-is forbidden while that object is there (:func:`add_pick_confusion_constraints`).
+of the posture's ranges, ``fetchcarry_env.rules``): a pick option from whose bases the
+env would take another object standing somewhere (:attr:`expert.milp.options.PoseOption.confusers`,
+:func:`expert.milp.options.split_by_choice`) is forbidden while that object stands there
+(:func:`add_pick_confusion_constraints`).
 """
 
 from __future__ import annotations

@@ -13,9 +13,9 @@ The box is cut (:func:`expert.milp.grid.split_box`) by the static parts of the r
 
 - the base disc off every table and obstacle (Eq. 18 at the acting pose);
 - the arm line (Eq. 19) clear of every obstacle and of clutter that never moves;
-- for a pick, the env's rule of which object a pick takes (the one within the
-  posture's ranges nearest their middle): the base must not have another object
-  within the ranges, so the pick takes its target whatever the order.
+- the env's rule of which item an action takes (the object within the posture's
+  ranges nearest their middle; for a push, the piece whose push contact is):
+  :func:`split_by_choice` keeps the bases from which the env takes the target.
 
 Pushable clutter moves and other objects come and go, so an option that some item
 would block (the arm line) or confuse (a pick) in some position carries that
@@ -28,13 +28,14 @@ Nothing here depends on the number of phases or on the solver.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
-from fetchcarry_env.kinematics import push_contact, push_headings
+from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
 from fetchcarry_env.scenario import Posture, Scenario
 
 
@@ -75,8 +76,8 @@ class ObjectAt:
 
 
 HAND_TOL = 5e-7  # metres: a hand point this close to a region counts as inside (float32 observations)
-CONFUSION_MARGIN = 3e-3  # metres: another item counts as in reach this far outside the ranges (the env's
-# reach tolerance is 1 mm; the rest covers float32 observations), so the env never takes it instead
+CONFUSION_MARGIN = 2e-3  # metres: another item confuses an action when it is in reach within the env's 1 mm
+# tolerance plus this, and at most this much farther from the middle of the ranges (float32 observations)
 
 
 def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture, margin: float = 0.0) -> IndexBox:
@@ -87,23 +88,6 @@ def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture, margi
         (hand[0] - max(dxs) - margin, hand[1] - max(dys) - margin),
         (hand[0] - min(dxs) + margin, hand[1] - min(dys) + margin),
     )
-
-
-def out_of_reach(grid: Grid, point: Point, heading: Heading, posture: Posture, tag: object = None) -> Condition | None:
-    """The base keeps ``point`` out of the posture's reach (with :data:`CONFUSION_MARGIN`), or None if it always does.
-
-    Outside a box is a union of four half-planes, the same shape as a region of Eq. 18.
-    """
-    box = reach_box(grid, point, heading, posture, CONFUSION_MARGIN)
-    if box.empty:
-        return None
-    planes = (
-        HalfPlane(0, True, box.i_lo - 1),
-        HalfPlane(0, False, box.i_hi + 1),
-        HalfPlane(1, True, box.j_lo - 1),
-        HalfPlane(1, False, box.j_hi + 1),
-    )
-    return Condition(planes, tag)
 
 
 def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[int, int]) -> tuple[HalfPlane, ...]:
@@ -168,41 +152,84 @@ class _Blockers:
                 out.append(Condition(arm_regions(self.grid, rect, hands, cells), tag=(clutter_id, position)))
         return out
 
-    def confusions(self, kind: str, target: str, heading: Heading, posture: Posture, push: PushCandidate | None):
-        """The env's choice of item: no other object (pick) or piece of clutter (push) within the ranges.
+    def others(self, kind: str, target: str, direction: Heading | None) -> list[tuple[Point, object]]:
+        """Where the items an action could take instead of its target may stand: ``(point, tag)``.
 
-        The env picks the object within the posture's ranges nearest their middle, and pushes
-        the piece whose push contact is (``fetchcarry_env.rules``); with no other one in
-        reach, it takes the target. Items that never move give plain conditions, the others
-        one tagged condition per place they can stand (the option is forbidden while they do).
+        Pick: every other object at its start and its goal (the hand's point is the object's
+        centre); push: every other piece of clutter at each place it can stand (the point is
+        its push contact along ``direction``). ``tag`` None for an item that never moves, else
+        the state in which it stands there (:class:`ObjectAt`, or ``(clutter id, position)``).
         """
-        wanted: list[tuple[Point, object]] = []
+        out: list[tuple[Point, object]] = []
         if kind == "pick":
             for obj in self.scenario.objects:
                 if obj.id == target:
                     continue
                 if obj.id not in self.deliver:  # already delivered: it stays at its goal
-                    wanted.append((obj.goal, None))
+                    out.append((obj.goal, None))
                     continue
                 if obj.id != self.holding:
-                    wanted.append((obj.start, ObjectAt(obj.id, "start")))
-                wanted.append((obj.goal, ObjectAt(obj.id, "goal")))
+                    out.append((obj.start, ObjectAt(obj.id, "start")))
+                out.append((obj.goal, ObjectAt(obj.id, "goal")))
         elif kind == "push":
             pushable = set(self.pushes.pushable)
             for item in self.scenario.clutter:
                 if item.id == target:
                     continue
                 if item.id not in pushable:
-                    wanted.append((push_contact(item.rect, push.direction), None))
+                    out.append((push_contact(item.rect, direction), None))
                     continue
                 for position, rect in self.pushes.positions(item.id).items():
-                    wanted.append((push_contact(rect, push.direction), (item.id, position)))
-        out = []
-        for point, tag in wanted:
-            condition = out_of_reach(self.grid, point, heading, posture, tag)
-            if condition is not None:
-                out.append(condition)
+                    out.append((push_contact(rect, direction), (item.id, position)))
         return out
+
+
+def split_by_choice(
+    grid: Grid, box: IndexBox, hand: Point, heading: Heading, posture: Posture, others: list[tuple[Point, object]]
+) -> list[tuple[IndexBox, frozenset]]:
+    """Cut ``box`` by which item the env would take from each base: the target, or another one.
+
+    The env picks the object within the posture's ranges nearest their middle, and pushes
+    the piece whose push contact is (``fetchcarry_env.rules``). A base from which another
+    item, standing at one of its places, is in reach and not farther from the middle than
+    the target (with :data:`CONFUSION_MARGIN`) gets that place's tag (the option is
+    forbidden while the item stands there), or is dropped if the item never moves.
+    Returns boxes with their tag sets; lattice points with the same tags are merged.
+    """
+    tol = 1e-3 + CONFUSION_MARGIN  # the env's reach tolerance (Posture.reaches), widened
+    near = [(p, t) for p, t in others if not reach_box(grid, p, heading, posture, tol).intersect(box).empty]
+    if not near:
+        return [(box, frozenset())]
+    groups: dict[frozenset, set[tuple[int, int]]] = {}
+    for i in range(box.i_lo, box.i_hi + 1):
+        for j in range(box.j_lo, box.j_hi + 1):
+            base = grid.point(i, j)
+            mine = math.dist(hand_offset(base, heading, hand), posture.center)
+            tags: set = set()
+            for point, tag in near:
+                offset = hand_offset(base, heading, point)
+                if posture.reaches(*offset, tol=tol) and math.dist(offset, posture.center) <= mine + CONFUSION_MARGIN:
+                    tags.add(tag)
+            if None not in tags:
+                groups.setdefault(frozenset(tags), set()).add((i, j))
+    return [(rect, tags) for tags, cells in groups.items() for rect in _rectangles(cells)]
+
+
+def _rectangles(cells: set[tuple[int, int]]) -> list[IndexBox]:
+    """Cover a set of lattice points by disjoint boxes, greedily (row runs grown across rows)."""
+    left = set(cells)
+    out = []
+    while left:
+        i, j = min(left)
+        j_hi = j
+        while (i, j_hi + 1) in left:
+            j_hi += 1
+        i_hi = i
+        while all((i_hi + 1, jj) in left for jj in range(j, j_hi + 1)):
+            i_hi += 1
+        out.append(IndexBox(i, i_hi, j, j_hi))
+        left -= {(ii, jj) for ii in range(i, i_hi + 1) for jj in range(j, j_hi + 1)}
+    return out
 
 
 def pose_options(
@@ -244,6 +271,7 @@ def _options(
     )
     domain = grid.domain.intersect(grid.domain.shifted(-cells[0], -cells[1]))
     headings = push_headings(push.direction) if push else HEADINGS
+    others = blockers.others(kind, target, push.direction if push else None)
     out = []
     for heading in headings:
         deadline.check()
@@ -254,11 +282,11 @@ def _options(
                 continue
             if conditions is None:
                 conditions = blockers.conditions(hands, cells, target if push else None)
-            confusions = blockers.confusions(kind, target, heading, posture, push)
-            for piece, tags in split_box(box, conditions + confusions):
-                forbidden = frozenset(t for t in tags if not isinstance(t, ObjectAt))
-                confusers = frozenset(t for t in tags if isinstance(t, ObjectAt))
-                out.append(PoseOption(kind, target, heading, posture.name, piece, hand, forbidden, push, confusers))
+            for piece, blocked in split_box(box, conditions):
+                for part, tags in split_by_choice(grid, piece, hand, heading, posture, others):
+                    forbidden = blocked | frozenset(t for t in tags if not isinstance(t, ObjectAt))
+                    confusers = frozenset(t for t in tags if isinstance(t, ObjectAt))
+                    out.append(PoseOption(kind, target, heading, posture.name, part, hand, forbidden, push, confusers))
     return out
 
 

@@ -52,6 +52,7 @@ CASES = {
     "pattern E": lambda: bench_cases.push("E", np.random.default_rng(1)),
 }
 
+
 def state_of(scenario: Scenario, phase: Phase) -> WorldState:
     """The world a plan phase describes (objects standing where it puts them, a held one lifted)."""
     objects = {}

@@ -339,3 +339,26 @@ def test_an_object_held_at_the_start_may_have_a_covered_goal(spec_example):
     actions = [p.action for p in result.phases]
     assert "pick" not in actions and actions[-2:] == ["push", "place"]
     assert all(p.holding == "bottle" for p in result.phases[:-1])
+
+
+def test_a_pick_base_is_kept_where_the_env_takes_the_target_even_with_another_object_in_reach():
+    """The env takes the object in reach nearest the middle of the ranges: another object in reach but farther
+    from the middle does not matter; nearer (or out of the target's way only by float noise) it does."""
+    from expert.milp.options import ObjectAt, reach_box, split_by_choice
+    from fetchcarry_env.scenario import DEFAULT_POSTURES
+
+    lattice = Lattice.over(Rect(0.0, 0.0, 2.0, 2.0), 0.05)
+    grid = Grid.for_area(lattice, Rect(0.0, 0.0, 2.0, 2.0), 0.2, True)
+    far = DEFAULT_POSTURES[0]  # forward 0.55-0.70 m, middle 0.625
+    target, other = (1.0, 1.0), (1.02, 1.0)
+    box = reach_box(grid, target, "+x", far)  # bases x 0.30-0.45, y 0.95-1.05
+    tag = ObjectAt("other", "start")
+    parts = split_by_choice(grid, box, target, "+x", far, [(other, tag)])
+    tagged_x = {round(lattice.point(i, 0)[0], 6) for b, tags in parts if tags for i in range(b.i_lo, b.i_hi + 1)}
+    free_x = {round(lattice.point(i, 0)[0], 6) for b, tags in parts if not tags for i in range(b.i_lo, b.i_hi + 1)}
+    # x 0.30: the other is out of reach (0.72 m); x 0.35: in reach (0.67) but farther from the middle than the
+    # target (0.65); x 0.40 and 0.45: nearer. Only the last two depend on where the other object is.
+    assert free_x == {0.30, 0.35} and tagged_x == {0.40, 0.45}
+    assert all(tags in (frozenset(), frozenset({tag})) for _, tags in parts)
+    static = split_by_choice(grid, box, target, "+x", far, [(other, None)])  # an object that never moves
+    assert {round(lattice.point(i, 0)[0], 6) for b, _ in static for i in range(b.i_lo, b.i_hi + 1)} == {0.30, 0.35}

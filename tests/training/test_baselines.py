@@ -93,3 +93,22 @@ def test_wilson_interval():
 def test_bad_bc_config_raises(options):
     with pytest.raises(ValueError):
         BCConfig(**options)
+
+
+@pytest.mark.parametrize("family,seeds", [("basic", range(100_000, 100_003)), ("push", range(100_000, 100_002))])
+def test_greedy_delivers_through_the_env_actions(family, seeds):
+    import gymnasium as gym
+
+    from training.baselines.greedy import GreedyPolicy
+
+    env = gym.make("FetchCarryPush-v0", family=family)
+    policy = GreedyPolicy(env)
+    for seed in seeds:
+        observation, info = env.reset(seed=seed)
+        for _ in range(12):
+            action, _ = policy.predict(observation)
+            observation, _r, terminated, _t, info = env.step(action)
+            assert info["invalid_action"] is None and info["contact"] is None
+            if terminated:
+                break
+        assert info["is_success"], seed

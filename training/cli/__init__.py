@@ -25,6 +25,7 @@ COMMAND_MODULES = (
     "training.cli.episodes",
     "training.cli.data",
     "training.cli.bench",
+    "training.cli.benchmark",
 )
 """Modules that add commands; a module that is not installed (an optional part) is skipped."""
 

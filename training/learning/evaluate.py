@@ -9,6 +9,7 @@ runs the expert on the same seeds so that costs compare scenario by scenario.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +30,7 @@ class EpisodeResult:
     travel_cost: float  # the paper's cost of the episode's moves (metres, Manhattan plus 0.1 x the diagonal term)
     phases: int  # steps taken
     refused: int  # steps the env refused
+    decision_s: float = 0.0  # seconds spent in the policy's predict (masks not included)
 
 
 @dataclass(frozen=True)
@@ -42,11 +44,13 @@ class Summary:
     cost_ratio: float  # mean over successful seeds of cost / expert's cost on the same seed (nan if none)
     phases: float  # mean phases per episode
     refused: float  # mean refused steps per episode
+    decision_ms: float  # mean milliseconds per decision (the policy's predict, masks not included)
 
     def line(self, name: str) -> str:
         return (
             f"{name:10} success {self.success:6.1%} [{self.success_low:.0%}, {self.success_high:.0%}]  "
-            f"cost ratio {self.cost_ratio:5.2f}  phases {self.phases:5.1f}  refused {self.refused:4.1f}"
+            f"cost ratio {self.cost_ratio:5.2f}  phases {self.phases:5.1f}  refused {self.refused:4.1f}  "
+            f"decision {self.decision_ms:6.2f} ms"
         )
 
 
@@ -63,18 +67,49 @@ def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool
         if hasattr(policy, "reset"):
             policy.reset()
         observation, info = env.reset(seed=seed)
-        refused, steps, start = 0, 0, True
+        refused, steps, start, decision = 0, 0, True, 0.0
         while True:
+            mask = masks()
+            clock = time.perf_counter()
             action, _ = policy.predict(
-                observation, episode_start=np.array([start]), deterministic=deterministic, action_masks=masks()
+                observation, episode_start=np.array([start]), deterministic=deterministic, action_masks=mask
             )
+            decision += time.perf_counter() - clock
             start = False
             observation, _reward, terminated, truncated, info = env.step(int(np.asarray(action).reshape(-1)[0]))
             steps += 1
             refused += info["invalid_action"] is not None
             if terminated or truncated:
                 break
-        results.append(EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused))
+        results.append(
+            EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused, decision)
+        )
+    env.close()
+    return results
+
+
+def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
+    """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
+    env = gym.make("FetchCarryPush-v0", family=family)
+    results = []
+    for seed in seeds:
+        if hasattr(policy, "reset"):
+            policy.reset()
+        observation, info = env.reset(seed=seed)
+        refused, steps, start, decision = 0, 0, True, 0.0
+        while True:
+            clock = time.perf_counter()
+            action, _ = policy.predict(observation, episode_start=np.array([start]), deterministic=True)
+            decision += time.perf_counter() - clock
+            start = False
+            observation, _reward, terminated, truncated, info = env.step(action)
+            steps += 1
+            refused += info["invalid_action"] is not None
+            if terminated or truncated:
+                break
+        results.append(
+            EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused, decision)
+        )
     env.close()
     return results
 
@@ -106,6 +141,7 @@ def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary
         cost_ratio=float(np.mean(ratios)) if ratios else math.nan,
         phases=float(np.mean([r.phases for r in results])) if results else math.nan,
         refused=float(np.mean([r.refused for r in results])) if results else math.nan,
+        decision_ms=1e3 * sum(r.decision_s for r in results) / max(sum(r.phases for r in results), 1),
     )
 
 

@@ -1,0 +1,124 @@
+"""A fast first plan: deliver the objects one at a time, each by the single-object MILP.
+
+The decoupled plan solves, object after object, the planner's own MILP for that one
+object from where the previous delivery left the robot (the other objects standing
+where they are, as if delivered; pushed clutter where it was pushed). Single-object
+models solve in tens of milliseconds, so the whole plan comes quickly. It is a valid
+plan of the full problem (every sub-plan obeys the same rules, and the state carries
+over exactly), usually with as many phases as the optimum or a few more, and a
+higher Eq. 1. :func:`expert.planner.plan` uses it as the answer of last resort
+(status ``feasible``) and, when it has no more phases than the model being solved,
+as SCIP's first incumbent (:mod:`expert.milp.warm`).
+
+Units are metres and seconds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+from expert.milp.deadline import Deadline, TimeUp
+from expert.milp.decode import Step
+from expert.milp.problem import Problem
+from expert.plans import Phase, Plan
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.geometry import Rect
+from fetchcarry_env.scenario import Scenario
+
+Planner = Callable[..., Plan]
+
+
+def decoupled_plan(
+    scenario: Scenario, order: Sequence[str], lattice: Lattice, deadline: Deadline, planner: Planner
+) -> tuple[Phase, ...] | None:
+    """Phases of a plan delivering the objects one at a time, trying them in ``order``; None if it fails.
+
+    ``planner`` is :func:`expert.planner.plan` (passed in to avoid an import circle).
+    Raises :class:`~expert.milp.deadline.TimeUp` when ``deadline`` passes.
+    """
+    phases: list[Phase] = []
+    base, heading = scenario.robot.start, scenario.robot.heading
+    objects = {o.id: o.start for o in scenario.objects}
+    clutter = {c.id: c.rect.center for c in scenario.clutter}
+    todo = [i for i in order]
+    while todo:
+        for object_id in todo:
+            left = deadline.left()
+            if left <= 0:
+                raise TimeUp
+            sub = _one_object(scenario, object_id, base, heading, objects, clutter)
+            result = planner(sub, time_limit=left, lattice=lattice)
+            if result.found:
+                break
+        else:
+            return None
+        todo.remove(object_id)
+        if not phases:
+            phases.append(result.phases[0])
+        phases.extend(result.phases[1:])
+        last = result.phases[-1]
+        base, heading = last.base, last.heading
+        objects, clutter = dict(last.objects), dict(last.clutter)
+    return tuple(phases)
+
+
+def _one_object(
+    scenario: Scenario,
+    object_id: str,
+    base,
+    heading,
+    objects: dict,
+    clutter: dict,
+) -> Scenario:
+    """The sub-problem: only ``object_id`` to deliver; every other object stays where it stands."""
+    moved_objects = tuple(
+        dataclasses.replace(o, start=objects[o.id], goal=o.goal if o.id == object_id else objects[o.id])
+        for o in scenario.objects
+    )
+    moved_clutter = tuple(dataclasses.replace(c, rect=_moved(c.rect, clutter[c.id])) for c in scenario.clutter)
+    return dataclasses.replace(
+        scenario,
+        robot=dataclasses.replace(scenario.robot, start=base, heading=heading),
+        objects=moved_objects,
+        clutter=moved_clutter,
+    )
+
+
+def _moved(rect: Rect, center) -> Rect:
+    cx, cy = rect.center
+    return rect.translate(center[0] - cx, center[1] - cy)
+
+
+def steps_of(problem: Problem, phases: Sequence[Phase]) -> list[Step] | None:
+    """The plan's phases after the start as MILP steps (lattice cell, pose option); None if one does not map."""
+    lattice = problem.grid.lattice
+    steps: list[Step] = []
+    previous = problem.start_index
+    for phase in phases[1:]:
+        if not lattice.on_lattice(phase.base):
+            return None
+        cell = lattice.index(phase.base)
+        option = None
+        if phase.action != "move":
+            acting = previous if phase.action == "push" else cell
+            if acting is None:
+                return None
+            option = next(
+                (
+                    o
+                    for o in problem.options
+                    if o.kind == phase.action
+                    and o.target == phase.target
+                    and o.heading == phase.heading
+                    and o.posture == phase.posture
+                    and o.box.contains(*acting)
+                    and (o.push is None or (acting[0] + o.push.cells[0], acting[1] + o.push.cells[1]) == cell)
+                ),
+                None,
+            )
+            if option is None:
+                return None
+        steps.append(Step(cell, option))
+        previous = cell
+    return steps

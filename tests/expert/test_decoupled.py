@@ -1,0 +1,63 @@
+"""The decoupled first plan: valid, quick to find, the answer of last resort and SCIP's first incumbent."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from expert import bench_cases
+from expert.decoupled import decoupled_plan, steps_of
+from expert.milp.deadline import Deadline
+from expert.milp.problem import prepare
+from expert.milp.warm import solution_values
+from expert.planner import plan
+from expert.plans import Plan
+from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
+
+
+@pytest.mark.parametrize(("family", "count"), [("multi", 3), ("multi", 5), ("covered", 2)])
+def test_decoupled_plan_is_valid(family, count):
+    scenario = getattr(bench_cases, family)(count, np.random.default_rng(7))
+    lattice = Lattice.over(scenario.area, 0.05)
+    order = [o.id for o in scenario.objects]
+    phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan)
+    assert phases is not None
+    result = Plan(scenario.name, "feasible", None, phases, {})
+    assert validate_plan(scenario, result) == []
+    problem = prepare(scenario, lattice)
+    steps = steps_of(problem, phases)
+    assert steps is not None and len(steps) == len(phases) - 1
+    assert all(s.option is not None for s, p in zip(steps, phases[1:], strict=True) if p.action != "move")
+
+
+def test_short_time_limit_returns_the_decoupled_plan_or_better():
+    """Five objects at a 1 s limit: SCIP rarely finishes, but the answer is a valid plan with its provenance."""
+    scenario = bench_cases.multi(5, np.random.default_rng(2024))
+    result = plan(scenario, time_limit=1.0)
+    assert result.status in ("feasible", "optimal"), result.stats
+    assert validate_plan(scenario, result) == []
+    assert result.stats["decoupled_phases"] >= result.stats["lower_bound"]
+    assert result.objective <= result.stats["decoupled_objective"] + 1e-6
+
+
+def test_decoupled_plan_warm_starts_a_model_with_as_many_phases():
+    scenario = bench_cases.multi(4, np.random.default_rng(2024))
+    result = plan(scenario, time_limit=30.0)
+    assert result.status == "optimal"
+    solve = result.stats["solves"][-1]
+    if result.stats["decoupled_phases"] <= solve["phases"]:
+        assert solve["warm_start"] is True
+    assert result.objective <= result.stats["decoupled_objective"] + 1e-6
+
+
+def test_warm_start_values_refuse_a_plan_longer_than_the_model():
+    from expert.milp.build import build
+
+    scenario = bench_cases.multi(3, np.random.default_rng(1))
+    lattice = Lattice.over(scenario.area, 0.05)
+    phases = decoupled_plan(scenario, [o.id for o in scenario.objects], lattice, Deadline.after(60.0), plan)
+    problem = prepare(scenario, lattice)
+    steps = steps_of(problem, phases)
+    assert solution_values(build(problem, len(phases) - 1), steps) is None
+    assert solution_values(build(problem, len(phases)), steps) is not None

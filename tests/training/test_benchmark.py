@@ -1,0 +1,316 @@
+"""The benchmark: splits, metrics, the records and reports it writes, and ``fetchcarry benchmark``."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fetchcarry_env.families import EXTENT, FAMILIES, HELD_OUT_FAMILIES, turn_quarter
+from fetchcarry_env.scenario import Scenario
+from training import benchmark
+from training.benchmark import runner
+from training.benchmark.splits import SPLIT_BLOCK, TRAINING_FAMILIES
+from training.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
+KEYS = {
+    "policy": str,
+    "scenario": str,
+    "split": str,
+    "source": str,
+    "seed": int,
+    "success": bool,
+    "delivered": int,
+    "objects": int,
+    "cost": float,
+    "return": float,
+    "phases": int,
+    "pushes": int,
+    "invalid_actions": int,
+    "contacts": int,
+    "decision_ms": float,
+    "mask_ms": float,
+}
+
+
+def _untimed(records: list[dict]) -> list[dict]:
+    return [{k: v for k, v in r.items() if k not in ("decision_ms", "mask_ms")} for r in records]
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``fetchcarry benchmark --policies expert random --split iid --episodes 2`` (basic and push)."""
+    out = tmp_path_factory.mktemp("bench") / "iid"
+    argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
+    assert main([*argv, "--out", str(out)]) == 0
+    return out
+
+
+# ------------------------------------------------------------------ end to end
+def test_expert_and_random_end_to_end(tiny: Path):
+    records = json.loads((tiny / "results.json").read_text())
+    assert [(r["policy"], r["source"]) for r in records] == [
+        ("expert", "basic"),
+        ("expert", "push"),
+        ("random", "basic"),
+        ("random", "push"),
+    ]
+    for record in records:
+        for key, kind in KEYS.items():
+            assert isinstance(record[key], kind), key
+        assert record["split"] == "iid-v0"
+        assert record["seed"] >= benchmark.EVAL_SEED_BASE
+        assert 0 <= record["delivered"] <= record["objects"]
+        assert record["decision_ms"] > 0
+    expert = [r for r in records if r["policy"] == "expert"]
+    assert all(r["success"] and r["expert_cost"] == r["cost"] and r["invalid_actions"] == 0 for r in expert)
+    assert expert[1]["pushes"] >= 1  # the push family's clutter stands on the goal
+    random = [r for r in records if r["policy"] == "random"]
+    assert [r["expert_cost"] for r in random] == [r["cost"] for r in expert]
+    summary = (tiny / "summary.md").read_text()
+    assert "| expert | iid-v0 | 2 | 100.0% [" in summary and "| random | iid-v0 | 2 |" in summary
+    assert (tiny / "splits.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_same_command_same_results_except_timing(tiny: Path, tmp_path: Path):
+    argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
+    assert main([*argv, "--out", str(tmp_path)]) == 0
+    first = json.loads((tiny / "results.json").read_text())
+    again = json.loads((tmp_path / "results.json").read_text())
+    assert _untimed(first) == _untimed(again)
+
+
+def test_scenario_folder(tmp_path: Path):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    shutil.copy(EXAMPLE, folder / "a_example.json")
+    turn_quarter(Scenario.load(EXAMPLE)).save(folder / "b_turned.json")
+    out = tmp_path / "out"
+    argv = ["benchmark", "--policies", "expert", "--scenarios", str(folder), "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    records = json.loads((out / "results.json").read_text())
+    assert [(r["policy"], r["source"]) for r in records] == [
+        ("expert", "a_example.json"),
+        ("expert", "b_turned.json"),
+        ("random", "a_example.json"),
+        ("random", "b_turned.json"),
+    ]
+    assert {r["split"] for r in records} == {"scenarios:mine"}
+    assert all(r["success"] for r in records[:2])
+    # The turned scenario costs the expert what the original does, up to the lattice: the world is isotropic.
+    assert records[1]["cost"] == pytest.approx(records[0]["cost"], rel=0.05)
+
+
+def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
+    bc = pytest.importorskip("training.baselines.bc")
+    from fetchcarry_env.observation import Capacity
+
+    demonstrations = bc.record_demonstrations("basic", range(3))
+    bc.train_bc(demonstrations, bc.BCConfig(epochs=2, hidden=16), Capacity(), out=tmp_path / "bc-tiny")
+    report = benchmark.run_benchmark([str(tmp_path / "bc-tiny")], split="iid", episodes=1, out=tmp_path / "out")
+    names = [r["policy"] for r in report.records]
+    assert names == ["expert", "random", "bc-tiny"]
+    learned = report.records[2]
+    assert learned["invalid_actions"] == 0  # the candidate masks are exact: a masked policy is never refused
+    assert [row.policy for row in report.rows] == names
+
+
+def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    calls = []
+    real = runner.run_task
+
+    def interrupted_third(task):
+        calls.append(task)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(runner, "run_task", interrupted_third)
+    argv = ["benchmark", "--policies", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
+    assert main([*argv, "--out", str(tmp_path)]) == 130
+    records = json.loads((tmp_path / "results.json").read_text())
+    assert [r["policy"] for r in records] == ["expert", "expert"]
+    assert (tmp_path / "summary.md").exists()
+
+
+# ------------------------------------------------------------------ bad input
+def _broken_run(tmp_path: Path) -> Path:
+    run = tmp_path / "broken"
+    run.mkdir()
+    (run / "config.json").write_text("{not json")
+    return run
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        ["--policies", "expert", "no-such-policy", "--split", "iid"],
+        ["--policies", "expert", "runs/missing", "--split", "iid"],
+        ["--policies", "expert", "--split", "no-such-split"],
+        ["--policies", "expert", "--split", "iid-v99"],
+        ["--policies", "expert", "--scenarios", "no/such/folder"],
+        ["--policies", "expert", "--split", "iid", "--episodes", "0"],
+        ["--policies", "expert", "--split", "iid", "--scenarios", "."],
+        ["--policies", "BROKEN", "--split", "iid"],
+        ["--policies", "expert", "--scenarios", "EMPTY"],
+    ],
+)
+def test_bad_input_exits_2(change, tmp_path: Path, capsys: pytest.CaptureFixture):
+    broken, empty = _broken_run(tmp_path), tmp_path / "empty"
+    empty.mkdir()
+    argv = ["benchmark", *[str(broken) if a == "BROKEN" else str(empty) if a == "EMPTY" else a for a in change]]
+    assert _status([*argv, "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert "Traceback" not in error and error.strip()
+    assert not (tmp_path / "out" / "results.json").exists()
+
+
+def _status(argv: list[str]) -> int:
+    """The exit status of ``fetchcarry argv`` (argparse's own errors raise ``SystemExit``)."""
+    try:
+        return main(argv)
+    except SystemExit as error:
+        return int(error.code)
+
+
+def test_scenario_outside_the_trained_extent_is_refused(tmp_path: Path):
+    data = json.loads(EXAMPLE.read_text())
+    data["area"] = {"min": [-1.0, -1.0], "max": [8.0, 6.0]}
+    (tmp_path / "wide.json").write_text(json.dumps(data))
+    with pytest.raises(benchmark.BenchmarkError, match=r"wide\.json.*extent"):
+        benchmark.folder_scenarios(tmp_path)
+
+
+# ------------------------------------------------------------------ metrics
+def test_wilson_interval_by_hand():
+    # p = 0.8, n = 10, z = 1.96: centre (0.8 + z²/20) / (1 + z²/10), half z sqrt(0.016 + z²/400) / (1 + z²/10)
+    low, high = benchmark.wilson(8, 10)
+    assert (low, high) == pytest.approx((0.490157, 0.943319), abs=1e-6)
+    assert benchmark.wilson(0, 4) == pytest.approx((0.0, 0.4899000), abs=1e-6)  # z²/(n + z²) = 3.8416/7.8416
+    assert all(math.isnan(v) for v in benchmark.wilson(0, 0))
+
+
+def test_spl_by_hand():
+    assert benchmark.spl(True, 12.0, 10.0) == pytest.approx(10 / 12)
+    assert benchmark.spl(True, 9.0, 10.0) == 1.0  # never above 1, even below the expert's cost
+    assert benchmark.spl(False, 10.0, 10.0) == 0.0
+
+
+def _record(policy: str, seed: int, success: bool, cost: float, ret: float, **extra) -> dict:
+    base = {"policy": policy, "split": "s", "seed": seed, "success": success, "cost": cost, "return": ret}
+    base.update(delivered=int(success), objects=1, phases=4, pushes=0, invalid_actions=0, contacts=0, decision_ms=1.0)
+    return {**base, **extra}
+
+
+def test_summary_by_hand():
+    records = [
+        _record("expert", 1, True, 10.0, 0.0),
+        _record("expert", 2, True, 5.0, 5.0),
+        _record("random", 1, False, 30.0, -40.0, invalid_actions=3),
+        _record("random", 2, False, 20.0, -20.0, invalid_actions=1),
+        _record("learned", 1, True, 12.0, -2.0),
+        _record("learned", 2, False, 8.0, -10.0, contacts=2),
+    ]
+    benchmark.fill_expert_costs(records)
+    rows = {row.policy: row for row in benchmark.summarise(records)}
+    learned = rows["learned"]
+    assert learned.success == 0.5
+    assert learned.cost_ratio == pytest.approx(1.2)  # only the solved seed: 12 / 10
+    assert learned.spl == pytest.approx((10 / 12 + 0) / 2)
+    # R: learned -6, expert 2.5, random -30: 100 * (-6 + 30) / (2.5 + 30)
+    assert learned.score == pytest.approx(100 * 24 / 32.5)
+    assert rows["expert"].score == pytest.approx(100.0) and rows["random"].score == pytest.approx(0.0)
+    assert learned.contacts == 1.0 and rows["random"].invalid_actions == 2.0
+    assert learned.expert_phases == 4.0
+    assert "| learned | s | 2 | 50.0% [" in benchmark.summary_markdown(list(rows.values()))
+
+
+def test_plots_of_learning_curves_and_demonstrations(tmp_path: Path):
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "metrics.csv").write_text("epoch,loss,accuracy,seconds\n1,2.0,0.3,0.1\n2,1.0,0.6,0.2\n")
+    assert benchmark.plot_learning_curve(run, tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+    records = [{"policy": "bc", "demonstrations": n, "success": k < n // 10} for n in (10, 30, 100) for k in range(10)]
+    assert benchmark.plot_demonstrations(records, tmp_path / "demos.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------ splits
+def test_split_seeds_are_disjoint_from_training_seeds_and_from_each_other():
+    seen: set[int] = set()
+    for split in benchmark.SPLITS.values():
+        seeds = {item.seed for item in benchmark.split_scenarios(split, 10)}
+        assert min(seeds) >= benchmark.EVAL_SEED_BASE + split.offset
+        assert max(seeds) < benchmark.EVAL_SEED_BASE + split.offset + SPLIT_BLOCK
+        assert not seeds & seen
+        seen |= seeds
+    # The learning checks hold out seeds from 100,000 and datasets count up from 0: far below.
+    assert benchmark.EVAL_SEED_BASE > 100_000 * 1_000
+
+
+def test_split_names_and_versions():
+    assert benchmark.get_split("iid").name == "iid-v0"
+    assert benchmark.get_split("more-objects-v0").sources[0].name == "multi-3"
+    iid = benchmark.split_scenarios("iid", 8)
+    assert [item.source for item in iid] == list(TRAINING_FAMILIES) * 2
+    assert [s.scenario for s in iid] == [s.scenario for s in benchmark.split_scenarios("iid-v0", 8)]
+    assert [len(item.scenario.objects) for item in benchmark.split_scenarios("more-objects", 4)] == [3, 4, 3, 4]
+
+
+def test_push_required_scenarios_have_clutter_on_a_goal():
+    for item in benchmark.split_scenarios("push-required", 15):
+        goals = [(o.goal, o.radius) for o in item.scenario.objects]
+        assert any(c.rect.overlaps_disc(g, r) for c in item.scenario.clutter for g, r in goals), item.source
+
+
+def test_layouts_are_held_out_of_training():
+    # Every training family starts the robot in the bottom-left room; the held-out layouts are turned
+    # a quarter turn, so the robot starts in the bottom-right one: no training draw looks like them.
+    for name in (*TRAINING_FAMILIES, "multi", "mixed"):
+        for seed in range(30):
+            assert FAMILIES[name].sample(np.random.default_rng(seed)).robot.start[0] < 1.0, (name, seed)
+    layouts = benchmark.split_scenarios("layouts", 20)
+    assert {item.source for item in layouts} == set(HELD_OUT_FAMILIES)
+    for item in layouts:
+        assert item.scenario.robot.start[0] > 4.0
+        assert EXTENT.contains_rect(item.scenario.area)
+
+
+def test_training_families_still_draw_the_same_scenarios():
+    # Digests of seeds 0-2 of each family taken before the held-out layouts were added.
+    before = {
+        "basic": "10a1c436b96b03ff",
+        "push": "1df547cccf6aaf0e",
+        "corridor": "2a7c0b7a3a7974cd",
+        "multi": "3f41cafd66baf292",
+        "multi-2": "0519662623e95ff2",
+        "multi-3": "20095c1d6bd0cf57",
+        "multi-4": "ac895ffcf4ced897",
+        "mixed": "168b602dee85f815",
+    }
+    for name, digest in before.items():
+        h = hashlib.sha256()
+        for seed in range(3):
+            h.update(json.dumps(FAMILIES[name].sample(np.random.default_rng(seed)).to_dict(), sort_keys=True).encode())
+        assert h.hexdigest()[:16] == digest, name
+
+
+def test_turn_quarter_four_times_is_the_identity():
+    scenario = FAMILIES["push"].sample(np.random.default_rng(3))
+    turned = scenario
+    for _ in range(4):
+        turned = turn_quarter(turned)
+    assert turned.robot.heading == scenario.robot.heading
+    assert turned.robot.start == pytest.approx(scenario.robot.start)
+    assert turned.tables[1].rect.min_x == pytest.approx(scenario.tables[1].rect.min_x)
+
+
+def test_unknown_policy_lists_what_is_available():
+    with pytest.raises(benchmark.BenchmarkError, match="expert, random"):
+        benchmark.resolve("no-such-policy")
+    assert "greedy" in benchmark.FACTORIES  # wired; resolved only where its module is installed

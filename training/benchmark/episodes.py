@@ -1,0 +1,136 @@
+"""One benchmark episode: a policy acts in one scenario until it succeeds or runs out of phases.
+
+:func:`run_episode` is what the workers run. It returns one record (a plain dict, the
+shape of ``results.json``'s entries) built from the env's ``info``:
+
+============== =====================================================================
+key            value
+============== =====================================================================
+policy         the policy's label
+scenario       the scenario's name
+split          the split's name (``iid-v0``), or ``scenarios:FOLDER``
+source         the family it was drawn from, or its file name
+seed           the reset seed (and the random policy's seed for the episode)
+success        every object at its goal and the hand empty (``info["is_success"]``)
+delivered      objects at their goals at the end (``info["delivered"]``)
+objects        objects in the scenario
+cost           the paper's travel cost of the episode, metres (``info["travel_cost"]``,
+               which the env sums over the episode's moves)
+expert_cost    the expert's cost on the same scenario (filled in by the benchmark;
+               ``null`` where the expert failed)
+return         the paper's reward summed over the episode (+10 per delivery, minus
+               travel cost and penalties)
+phases         decisions taken (env steps)
+pushes         steps that pushed a piece of clutter (``info["push"]`` present)
+invalid_actions steps the env refused (``info["invalid_action"]`` not ``None``)
+contacts       stops at a contact (the env's ``info["collisions"]`` at the end)
+decision_ms    mean wall time of the policy's ``predict`` per decision, milliseconds
+               (for the expert: the planner's time per decision)
+mask_ms        mean wall time per decision of the env's ``action_masks()`` handed to
+               the policy, milliseconds (0 for a policy whose ``predict`` takes no
+               ``action_masks=``: the expert reads what it needs from the env)
+============== =====================================================================
+"""
+
+from __future__ import annotations
+
+import inspect
+import time
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from training.benchmark.policies import PolicySpec, build, start_episode
+from training.benchmark.splits import EvalScenario
+
+# One env and policy per policy spec in each process, reused episode after episode (an
+# env's reset rebuilds only what changed). A worker process runs one task at a time.
+_BUILT: dict[str, tuple[gym.Env, Any, bool]] = {}
+_MAX_BUILT = 4
+
+
+def make_env(spec: PolicySpec) -> gym.Env:
+    """The env ``spec``'s interface needs, over the families' extent (``family="basic"`` sets the lattice)."""
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+    from fetchcarry_env.observation import Capacity
+
+    options = dict(spec.env_options)
+    if isinstance(options.get("capacity"), dict):
+        options["capacity"] = Capacity(**options["capacity"])
+    return gym.make(spec.env_id, family="basic", **options)
+
+
+def _built(spec: PolicySpec) -> tuple[gym.Env, Any, bool]:
+    """The env, the policy, and whether its ``predict`` takes ``action_masks=`` (the expert reads the env's)."""
+    key = repr(spec)
+    if key not in _BUILT:
+        if len(_BUILT) >= _MAX_BUILT:
+            env, _, _ = _BUILT.pop(next(iter(_BUILT)))
+            env.close()
+        env = make_env(spec)
+        policy = build(spec, env)
+        parameters = inspect.signature(policy.predict).parameters
+        takes_masks = "action_masks" in parameters or any(p.kind is p.VAR_KEYWORD for p in parameters.values())
+        _BUILT[key] = (env, policy, takes_masks)
+    return _BUILT[key]
+
+
+def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True) -> dict[str, Any]:
+    """One episode of ``spec`` on ``item``'s scenario; its record (see the module docstring)."""
+    env, policy, takes_masks = _built(spec)
+    masks = env.get_wrapper_attr("action_masks")
+    observation, info = env.reset(seed=item.seed, options={"scenario": item.scenario})
+    start_episode(spec, policy, item.seed)
+    phases = pushes = invalid = 0
+    total_return = 0.0
+    decision_s = mask_s = 0.0
+    while True:
+        started = time.perf_counter()
+        given = {"action_masks": masks()} if takes_masks else {}
+        asked = time.perf_counter()
+        mask_s += asked - started
+        action, _ = policy.predict(
+            observation, episode_start=np.array([phases == 0]), deterministic=deterministic, **given
+        )
+        decision_s += time.perf_counter() - asked
+        if spec.interface == "phases":
+            action = int(np.asarray(action).reshape(-1)[0])
+        observation, reward, terminated, truncated, info = env.step(action)
+        phases += 1
+        total_return += float(reward)
+        pushes += info.get("push") is not None
+        invalid += info["invalid_action"] is not None
+        if terminated or truncated:
+            break
+    return {
+        "policy": spec.name,
+        "scenario": item.scenario.name,
+        "split": item.split,
+        "source": item.source,
+        "seed": item.seed,
+        "success": bool(info["is_success"]),
+        "delivered": int(info["delivered"]),
+        "objects": len(item.scenario.objects),
+        "cost": float(info["travel_cost"]),
+        "expert_cost": None,
+        "return": total_return,
+        "phases": phases,
+        "pushes": pushes,
+        "invalid_actions": invalid,
+        "contacts": int(info["collisions"]),
+        "decision_ms": 1000.0 * decision_s / phases,
+        "mask_ms": 1000.0 * mask_s / phases,
+    }
+
+
+def run_task(task: tuple[PolicySpec, EvalScenario]) -> dict[str, Any]:
+    """``run_episode(*task)``: the picklable unit of work the process pool and Ray run."""
+    return run_episode(*task)
+
+
+def close_all() -> None:
+    """Close the envs this process built (safe to call twice)."""
+    while _BUILT:
+        _, (env, _, _) = _BUILT.popitem()
+        env.close()

@@ -1,0 +1,7 @@
+"""The benchmark's one error: bad input to it (an unknown policy or split, a missing run folder, a bad scenario)."""
+
+from __future__ import annotations
+
+
+class BenchmarkError(ValueError):
+    """What the benchmark was asked cannot be done as asked; the message says why."""

@@ -1,0 +1,207 @@
+"""Run a benchmark: every policy on every scenario of a split (or a folder), then write the results.
+
+:func:`run_benchmark` always runs the two reference policies, ``expert`` (the MILP
+planner: every cost ratio is to its cost on the same scenario) and ``random`` (the
+normalised score's zero), next to the policies asked for. Episodes run in this process
+(``workers=1``), on a process pool or on Ray, with the worker set-up of
+``fetchcarry generate`` (:mod:`training.generate`): workers ignore Ctrl-C and die with
+their parent.
+
+``OUT_DIR/results.json`` is rewritten as episodes finish (at most every
+:data:`WRITE_EVERY_S` seconds) and once more at the end, so an interrupted run keeps
+its finished episodes; ``summary.md`` and ``splits.png`` are written at the end and on
+an interrupt. Records are kept in a fixed order (policy, then episode), so the same
+command gives the same file, timings aside.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from training.benchmark.episodes import close_all, run_task
+from training.benchmark.errors import BenchmarkError
+from training.benchmark.metrics import Row, fill_expert_costs, summarise
+from training.benchmark.policies import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
+from training.benchmark.report import plot_splits, summary_markdown
+from training.benchmark.splits import EvalScenario, folder_scenarios, split_scenarios
+from training.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
+
+RESULTS, SUMMARY, PLOT = "results.json", "summary.md", "splits.png"
+WRITE_EVERY_S = 1.0  # seconds between rewrites of results.json while episodes finish
+
+Task = tuple[PolicySpec, EvalScenario]
+
+
+@dataclass(frozen=True)
+class BenchmarkReport:
+    """What a finished benchmark wrote."""
+
+    out: Path
+    records: list[dict[str, Any]]
+    rows: list[Row]
+
+
+def run_benchmark(
+    policies: list[str],
+    *,
+    out: str | Path,
+    split: str | None = None,
+    scenarios: str | Path | None = None,
+    episodes: int | None = None,
+    workers: int = 1,
+    backend: str = "process",
+    progress: bool = False,
+) -> BenchmarkReport:
+    """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
+
+    Raises :class:`BenchmarkError` for bad input before any episode runs; a
+    ``KeyboardInterrupt`` propagates after the finished episodes are written.
+    """
+    if (split is None) == (scenarios is None):
+        raise BenchmarkError("give exactly one of a split and a folder of scenarios")
+    if workers < 1:
+        raise BenchmarkError(f"the number of workers must be at least 1, got {workers}")
+    if backend not in BACKENDS:
+        raise BenchmarkError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
+    if episodes is not None and episodes < 1:
+        raise BenchmarkError(f"the number of episodes must be at least 1, got {episodes}")
+    specs = with_references(policies)
+    items = split_scenarios(split, episodes) if split is not None else folder_scenarios(scenarios, episodes)
+    check_fits(specs, items)
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    tasks = [(spec, item) for spec in specs for item in items]
+    order = {(spec.name, item.index): k for k, (spec, item) in enumerate(tasks)}
+    records: list[dict[str, Any]] = []
+    last_write = time.monotonic()
+    bar = progress_bar(len(tasks), "benchmark", enabled=progress)
+    try:
+        for record in run_tasks(tasks, workers=workers, backend=backend):
+            records.append(record)
+            bar.update(1)
+            if time.monotonic() - last_write > WRITE_EVERY_S:
+                write_results(out, records, order)
+                last_write = time.monotonic()
+    finally:
+        bar.close()
+        close_all()
+        records = write_results(out, records, order)
+        rows = summarise(records) if records else []
+        if rows:
+            write_report(out, rows, title=f"Benchmark: {items[0].split}")
+    return BenchmarkReport(out, records, rows)
+
+
+def with_references(policies: list[str]) -> list[PolicySpec]:
+    """The specs of ``policies`` with ``expert`` and ``random`` first (added if missing)."""
+    if not policies:
+        raise BenchmarkError("give at least one policy")
+    specs = resolve_all(policies)
+    names = [s.name for s in specs]
+    references = [resolve(name) for name in (EXPERT, RANDOM) if name not in names]
+    ordered = references + specs
+    return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != RANDOM))  # stable: the rest keep their order
+
+
+def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
+    """Every scenario fits the observation capacity of every policy; :class:`BenchmarkError` names what does not."""
+    from fetchcarry_env.observation import Capacity
+
+    problems = []
+    for spec in specs:
+        capacity = spec.env_options.get("capacity")
+        if capacity is None:
+            continue
+        for item in items:
+            try:
+                Capacity(**capacity).check(item.scenario)
+            except ValueError as error:
+                problems.append(f"{spec.name} cannot act in {item.source} ({item.scenario.name}): {error}")
+    if problems:
+        raise BenchmarkError("\n".join(problems[:10]))
+
+
+def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, int], int]) -> list[dict]:
+    """Fill in the expert's costs, sort ``records`` into task order and write ``results.json`` atomically."""
+    fill_expert_costs(records)
+    ordered = sorted(records, key=lambda r: order[(r["policy"], r["index"])])
+    public = [{k: v for k, v in r.items() if k != "index"} for r in ordered]
+    temporary = out / f".{RESULTS}.tmp"
+    temporary.write_text(json.dumps(public, indent=1) + "\n")
+    os.replace(temporary, out / RESULTS)
+    return public
+
+
+def write_report(out: Path, rows: list[Row], title: str) -> None:
+    """``summary.md`` and ``splits.png`` of ``rows`` in ``out``."""
+    (out / SUMMARY).write_text(summary_markdown(rows, title))
+    plot_splits(rows, out / PLOT)
+
+
+def run_tasks(tasks: list[Task], *, workers: int = 1, backend: str = "process") -> Iterator[dict[str, Any]]:
+    """Each task's record (with its ``index`` in the split), as they finish."""
+    if backend == "ray":
+        yield from _run_ray(tasks, workers)
+    elif workers == 1:
+        for task in tasks:
+            yield _indexed(task)
+    else:
+        yield from _run_pool(_indexed, tasks, workers)
+
+
+def _indexed(task: Task) -> dict[str, Any]:
+    return {**run_task(task), "index": task[1].index}
+
+
+def _run_pool(function: Callable[[Task], dict], tasks: list[Task], workers: int) -> Iterator[dict[str, Any]]:
+    # The pool of ``fetchcarry generate``: spawned workers that ignore Ctrl-C and die with this process.
+    pool = ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=worker_setup,
+        initargs=(os.getpid(),),
+    )
+    finished_cleanly = False
+    try:
+        pending = {pool.submit(function, task) for task in tasks}
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for future in finished:
+                yield future.result()
+        finished_cleanly = True
+    finally:
+        if not finished_cleanly:
+            _terminate_workers(pool)
+        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
+
+
+def _run_ray(tasks: list[Task], workers: int) -> Iterator[dict[str, Any]]:
+    try:
+        import ray
+    except ModuleNotFoundError:
+        raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    remote = ray.remote(num_cpus=1)(_indexed)
+    queue, pending = list(tasks), []
+    try:
+        while queue or pending:
+            while queue and len(pending) < 2 * workers:  # few in flight: an interruption loses only those
+                pending.append(remote.remote(queue.pop(0)))
+            finished, pending = ray.wait(pending, num_returns=1)
+            for ref in finished:
+                yield ray.get(ref)
+    finally:
+        for ref in pending:
+            ray.cancel(ref)
+        if started_here:
+            ray.shutdown()

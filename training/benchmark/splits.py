@@ -1,0 +1,169 @@
+"""Fixed, versioned lists of evaluation scenarios (splits), and folders of scenario files.
+
+A split is a list of scenario *sources* (a family, or a sampler of one Table I push
+pattern) that its episodes cycle through: episode ``k`` draws from source
+``k % len(sources)`` with the seed ``EVAL_SEED_BASE + split.offset + k``, through
+``Family.sample(numpy.random.default_rng(seed))``. The same split name, version and
+episode count give the same scenarios on every machine.
+
+Seeds: evaluation seeds start at :data:`EVAL_SEED_BASE` (10^9), each split in its own
+block of :data:`SPLIT_BLOCK` seeds. Training runs and datasets use seeds below
+:data:`EVAL_SEED_BASE` (``fetchcarry generate`` counts up from ``--seed``, default 0;
+the learning checks hold out seeds from 100,000), so no evaluation scenario is drawn
+from a seed a learner was trained on.
+
+=====================  ===========================================================
+split                  scenarios
+=====================  ===========================================================
+``iid-v0``             unseen seeds of the training families ``basic``, ``push``,
+                       ``corridor``, ``multi-2``
+``more-objects-v0``    three and four objects (``multi-3``, ``multi-4``)
+``layouts-v0``         layouts held out from training (``turned-room``,
+                       ``turned-corridor``: the rooms and corridors turned a quarter
+                       turn, which no training family draws)
+``push-required-v0``   the five Table I push patterns A-E in turn; every scenario
+                       has clutter on a goal, so every solution pushes at least once
+=====================  ===========================================================
+
+A name without a version (``iid``) means the newest version. A new version gets a new
+entry here; an existing version never changes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fetchcarry_env.families import EXTENT, HELD_OUT_FAMILIES, Family, draw_push, get_family
+from fetchcarry_env.scenario import Scenario, ScenarioError
+from training.benchmark.errors import BenchmarkError
+
+EVAL_SEED_BASE = 1_000_000_000  # first evaluation seed; training and dataset seeds stay below it
+SPLIT_BLOCK = 1_000_000  # seeds reserved per split (episode k of a split uses base + offset + k)
+TRAINING_FAMILIES = ("basic", "push", "corridor", "multi-2")  # what a learner is trained on
+SCENARIO_FILES = "*.json"  # what --scenarios reads from a folder
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where a split's scenarios come from: a name (shown in results) and a family to sample."""
+
+    name: str
+    family: Family
+
+
+@dataclass(frozen=True)
+class Split:
+    """A versioned list of scenarios: its sources, cycled, and its seed block."""
+
+    name: str  # e.g. "iid-v0"
+    description: str
+    sources: tuple[Source, ...]
+    offset: int  # this split's seeds start at EVAL_SEED_BASE + offset
+    episodes: int = 100  # the default number of episodes
+
+    @property
+    def base_name(self) -> str:
+        """The name without its version (``iid`` for ``iid-v0``)."""
+        return self.name.rsplit("-v", 1)[0]
+
+    def seed(self, index: int) -> int:
+        """The seed of episode ``index``."""
+        if not 0 <= index < SPLIT_BLOCK:
+            raise BenchmarkError(f"a split has at most {SPLIT_BLOCK} episodes, asked for episode {index}")
+        return EVAL_SEED_BASE + self.offset + index
+
+
+@dataclass(frozen=True)
+class EvalScenario:
+    """One scenario to evaluate every policy on."""
+
+    index: int  # position in the split (0, 1, ...)
+    split: str  # the split's name, or "scenarios:FOLDER"
+    source: str  # the family it was drawn from, or the file it was read from
+    seed: int  # the env's reset seed (and the random policy's)
+    scenario: Scenario
+
+
+def _families(*names: str) -> tuple[Source, ...]:
+    return tuple(Source(name, get_family(name)) for name in names)
+
+
+def _push_pattern(pattern: str) -> Source:
+    draw: Callable[[np.random.Generator], Scenario] = lambda rng: draw_push(rng, pattern)  # noqa: E731
+    return Source(f"push-{pattern}", Family(f"push-{pattern}", f"Table I pattern {pattern}", EXTENT, draw))
+
+
+SPLITS: dict[str, Split] = {
+    split.name: split
+    for split in (
+        Split("iid-v0", "unseen seeds of the training families", _families(*TRAINING_FAMILIES), 0 * SPLIT_BLOCK),
+        Split("more-objects-v0", "three and four objects", _families("multi-3", "multi-4"), 1 * SPLIT_BLOCK),
+        Split("layouts-v0", "room and corridor layouts held out", _families(*HELD_OUT_FAMILIES), 2 * SPLIT_BLOCK),
+        Split(
+            "push-required-v0",
+            "every scenario needs a push, Table I patterns A-E",
+            tuple(_push_pattern(p) for p in "ABCDE"),
+            3 * SPLIT_BLOCK,
+        ),
+    )
+}
+
+
+def get_split(name: str) -> Split:
+    """The split called ``name`` (``iid`` means its newest version); :class:`BenchmarkError` otherwise."""
+    if name in SPLITS:
+        return SPLITS[name]
+    versions = sorted((s for s in SPLITS.values() if s.base_name == name), key=lambda s: int(s.name.rsplit("v", 1)[1]))
+    if versions:
+        return versions[-1]
+    known = ", ".join(sorted({s.base_name for s in SPLITS.values()} | set(SPLITS)))
+    raise BenchmarkError(f"unknown split {name!r}; known: {known}")
+
+
+def split_scenarios(split: Split | str, episodes: int | None = None) -> list[EvalScenario]:
+    """The first ``episodes`` scenarios of ``split`` (its default count if ``None``)."""
+    split = get_split(split) if isinstance(split, str) else split
+    count = split.episodes if episodes is None else episodes
+    if count < 1:
+        raise BenchmarkError(f"the number of episodes must be at least 1, got {count}")
+    out = []
+    for index in range(count):
+        source = split.sources[index % len(split.sources)]
+        seed = split.seed(index)
+        scenario = source.family.sample(np.random.default_rng(seed))
+        out.append(EvalScenario(index, split.name, source.name, seed, scenario))
+    return out
+
+
+def folder_scenarios(folder: str | Path, episodes: int | None = None) -> list[EvalScenario]:
+    """The scenario files (``*.json``, in name order) of ``folder``, the first ``episodes`` of them.
+
+    Every file must be a valid scenario whose area lies inside the families' extent
+    (``EXTENT``, the floor a trained policy's lattice covers); :class:`BenchmarkError`
+    names every file that is not.
+    """
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise BenchmarkError(f"{folder} is not a folder of scenario files")
+    files = sorted(folder.glob(SCENARIO_FILES))
+    if not files:
+        raise BenchmarkError(f"{folder} holds no scenario files ({SCENARIO_FILES})")
+    files = files[:episodes] if episodes is not None else files
+    problems, out = [], []
+    for index, path in enumerate(files):
+        try:
+            scenario = Scenario.load(path)
+        except (ScenarioError, OSError) as error:
+            problems.append(f"{path.name}: {error}")
+            continue
+        if not EXTENT.contains_rect(scenario.area):
+            problems.append(f"{path.name}: its area {scenario.area} does not fit inside the trained extent {EXTENT}")
+            continue
+        out.append(EvalScenario(index, f"scenarios:{folder.name}", path.name, EVAL_SEED_BASE + index, scenario))
+    if problems:
+        raise BenchmarkError("unusable scenario files:\n" + "\n".join(problems))
+    return out

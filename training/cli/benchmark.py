@@ -1,0 +1,89 @@
+"""The ``fetchcarry benchmark`` command: learned policies against the MILP expert on a split or a folder.
+
+Exit statuses: 0 done; 2 bad input (an unknown policy or split, a missing or broken run
+folder, an unusable scenario file); 130 interrupted (the finished episodes are kept in
+``OUT_DIR/results.json``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_int
+from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.text import echo
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``benchmark`` to the ``fetchcarry`` parser."""
+    from training.benchmark.splits import SPLITS
+
+    splits = ", ".join(f"{s.base_name} ({s.description})" for s in SPLITS.values())
+    parser = commands.add_parser(
+        "benchmark",
+        help="evaluate policies against the MILP expert on a split or a folder of scenarios",
+        description="Run every policy on the same scenarios and compare it with the MILP expert on each: "
+        "success with a 95 % Wilson interval, objects delivered, cost ratio to the expert, a cost-weighted "
+        "success (SPL), phases and pushes, invalid actions, contacts, time per decision, and the normalised "
+        "score 100 x (R - R_random) / (R_expert - R_random). The expert and random policies always run as "
+        "references. Writes OUT_DIR/results.json (one record per policy and episode, rewritten as episodes "
+        "finish), OUT_DIR/summary.md (the table) and OUT_DIR/splits.png. "
+        f"Splits: {splits}. Evaluation seeds start at 10^9, so they never meet training seeds.",
+        epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
+        "scenario file), 130 interrupted (the finished episodes are kept in results.json).",
+    )
+    parser.add_argument(
+        "--policies",
+        nargs="+",
+        required=True,
+        metavar="POLICY",
+        help="expert, random, random-phases, greedy (where installed) or run folders (as fetchcarry train writes)",
+    )
+    where = parser.add_mutually_exclusive_group(required=True)
+    where.add_argument("--split", metavar="NAME", help="a split name, e.g. iid or iid-v0 (newest version if none)")
+    where.add_argument(
+        "--scenarios",
+        metavar="DIR",
+        help="a folder of scenario files (*.json) whose areas fit inside the families' extent",
+    )
+    parser.add_argument(
+        "--episodes", type=positive_int, metavar="N", help="episodes (default: the split's 100, or every file)"
+    )
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument(
+        "--backend",
+        choices=("process", "ray"),
+        default="process",
+        help="a local process pool (default) or Ray (optional extra: pip install ray)",
+    )
+    parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.set_defaults(handler=run_benchmark_command)
+
+
+def run_benchmark_command(args: argparse.Namespace) -> int:
+    from training.benchmark import BenchmarkError, run_benchmark
+    from training.benchmark.runner import RESULTS, SUMMARY
+
+    try:
+        report = run_benchmark(
+            args.policies,
+            out=args.out,
+            split=args.split,
+            scenarios=args.scenarios,
+            episodes=args.episodes,
+            workers=args.workers,
+            backend=args.backend,
+            progress=not args.no_progress,
+        )
+    except BenchmarkError as error:
+        raise UsageError(str(error)) from None
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
+        say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}")
+        return INTERRUPTED
+    echo((report.out / SUMMARY).read_text())
+    echo(f"wrote {len(report.records)} records to {report.out / RESULTS}")
+    return 0
