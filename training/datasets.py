@@ -237,7 +237,7 @@ def _exchange(first: Path, second: Path) -> bool:
 def _description(config: GenerationConfig) -> str:
     source = config.source
     return (
-        f"{config.episodes} episodes of {source.env_id} ({source.label}) by the {source.policy} policy; "
+        f"{config.episodes} episodes of {source.gym_id} ({source.label}) by the {source.policy} policy; "
         f"episode k uses seed {source.seed} + k. Episode metadata holds the seed, the scenario JSON and the "
         "episode's figures; per-step infos hold the planner's figures."
     )
@@ -417,9 +417,6 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
             f"dataset {dataset_id!r} names an unknown env {spec.id!r} (entry point {spec.entry_point!r}); "
             f"only this project's envs are rebuilt: {', '.join(ours)}"
         )
-    if spec.additional_wrappers:
-        names = ", ".join(str(w.name) for w in spec.additional_wrappers)
-        raise UnknownEnvError(f"dataset {dataset_id!r} names an unknown env: it adds wrappers ({names})")
     kwargs = dict(spec.kwargs or {})
     for key, value in kwargs.items():
         allowed = TRUSTED_ENV_KWARGS.get(key)
@@ -428,7 +425,24 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
                 f"dataset {dataset_id!r} names an unknown env: {spec.id} does not take {key}={value!r:.60} "
                 f"from a dataset (allowed: {', '.join(TRUSTED_ENV_KWARGS)})"
             )
+    if spec.additional_wrappers and tuple(spec.additional_wrappers) != _own_wrappers(spec.id, kwargs):
+        names = ", ".join(str(w.name) for w in spec.additional_wrappers)
+        raise UnknownEnvError(f"dataset {dataset_id!r} names an unknown env: it adds wrappers ({names})")
     return spec.id, kwargs
+
+
+def _own_wrappers(env_id: str, kwargs: dict[str, Any]) -> tuple[Any, ...]:
+    """The wrappers this project's entry point itself puts around the env (``FetchCarryPushPhases-v0``'s)."""
+    import gymnasium as gym
+
+    try:
+        env = gym.make(env_id, **kwargs)
+    except Exception:  # kwargs the env refuses: not its own wrappers either
+        return ()
+    try:
+        return tuple(env.spec.additional_wrappers) if env.spec is not None else ()
+    finally:
+        env.close()
 
 
 def make_recorded_env(dataset: Any, dataset_id: str):

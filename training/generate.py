@@ -100,7 +100,7 @@ def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
     seed = source.episode_seed(index)
     env = make_env(source)
     try:
-        return run_episode(env, make_policy(source, env, seed), seed)
+        return run_episode(env, make_policy(source, env, seed), seed, record_masks=source.interface == "phases")
     finally:
         env.close()
 

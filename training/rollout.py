@@ -27,6 +27,7 @@ import numpy as np
 from expert.policy import Decision
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
+from training.phase_recording import MASK_INFO, UNEXPRESSIBLE
 
 # The per-step infos recorded for every episode (Minari needs the same keys at every step):
 # seconds in the planner before the step, whether the policy planned / replanned / repaired its
@@ -55,7 +56,7 @@ class EpisodeFigures:
     objects: int  # objects to deliver
     delivered: int  # objects standing at their goals at the end
     success: bool  # every object delivered and the hand empty
-    outcome: str  # "delivered", "truncated" (time limit), "planner_failed (<status>)", "expert_stuck"
+    outcome: str  # "delivered", "truncated" (time limit), "planner_failed (<status>)", "expert_stuck", "unexpressible"
     failure: str | None  # the policy's reason when it could not act, else None
     steps: int  # actions taken
     episode_return: float  # sum of rewards
@@ -105,6 +106,7 @@ def run_episode(
     *,
     render: bool = False,
     max_steps: int | None = None,
+    record_masks: bool = False,
 ) -> EpisodeRecord:
     """Run one episode of ``policy`` in ``env`` from ``env.reset(seed=seed)`` and record it.
 
@@ -113,7 +115,9 @@ def run_episode(
     policy (:class:`~expert.policy.ExpertPolicy`) reports each step through its
     ``last_decision`` and its totals through ``stats``. ``render`` keeps an rgb frame per
     state (the env must have ``render_mode="rgb_array"``). ``max_steps`` caps the episode
-    for envs without a time limit.
+    for envs without a time limit. ``record_masks`` (an env with ``action_masks()``, such
+    as ``FetchCarryPushPhases-v0``) adds the per-step info ``action_mask``: each state's
+    mask, the reset's first (the mask the step from that state was chosen under).
     """
     _reset_policy(policy, seed)
     clock = _Clock()
@@ -127,7 +131,10 @@ def run_episode(
     rewards: list[float] = []
     terminations: list[bool] = []
     truncations: list[bool] = []
+    masks = env.get_wrapper_attr("action_masks") if record_masks else None
     infos = [{**dict.fromkeys(INFO_KEYS, 0), "objective": math.nan, "delivered": _delivered(unwrapped)}]
+    if masks is not None:
+        infos[0][MASK_INFO] = masks()
     failure: Decision | None = None
     first_objective: float | None = None
     episode_start = True
@@ -164,6 +171,8 @@ def run_episode(
                 "delivered": _delivered(unwrapped),
             }
         )
+        if masks is not None:
+            infos[-1][MASK_INFO] = masks()
         if render:
             frames.append(env.render())
         if terminated or truncated:
@@ -203,7 +212,7 @@ def run_episode(
         rewards=np.asarray(rewards, dtype=np.float64),
         terminations=np.asarray(terminations, dtype=bool),
         truncations=np.asarray(truncations, dtype=bool),
-        infos={key: np.asarray([i[key] for i in infos]) for key in INFO_KEYS},
+        infos={key: np.asarray([i[key] for i in infos]) for key in infos[0]},
         figures=figures,
         states=states,
         frames=frames,
@@ -229,6 +238,8 @@ def _outcome(success: bool, failure: Decision | None) -> str:
         return "delivered"
     if failure is None:
         return "truncated"
+    if failure.status == UNEXPRESSIBLE:
+        return UNEXPRESSIBLE
     if failure.status in ("infeasible", "time_limit") and failure.failure.startswith("no plan"):
         return f"planner_failed ({failure.status})"
     return "expert_stuck"

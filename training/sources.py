@@ -12,6 +12,8 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 
 ENV_ID = "FetchCarryPush-v0"
+PHASES_ENV_ID = "FetchCarryPushPhases-v0"
+INTERFACES = ("env", "phases")  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
 
@@ -21,6 +23,9 @@ class EpisodeSource:
     """Where episodes come from: the env (a family or one scenario), the policy and the seeds.
 
     Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
+    ``interface`` is the action interface episodes are recorded in: ``env`` (the env's
+    own ``MultiDiscrete`` actions, ``env_id``) or ``phases`` (``FetchCarryPushPhases-v0``'s
+    candidate indices, with each state's candidate mask; see :mod:`training.phase_recording`).
     """
 
     family: str | None = None  # a scenario family name, or
@@ -29,8 +34,11 @@ class EpisodeSource:
     policy: str = "expert"
     time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
     env_id: str = ENV_ID
+    interface: str = "env"
 
     def __post_init__(self) -> None:
+        if self.interface not in INTERFACES:
+            raise UsageError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
         if (self.family is None) == (self.scenario is None):
             raise UsageError("give exactly one of a scenario family and a fixed scenario")
         if self.family is not None:
@@ -47,6 +55,11 @@ class EpisodeSource:
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
         return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+
+    @property
+    def gym_id(self) -> str:
+        """The id ``gym.make`` builds: ``env_id``, or ``FetchCarryPushPhases-v0`` for the ``phases`` interface."""
+        return PHASES_ENV_ID if self.interface == "phases" else self.env_id
 
     @property
     def label(self) -> str:
@@ -70,7 +83,10 @@ class GenerationConfig:
 
     def manifest(self) -> dict[str, Any]:
         """The options that identify the staged episodes (everything but how many there are)."""
-        return {"dataset_id": self.dataset_id, **asdict(self.source)}
+        manifest = {"dataset_id": self.dataset_id, **asdict(self.source)}
+        if manifest["interface"] == "env":  # datasets made before the interface existed keep their manifest
+            del manifest["interface"]
+        return manifest
 
 
 def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
@@ -79,11 +95,15 @@ def make_env(source: EpisodeSource, render_mode: str | None = None, **render_opt
 
     import fetchcarry_env  # noqa: F401  (registers the env ids)
 
-    return gym.make(source.env_id, render_mode=render_mode, **source.env_kwargs, **render_options)
+    return gym.make(source.gym_id, render_mode=render_mode, **source.env_kwargs, **render_options)
 
 
 def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
-    """The policy named by ``source.policy`` for ``env``."""
+    """The policy named by ``source.policy`` for ``env`` (acting in ``source.interface``)."""
+    if source.interface == "phases":
+        from training.phase_recording import make_phase_policy
+
+        return make_phase_policy(source.policy, env, seed, time_limit=source.time_limit)
     if source.policy == "expert":
         from expert.policy import ExpertPolicy
 

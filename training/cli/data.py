@@ -41,6 +41,14 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
     )
     add_source_arguments(parser)
     parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
+    parser.add_argument(
+        "--interface",
+        choices=("env", "phases"),
+        default="env",
+        help="record the env's own actions (FetchCarryPush-v0, default) or candidate phases "
+        "(FetchCarryPushPhases-v0: actions are candidate indices, each state's mask is the per-step info "
+        "action_mask; an expert action no candidate expresses ends its episode with the outcome unexpressible)",
+    )
     parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
     parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
     parser.add_argument(

@@ -62,6 +62,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
         seed=args.seed,
         policy=policy or args.policy,
         time_limit=args.time_limit,
+        interface=getattr(args, "interface", "env"),
     )
 
 

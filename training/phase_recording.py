@@ -1,0 +1,87 @@
+"""Policies that act in the candidate-phase interface (``FetchCarryPushPhases-v0``) for recording.
+
+A dataset recorded with ``interface="phases"`` stores candidate indices as actions and
+each state's candidate mask as the per-step info ``action_mask``
+(:data:`MASK_INFO`), so a learner trains from the Minari dataset alone.
+
+The expert plans in env actions; :class:`PhaseExpert` maps each of them to the allowed
+candidate that stands for it (:meth:`PhaseActions.index_of`). An expert action that
+no allowed candidate expresses ends the episode there, *unexpressible*: the recorded
+last step is a masked candidate (the env refuses it and changes nothing; its mask row
+says it was not allowed, so learners drop it) and the episode is truncated with the
+outcome ``unexpressible`` (counted in the dataset's outcomes). Recording the expert's
+own env action instead would put an action outside ``Discrete(K)`` into the dataset,
+and replay would no longer be exact.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from expert.policy import Decision
+
+MASK_INFO = "action_mask"  # per-step info of a phases dataset: the state's candidate mask (bool, K)
+UNEXPRESSIBLE = "unexpressible"  # the failure status (and episode outcome) of an expert action no candidate expresses
+
+
+class PhaseExpert:
+    """:class:`expert.ExpertPolicy` on a phase env, answering with candidate indices (``predict`` protocol)."""
+
+    def __init__(self, env: Any, *, time_limit: float) -> None:
+        from expert.policy import ExpertPolicy
+
+        self.env = env
+        self.expert = ExpertPolicy(env, time_limit=time_limit)
+        self.last_decision: Decision | None = None
+        self.unexpressible = 0  # expert actions no candidate expressed (one ends an episode)
+
+    @property
+    def stats(self) -> Any:
+        return self.expert.stats
+
+    def reset(self) -> None:
+        self.expert.reset()
+        self.last_decision = None
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+        action_masks: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, Any]:
+        """The candidate that stands for the expert's action; a masked one (refused) when none does."""
+        action, _ = self.expert.predict(observation, episode_start=episode_start, deterministic=True)
+        decision = self.expert.last_decision
+        index = self.env.get_wrapper_attr("index_of")(action)
+        if index is None:
+            self.unexpressible += 1
+            mask = self.env.get_wrapper_attr("action_masks")()
+            masked = np.flatnonzero(~mask)
+            if masked.size == 0:
+                raise RuntimeError("every candidate is allowed: an unexpressible action has no masked stand-in")
+            reason = f"{UNEXPRESSIBLE}: no allowed candidate stands for the expert's action {np.asarray(action)}"
+            self.last_decision = Decision(
+                planned=decision.planned if decision else False,
+                replanned=decision.replanned if decision else False,
+                reason=reason,
+                planning_s=decision.planning_s if decision else 0.0,
+                status=UNEXPRESSIBLE,
+                objective=decision.objective if decision else None,
+                failure=reason,
+            )
+            return np.int64(masked[0]), state
+        self.last_decision = decision
+        return np.int64(index), state
+
+
+def make_phase_policy(name: str, env: Any, seed: int | None, *, time_limit: float) -> Any:
+    """The recording policy ``name`` (``expert`` or ``random``) for a phase env."""
+    if name == "expert":
+        return PhaseExpert(env, time_limit=time_limit)
+    from training.baselines.random_phases import RandomPhasePolicy
+
+    return RandomPhasePolicy(env, seed=seed)
