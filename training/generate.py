@@ -206,8 +206,15 @@ def run_episodes(
     workers: int = 1,
     backend: str = "process",
     ray_address: str | None = None,
-) -> Iterator[tuple[int, EpisodeRecord]]:
-    """Episodes ``indices`` of ``source`` as ``(index, record)``, as they finish (not in order when parallel)."""
+    episode: Callable[[Any, int], Any] | None = None,
+) -> Iterator[tuple[int, Any]]:
+    """Episodes ``indices`` of ``source`` as ``(index, record)``, as they finish (not in order when parallel).
+
+    ``episode(source, index)`` is what each worker runs (default :func:`run_indexed_episode`);
+    another module-level function (DAgger's labelling) runs on the same pool or Ray backend,
+    with ``source`` any picklable task description.
+    """
+    episode = run_indexed_episode if episode is None else episode
     if workers < 1:
         raise UsageError(f"the number of workers must be at least 1, got {workers}")
     if backend not in BACKENDS:
@@ -215,15 +222,17 @@ def run_episodes(
     if not indices:
         return
     if backend == "ray":
-        yield from _run_ray(source, indices, workers, ray_address)
+        yield from _run_ray(source, indices, workers, ray_address, episode)
     elif workers == 1:
         for index in indices:
-            yield index, run_indexed_episode(source, index)
+            yield index, episode(source, index)
     else:
-        yield from _run_pool(source, indices, workers)
+        yield from _run_pool(source, indices, workers, episode)
 
 
-def _run_pool(source: EpisodeSource, indices: list[int], workers: int) -> Iterator[tuple[int, EpisodeRecord]]:
+def _run_pool(
+    source: Any, indices: list[int], workers: int, episode: Callable[[Any, int], Any]
+) -> Iterator[tuple[int, Any]]:
     # spawn: the workers start clean (no simulator or solver state inherited from this process).
     context = multiprocessing.get_context("spawn")
     pool = ProcessPoolExecutor(
@@ -231,7 +240,7 @@ def _run_pool(source: EpisodeSource, indices: list[int], workers: int) -> Iterat
     )
     finished_cleanly = False
     try:
-        pending = {pool.submit(run_indexed_episode, source, index): index for index in indices}
+        pending = {pool.submit(episode, source, index): index for index in indices}
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
@@ -279,8 +288,8 @@ def _terminate_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def _run_ray(
-    source: EpisodeSource, indices: list[int], workers: int, address: str | None
-) -> Iterator[tuple[int, EpisodeRecord]]:
+    source: Any, indices: list[int], workers: int, address: str | None, episode: Callable[[Any, int], Any]
+) -> Iterator[tuple[int, Any]]:
     try:
         import ray
     except ModuleNotFoundError:
@@ -291,7 +300,7 @@ def _run_ray(
             ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
         else:
             ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(run_indexed_episode)
+    remote = ray.remote(num_cpus=1)(episode)
     in_flight_limit = 2 * workers  # keep few episodes in flight: an interruption loses only those
     queue = list(indices)
     pending: dict[Any, int] = {}

@@ -7,7 +7,7 @@ from typing import Any
 
 
 def load_policy(path: str | Path, env: Any = None) -> Any:
-    """The policy of a run folder (``config.json``'s ``kind`` says which baseline); ``ValueError`` otherwise."""
-    from training.baselines.bc import load_bc
+    """The policy of a run folder (``config.json``'s ``kind``: bc, dagger or ppo); ``ValueError`` otherwise."""
+    from training.baselines.runs import load_policy as load_run
 
-    return load_bc(path, env)
+    return load_run(path, env)

@@ -1,0 +1,244 @@
+"""DAgger on the candidate-phase interface, with the MILP expert labelling the learner's states.
+
+Iteration 0 is behaviour cloning on ``demonstrations`` expert episodes (seeds ``0 ..
+demonstrations-1`` of the family: the seeds ``fetchcarry generate`` uses by default,
+so BC on such a dataset and DAgger start from the same scenarios). Each later
+iteration runs the current learner (deterministic, masked) for
+``episodes_per_iteration`` episodes on new seeds (from :data:`LEARNER_SEED_BASE`); at
+every state it visits, :class:`expert.ExpertPolicy` says what it would do, mapped to
+the allowed candidate that stands for it (an expert action no candidate expresses, or
+the expert's idle fallback, gives no label). The labelled states join the aggregate
+and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), as in
+Ross et al. (2011) with beta = 0 after the first iteration.
+
+Labelling episodes run on the worker pool (or Ray) of ``fetchcarry generate``
+(:func:`training.generate.run_episodes`): the learner's weights travel with the task.
+After each iteration the learner is measured on held-out seeds (from
+:data:`HELDOUT_SEED_BASE`, never trained on) and ``metrics.csv`` gains a row: the
+expert labels so far and the held-out success. A checkpoint after every iteration
+(the aggregate, the weights, the metrics) lets an interrupted run resume.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from fetchcarry_env.observation import Capacity
+from training.baselines import runs
+from training.baselines.bc import BCConfig, BCPolicy, Demonstrations
+from training.baselines.encoders import build_network
+from training.baselines.imitation import finish, fit, run_config
+
+LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
+HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
+
+
+@dataclass(frozen=True)
+class DaggerOptions:
+    """A DAgger run's budget (the defaults are the published budget)."""
+
+    demonstrations: int = 100  # expert episodes of iteration 0
+    iterations: int = 4  # learner iterations after iteration 0
+    episodes_per_iteration: int = 50  # learner episodes labelled per iteration
+    eval_episodes: int = 50  # held-out episodes measured after each iteration
+    time_limit: float = 10.0  # seconds per planning call of the expert
+    epochs: int = 40  # epochs of each retraining
+
+    def __post_init__(self) -> None:
+        if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
+            raise ValueError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
+        if self.time_limit <= 0:
+            raise ValueError(f"the time limit must be positive, got {self.time_limit}")
+
+
+@dataclass(frozen=True)
+class LabelTask:
+    """One labelling job for a worker: whose episodes (expert or learner) on which seeds (picklable)."""
+
+    family: str
+    seed_base: int  # episode k uses seed_base + k
+    time_limit: float
+    network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
+
+
+@dataclass
+class LabelledEpisode:
+    """The labelled states of one episode."""
+
+    observations: np.ndarray  # (n, D) float32
+    masks: np.ndarray  # (n, K) bool
+    labels: np.ndarray  # (n,) int64
+    steps: int  # steps of the episode
+    success: bool
+    unexpressible: int  # states whose expert action no allowed candidate expressed (no label)
+
+
+def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
+    """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+    from expert.policy import ExpertPolicy
+
+    torch.set_num_threads(1)
+    env = gym.make(runs.ENV_ID, family=task.family)
+    try:
+        expert = ExpertPolicy(env, time_limit=task.time_limit)
+        learner = _learner(task.network) if task.network is not None else None
+        masks_of = env.get_wrapper_attr("action_masks")
+        index_of = env.get_wrapper_attr("index_of")
+        step_env_action = env.get_wrapper_attr("step_env_action")
+        observation, info = env.reset(seed=task.seed_base + index)
+        observations, masks, labels = [], [], []
+        steps = unexpressible = 0
+        while True:
+            mask = masks_of()
+            action, _ = expert.predict(observation, episode_start=np.array([steps == 0]), deterministic=True)
+            decision = expert.last_decision
+            label = index_of(action) if decision is None or decision.failure is None else None
+            if label is None:
+                unexpressible += 1
+            else:
+                observations.append(np.asarray(observation["observation"], np.float32))
+                masks.append(mask)
+                labels.append(int(label))
+            if learner is not None:
+                choice, _ = learner.predict(observation, action_masks=mask, deterministic=True)
+                observation, _, terminated, truncated, info = env.step(int(choice))
+            else:  # the expert's own episode, whether or not a candidate expresses its action
+                observation, _, terminated, truncated, info = step_env_action(action)
+            steps += 1
+            if terminated or truncated:
+                break
+        size = env.action_space.n
+    finally:
+        env.close()
+    return LabelledEpisode(
+        np.asarray(observations, np.float32).reshape(len(labels), -1),
+        np.asarray(masks, bool).reshape(len(labels), size),
+        np.asarray(labels, np.int64),
+        steps,
+        bool(info.get("is_success", False)),
+        unexpressible,
+    )
+
+
+def _learner(network: dict[str, Any]) -> BCPolicy:
+    config = BCConfig(**network["config"])
+    capacity = Capacity(**network["capacity"])
+    model = build_network(config, capacity, network["candidates"], torch.zeros(1, network["features"]))
+    model.load_state_dict({k: torch.as_tensor(v) for k, v in network["weights"].items()})
+    return BCPolicy(model, config, capacity)
+
+
+def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, candidates: int, features: int):
+    weights = {k: v.detach().numpy().copy() for k, v in model.state_dict().items()}
+    return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates, "features": features,
+            "weights": weights}  # fmt: skip
+
+
+def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
+    """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
+    from training.learning.evaluate import evaluate
+
+    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
+    return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
+
+
+def train_dagger(
+    family: str,
+    options: DaggerOptions,
+    config: BCConfig,
+    out: str | Path,
+    *,
+    workers: int = 1,
+    backend: str = "process",
+    resume: bool = False,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Run DAgger into the run folder ``out``; return its metrics rows (one per iteration, 0 first)."""
+    import gymnasium as gym
+    from tqdm import tqdm
+
+    import fetchcarry_env  # noqa: F401
+    from training.generate import run_episodes
+
+    config = BCConfig(**{**asdict(config), "epochs": options.epochs})
+    probe = gym.make(runs.ENV_ID, family=family)
+    capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
+    features = int(probe.observation_space["observation"].shape[0])
+    probe.close()
+    run_options = {"family": family, **asdict(options), **asdict(config)}
+    config_json = run_config("dagger", run_options, config, capacity, candidates, features, {})
+    folder, checkpoint = runs.start_run(out, config_json, resume=resume)
+    if runs.read_config(folder).get("complete"):
+        return runs.read_metrics(folder)
+    if checkpoint is not None:
+        aggregate = Demonstrations(checkpoint["observations"].numpy(), checkpoint["masks"].numpy(),
+                                   checkpoint["labels"].numpy())  # fmt: skip
+        rows = [dict(r) for r in checkpoint["metrics"]]
+        episodes_done = int(checkpoint["episodes"])
+        network = build_network(config, capacity, candidates, torch.zeros(1, features))
+        network.load_state_dict(checkpoint["network"])
+    else:
+        aggregate = Demonstrations(np.zeros((0, features), np.float32), np.zeros((0, candidates), bool),
+                                   np.zeros(0, np.int64))  # fmt: skip
+        rows, episodes_done, network = [], 0, None
+    total = options.demonstrations + options.iterations * options.episodes_per_iteration
+    started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
+    with tqdm(total=total, initial=episodes_done, desc=f"dagger {folder.name}", unit="episode",
+              disable=not progress) as bar:  # fmt: skip
+        for iteration in range(len(rows), options.iterations + 1):
+            if iteration == 0:
+                task = LabelTask(family, 0, options.time_limit)
+                count = options.demonstrations
+            else:
+                base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
+                task = LabelTask(family, base, options.time_limit,
+                                 _network_task(network, config, capacity, candidates, features))  # fmt: skip
+                count = options.episodes_per_iteration
+            labelled: dict[int, LabelledEpisode] = {}
+            for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
+                                               episode=label_episode):  # fmt: skip
+                labelled[index] = episode
+                bar.update(1)
+            ordered = [labelled[k] for k in range(count)]
+            aggregate = Demonstrations(
+                np.concatenate([aggregate.observations, *(e.observations for e in ordered)]),
+                np.concatenate([aggregate.masks, *(e.masks for e in ordered)]),
+                np.concatenate([aggregate.labels, *(e.labels for e in ordered)]),
+            )
+            episodes_done += count
+            network, fit_rows = fit(aggregate, config, capacity)
+            policy = BCPolicy(network, config, capacity)
+            success, cost = heldout_success(policy, family, options.eval_episodes)
+            rows.append(
+                {
+                    "iteration": iteration,
+                    "episodes": episodes_done,
+                    "expert_labels": len(aggregate),
+                    "unexpressible": sum(e.unexpressible for e in ordered),
+                    "learner_success": float(np.mean([e.success for e in ordered])) if iteration else float("nan"),
+                    "loss": fit_rows[-1]["loss"],
+                    "accuracy": fit_rows[-1]["accuracy"],
+                    "heldout_success": success,
+                    "heldout_cost": cost,
+                    "seconds": time.perf_counter() - started,
+                }
+            )
+            runs.save_checkpoint(folder, {
+                "observations": torch.as_tensor(aggregate.observations), "masks": torch.as_tensor(aggregate.masks),
+                "labels": torch.as_tensor(aggregate.labels), "network": network.state_dict(), "metrics": rows,
+                "episodes": episodes_done,
+            })  # fmt: skip
+            runs.write_metrics(folder, rows)
+            bar.set_postfix_str(f"labels {len(aggregate)} held-out success {success:.0%}", refresh=False)
+    config_json["data"] = {"expert_labels": len(aggregate), "episodes": episodes_done}
+    finish(folder, network, config_json)
+    return rows

@@ -1,0 +1,236 @@
+"""MaskablePPO (sb3-contrib, unchanged) on the candidate phases, with an actor a BC run can initialise.
+
+The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shaped
+progress; refusals cost more than moving), one env, its flat observation vector
+(``observation["observation"]``) as the policy's input. The policy,
+:class:`CandidateActorCritic`, is sb3-contrib's ``MaskableActorCriticPolicy`` whose
+action head is the BC network of the chosen encoder (:mod:`training.baselines.encoders`):
+the observation goes straight to it (no shared layers), and a separate two-layer MLP
+gives the value. So a BC or DAgger run of the same encoder initialises the actor
+(``init``), and a finished PPO run's actor loads as any other run's network.
+
+Learning curves: after every rollout, ``metrics.csv`` gains a row with the env steps,
+the wall-clock seconds, and the training episodes finished in that rollout: success
+rate, mean return (learning reward), mean paper return and mean travel cost (the
+paper's cost, metres). A checkpoint (weights, optimiser, step count, metrics) is
+written every ``checkpoint_every`` steps and at the end; a resumed run continues from
+the last one (the episode under way at the interruption starts again, so a resumed run
+is complete but not bit-identical to an uninterrupted one).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from fetchcarry_env.observation import Capacity
+from training.baselines import runs
+from training.baselines.bc import BCConfig
+from training.baselines.encoders import build_network
+from training.baselines.imitation import finish, run_config
+
+SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
+VALUE_LAYERS = (256, 256)  # units of the value MLP
+
+
+@dataclass(frozen=True)
+class PPOOptions:
+    """A PPO run's budget and settings (the defaults are the published budget)."""
+
+    steps: int = 20_000  # env steps in total
+    n_steps: int = 256  # env steps per rollout
+    batch_size: int = 64
+    n_epochs: int = 10
+    learning_rate: float = 3e-4
+    gamma: float = 0.99
+    checkpoint_every: int = 1024  # env steps between checkpoints
+    encoder: str = "mlp"  # the actor's network ("mlp" or "set"; with init, the init run's)
+    hidden: int = 256
+    seed: int = 0
+    init: str | None = None  # a bc or dagger run folder whose network starts the actor
+
+    def __post_init__(self) -> None:
+        if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
+            raise ValueError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
+        if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
+            raise ValueError("learning_rate must be positive and gamma in (0, 1]")
+        BCConfig(encoder=self.encoder, hidden=self.hidden)
+
+
+class FlatObservation(gym.ObservationWrapper):
+    """The env's flat observation vector (``observation["observation"]``) as the observation."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.observation_space = env.observation_space["observation"]
+
+    def observation(self, observation: dict[str, np.ndarray]) -> np.ndarray:
+        return observation["observation"]
+
+
+def make_training_env(family: str) -> gym.Env:
+    """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations."""
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+
+    return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
+
+
+def _policy_class() -> type:
+    from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
+
+    class CandidateActorCritic(MaskableActorCriticPolicy):
+        """sb3-contrib's masked actor-critic whose action head is a BC network (``actor``: how to build it)."""
+
+        def __init__(self, *args: Any, actor: dict[str, Any], **kwargs: Any) -> None:
+            self.actor_spec = actor
+            super().__init__(*args, **kwargs)
+
+        def _build(self, lr_schedule: Any) -> None:
+            super()._build(lr_schedule)
+            spec = self.actor_spec
+            scale = torch.as_tensor(np.asarray(spec["scale"], np.float32))
+            self.action_net = build_network(
+                BCConfig(**spec["config"]), Capacity(**spec["capacity"]), spec["candidates"], scale
+            )
+            self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
+
+    return CandidateActorCritic
+
+
+def _scale_observations(family: str, features: int) -> np.ndarray:
+    """Observations of a few resets (seeds 0..), to standardise a scratch MLP's input."""
+    env = make_training_env(family)
+    try:
+        rows = [env.reset(seed=seed)[0] for seed in range(SCALE_RESETS)]
+    finally:
+        env.close()
+    return np.asarray(rows, np.float32).reshape(len(rows), features)
+
+
+def _metrics_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOptions, started: float, bar: Any):
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Curves(BaseCallback):
+        """Rows of learning curves per rollout, checkpoints every ``checkpoint_every`` steps, the progress bar."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            self.returns = self.paper = 0.0
+            self.finished: list[tuple[bool, float, float, float]] = []
+            self.saved_at = rows[-1]["steps"] if rows else 0
+            self.episodes = int(rows[-1]["episodes"]) if rows else 0
+
+        def _on_step(self) -> bool:
+            info = self.locals["infos"][0]
+            self.returns += float(self.locals["rewards"][0])
+            self.paper += float(info.get("paper_reward", 0.0))
+            if self.locals["dones"][0]:
+                self.finished.append((bool(info.get("is_success")), self.returns, self.paper,
+                                      float(info.get("travel_cost", 0.0))))  # fmt: skip
+                self.returns = self.paper = 0.0
+            bar.update(1)
+            return True
+
+        def _on_rollout_end(self) -> None:
+            done = self.finished
+            self.episodes += len(done)
+            rows.append(
+                {
+                    "steps": self.num_timesteps,
+                    "seconds": time.perf_counter() - started,
+                    "episodes": self.episodes,
+                    "success": float(np.mean([d[0] for d in done])) if done else float("nan"),
+                    "return": float(np.mean([d[1] for d in done])) if done else float("nan"),
+                    "paper_return": float(np.mean([d[2] for d in done])) if done else float("nan"),
+                    "travel_cost": float(np.mean([d[3] for d in done])) if done else float("nan"),
+                }
+            )
+            self.finished = []
+            runs.write_metrics(folder, rows)
+            if rows[-1]["success"] == rows[-1]["success"]:
+                bar.set_postfix_str(f"success {rows[-1]['success']:.0%}", refresh=False)
+            if self.num_timesteps - self.saved_at >= options.checkpoint_every:
+                save_ppo_checkpoint(folder, self.model, rows)
+                self.saved_at = self.num_timesteps
+
+    return Curves()
+
+
+def save_ppo_checkpoint(folder: Path, model: Any, rows: list[dict[str, Any]]) -> None:
+    runs.save_checkpoint(folder, {"policy": model.policy.state_dict(), "optimizer": model.policy.optimizer.state_dict(),
+                                  "steps": int(model.num_timesteps), "metrics": rows})  # fmt: skip
+
+
+def train_ppo(
+    family: str, options: PPOOptions, out: str | Path, *, resume: bool = False, progress: bool = True
+) -> list[dict[str, Any]]:
+    """Train MaskablePPO on ``family`` into the run folder ``out``; return the learning-curve rows."""
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3.common.vec_env import DummyVecEnv
+    from tqdm import tqdm
+
+    torch.set_num_threads(1)
+    if options.init is not None:
+        init = runs.read_config(options.init)
+        if init["kind"] not in ("bc", "dagger"):
+            raise ValueError(f"--init needs a bc or dagger run, {options.init} holds a {init['kind']!r} run")
+        options = PPOOptions(**{**asdict(options), "encoder": init["config"]["encoder"],
+                                "hidden": init["config"]["hidden"]})  # fmt: skip
+    config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed)
+    env = DummyVecEnv([lambda: make_training_env(family)])
+    base = env.envs[0].unwrapped
+    capacity, candidates = base.capacity, int(env.action_space.n)
+    features = int(env.observation_space.shape[0])
+    if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
+        raise ValueError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
+    run_options = {"family": family, **asdict(options)}
+    config_json = run_config("ppo", run_options, config, capacity, candidates, features,
+                             {"init": options.init, "steps": options.steps})  # fmt: skip
+    folder, checkpoint = runs.start_run(out, config_json, resume=resume)
+    if runs.read_config(folder).get("complete"):
+        env.close()
+        return runs.read_metrics(folder)
+    torch.manual_seed(options.seed)
+    actor = {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
+             "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+    model = MaskablePPO(
+        _policy_class(),
+        env,
+        learning_rate=options.learning_rate,
+        n_steps=options.n_steps,
+        batch_size=options.batch_size,
+        n_epochs=options.n_epochs,
+        gamma=options.gamma,
+        seed=options.seed,
+        device="cpu",
+        verbose=0,
+        policy_kwargs={"actor": actor, "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)}},
+    )
+    rows: list[dict[str, Any]] = []
+    if checkpoint is not None:
+        model.policy.load_state_dict(checkpoint["policy"])
+        model.policy.optimizer.load_state_dict(checkpoint["optimizer"])
+        model.num_timesteps = int(checkpoint["steps"])
+        rows = [dict(r) for r in checkpoint["metrics"]]
+    elif options.init is not None:
+        weights = torch.load(Path(options.init) / runs.WEIGHTS_FILE, weights_only=True, map_location="cpu")
+        model.policy.action_net.load_state_dict(weights)
+    done = model.num_timesteps
+    started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
+    try:
+        with tqdm(total=options.steps, initial=done, desc=f"ppo {folder.name}", unit="step",
+                  disable=not progress) as bar:  # fmt: skip
+            if done < options.steps:
+                model.learn(options.steps - done, callback=_metrics_callback(rows, folder, options, started, bar),
+                            reset_num_timesteps=checkpoint is None)  # fmt: skip
+        save_ppo_checkpoint(folder, model, rows)
+        finish(folder, model.policy.action_net, config_json)
+    finally:
+        env.close()
+    return rows

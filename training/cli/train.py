@@ -1,0 +1,305 @@
+"""The training commands: ``fetchcarry train bc|dagger|ppo``.
+
+Each writes a run folder (``config.json``, ``metrics.csv``, ``checkpoint.pt``,
+``model.pt``; see :mod:`training.baselines.runs`) that ``fetchcarry benchmark`` and
+``fetchcarry rollout --policy RUN_DIR`` take, and ``training.load_policy(path)`` loads.
+
+Exit statuses: 0 trained (also when the run folder already held the complete run);
+2 bad input; 130 interrupted (the last checkpoint is kept: the same command with
+``--resume`` finishes the run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.text import echo
+
+RUN_EPILOG = (
+    "The run folder holds config.json (the kind, the interface and every option), metrics.csv, checkpoint.pt and, "
+    "once finished, model.pt. Exit status: 0 trained, 2 bad input, 130 interrupted (the last checkpoint is kept: "
+    "run the same command with --resume to finish)."
+)
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``train`` (``bc``, ``dagger``, ``ppo``) to the ``fetchcarry`` parser."""
+    from training.baselines.bc import BCConfig
+
+    defaults = BCConfig()
+    parser = commands.add_parser(
+        "train",
+        help="train a learned baseline (bc, dagger, ppo) into a run folder",
+        description="Train a learned policy on the candidate-phase interface (FetchCarryPushPhases-v0) into a "
+        "run folder. Deterministic on CPU for one --seed.",
+    )
+    kinds = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
+
+    bc = kinds.add_parser(
+        "bc",
+        help="behaviour cloning on a Minari dataset recorded with --interface phases",
+        description="Behaviour cloning: a network scores every candidate phase from the observation, trained "
+        "with cross-entropy on the expert's choices among the allowed candidates of a dataset made by "
+        "'fetchcarry generate ... --interface phases'.",
+        epilog=RUN_EPILOG,
+    )
+    bc.add_argument("--dataset", required=True, metavar="ID", help="Minari dataset id (made with --interface phases)")
+    _network_arguments(bc, defaults)
+    _run_arguments(bc)
+    bc.set_defaults(handler=run_train_bc)
+
+    from training.baselines.dagger import DaggerOptions
+
+    dagger_defaults = DaggerOptions()
+    dagger = kinds.add_parser(
+        "dagger",
+        help="DAgger: the learner acts, the MILP expert labels the states it visits",
+        description="DAgger: BC on expert demonstrations, then iterations in which the learner acts on new seeds "
+        "of the family, the MILP expert labels every state it visits (mapped to candidates; an action no "
+        "candidate expresses gives no label) and the network is retrained on the aggregate. Labelling runs on "
+        "the same worker pool (or Ray) as fetchcarry generate. metrics.csv: one row per iteration with the "
+        "expert labels so far and the success on held-out seeds.",
+        epilog=RUN_EPILOG,
+    )
+    dagger.add_argument("--family", required=True, metavar="NAME", help="scenario family (basic, push, ...)")
+    dagger.add_argument(
+        "--demonstrations",
+        type=positive_int,
+        default=dagger_defaults.demonstrations,
+        metavar="N",
+        help=f"expert episodes before the first iteration (default {dagger_defaults.demonstrations})",
+    )
+    dagger.add_argument(
+        "--iterations",
+        type=positive_int,
+        default=dagger_defaults.iterations,
+        metavar="N",
+        help=f"DAgger iterations (default {dagger_defaults.iterations})",
+    )
+    dagger.add_argument(
+        "--episodes-per-iteration",
+        type=positive_int,
+        default=dagger_defaults.episodes_per_iteration,
+        metavar="N",
+        help=f"learner episodes per iteration (default {dagger_defaults.episodes_per_iteration})",
+    )
+    dagger.add_argument(
+        "--eval-episodes",
+        type=positive_int,
+        default=dagger_defaults.eval_episodes,
+        metavar="N",
+        help=f"held-out episodes per iteration (default {dagger_defaults.eval_episodes})",
+    )
+    dagger.add_argument(
+        "--time-limit",
+        type=positive_float,
+        default=dagger_defaults.time_limit,
+        metavar="S",
+        help=f"seconds per planning call of the expert (default {dagger_defaults.time_limit:g})",
+    )
+    dagger.add_argument("--workers", type=positive_int, default=1, metavar="W", help="labelling workers (default 1)")
+    dagger.add_argument(
+        "--backend", choices=("process", "ray"), default="process", help="a local process pool (default) or Ray"
+    )
+    _network_arguments(dagger, defaults, epochs=dagger_defaults.epochs)
+    _run_arguments(dagger)
+    dagger.set_defaults(handler=run_train_dagger)
+
+    from training.baselines.ppo import PPOOptions
+
+    ppo_defaults = PPOOptions()
+    ppo = kinds.add_parser(
+        "ppo",
+        help="MaskablePPO (sb3-contrib) on the candidate phases with the learning reward",
+        description="sb3-contrib's MaskablePPO on FetchCarryPushPhases-v0 with the learning reward (potential-"
+        "shaped progress, refusals cost more than moving). The actor is the BC network of --encoder, so --init "
+        "RUN_DIR (a bc or dagger run of the same encoder) starts it from those weights. metrics.csv: one row per "
+        "rollout with env steps, wall-clock seconds, and the training episodes' success, return and the paper's "
+        "travel cost.",
+        epilog=RUN_EPILOG,
+    )
+    ppo.add_argument("--family", required=True, metavar="NAME", help="scenario family (basic, push, ...)")
+    ppo.add_argument(
+        "--steps",
+        type=positive_int,
+        default=ppo_defaults.steps,
+        metavar="N",
+        help=f"env steps in total (default {ppo_defaults.steps})",
+    )
+    ppo.add_argument("--init", metavar="RUN_DIR", help="a bc or dagger run folder whose network starts the actor")
+    ppo.add_argument(
+        "--n-steps",
+        type=positive_int,
+        default=ppo_defaults.n_steps,
+        metavar="N",
+        help=f"env steps per rollout (default {ppo_defaults.n_steps})",
+    )
+    ppo.add_argument(
+        "--learning-rate",
+        type=positive_float,
+        default=ppo_defaults.learning_rate,
+        metavar="LR",
+        help=f"Adam step size (default {ppo_defaults.learning_rate:g})",
+    )
+    ppo.add_argument(
+        "--checkpoint-every",
+        type=positive_int,
+        default=ppo_defaults.checkpoint_every,
+        metavar="N",
+        help=f"env steps between checkpoints (default {ppo_defaults.checkpoint_every})",
+    )
+    ppo.add_argument(
+        "--encoder",
+        choices=("mlp", "set"),
+        default=defaults.encoder,
+        help=f"the actor's network (default {defaults.encoder}; with --init, the init run's)",
+    )
+    ppo.add_argument(
+        "--hidden",
+        type=positive_int,
+        default=defaults.hidden,
+        metavar="N",
+        help=f"units per hidden layer / token width (default {defaults.hidden})",
+    )
+    _run_arguments(ppo)
+    ppo.set_defaults(handler=run_train_ppo)
+
+
+def _network_arguments(parser: argparse.ArgumentParser, defaults: Any, epochs: int | None = None) -> None:
+    parser.add_argument(
+        "--encoder",
+        choices=("mlp", "set"),
+        default=defaults.encoder,
+        help=f"flat MLP or object-centric set encoder (default {defaults.encoder})",
+    )
+    parser.add_argument(
+        "--hidden",
+        type=positive_int,
+        default=defaults.hidden,
+        metavar="N",
+        help=f"units per hidden layer / token width (default {defaults.hidden})",
+    )
+    epochs = defaults.epochs if epochs is None else epochs
+    parser.add_argument(
+        "--epochs",
+        type=positive_int,
+        default=epochs,
+        metavar="N",
+        help=f"epochs (per iteration for dagger; default {epochs})",
+    )
+    parser.add_argument(
+        "--batch-size",
+        type=positive_int,
+        default=defaults.batch_size,
+        metavar="N",
+        help=f"minibatch size (default {defaults.batch_size})",
+    )
+    parser.add_argument(
+        "--learning-rate",
+        type=positive_float,
+        default=defaults.learning_rate,
+        metavar="LR",
+        help=f"Adam step size (default {defaults.learning_rate:g})",
+    )
+
+
+def _run_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seed", type=whole_number, default=0, metavar="N", help="training seed (default 0)")
+    parser.add_argument("--out", required=True, metavar="RUN_DIR", help="the run folder to write")
+    parser.add_argument("--resume", action="store_true", help="finish the interrupted run in RUN_DIR")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _network_config(args: argparse.Namespace) -> Any:
+    from training.baselines.bc import BCConfig
+
+    try:
+        return BCConfig(encoder=args.encoder, hidden=args.hidden, epochs=args.epochs, batch_size=args.batch_size,
+                        learning_rate=args.learning_rate, seed=args.seed)  # fmt: skip
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+
+
+def _guarded(train: Any, args: argparse.Namespace) -> int:
+    """Run ``train()``; library ``ValueError`` is bad input, Ctrl-C keeps the checkpoint."""
+    try:
+        summary = train()
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable
+        say(f"interrupted: the last checkpoint in {args.out} is kept; add --resume to the same command to finish")
+        return INTERRUPTED
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    echo(summary)
+    return 0
+
+
+def run_train_bc(args: argparse.Namespace) -> int:
+    from training.baselines.imitation import train_bc_run
+    from training.baselines.runs import read_metrics
+
+    config = _network_config(args)
+
+    def train() -> str:
+        train_bc_run(args.dataset, config, args.out, resume=args.resume, progress=not args.no_progress)
+        last = read_metrics(args.out)[-1]
+        return (f"bc ({config.encoder}) on {args.dataset}: {int(last['epoch'])} epochs, loss {last['loss']:.3f}, "
+                f"accuracy {last['accuracy']:.1%}\nrun folder {args.out}")  # fmt: skip
+
+    return _guarded(train, args)
+
+
+def run_train_dagger(args: argparse.Namespace) -> int:
+    from training.baselines.dagger import DaggerOptions, train_dagger
+    from training.sources import EpisodeSource
+
+    EpisodeSource(family=args.family)  # checks the family's name (UsageError)
+    config = _network_config(args)
+    options = DaggerOptions(
+        demonstrations=args.demonstrations,
+        iterations=args.iterations,
+        episodes_per_iteration=args.episodes_per_iteration,
+        eval_episodes=args.eval_episodes,
+        time_limit=args.time_limit,
+        epochs=args.epochs,
+    )
+
+    def train() -> str:
+        rows = train_dagger(args.family, options, config, args.out, workers=args.workers, backend=args.backend,
+                            resume=args.resume, progress=not args.no_progress)  # fmt: skip
+        last = rows[-1]
+        return (f"dagger ({config.encoder}) on {args.family}: {int(last['iteration'])} iterations, "
+                f"{int(last['expert_labels'])} expert labels, held-out success {last['heldout_success']:.1%}\n"
+                f"run folder {args.out}")  # fmt: skip
+
+    return _guarded(train, args)
+
+
+def run_train_ppo(args: argparse.Namespace) -> int:
+    from training.baselines.ppo import PPOOptions, train_ppo
+    from training.sources import EpisodeSource
+
+    EpisodeSource(family=args.family)  # checks the family's name (UsageError)
+    options = PPOOptions(
+        steps=args.steps,
+        n_steps=args.n_steps,
+        learning_rate=args.learning_rate,
+        checkpoint_every=args.checkpoint_every,
+        encoder=args.encoder,
+        hidden=args.hidden,
+        seed=args.seed,
+        init=args.init,
+    )
+
+    def train() -> str:
+        rows = train_ppo(args.family, options, args.out, resume=args.resume, progress=not args.no_progress)
+        last = rows[-1] if rows else {}
+        return (f"ppo ({options.encoder}) on {args.family}: {int(last.get('steps', 0))} env steps, recent training "
+                f"success {last.get('success', float('nan')):.1%}\nrun folder {args.out}")  # fmt: skip
+
+    return _guarded(train, args)
