@@ -31,13 +31,24 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 
 # ---------------------------------------------------------------------------- helpers
-def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True) -> None:
-    """``--scenario``/``--family``, ``--seed``, ``--policy`` and ``--time-limit``: where episodes come from."""
+def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True, runs: bool = False) -> None:
+    """``--scenario``/``--family``, ``--seed``, ``--policy`` and ``--time-limit``: where episodes come from.
+
+    With ``runs``, ``--policy`` also takes a run folder of ``fetchcarry train``.
+    """
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--scenario", metavar="FILE", help="one fixed scenario (fetchcarry-scenario/1 JSON)")
     source.add_argument("--family", metavar="NAME", help="random scenarios of this family (basic, push, ...)")
     parser.add_argument("--seed", type=whole_number, default=0, metavar="N", help="reset seed (default 0)")
-    if policy:
+    if policy and runs:
+        parser.add_argument(
+            "--policy",
+            default="expert",
+            metavar="POLICY",
+            help="expert (the MILP expert, default), random (the masked random policy) or RUN_DIR (a run folder "
+            "of fetchcarry train: bc, dagger or ppo, acting in the candidate phases)",
+        )
+    elif policy:
         parser.add_argument(
             "--policy",
             choices=("expert", "random"),
@@ -56,11 +67,14 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
 def episode_source(args: argparse.Namespace, policy: str | None = None) -> EpisodeSource:
     """The ``EpisodeSource`` the options of :func:`add_source_arguments` describe."""
     scenario = None if args.scenario is None else load_scenario(Path(args.scenario)).to_dict()
+    policy = policy or args.policy
+    if policy not in ("expert", "random"):
+        raise UsageError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
     return EpisodeSource(
         family=args.family,
         scenario=scenario,
         seed=args.seed,
-        policy=policy or args.policy,
+        policy=policy,
         time_limit=args.time_limit,
         interface=getattr(args, "interface", "env"),
     )
@@ -126,9 +140,15 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
     return None
 
 
-def _run_one(source: Any, picture: Path | None) -> Any:
+def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
+    """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
     from training.generate import make_env, make_policy
     from training.rollout import run_episode
+
+    if run is not None:
+        from dataclasses import replace
+
+        source = replace(source, interface="phases")
 
     if picture is None:
         env = make_env(source)
@@ -138,7 +158,8 @@ def _run_one(source: Any, picture: Path | None) -> Any:
         size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
         env = make_env(source, render_mode="rgb_array", width=size[0], height=size[1])
     try:
-        record = run_episode(env, make_policy(source, env, source.seed), source.seed, render=picture is not None)
+        policy = make_policy(source, env, source.seed) if run is None else _load_run(run, env)
+        record = run_episode(env, policy, source.seed, render=picture is not None)
     finally:
         env.close()
     if picture is not None:
@@ -148,18 +169,38 @@ def _run_one(source: Any, picture: Path | None) -> Any:
     return record
 
 
+def _load_run(run: Path, env: Any) -> Any:
+    from training import load_policy
+
+    try:
+        return load_policy(run, env)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+
+
+def _run_folder(policy: str) -> Path | None:
+    """The run folder ``--policy`` names, or None for ``expert`` and ``random``."""
+    if policy in ("expert", "random"):
+        return None
+    path = Path(policy)
+    if not path.is_dir():
+        raise UsageError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
+    return path
+
+
 # ---------------------------------------------------------------------------- rollout
 def _register_rollout(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "rollout",
         help="run one episode in the physics env and print its figures",
         description="Run one episode of FetchCarryPush-v0 (a fixed scenario, or a family's scenario drawn from "
-        "the seed) with the expert or the random policy, and print its figures: objects delivered, steps, "
+        "the seed) with the expert, the random policy or a trained run folder (in FetchCarryPushPhases-v0), "
+        "and print its figures: objects delivered, steps, "
         "return, path length, collisions, invalid actions, planning time and replans; when the expert cannot "
         "act, why.",
         epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
     )
-    add_source_arguments(parser)
+    add_source_arguments(parser, runs=True)
     parser.add_argument("--render", metavar="PICTURE", help="write the episode as a .gif (every state) or .png")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
     parser.set_defaults(handler=run_rollout)
@@ -167,12 +208,14 @@ def _register_rollout(commands: argparse._SubParsersAction) -> None:
 
 def run_rollout(args: argparse.Namespace) -> int:
     picture = check_picture(args.render)
-    source = episode_source(args)
-    record = _run_one(source, picture)
+    run = _run_folder(args.policy)
+    source = episode_source(args, policy="expert" if run is not None else None)
+    record = _run_one(source, picture, run)
     if args.json:
         print(json.dumps({**record.figures.to_dict(), "picture": str(picture) if picture else None}, indent=2))
     else:
-        echo(_figures_text(record.figures, source.label, source.policy, source.time_limit))
+        label = source.policy if run is None else f"{run} (candidate phases)"
+        echo(_figures_text(record.figures, source.label, label, source.time_limit))
         if picture is not None:
             echo(f"picture    {picture}")
     return 0 if record.figures.success else 1
