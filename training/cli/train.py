@@ -169,6 +169,28 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(ppo)
     ppo.set_defaults(handler=run_train_ppo)
 
+    from training.baselines.dagger import HELDOUT_SEED_BASE
+
+    learned = bench.add_parser(
+        "learned",
+        help="held-out success and cost ratio of trained run folders against the expert",
+        description="Run each run folder's policy (deterministic, masked) for one episode per held-out seed of "
+        "a family in FetchCarryPushPhases-v0, and the MILP expert on the same seeds; print success with a 95 % "
+        "Wilson interval, the cost ratio to the expert (successful episodes), phases, refusals and time per "
+        "decision.",
+    )
+    learned.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders of fetchcarry train")
+    learned.add_argument("--family", required=True, metavar="NAME", help="scenario family (basic, push, ...)")
+    learned.add_argument("--episodes", type=positive_int, default=100, metavar="N", help="held-out seeds (default 100)")
+    learned.add_argument(
+        "--first-seed",
+        type=whole_number,
+        default=HELDOUT_SEED_BASE,
+        metavar="N",
+        help=f"the first held-out seed (default {HELDOUT_SEED_BASE}: never trained on)",
+    )
+    learned.set_defaults(handler=run_bench_learned)
+
 
 def _network_arguments(parser: argparse.ArgumentParser, defaults: Any, epochs: int | None = None) -> None:
     parser.add_argument(
@@ -303,3 +325,21 @@ def run_train_ppo(args: argparse.Namespace) -> int:
                 f"success {last.get('success', float('nan')):.1%}\nrun folder {args.out}")  # fmt: skip
 
     return _guarded(train, args)
+
+
+def run_bench_learned(args: argparse.Namespace) -> int:
+    from training import load_policy
+    from training.learning.evaluate import evaluate, expert_costs, summarise
+    from training.sources import EpisodeSource
+
+    EpisodeSource(family=args.family)  # checks the family's name (UsageError)
+    try:
+        policies = {run: load_policy(run) for run in args.runs}
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    seeds = range(args.first_seed, args.first_seed + args.episodes)
+    expert = expert_costs(args.family, seeds)
+    echo(f"{args.family}: {args.episodes} held-out seeds from {args.first_seed}; the expert solves {len(expert)}")
+    for run, policy in policies.items():
+        echo(summarise(evaluate(policy, args.family, seeds), expert).line(run))
+    return 0

@@ -1,0 +1,280 @@
+"""Training commands at a tiny budget: phase datasets, BC, DAgger and PPO run folders, resume, loading."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import gymnasium as gym
+import minari
+import numpy as np
+import pytest
+import torch
+
+import fetchcarry_env  # noqa: F401  (registers the env ids)
+import training
+from training.baselines import runs
+from training.baselines.bc import BCConfig
+from training.baselines.dagger import DaggerOptions, train_dagger
+from training.baselines.imitation import demonstrations_from_dataset
+from training.baselines.ppo import PPOOptions, train_ppo
+from training.cli import main
+from training.datasets import replay
+from training.generate import EpisodeSource, GenerationConfig, generate
+from training.phase_recording import MASK_INFO, UNEXPRESSIBLE
+from training.staging import Staging
+
+PHASES_ID = "fetchcarry/basic-phases-test-v0"
+SOURCE = EpisodeSource(family="basic", seed=0, interface="phases")
+EPISODES = 6  # seeds 0..5 of basic: both delivered and unexpressible episodes (see the first test)
+
+
+@pytest.fixture(scope="module")
+def phase_root(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One phases dataset shared by the tests that read it."""
+    root = tmp_path_factory.mktemp("minari")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("MINARI_DATASETS_PATH", str(root))
+        generate(GenerationConfig(PHASES_ID, EPISODES, SOURCE), progress=False)
+    return root
+
+
+@pytest.fixture
+def phases_dataset(phase_root: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(phase_root))
+    return PHASES_ID
+
+
+def _weights(folder: Path) -> dict[str, torch.Tensor]:
+    return torch.load(folder / runs.WEIGHTS_FILE, weights_only=True)
+
+
+def _same_weights(a: Path, b: Path) -> bool:
+    first, second = _weights(a), _weights(b)
+    return first.keys() == second.keys() and all(torch.equal(first[k], second[k]) for k in first)
+
+
+def _without_seconds(rows: list[dict]) -> str:
+    """The rows without their wall-clock seconds, as text (so that NaN equals NaN)."""
+    return json.dumps([{k: v for k, v in row.items() if k != "seconds"} for row in rows])
+
+
+# ---------------------------------------------------------------------------- datasets in the phases interface
+def test_phase_dataset_stores_candidates_and_masks_and_replays(phases_dataset: str) -> None:
+    dataset = minari.load_dataset(phases_dataset)
+    size = gym.make("FetchCarryPushPhases-v0", family="basic").action_space.n
+    outcomes = []
+    for k, episode in enumerate(dataset.iterate_episodes()):
+        mask = episode.infos[MASK_INFO]
+        assert mask.shape == (len(episode.actions) + 1, size) and mask.dtype == bool
+        allowed = mask[np.arange(len(episode.actions)), episode.actions]
+        outcome = dataset.storage.get_episode_metadata([k]).__next__()["outcome"]
+        outcomes.append(outcome)
+        if outcome == UNEXPRESSIBLE:  # the last step is the refused stand-in, every earlier one allowed
+            assert allowed[:-1].all() and not allowed[-1] and episode.truncations[-1]
+        else:
+            assert allowed.all()
+        assert replay(phases_dataset, k).reproduced
+    assert "delivered" in outcomes and UNEXPRESSIBLE in outcomes  # both cases are exercised
+    demonstrations, _ = demonstrations_from_dataset(phases_dataset)
+    assert demonstrations.stats["dropped"] == outcomes.count(UNEXPRESSIBLE)
+    assert demonstrations.masks[np.arange(len(demonstrations)), demonstrations.labels].all()
+
+
+def test_env_interface_manifest_is_unchanged() -> None:
+    manifest = GenerationConfig("fetchcarry/x-v0", 1, EpisodeSource(family="basic")).manifest()
+    assert "interface" not in manifest  # datasets made before --interface keep matching their staging
+    assert GenerationConfig("fetchcarry/x-v0", 1, SOURCE).manifest()["interface"] == "phases"
+
+
+def test_phase_generation_resumes_after_an_interruption() -> None:
+    config = GenerationConfig("fetchcarry/basic-phases-resume-v0", 3, SOURCE)
+
+    def stop(index: int, record: object) -> None:
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        generate(config, progress=False, on_episode=stop)
+    assert len(Staging(config.dataset_id).staged()) == 1
+    report = generate(config, progress=False)
+    assert (report.resumed, report.generated) == (1, 2)
+    assert replay(config.dataset_id, 0).reproduced
+
+
+def test_cli_generate_phases_and_train_bc_rejects_an_env_dataset(tmp_path: Path) -> None:
+    assert main(["generate", "--family", "basic", "--episodes", "1", "--interface", "phases", "--dataset-id",
+                 "fetchcarry/p-v0", "--no-progress"]) == 0  # fmt: skip
+    assert main(["generate", "--family", "basic", "--episodes", "1", "--dataset-id", "fetchcarry/e-v0",
+                 "--no-progress"]) == 0  # fmt: skip
+    status = main(["train", "bc", "--dataset", "fetchcarry/e-v0", "--epochs", "1", "--out", str(tmp_path / "r")])
+    assert status == 2
+
+
+# ---------------------------------------------------------------------------- bc
+def _bc(dataset: str, out: Path, *extra: str) -> int:
+    return main(["train", "bc", "--dataset", dataset, "--epochs", "3", "--hidden", "32", "--out", str(out),
+                 "--no-progress", *extra])  # fmt: skip
+
+
+def test_train_bc_is_deterministic_and_resumes_to_the_same_weights(
+    phases_dataset: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    assert _bc(phases_dataset, tmp_path / "a") == 0
+    assert _bc(phases_dataset, tmp_path / "b") == 0
+    assert _same_weights(tmp_path / "a", tmp_path / "b")
+    assert _without_seconds(runs.read_metrics(tmp_path / "a")) == _without_seconds(runs.read_metrics(tmp_path / "b"))
+    config = json.loads((tmp_path / "a" / runs.CONFIG_FILE).read_text())
+    assert config["kind"] == "bc" and config["interface"] == "phases" and config["complete"]
+    assert config["options"]["dataset"] == phases_dataset and config["options"]["epochs"] == 3
+
+    real, calls = runs.write_metrics, []
+
+    def interrupt_second_epoch(folder: Path, rows: list) -> None:
+        calls.append(len(rows))
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        real(folder, rows)
+
+    monkeypatch.setattr(runs, "write_metrics", interrupt_second_epoch)
+    assert _bc(phases_dataset, tmp_path / "c") == 130
+    monkeypatch.setattr(runs, "write_metrics", real)
+    assert (tmp_path / "c" / runs.CHECKPOINT_FILE).exists() and not (tmp_path / "c" / runs.WEIGHTS_FILE).exists()
+    assert _bc(phases_dataset, tmp_path / "c") == 2  # a run is there: resume it or choose another folder
+    assert _bc(phases_dataset, tmp_path / "c", "--resume") == 0
+    assert _same_weights(tmp_path / "a", tmp_path / "c")
+    assert len(runs.read_metrics(tmp_path / "c")) == 3
+    assert _bc(phases_dataset, tmp_path / "c", "--resume") == 0  # complete: nothing to do
+
+
+def test_rollout_takes_a_run_folder(phases_dataset: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert _bc(phases_dataset, tmp_path / "run") == 0
+    capsys.readouterr()
+    status = main(["rollout", "--family", "basic", "--seed", "100000", "--policy", str(tmp_path / "run"), "--json"])
+    figures = json.loads(capsys.readouterr().out)
+    assert status == (0 if figures["success"] else 1) and figures["steps"] >= 1
+    assert main(["rollout", "--family", "basic", "--policy", str(tmp_path / "missing")]) == 2
+
+
+# ---------------------------------------------------------------------------- loading run folders
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda c: {**c, "surprise": 1},
+        lambda c: {**c, "kind": "sorcery"},
+        lambda c: {k: v for k, v in c.items() if k != "capacity"},
+        lambda c: {**c, "config": {**c["config"], "layers": 9}},
+        lambda c: {**c, "config": {**c["config"], "hidden": "many"}},
+        lambda c: {**c, "candidates": True},
+        lambda c: {**c, "interface": "env"},
+        lambda c: [c],
+    ],
+)
+def test_bad_config_is_a_value_error_and_exit_2(phases_dataset: str, tmp_path: Path, edit) -> None:
+    assert _bc(phases_dataset, tmp_path / "run") == 0
+    file = tmp_path / "run" / runs.CONFIG_FILE
+    file.write_text(json.dumps(edit(json.loads(file.read_text()))))
+    with pytest.raises(ValueError):
+        training.load_policy(tmp_path / "run")
+    assert main(["rollout", "--family", "basic", "--policy", str(tmp_path / "run")]) == 2
+
+
+def test_weights_that_do_not_fit_are_a_value_error(phases_dataset: str, tmp_path: Path) -> None:
+    assert _bc(phases_dataset, tmp_path / "run") == 0
+    torch.save({"nothing": torch.zeros(1)}, tmp_path / "run" / runs.WEIGHTS_FILE)
+    with pytest.raises(ValueError):
+        training.load_policy(tmp_path / "run")
+
+
+# ---------------------------------------------------------------------------- dagger
+TINY_DAGGER = DaggerOptions(demonstrations=2, iterations=1, episodes_per_iteration=2, eval_episodes=2, epochs=2)
+TINY_NET = BCConfig(hidden=16, seed=3)
+
+
+def test_dagger_is_deterministic_and_counts_labels(tmp_path: Path) -> None:
+    first = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "a", progress=False)
+    second = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "b", progress=False)
+    assert _without_seconds(first) == _without_seconds(second)
+    assert _same_weights(tmp_path / "a", tmp_path / "b")
+    assert [row["iteration"] for row in first] == [0, 1]
+    assert 0 < first[0]["expert_labels"] < first[1]["expert_labels"]
+    assert all(0.0 <= row["heldout_success"] <= 1.0 for row in first)
+    policy = training.load_policy(tmp_path / "a")
+    env = gym.make("FetchCarryPushPhases-v0", family="basic")
+    observation, _ = env.reset(seed=1)
+    mask = env.get_wrapper_attr("action_masks")()
+    action, _ = policy.predict(observation, action_masks=mask)
+    assert mask[int(action)]
+
+
+def test_dagger_labels_the_same_on_a_worker_pool(tmp_path: Path) -> None:
+    serial = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "a", progress=False)
+    pooled = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "b", workers=2, progress=False)
+    assert _without_seconds(serial) == _without_seconds(pooled)
+
+
+def test_dagger_resumes_after_an_interruption(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    options = DaggerOptions(demonstrations=2, iterations=2, episodes_per_iteration=1, eval_episodes=1, epochs=2)
+    whole = train_dagger("basic", options, TINY_NET, tmp_path / "whole", progress=False)
+    real = runs.write_metrics
+
+    def stop_after_first_iteration(folder: Path, rows: list) -> None:
+        real(folder, rows)
+        if len(rows) == 2:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(runs, "write_metrics", stop_after_first_iteration)
+    with pytest.raises(KeyboardInterrupt):
+        train_dagger("basic", options, TINY_NET, tmp_path / "cut", progress=False)
+    monkeypatch.setattr(runs, "write_metrics", real)
+    resumed = train_dagger("basic", options, TINY_NET, tmp_path / "cut", resume=True, progress=False)
+    assert _without_seconds(resumed) == _without_seconds(whole)
+    assert _same_weights(tmp_path / "whole", tmp_path / "cut")
+
+
+# ---------------------------------------------------------------------------- ppo
+TINY_PPO = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32, checkpoint_every=32, seed=1)
+
+
+def test_ppo_is_deterministic_and_logs_learning_curves(tmp_path: Path) -> None:
+    first = train_ppo("basic", TINY_PPO, tmp_path / "a", progress=False)
+    second = train_ppo("basic", TINY_PPO, tmp_path / "b", progress=False)
+    assert _without_seconds(first) == _without_seconds(second)
+    assert _same_weights(tmp_path / "a", tmp_path / "b")
+    assert [row["steps"] for row in first] == [32, 64]
+    assert {"seconds", "success", "return", "paper_return", "travel_cost", "episodes"} <= set(first[0])
+    config = runs.read_config(tmp_path / "a")
+    assert config["kind"] == "ppo" and config["options"]["steps"] == 64 and config["complete"]
+    assert type(training.load_policy(tmp_path / "a")).__name__ == "BCPolicy"
+
+
+def test_ppo_starts_from_a_bc_run(phases_dataset: str, tmp_path: Path) -> None:
+    assert _bc(phases_dataset, tmp_path / "bc") == 0
+    options = PPOOptions(
+        steps=32, n_steps=32, batch_size=16, n_epochs=1, learning_rate=1e-12, init=str(tmp_path / "bc")
+    )
+    train_ppo("basic", options, tmp_path / "ppo", progress=False)
+    bc, ppo = _weights(tmp_path / "bc"), _weights(tmp_path / "ppo")
+    assert bc.keys() == ppo.keys() and all(torch.allclose(bc[k], ppo[k], atol=1e-6) for k in bc)
+    assert runs.read_config(tmp_path / "ppo")["options"]["hidden"] == 32  # the init run's network
+
+
+def test_ppo_interrupted_by_ctrl_c_resumes_to_completion(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    options = PPOOptions(steps=96, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32)
+    args = ["train", "ppo", "--family", "basic", "--steps", "96", "--n-steps", "32", "--hidden", "16",
+            "--checkpoint-every", "32", "--out", str(tmp_path / "run"), "--no-progress"]  # fmt: skip
+    real, calls = runs.write_metrics, []
+
+    def interrupt_third_rollout(folder: Path, rows: list) -> None:
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        real(folder, rows)
+
+    monkeypatch.setattr(runs, "write_metrics", interrupt_third_rollout)
+    assert main(args) == 130
+    monkeypatch.setattr(runs, "write_metrics", real)
+    assert runs.load_checkpoint(tmp_path / "run")["steps"] == 64
+    assert main([*args, "--resume"]) == 0
+    rows = runs.read_metrics(tmp_path / "run")
+    assert [row["steps"] for row in rows] == [32, 64, 96]
+    assert runs.read_config(tmp_path / "run")["complete"] and options.steps == 96
