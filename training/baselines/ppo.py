@@ -179,7 +179,7 @@ def train_ppo(
     if options.init is not None:
         init = runs.read_config(options.init)
         if init["kind"] not in ("bc", "dagger"):
-            raise ValueError(f"--init needs a bc or dagger run, {options.init} holds a {init['kind']!r} run")
+            raise ValueError(f"a PPO actor starts from a bc or dagger run; {options.init} holds a {init['kind']!r} run")
         options = PPOOptions(**{**asdict(options), "encoder": init["config"]["encoder"],
                                 "hidden": init["config"]["hidden"]})  # fmt: skip
     config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed)
