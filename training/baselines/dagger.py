@@ -7,7 +7,8 @@ iteration runs the current learner (deterministic, masked) for
 ``episodes_per_iteration`` episodes on new seeds (from :data:`LEARNER_SEED_BASE`); at
 every state it visits, :class:`expert.ExpertPolicy` says what it would do, mapped to
 the allowed candidate that stands for it (an expert action no candidate expresses, or
-the expert's idle fallback, gives no label). The labelled states join the aggregate
+the expert's idle fallback, gives no label; a state visited again in the same episode,
+as by a learner going round in circles, is labelled once). The labelled states join the aggregate
 and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), as in
 Ross et al. (2011) with beta = 0 after the first iteration.
 
@@ -96,15 +97,18 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
         step_env_action = env.get_wrapper_attr("step_env_action")
         observation, info = env.reset(seed=task.seed_base + index)
         observations, masks, labels = [], [], []
+        seen: set[bytes] = set()
         steps = unexpressible = 0
         while True:
             mask = masks_of()
             action, _ = expert.predict(observation, episode_start=np.array([steps == 0]), deterministic=True)
             decision = expert.last_decision
             label = index_of(action) if decision is None or decision.failure is None else None
+            key = np.asarray(observation["observation"]).tobytes()
             if label is None:
                 unexpressible += 1
-            else:
+            elif key not in seen:  # a learner going round in circles labels each state once
+                seen.add(key)
                 observations.append(np.asarray(observation["observation"], np.float32))
                 masks.append(mask)
                 labels.append(int(label))
