@@ -15,7 +15,7 @@ import fetchcarry_env  # noqa: F401  (registers the env ids)
 import training
 from training.baselines import runs
 from training.baselines.bc import BCConfig
-from training.baselines.dagger import DaggerOptions, train_dagger
+from training.baselines.dagger_run import DaggerOptions, train_dagger
 from training.baselines.imitation import demonstrations_from_dataset
 from training.baselines.ppo import PPOOptions, train_ppo
 from training.cli import main

@@ -53,7 +53,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(bc)
     bc.set_defaults(handler=run_train_bc)
 
-    from training.baselines.dagger import DaggerOptions
+    from training.baselines.dagger_run import DaggerOptions
 
     dagger_defaults = DaggerOptions()
     dagger = kinds.add_parser(
@@ -169,7 +169,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(ppo)
     ppo.set_defaults(handler=run_train_ppo)
 
-    from training.baselines.dagger import HELDOUT_SEED_BASE
+    from training.baselines.dagger_run import HELDOUT_SEED_BASE
 
     learned = bench.add_parser(
         "learned",
@@ -277,7 +277,7 @@ def run_train_bc(args: argparse.Namespace) -> int:
 
 
 def run_train_dagger(args: argparse.Namespace) -> int:
-    from training.baselines.dagger import DaggerOptions, train_dagger
+    from training.baselines.dagger_run import DaggerOptions, train_dagger
     from training.sources import EpisodeSource
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)

@@ -1,4 +1,4 @@
-"""DAgger on the candidate-phase interface, with the MILP expert labelling the learner's states.
+"""DAgger into a run folder (``fetchcarry train dagger``), labelling on the worker pool of ``fetchcarry generate``.
 
 Iteration 0 is behaviour cloning on ``demonstrations`` expert episodes (seeds ``0 ..
 demonstrations-1`` of the family: the seeds ``fetchcarry generate`` uses by default,
