@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import gymnasium as gym
@@ -154,11 +155,13 @@ def test_refuses_to_be_made_without_a_lattice() -> None:
 
 
 def test_escapes_a_corner_gap_the_milp_cannot_start_from(spec_example: Scenario) -> None:
-    """A base that stopped by a table's corner is clear of it, but inside the square the MILP keeps it out of
+    """A base that stopped by a table's corner is clear of it, but inside the octagon the MILP keeps it out of
     (Eq. 18): the planner has no plan from there, so the expert first moves out, then plans."""
     from expert import plan
 
-    corner = (1.54, 1.54)  # 0.226 m from table_src's corner (1.7, 1.7): the disc (0.22 m) is clear
+    # 0.226 m from table_src's corner (1.7, 1.7) at 22.5 degrees from the -x axis: the disc (0.22 m) is clear,
+    # but the point lies in the octagon's sliver next to its vertex (the vertices are 0.238 m from the corner).
+    corner = (1.7 - 0.226 * math.cos(math.pi / 8), 1.7 - 0.226 * math.sin(math.pi / 8))
     scenario = dataclasses.replace(spec_example, robot=dataclasses.replace(spec_example.robot, start=corner))
     assert plan(scenario).status == "infeasible"
     env = gym.make("FetchCarryPush-v0", scenario=scenario)
