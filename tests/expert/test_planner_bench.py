@@ -42,3 +42,21 @@ def test_unknown_group_is_a_usage_error():
 
 def test_main_parses_its_options():
     assert bench.main(["--scale", "0.05", "--only", "L", "--seed", "3"]) == 0
+
+
+def test_scale_families_are_in_the_benchmark():
+    groups = {c.group for c in bench.cases()}
+    assert {"4 obj", "5 obj", "6 obj", "cov 2", "cov 3"} <= groups
+
+
+@pytest.mark.parametrize("count", [2, 3])
+def test_covered_scenarios_cover_every_goal(count):
+    import numpy as np
+
+    from expert import bench_cases
+    from fetchcarry_env.scenario import check_rules
+
+    scenario = bench_cases.covered(count, np.random.default_rng(count))
+    assert check_rules(scenario) == [] and len(scenario.objects) == count
+    for obj in scenario.objects:
+        assert any(c.rect.overlaps_disc(obj.goal, obj.radius) for c in scenario.clutter), obj.id
