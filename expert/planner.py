@@ -288,7 +288,8 @@ class _Run:
             return "time_limit"
         steps = read_steps(problem, milp, model.getBestSol())
         stats["milp_objective"] = model.getObjVal()
-        stats["dual_bound"] = model.getDualbound()
+        dual = model.getDualbound()
+        stats["dual_bound"] = dual if math.isfinite(dual) else None
         gap = model.getGap()
         stats["gap"] = gap if math.isfinite(gap) else None
         return ("optimal" if status == "optimal" else "feasible"), steps
