@@ -47,6 +47,7 @@ EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not g
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
 DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
+LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {"integral", "lower_bound"}
 
 
@@ -233,10 +234,17 @@ class _Run:
             picks = [key[1] for key, _ in schedule if key[0] == "pick"]
             order = picks + [i for i in order if i not in picks]
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
-        try:
-            phases = decoupled_plan(self.scenario, order, lattice, budget, plan)
-        except TimeUp:
-            phases = None
+        phases = None
+        for lookahead in (1, 2):
+            if phases is not None and (len(phases) <= n_phases or budget.left() < LOOKAHEAD_MIN_S):
+                break
+            try:
+                found = decoupled_plan(self.scenario, order, lattice, budget, plan, lookahead)
+            except TimeUp:
+                break
+            if found is not None and (phases is None or len(found) < len(phases)):
+                phases = found
+                self.stats["decoupled_lookahead"] = lookahead
         self.stats["decoupled_s"] = time.perf_counter() - t0
         if phases is None:
             return
