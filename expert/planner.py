@@ -223,6 +223,8 @@ class _Run:
             return self.finish(*self.best)
         if not stats["phases_tried"]:
             stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
+        else:
+            stats["reason"] = f"no plan with {first} to {last} phases (every model was infeasible)"
         return self.finish("infeasible")
 
     def first_plan(self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int) -> None:
