@@ -61,3 +61,14 @@ def test_warm_start_values_refuse_a_plan_longer_than_the_model():
     steps = steps_of(problem, phases)
     assert solution_values(build(problem, len(phases) - 1), steps) is None
     assert solution_values(build(problem, len(phases)), steps) is not None
+
+
+def test_lookahead_keeps_phases_through_the_first_place_and_stays_valid():
+    """Two objects at a time: each step keeps the sub-plan up to its first place; the whole plan is valid."""
+    scenario = bench_cases.multi(4, np.random.default_rng(3))
+    lattice = Lattice.over(scenario.area, 0.05)
+    order = [o.id for o in scenario.objects]
+    phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan, lookahead=2)
+    assert phases is not None
+    assert sum(p.action == "place" for p in phases) == len(scenario.objects)
+    assert validate_plan(scenario, Plan(scenario.name, "feasible", None, phases, {})) == []
