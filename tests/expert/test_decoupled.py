@@ -8,6 +8,7 @@ import pytest
 from expert import bench_cases
 from expert.decoupled import decoupled_plan, steps_of
 from expert.milp.deadline import Deadline
+from expert.milp.decode import plan_objective
 from expert.milp.problem import prepare
 from expert.milp.warm import solution_values
 from expert.planner import plan
@@ -23,7 +24,7 @@ def test_decoupled_plan_is_valid(family, count):
     order = [o.id for o in scenario.objects]
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan)
     assert phases is not None
-    result = Plan(scenario.name, "feasible", None, phases, {})
+    result = Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})
     assert validate_plan(scenario, result) == []
     problem = prepare(scenario, lattice)
     steps = steps_of(problem, phases)
@@ -71,4 +72,4 @@ def test_lookahead_keeps_phases_through_the_first_place_and_stays_valid():
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan, lookahead=2)
     assert phases is not None
     assert sum(p.action == "place" for p in phases) == len(scenario.objects)
-    assert validate_plan(scenario, Plan(scenario.name, "feasible", None, phases, {})) == []
+    assert validate_plan(scenario, Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})) == []

@@ -8,6 +8,7 @@ from argparse import Namespace
 
 import pytest
 
+from expert import bench
 from fetchcarry_env.errors import UsageError
 from training.cli import main as fetchcarry
 from training.cli.bench import run_planner
