@@ -86,6 +86,16 @@ def test_same_command_same_results_except_timing(tiny: Path, tmp_path: Path):
     assert _untimed(first) == _untimed(again)
 
 
+def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path, capsys: pytest.CaptureFixture):
+    argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
+    assert main([*argv, "--workers", "2", "--json", "--out", str(tmp_path)]) == 0
+    first = json.loads((tiny / "results.json").read_text())
+    again = json.loads((tmp_path / "results.json").read_text())
+    assert _untimed(first) == _untimed(again)
+    rows = json.loads(capsys.readouterr().out)
+    assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows] == [("expert", 1.0, 1.0), ("random", 0.0, None)]
+
+
 def test_scenario_folder(tmp_path: Path):
     folder = tmp_path / "mine"
     folder.mkdir()

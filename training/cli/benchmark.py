@@ -8,7 +8,10 @@ folder, an unusable scenario file); 130 interrupted (the finished episodes are k
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import sys
+from dataclasses import asdict
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_int
@@ -60,6 +63,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     )
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     parser.set_defaults(handler=run_benchmark_command)
 
 
@@ -84,6 +88,14 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}")
         return INTERRUPTED
+    if args.json:
+        print(json.dumps([_json_row(asdict(row)) for row in report.rows], indent=1))
+        return 0
     echo((report.out / SUMMARY).read_text())
     echo(f"wrote {len(report.records)} records to {report.out / RESULTS}")
     return 0
+
+
+def _json_row(row: dict) -> dict:
+    """A row with ``null`` for figures that do not exist (nan: a cost ratio without a success)."""
+    return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()}
