@@ -246,6 +246,9 @@ def test_plots_of_learning_curves_and_demonstrations(tmp_path: Path):
     run.mkdir()
     (run / "metrics.csv").write_text("epoch,loss,accuracy,seconds\n1,2.0,0.3,0.1\n2,1.0,0.6,0.2\n")
     assert benchmark.plot_learning_curve(run, tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+    assert benchmark.plot_learning_curve(run, tmp_path / "time.png", ["loss"], x="seconds").exists()
+    with pytest.raises(ValueError, match="no column"):
+        benchmark.plot_learning_curve(run, tmp_path / "bad.png", x="steps")
     records = [{"policy": "bc", "demonstrations": n, "success": k < n // 10} for n in (10, 30, 100) for k in range(10)]
     assert benchmark.plot_demonstrations(records, tmp_path / "demos.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -270,6 +273,34 @@ def test_split_names_and_versions():
     assert [item.source for item in iid] == list(TRAINING_FAMILIES) * 2
     assert [s.scenario for s in iid] == [s.scenario for s in benchmark.split_scenarios("iid-v0", 8)]
     assert [len(item.scenario.objects) for item in benchmark.split_scenarios("more-objects", 4)] == [3, 4, 3, 4]
+
+
+def test_a_split_version_never_changes():
+    # Digests of the first three scenarios of each split when it was published: a change needs a new version.
+    published = {
+        "iid-v0": "fc34ea4f9f628d50",
+        "more-objects-v0": "44b025e7ea45ee92",
+        "layouts-v0": "1f1698736be96064",
+        "push-required-v0": "56744d90abfa7852",
+    }
+    assert set(published) == set(benchmark.SPLITS)
+    for name, digest in published.items():
+        h = hashlib.sha256()
+        for item in benchmark.split_scenarios(name, 3):
+            h.update(json.dumps([item.seed, item.source, item.scenario.to_dict()], sort_keys=True).encode())
+        assert h.hexdigest()[:16] == digest, name
+
+
+def test_several_splits_in_one_run(tmp_path: Path):
+    report = benchmark.run_benchmark(["random"], split=["layouts", "push-required"], episodes=1, out=tmp_path)
+    assert [(r["policy"], r["split"]) for r in report.records] == [
+        ("expert", "layouts-v0"),
+        ("expert", "push-required-v0"),
+        ("random", "layouts-v0"),
+        ("random", "push-required-v0"),
+    ]
+    assert [(row.policy, row.split) for row in report.rows] == [(r["policy"], r["split"]) for r in report.records]
+    assert "Benchmark: layouts-v0, push-required-v0" in (tmp_path / "summary.md").read_text()
 
 
 def test_push_required_scenarios_have_clutter_on_a_goal():

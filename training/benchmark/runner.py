@@ -53,7 +53,7 @@ def run_benchmark(
     policies: list[str],
     *,
     out: str | Path,
-    split: str | None = None,
+    split: str | list[str] | None = None,
     scenarios: str | Path | None = None,
     episodes: int | None = None,
     workers: int = 1,
@@ -61,6 +61,8 @@ def run_benchmark(
     progress: bool = False,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
+
+    ``split`` is a split's name or a list of names (the first ``episodes`` of each).
 
     Raises :class:`BenchmarkError` for bad input before any episode runs; a
     ``KeyboardInterrupt`` propagates after the finished episodes are written.
@@ -74,12 +76,18 @@ def run_benchmark(
     if episodes is not None and episodes < 1:
         raise BenchmarkError(f"the number of episodes must be at least 1, got {episodes}")
     specs = with_references(policies)
-    items = split_scenarios(split, episodes) if split is not None else folder_scenarios(scenarios, episodes)
+    if split is not None:
+        names = [split] if isinstance(split, str) else list(split)
+        if not names:
+            raise BenchmarkError("give at least one split")
+        items = [item for name in dict.fromkeys(names) for item in split_scenarios(name, episodes)]
+    else:
+        items = folder_scenarios(scenarios, episodes)
     check_fits(specs, items)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tasks = [(spec, item) for spec in specs for item in items]
-    order = {(spec.name, item.index): k for k, (spec, item) in enumerate(tasks)}
+    order = {(spec.name, item.split, item.index): k for k, (spec, item) in enumerate(tasks)}
     records: list[dict[str, Any]] = []
     last_write = time.monotonic()
     bar = progress_bar(len(tasks), "benchmark", enabled=progress)
@@ -96,7 +104,7 @@ def run_benchmark(
         records = write_results(out, records, order)
         rows = summarise(records) if records else []
         if rows:
-            write_report(out, rows, title=f"Benchmark: {items[0].split}")
+            write_report(out, rows, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
     return BenchmarkReport(out, records, rows)
 
 
@@ -129,10 +137,10 @@ def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
         raise BenchmarkError("\n".join(problems[:10]))
 
 
-def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, int], int]) -> list[dict]:
+def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, str, int], int]) -> list[dict]:
     """Fill in the expert's costs, sort ``records`` into task order and write ``results.json`` atomically."""
     fill_expert_costs(records)
-    ordered = sorted(records, key=lambda r: order[(r["policy"], r["index"])])
+    ordered = sorted(records, key=lambda r: order[(r["policy"], r["split"], r["index"])])
     public = [{k: v for k, v in r.items() if k != "index"} for r in ordered]
     temporary = out / f".{RESULTS}.tmp"
     temporary.write_text(json.dumps(public, indent=1) + "\n")

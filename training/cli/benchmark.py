@@ -45,7 +45,12 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="expert, random, random-phases, greedy (where installed) or run folders (as fetchcarry train writes)",
     )
     where = parser.add_mutually_exclusive_group(required=True)
-    where.add_argument("--split", metavar="NAME", help="a split name, e.g. iid or iid-v0 (newest version if none)")
+    where.add_argument(
+        "--split",
+        nargs="+",
+        metavar="NAME",
+        help="one or more split names, e.g. iid or iid-v0 (the newest version if none is given)",
+    )
     where.add_argument(
         "--scenarios",
         metavar="DIR",
