@@ -189,6 +189,13 @@ def _status(argv: list[str]) -> int:
         return int(error.code)
 
 
+def test_a_policy_without_room_for_the_objects_is_refused():
+    small = benchmark.PolicySpec("two-slots", "phases", run="runs/x", env_options={"capacity": {"objects": 2}})
+    with pytest.raises(benchmark.BenchmarkError, match="two-slots cannot act in multi-3"):
+        runner.check_fits([small], benchmark.split_scenarios("more-objects", 2))
+    runner.check_fits([small], benchmark.split_scenarios("iid", 4))  # one and two objects fit
+
+
 def test_scenario_outside_the_trained_extent_is_refused(tmp_path: Path):
     data = json.loads(EXAMPLE.read_text())
     data["area"] = {"min": [-1.0, -1.0], "max": [8.0, 6.0]}

@@ -58,6 +58,7 @@ def run_benchmark(
     episodes: int | None = None,
     workers: int = 1,
     backend: str = "process",
+    ray_address: str | None = None,
     progress: bool = False,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
@@ -92,7 +93,7 @@ def run_benchmark(
     last_write = time.monotonic()
     bar = progress_bar(len(tasks), "benchmark", enabled=progress)
     try:
-        for record in run_tasks(tasks, workers=workers, backend=backend):
+        for record in run_tasks(tasks, workers=workers, backend=backend, ray_address=ray_address):
             records.append(record)
             bar.update(1)
             if time.monotonic() - last_write > WRITE_EVERY_S:
@@ -154,10 +155,12 @@ def write_report(out: Path, rows: list[Row], title: str) -> None:
     plot_splits(rows, out / PLOT)
 
 
-def run_tasks(tasks: list[Task], *, workers: int = 1, backend: str = "process") -> Iterator[dict[str, Any]]:
-    """Each task's record (with its ``index`` in the split), as they finish."""
+def run_tasks(
+    tasks: list[Task], *, workers: int = 1, backend: str = "process", ray_address: str | None = None
+) -> Iterator[dict[str, Any]]:
+    """Each task's record (with its ``index`` in the split), as they finish (Ray: on ``ray_address``, if given)."""
     if backend == "ray":
-        yield from _run_ray(tasks, workers)
+        yield from _run_ray(tasks, workers, ray_address)
     elif workers == 1:
         for task in tasks:
             yield _indexed(task)
@@ -191,14 +194,16 @@ def _run_pool(function: Callable[[Task], dict], tasks: list[Task], workers: int)
         pool.shutdown(wait=finished_cleanly, cancel_futures=True)
 
 
-def _run_ray(tasks: list[Task], workers: int) -> Iterator[dict[str, Any]]:
+def _run_ray(tasks: list[Task], workers: int, address: str | None) -> Iterator[dict[str, Any]]:
     try:
         import ray
     except ModuleNotFoundError:
         raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
     started_here = not ray.is_initialized()
-    if started_here:
+    if started_here and address is None:
         ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    elif started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False)
     remote = ray.remote(num_cpus=1)(_indexed)
     queue, pending = list(tasks), []
     try:

@@ -66,6 +66,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         default="process",
         help="a local process pool (default) or Ray (optional extra: pip install ray)",
     )
+    parser.add_argument("--ray-address", metavar="ADDR", help="a Ray cluster to join (default: start a local one)")
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
@@ -85,6 +86,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             episodes=args.episodes,
             workers=args.workers,
             backend=args.backend,
+            ray_address=args.ray_address,
             progress=not args.no_progress,
         )
     except BenchmarkError as error:
