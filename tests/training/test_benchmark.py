@@ -129,6 +129,9 @@ def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
     learned = report.records[2]
     assert learned["invalid_actions"] == 0  # the candidate masks are exact: a masked policy is never refused
     assert [row.policy for row in report.rows] == names
+    shutil.copytree(tmp_path / "bc-tiny", tmp_path / "expert")  # a run folder may not pose as a reference
+    with pytest.raises(benchmark.BenchmarkError, match="may not be named"):
+        runner.with_references([str(tmp_path / "expert")])
 
 
 def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
@@ -174,7 +177,8 @@ def _broken_run(tmp_path: Path) -> Path:
 def test_bad_input_exits_2(change, tmp_path: Path, capsys: pytest.CaptureFixture):
     broken, empty = _broken_run(tmp_path), tmp_path / "empty"
     empty.mkdir()
-    argv = ["benchmark", *[str(broken) if a == "BROKEN" else str(empty) if a == "EMPTY" else a for a in change]]
+    named = {"BROKEN": str(broken), "EMPTY": str(empty)}
+    argv = ["benchmark", *[named.get(a, a) for a in change]]
     assert _status([*argv, "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
     assert "Traceback" not in error and error.strip()

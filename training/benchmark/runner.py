@@ -114,6 +114,9 @@ def with_references(policies: list[str]) -> list[PolicySpec]:
     if not policies:
         raise BenchmarkError("give at least one policy")
     specs = resolve_all(policies)
+    clashes = [s.run for s in specs if s.run is not None and s.name in (EXPERT, RANDOM)]
+    if clashes:
+        raise BenchmarkError(f"a run folder may not be named {EXPERT!r} or {RANDOM!r} (the references): {clashes[0]}")
     names = [s.name for s in specs]
     references = [resolve(name) for name in (EXPERT, RANDOM) if name not in names]
     ordered = references + specs
