@@ -123,7 +123,11 @@ def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
 
     demonstrations = bc.record_demonstrations("basic", range(3))
     bc.train_bc(demonstrations, bc.BCConfig(epochs=2, hidden=16), Capacity(), out=tmp_path / "bc-tiny")
+    import torch
+
+    threads = torch.get_num_threads()
     report = benchmark.run_benchmark([str(tmp_path / "bc-tiny")], split="iid", episodes=1, out=tmp_path / "out")
+    assert torch.get_num_threads() == threads  # one thread while deciding, given back afterwards
     names = [r["policy"] for r in report.records]
     assert names == ["expert", "random", "bc-tiny"]
     learned = report.records[2]
