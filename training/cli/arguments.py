@@ -39,3 +39,15 @@ def positive_float(text: str) -> float:
     if not (value > 0 and math.isfinite(value)):
         raise argparse.ArgumentTypeError(f"expected a positive finite number, got {text!r}")
     return value
+
+
+def add_worker_options(parser: argparse.ArgumentParser) -> None:
+    """``--workers``, ``--backend`` and ``--ray-address``: where episodes run (``generate``, ``benchmark``, ...)."""
+    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
+    parser.add_argument(
+        "--backend",
+        choices=("process", "ray"),
+        default="process",
+        help="a local process pool (default) or Ray (optional extra: pip install ray)",
+    )
+    parser.add_argument("--ray-address", metavar="ADDR", help="a Ray cluster to join (default: start a local one)")

@@ -14,7 +14,7 @@ import sys
 from dataclasses import asdict
 
 from fetchcarry_env.errors import UsageError
-from training.cli.arguments import positive_int
+from training.cli.arguments import add_worker_options, positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 
@@ -59,14 +59,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.add_argument(
         "--episodes", type=positive_int, metavar="N", help="episodes (default: the split's 100, or every file)"
     )
-    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
-    parser.add_argument(
-        "--backend",
-        choices=("process", "ray"),
-        default="process",
-        help="a local process pool (default) or Ray (optional extra: pip install ray)",
-    )
-    parser.add_argument("--ray-address", metavar="ADDR", help="a Ray cluster to join (default: start a local one)")
+    add_worker_options(parser)
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
