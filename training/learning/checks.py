@@ -29,23 +29,36 @@ HELD_OUT = 100_000  # first evaluation seed
 
 
 def check_bc(
-    family: str, episodes: int, eval_episodes: int, encoders: list[str], epochs: int, out: Path | None
+    family: str,
+    episodes: int,
+    eval_episodes: int,
+    encoders: list[str],
+    epochs: int,
+    out: Path | None,
+    also: list[str] | None = None,
 ) -> None:
+    """Record, train each encoder, evaluate on held-out seeds of ``family`` (and of each family in ``also``)."""
     torch.set_num_threads(1)
     start = time.perf_counter()
     data = record_demonstrations(family, range(episodes))
     print(f"recorded {data.stats} in {time.perf_counter() - start:.1f} s")
     seeds = range(HELD_OUT, HELD_OUT + eval_episodes)
-    expert = expert_costs(family, seeds)
-    print(f"expert: {len(expert)}/{eval_episodes} held-out seeds solved")
-    print(summarise(evaluate(RandomPhasePolicy(seed=0), family, seeds), expert).line("random"))
-    print(summarise(evaluate_env_actions(GreedyPolicy(make_env(family)), family, seeds), expert).line("greedy"))
+    policies = {}
     for encoder in encoders:
         start = time.perf_counter()
         config = BCConfig(encoder=encoder, epochs=epochs)
-        policy = train_bc(data, config, make_env(family).unwrapped.capacity, out / f"bc-{encoder}" if out else None)
-        trained = time.perf_counter() - start
-        print(summarise(evaluate(policy, family, seeds), expert).line(f"bc-{encoder}") + f"  (trained {trained:.0f} s)")
+        policies[f"bc-{encoder}"] = train_bc(
+            data, config, make_env(family).unwrapped.capacity, out / f"bc-{encoder}" if out else None
+        )
+        print(f"bc-{encoder} trained in {time.perf_counter() - start:.0f} s")
+    for evaluated in [family, *(also or [])]:
+        expert = expert_costs(evaluated, seeds)
+        print(f"\n{evaluated}: the expert solved {len(expert)}/{eval_episodes} held-out seeds")
+        print(summarise(evaluate(RandomPhasePolicy(seed=0), evaluated, seeds), expert).line("random"))
+        greedy = evaluate_env_actions(GreedyPolicy(make_env(evaluated)), evaluated, seeds)
+        print(summarise(greedy, expert).line("greedy"))
+        for name, policy in policies.items():
+            print(summarise(evaluate(policy, evaluated, seeds), expert).line(name))
 
 
 def check_ppo(family: str, steps: int, eval_episodes: int, seed: int, out: Path | None) -> None:
@@ -100,6 +113,7 @@ def main(argv: list[str] | None = None) -> None:
     bc.add_argument("--encoders", nargs="+", default=["mlp", "set"])
     bc.add_argument("--epochs", type=int, default=BCConfig.epochs)
     bc.add_argument("--out", type=Path, default=None, help="write the run folders here")
+    bc.add_argument("--also", nargs="*", default=[], help="other families to evaluate on (e.g. multi-3)")
     ppo = sub.add_parser("ppo", help="MaskablePPO with the learning reward")
     ppo.add_argument("--family", default="basic")
     ppo.add_argument("--steps", type=int, default=20_000)
@@ -108,7 +122,7 @@ def main(argv: list[str] | None = None) -> None:
     ppo.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
     if args.what == "bc":
-        check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, args.out)
+        check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, args.out, args.also)
     else:
         check_ppo(args.family, args.steps, args.eval_episodes, args.seed, args.out)
 
