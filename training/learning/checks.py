@@ -69,7 +69,7 @@ def check_ppo(family: str, steps: int, eval_episodes: int, seed: int, out: Path 
     env = make_vec_env(lambda: make_env(family, reward="learning"), n_envs=1, seed=seed)
     model = MaskablePPO("MultiInputPolicy", env, n_steps=512, batch_size=128, gamma=0.99, seed=seed, verbose=0)
     start = time.perf_counter()
-    curve: list[tuple[int, float, float]] = []
+    curve: list[tuple[int, float, float, float]] = []
     seeds = range(HELD_OUT, HELD_OUT + eval_episodes)
     expert = expert_costs(family, seeds)
     print(summarise(evaluate(RandomPhasePolicy(seed=0), family, seeds), expert).line("random"))
@@ -79,11 +79,13 @@ def check_ppo(family: str, steps: int, eval_episodes: int, seed: int, out: Path 
         model.learn(chunk, reset_num_timesteps=False)
         done += chunk
         summary = summarise(evaluate(_Masked(model), family, seeds), expert)
-        curve.append((done, time.perf_counter() - start, summary.success))
+        curve.append((done, time.perf_counter() - start, summary.success, summary.cost_ratio))
         print(summary.line(f"ppo {done}") + f"  ({time.perf_counter() - start:.0f} s)")
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         model.save(out / "ppo.zip")
+        lines = ["steps,seconds,success,cost_ratio", *(",".join(str(v) for v in row) for row in curve)]
+        (out / "metrics.csv").write_text("\n".join(lines) + "\n")
 
 
 class _Masked:

@@ -9,6 +9,7 @@ episode is the expert's whether or not each action is expressible.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,8 +49,6 @@ def expert_episode(
     env: gym.Env, expert: ExpertPolicy, seed: int, options: dict[str, Any] | None = None
 ) -> ExpertEpisode:
     """Run the expert for one episode (``reset(seed=seed)``) on a phase env and record it."""
-    import time
-
     index_of = env.get_wrapper_attr("index_of")
     masks = env.get_wrapper_attr("action_masks")
     step_env_action = env.get_wrapper_attr("step_env_action")
