@@ -61,6 +61,25 @@ def check_bc(
             print(summarise(evaluate(policy, evaluated, seeds), expert).line(name))
 
 
+def check_dagger(family: str, demonstrations: int, rounds: int, per_round: int, eval_episodes: int) -> None:
+    """BC on ``demonstrations`` episodes, then DAgger rounds; the policy of each round evaluated on held-out seeds."""
+    from training.baselines.dagger import train_dagger
+
+    torch.set_num_threads(1)
+    seeds = range(HELD_OUT, HELD_OUT + eval_episodes)
+    expert = expert_costs(family, seeds)
+    start = time.perf_counter()
+
+    def report(row: dict) -> None:
+        line = summarise(evaluate(row["policy"], family, seeds), expert).line(f"dagger {row['round']}")
+        print(
+            f"{line}  labelled {row['labelled']}, learner successes {row['learner_successes']}"
+            f"  ({time.perf_counter() - start:.0f} s)"
+        )
+
+    train_dagger(family, BCConfig(), demonstrations, rounds, per_round, progress=report)
+
+
 def check_ppo(family: str, steps: int, eval_episodes: int, seed: int, out: Path | None) -> None:
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.env_util import make_vec_env
@@ -122,9 +141,17 @@ def main(argv: list[str] | None = None) -> None:
     ppo.add_argument("--eval-episodes", type=int, default=50)
     ppo.add_argument("--seed", type=int, default=0)
     ppo.add_argument("--out", type=Path, default=None)
+    dagger = sub.add_parser("dagger", help="BC, then DAgger rounds with the expert labelling")
+    dagger.add_argument("--family", default="push")
+    dagger.add_argument("--episodes", type=int, default=100, help="expert episodes before round 1")
+    dagger.add_argument("--rounds", type=int, default=2)
+    dagger.add_argument("--per-round", type=int, default=50, help="learner episodes labelled per round")
+    dagger.add_argument("--eval-episodes", type=int, default=50)
     args = parser.parse_args(argv)
     if args.what == "bc":
         check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, args.out, args.also)
+    elif args.what == "dagger":
+        check_dagger(args.family, args.episodes, args.rounds, args.per_round, args.eval_episodes)
     else:
         check_ppo(args.family, args.steps, args.eval_episodes, args.seed, args.out)
 
