@@ -19,24 +19,37 @@ from fetchcarry_env.observation import Capacity
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, record_demonstrations, train_bc
 
 
-def label_learner_episodes(policy: BCPolicy, family: str, seeds: range | list[int]) -> tuple[Demonstrations, int]:
-    """Run ``policy`` on ``seeds``; label each visited state with the expert's candidate. Also return the successes."""
+def label_learner_episodes(
+    policy: BCPolicy, family: str, seeds: range | list[int], nearest_moves: bool = False
+) -> tuple[Demonstrations, int, int]:
+    """Run ``policy`` on ``seeds``; label each visited state with the expert's candidate.
+
+    Returns the labelled states, the learner's successes and the number of states visited.
+
+    A state whose expert action no candidate expresses is left out, or, with
+    ``nearest_moves``, labelled with the allowed move nearest the expert's move
+    (:func:`training.learning.expert_phases.nearest_move`).
+    """
     from expert import ExpertPolicy
     from training.learning.evaluate import make_env
+    from training.learning.expert_phases import nearest_move
 
     env = make_env(family)
     expert = ExpertPolicy(env)
     masks_of = env.get_wrapper_attr("action_masks")
     index_of = env.get_wrapper_attr("index_of")
     observations, masks, labels = [], [], []
-    successes = 0
+    successes = visited = 0
     for seed in seeds:
         observation, info = env.reset(seed=seed)
         expert.reset()
         for step in range(env.spec.max_episode_steps):
             mask = masks_of()
+            visited += 1
             label, _ = expert.predict(observation, episode_start=step == 0, deterministic=True)
             index = index_of(label)
+            if index is None and nearest_moves:
+                index = nearest_move(env, label)
             if index is not None:
                 observations.append(observation["observation"].copy())
                 masks.append(mask)
@@ -53,7 +66,7 @@ def label_learner_episodes(policy: BCPolicy, family: str, seeds: range | list[in
         np.asarray(masks, dtype=bool).reshape(len(labels), size),
         np.asarray(labels, dtype=np.int64),
     )
-    return data, successes
+    return data, successes, visited
 
 
 def train_dagger(
@@ -65,13 +78,15 @@ def train_dagger(
     capacity: Capacity | None = None,
     out: str | Path | None = None,
     progress: Any = None,
+    nearest_moves: bool = False,
 ) -> BCPolicy:
     """BC on ``demonstrations`` expert episodes (seeds 0...), then ``rounds`` of DAgger on fresh seeds.
 
     ``progress``, if given, is called after each training (round 0 is the BC) with a dict:
     ``round``, ``labelled`` (states in the data), ``learner_successes`` (in the episodes
-    that round labelled; None for round 0) and ``policy``. The run folder (``out``) is a
-    BC run folder of the final policy.
+    that round labelled; None for round 0) and ``policy``; from round 1, ``visited``
+    (states the learner visited) and ``new_labels`` (those the round labelled). The run folder (``out``) is a
+    BC run folder of the final policy. ``nearest_moves``: see :func:`label_learner_episodes`.
     """
     if rounds < 0 or demonstrations < 1 or episodes_per_round < 1:
         raise ValueError("demonstrations and episodes_per_round must be positive, rounds not negative")
@@ -84,7 +99,7 @@ def train_dagger(
     for round_ in range(1, rounds + 1):
         seeds = range(next_seed, next_seed + episodes_per_round)
         next_seed += episodes_per_round
-        new, successes = label_learner_episodes(policy, family, seeds)
+        new, successes, visited = label_learner_episodes(policy, family, seeds, nearest_moves)
         data = Demonstrations(
             np.concatenate([data.observations, new.observations]),
             np.concatenate([data.masks, new.masks]),
@@ -93,5 +108,6 @@ def train_dagger(
         )
         policy = train_bc(data, config, capacity, out=out if round_ == rounds else None)
         if progress is not None:
-            progress({"round": round_, "labelled": len(data), "learner_successes": successes, "policy": policy})
+            row = {"round": round_, "labelled": len(data), "learner_successes": successes, "policy": policy}
+            progress({**row, "visited": visited, "new_labels": len(new)})
     return policy

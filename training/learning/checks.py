@@ -61,7 +61,9 @@ def check_bc(
             print(summarise(evaluate(policy, evaluated, seeds), expert).line(name))
 
 
-def check_dagger(family: str, demonstrations: int, rounds: int, per_round: int, eval_episodes: int) -> None:
+def check_dagger(
+    family: str, demonstrations: int, rounds: int, per_round: int, eval_episodes: int, nearest_moves: bool = False
+) -> None:
     """BC on ``demonstrations`` episodes, then DAgger rounds; the policy of each round evaluated on held-out seeds."""
     from training.baselines.dagger import train_dagger
 
@@ -72,12 +74,13 @@ def check_dagger(family: str, demonstrations: int, rounds: int, per_round: int, 
 
     def report(row: dict) -> None:
         line = summarise(evaluate(row["policy"], family, seeds), expert).line(f"dagger {row['round']}")
+        new = f", {row['new_labels']} of {row['visited']} visited states labelled" if "visited" in row else ""
         print(
-            f"{line}  labelled {row['labelled']}, learner successes {row['learner_successes']}"
+            f"{line}  data {row['labelled']}{new}, learner successes {row['learner_successes']}"
             f"  ({time.perf_counter() - start:.0f} s)"
         )
 
-    train_dagger(family, BCConfig(), demonstrations, rounds, per_round, progress=report)
+    train_dagger(family, BCConfig(), demonstrations, rounds, per_round, progress=report, nearest_moves=nearest_moves)
 
 
 def check_ppo(family: str, steps: int, eval_episodes: int, seed: int, out: Path | None) -> None:
@@ -147,11 +150,14 @@ def main(argv: list[str] | None = None) -> None:
     dagger.add_argument("--rounds", type=int, default=2)
     dagger.add_argument("--per-round", type=int, default=50, help="learner episodes labelled per round")
     dagger.add_argument("--eval-episodes", type=int, default=50)
+    dagger.add_argument(
+        "--nearest-moves", action="store_true", help="label inexpressible expert moves with the nearest allowed move"
+    )
     args = parser.parse_args(argv)
     if args.what == "bc":
         check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, args.out, args.also)
     elif args.what == "dagger":
-        check_dagger(args.family, args.episodes, args.rounds, args.per_round, args.eval_episodes)
+        check_dagger(args.family, args.episodes, args.rounds, args.per_round, args.eval_episodes, args.nearest_moves)
     else:
         check_ppo(args.family, args.steps, args.eval_episodes, args.seed, args.out)
 

@@ -74,5 +74,21 @@ def expert_episode(
     return record
 
 
+def nearest_move(env: gym.Env, action: np.ndarray) -> int | None:
+    """The allowed move candidate whose end lies nearest the end of the env move ``action``, or None.
+
+    A stand-in label for an expert move that no candidate expresses (the expert's
+    waypoints lie anywhere along a line, the candidates at fixed points).
+    """
+    if int(action[4]) != Mode.MOVE:
+        return None
+    table = env.get_wrapper_attr("table")
+    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    if moves.size == 0:
+        return None
+    gaps = np.abs(table.actions[moves, :2] - np.asarray(action[:2])).sum(axis=1)
+    return int(moves[int(np.argmin(gaps))])
+
+
 def mode_name(mode: int) -> str:
     return Mode(mode).name.lower()
