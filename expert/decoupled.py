@@ -30,10 +30,19 @@ Planner = Callable[..., Plan]
 
 
 def decoupled_plan(
-    scenario: Scenario, order: Sequence[str], lattice: Lattice, deadline: Deadline, planner: Planner
+    scenario: Scenario,
+    order: Sequence[str],
+    lattice: Lattice,
+    deadline: Deadline,
+    planner: Planner,
+    lookahead: int = 1,
 ) -> tuple[Phase, ...] | None:
     """Phases of a plan delivering the objects one at a time, trying them in ``order``; None if it fails.
 
+    Each step solves the MILP for the next ``lookahead`` objects of ``order`` (the others
+    standing where they are) and keeps its phases up to its first place: with
+    ``lookahead = 2`` the place of one object is chosen knowing the next one (fewer
+    phases at the junctions, at the price of two-object models).
     ``planner`` is :func:`expert.planner.plan` (passed in to avoid an import circle).
     Raises :class:`~expert.milp.deadline.TimeUp` when ``deadline`` passes.
     """
@@ -41,39 +50,46 @@ def decoupled_plan(
     base, heading = scenario.robot.start, scenario.robot.heading
     objects = {o.id: o.start for o in scenario.objects}
     clutter = {c.id: c.rect.center for c in scenario.clutter}
-    todo = [i for i in order]
+    todo = list(order)
     while todo:
-        for object_id in todo:
+        for first in range(len(todo)):
             left = deadline.left()
             if left <= 0:
                 raise TimeUp
-            sub = _one_object(scenario, object_id, base, heading, objects, clutter)
+            targets = (todo[first:] + todo[:first])[:lookahead]
+            sub = _sub_problem(scenario, targets, base, heading, objects, clutter)
             result = planner(sub, time_limit=left, lattice=lattice)
             if result.found:
                 break
         else:
             return None
-        todo.remove(object_id)
+        kept = _through_first_place(result.phases)
+        todo.remove(kept[-1].target)
         if not phases:
-            phases.append(result.phases[0])
-        phases.extend(result.phases[1:])
-        last = result.phases[-1]
+            phases.append(kept[0])
+        phases.extend(kept[1:])
+        last = kept[-1]
         base, heading = last.base, last.heading
         objects, clutter = dict(last.objects), dict(last.clutter)
     return tuple(phases)
 
 
-def _one_object(
+def _through_first_place(phases: Sequence[Phase]) -> list[Phase]:
+    end = next(k for k, p in enumerate(phases) if p.action == "place")
+    return list(phases[: end + 1])
+
+
+def _sub_problem(
     scenario: Scenario,
-    object_id: str,
+    targets: Sequence[str],
     base,
     heading,
     objects: dict,
     clutter: dict,
 ) -> Scenario:
-    """The sub-problem: only ``object_id`` to deliver; every other object stays where it stands."""
+    """The sub-problem: only ``targets`` to deliver; every other object stays where it stands."""
     moved_objects = tuple(
-        dataclasses.replace(o, start=objects[o.id], goal=o.goal if o.id == object_id else objects[o.id])
+        dataclasses.replace(o, start=objects[o.id], goal=o.goal if o.id in targets else objects[o.id])
         for o in scenario.objects
     )
     moved_clutter = tuple(dataclasses.replace(c, rect=_moved(c.rect, clutter[c.id])) for c in scenario.clutter)

@@ -47,6 +47,7 @@ EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not g
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
 DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
+LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {"integral", "lower_bound"}
 
 
@@ -222,6 +223,8 @@ class _Run:
             return self.finish(*self.best)
         if not stats["phases_tried"]:
             stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
+        else:
+            stats["reason"] = f"no plan with {first} to {last} phases (every model was infeasible)"
         return self.finish("infeasible")
 
     def first_plan(self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int) -> None:
@@ -233,10 +236,17 @@ class _Run:
             picks = [key[1] for key, _ in schedule if key[0] == "pick"]
             order = picks + [i for i in order if i not in picks]
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
-        try:
-            phases = decoupled_plan(self.scenario, order, lattice, budget, plan)
-        except TimeUp:
-            phases = None
+        phases = None
+        for lookahead in (1, 2):
+            if phases is not None and (len(phases) <= n_phases or budget.left() < LOOKAHEAD_MIN_S):
+                break
+            try:
+                found = decoupled_plan(self.scenario, order, lattice, budget, plan, lookahead)
+            except TimeUp:
+                break
+            if found is not None and (phases is None or len(found) < len(phases)):
+                phases = found
+                self.stats["decoupled_lookahead"] = lookahead
         self.stats["decoupled_s"] = time.perf_counter() - t0
         if phases is None:
             return
@@ -288,7 +298,8 @@ class _Run:
             return "time_limit"
         steps = read_steps(problem, milp, model.getBestSol())
         stats["milp_objective"] = model.getObjVal()
-        stats["dual_bound"] = model.getDualbound()
+        dual = model.getDualbound()
+        stats["dual_bound"] = dual if math.isfinite(dual) else None
         gap = model.getGap()
         stats["gap"] = gap if math.isfinite(gap) else None
         return ("optimal" if status == "optimal" else "feasible"), steps

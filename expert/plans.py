@@ -10,6 +10,7 @@ Units are metres.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from collections.abc import Mapping
@@ -19,6 +20,8 @@ from typing import Any, Literal
 
 from fetchcarry_env.geometry import HEADINGS, Heading, Point
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
+from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from fetchcarry_env.scenario import Scenario
 
 FORMAT = "fetchcarry-plan/1"
 
@@ -200,3 +203,25 @@ def _text(value: Any, where: str, expected: str = "a string") -> str:
     except UnicodeEncodeError:
         raise PlanFormatError(f"{where} {describe(value)} is not valid Unicode text (a lone surrogate)") from None
     return value
+
+
+GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1
+
+
+def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
+    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
+
+    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within ``GOAL_TOL`` of its
+    goal at the end of phase ``k`` (phase 0 included); ``travel_cost`` is Eq. 2-3's
+    ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres). Phases that lack an object count it as not delivered.
+    """
+    bonus = sum(
+        1
+        for phase in phases
+        for obj in scenario.objects
+        if phase.holding != obj.id
+        and obj.id in phase.objects
+        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
+    )
+    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
+    return -DELIVERY_BONUS * bonus + travel

@@ -54,12 +54,11 @@ Units are metres.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from expert.plans import Phase, Plan
+from expert.plans import Phase, Plan, plan_objective
 from fetchcarry_env.geometry import (
     Heading,
     Point,
@@ -70,21 +69,18 @@ from fetchcarry_env.geometry import (
     to_world_frame,
 )
 from fetchcarry_env.kinematics import (
-    DELIVERY_BONUS,
     arm_line_clear,
     hand_blocker,
     hand_offset,
     push_contact,
     push_headings,
     swept_rect,
-    travel_cost,
 )
 from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
 TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (docs/plan-format.md)
 CLEARANCE_SLACK = 1e-6  # metres: a base segment may come this much closer than the radius (rule 1)
 OBJECTIVE_RTOL = 1e-6  # relative tolerance of the objective against Eq. 1 recomputed (rule 8)
-GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1
 
 
 @dataclass(frozen=True)
@@ -153,25 +149,6 @@ def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None)
         *_rule8_objective(scenario, plan),
         *_rule9_hand_room(context),
     ]
-
-
-def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
-    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
-
-    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within ``GOAL_TOL`` of its
-    goal at the end of phase ``k`` (phase 0 included); ``travel_cost`` is Eq. 2-3's
-    ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres). Phases that lack an object count it as not delivered.
-    """
-    bonus = sum(
-        1
-        for phase in phases
-        for obj in scenario.objects
-        if phase.holding != obj.id
-        and obj.id in phase.objects
-        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
-    )
-    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
-    return -DELIVERY_BONUS * bonus + travel
 
 
 # ---------------------------------------------------------------------- structure

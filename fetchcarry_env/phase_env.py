@@ -28,17 +28,17 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ## Action Space
 
     ``Discrete(layout.size)``: candidate ``k`` is the phase :meth:`PhaseLayout.describe`
-    names (pick, place, push, approach move, waypoint move; see
+    names (pick, place, push, approach move, waypoint or edge move; see
     :mod:`fetchcarry_env.phases` for the numbering). With the default layout and
     capacity, K = 4,080.
 
     :meth:`action_masks` (MaskablePPO's convention: one bool per candidate) is True
     exactly for the candidates allowed in the current state: their env action is
     accepted by the env's checks (:func:`fetchcarry_env.rules.check_action`), acts on
-    the candidate's own item, reaches its end without a contact, and stands for no
-    earlier candidate's env action. So an allowed candidate always executes as asked,
-    and allowed candidates and env actions are one to one (:meth:`index_of`,
-    :meth:`env_action`). The mask is computed once per state, when first asked for.
+    the candidate's own item, reaches its end without a contact, stands for no
+    earlier candidate's env action, and is not a move that goes nowhere. So an allowed
+    candidate always executes as asked, and allowed candidates and env actions are one
+    to one (:meth:`index_of`, :meth:`env_action`). The mask is computed once per state, when first asked for.
 
     A masked candidate is refused: the world does not change and the env's penalty
     for an impossible action applies (``info["invalid_action"]`` says which candidate).

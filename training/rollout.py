@@ -4,13 +4,13 @@
 the expert evaluation and the demo share: it resets the env with a seed, asks the
 policy (stable-baselines3's ``predict`` protocol) for each action, steps the env and
 keeps everything a dataset needs (observations, actions, rewards, flags, per-step
-infos) plus the figures a person wants (delivered objects, path length, contacts,
+infos) plus the figures a person wants (delivered objects, path length, collisions,
 invalid actions, planning and simulation seconds, replans).
 
 An expert that cannot act does not crash the episode: the episode ends after the
 policy's idle fallback action, truncated, with the outcome ``planner_failed (<status>)``
 (no plan: infeasible, time limit) or ``expert_stuck`` (the env would refuse the planned
-action and no repair works), and the policy's reason in ``failure``.
+action and no escape move helps), and the policy's reason in ``failure``.
 """
 
 from __future__ import annotations

@@ -24,7 +24,10 @@ Pruned exactly:
 - regions that no lattice point of the domain (Eq. 27) lies in are dropped;
 - a rectangle with a region that holds the whole domain needs no constraint;
 - with one region left, the bounds are hard (no binary);
-- phase 0 is a constant (the exact start): only the regions that hold it count.
+- phase 0 is a constant (the exact start): only the regions that hold it count;
+- where an action that must happen can only happen at one phase (the action windows),
+  the base there lies in one of its options' boxes: regions that miss all of them are
+  dropped for the moves ending or starting there.
 
 Eq. 19 (the arm does not reach across an obstacle or clutter: the base and the hand
 in one common region of the rectangle) is applied to the pose options before the
@@ -67,10 +70,10 @@ def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
             continue
         at_start = [n for n in usable if point_in_move_region(start, rect, radius, n)]
         for k in range(1, milp.n_phases):
-            regions = at_start if k == 1 else usable
-            if not regions:
-                raise Infeasible(f"the base at the start touches {name!r}")
             ends = (k - 1, k) if k > 1 else (k,)
+            regions = [n for n in (at_start if k == 1 else usable) if _possible(milp, planes[n], ends)]
+            if not regions:
+                raise Infeasible(f"no region of {name!r} holds both ends of move {k}")
             if len(regions) == 1:
                 milp.regions.append((k, [planes[regions[0]]], None))
                 for e in ends:
@@ -85,6 +88,15 @@ def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
                     model.addCons(_in_plane(milp, plane, e, r), name=f"eq18_{name}_{k}_{n}_{e}")
                     for group, terms in _poses_outside(milp, e, plane).items():
                         model.addCons(r + quicksum(terms) <= 1, name=f"eq18_link_{name}_{k}_{n}_{e}_{group}")
+
+
+def _possible(milp: Milp, plane: Plane, ends: tuple[int, ...]) -> bool:
+    """False when some end of the move is confined to boxes that all miss ``plane`` (an action forced there)."""
+    for e in ends:
+        boxes = milp.base_boxes(e)
+        if boxes is not None and all(milp.misses(box, plane) for box in boxes):
+            return False
+    return True
 
 
 def _in_plane(milp: Milp, plane: Plane, e: int, chosen):

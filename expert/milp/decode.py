@@ -11,18 +11,12 @@ the hand is, at the robot-frame offset it was picked with.
 
 from __future__ import annotations
 
-import itertools
-import math
 from dataclasses import dataclass
 
 from expert.milp.options import PoseOption
 from expert.milp.problem import Problem
-from expert.plans import Phase
+from expert.plans import Phase, plan_objective  # noqa: F401  (plan_objective: imported from here by the planner)
 from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_frame
-from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
-from fetchcarry_env.scenario import Scenario
-
-GOAL_TOL = 1e-3  # metres: an object this close to its goal (and not held) counts as delivered (delta = 1)
 
 
 @dataclass(frozen=True)
@@ -89,22 +83,3 @@ def phases_of(problem: Problem, steps: list[Step]) -> tuple[Phase, ...]:
 def _hand(base: Point, heading: Heading, grip: Point) -> Point:
     dx, dy = to_world_frame(heading, grip[0], grip[1])
     return (base[0] + dx, base[1] + dy)
-
-
-def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
-    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
-
-    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within 1 mm of its goal
-    at the end of phase ``k`` (phase 0 included, as in the paper, whose phases start at the
-    initial state). ``travel_cost`` is Eq. 2-3's ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres).
-    """
-    bonus = sum(
-        1
-        for phase in phases
-        for obj in scenario.objects
-        if phase.holding != obj.id
-        and obj.id in phase.objects
-        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
-    )
-    travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
-    return -DELIVERY_BONUS * bonus + travel

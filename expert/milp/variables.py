@@ -53,6 +53,7 @@ class Milp:
     _arm: list[list] = field(default_factory=list)
     _push: list[list] = field(default_factory=list)
     _misses: dict = field(default_factory=dict)
+    _forced: dict | None = None
 
     # ------------------------------------------------------------ selections
     def arm_options_at(self, k: int) -> list[tuple[int, Any]]:
@@ -70,6 +71,34 @@ class Milp:
         if hit is None:
             hit = self._misses[key] = box.clip(plane).empty
         return hit
+
+    def base_boxes(self, e: int) -> list | None:
+        """Boxes one of which must hold base_e, when an action that must happen can only happen there; else None.
+
+        An action (every pick, place and push is done exactly once) whose binaries all sit
+        at one phase ``t`` fixes the acting base to its options' boxes: base_t for a pick or
+        place, base_{t-1} (the stroke's start) and base_t (its end) for a push.
+        """
+        if self._forced is None:
+            phases: dict[tuple[str, str], set[int]] = {}
+            for k, chosen in enumerate(self.z):
+                for o in chosen:
+                    option = self.problem.options[o]
+                    phases.setdefault((option.kind, option.target), set()).add(k)
+            forced: dict[int, list] = {}
+            for (kind, target), at in phases.items():
+                if len(at) != 1:
+                    continue
+                (t,) = at
+                options = [self.problem.options[o] for o in self.z[t]]
+                mine = [o for o in options if (o.kind, o.target) == (kind, target)]
+                if kind == "push":
+                    forced.setdefault(t - 1, [o.box for o in mine])
+                    forced.setdefault(t, [o.end_box for o in mine])
+                else:
+                    forced.setdefault(t, [o.box for o in mine])
+            self._forced = forced
+        return self._forced.get(e)
 
     def action_sum(self, kind: str, target: str, k: int) -> Expr | None:
         """``theta_{i,k}^{kind}``: the sum of the options of ``kind`` on ``target`` at phase ``k`` (None if none)."""

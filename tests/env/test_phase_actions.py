@@ -41,7 +41,7 @@ def test_registered_with_the_env_time_limit_and_a_discrete_space():
     assert gym.spec(ENV_ID).max_episode_steps == MAX_EPISODE_STEPS
     layout = env.get_wrapper_attr("layout")
     assert env.action_space == gym.spaces.Discrete(layout.size)
-    assert layout.size == sum(int(np.prod(layout.shape(kind))) for kind in KINDS)
+    assert layout.size == sum(int(np.prod(layout.shape(kind))) for kind in KINDS) == 4080  # the documented K
     assert env.observation_space == gym.make("FetchCarryPush-v0").observation_space
     env.reset(seed=0)
     for _ in range(MAX_EPISODE_STEPS - 1):

@@ -8,6 +8,7 @@ import pytest
 from expert import bench_cases
 from expert.decoupled import decoupled_plan, steps_of
 from expert.milp.deadline import Deadline
+from expert.milp.decode import plan_objective
 from expert.milp.problem import prepare
 from expert.milp.warm import solution_values
 from expert.planner import plan
@@ -23,7 +24,7 @@ def test_decoupled_plan_is_valid(family, count):
     order = [o.id for o in scenario.objects]
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan)
     assert phases is not None
-    result = Plan(scenario.name, "feasible", None, phases, {})
+    result = Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})
     assert validate_plan(scenario, result) == []
     problem = prepare(scenario, lattice)
     steps = steps_of(problem, phases)
@@ -61,3 +62,14 @@ def test_warm_start_values_refuse_a_plan_longer_than_the_model():
     steps = steps_of(problem, phases)
     assert solution_values(build(problem, len(phases) - 1), steps) is None
     assert solution_values(build(problem, len(phases)), steps) is not None
+
+
+def test_lookahead_keeps_phases_through_the_first_place_and_stays_valid():
+    """Two objects at a time: each step keeps the sub-plan up to its first place; the whole plan is valid."""
+    scenario = bench_cases.multi(4, np.random.default_rng(3))
+    lattice = Lattice.over(scenario.area, 0.05)
+    order = [o.id for o in scenario.objects]
+    phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan, lookahead=2)
+    assert phases is not None
+    assert sum(p.action == "place" for p in phases) == len(scenario.objects)
+    assert validate_plan(scenario, Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})) == []

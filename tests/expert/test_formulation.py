@@ -12,6 +12,7 @@ from planner_cases import BLOCK, bar, one_table, push_scene
 from expert import bench_cases
 from expert.milp.bounds import counting_bound, min_travel, skeleton
 from expert.milp.build import build
+from expert.milp.collision import Infeasible
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, split_box
 from expert.milp.problem import prepare
 from expert.milp.reach import reachable_mask, unreachable_reason
@@ -200,7 +201,10 @@ def test_lower_bound_is_valid(scenario):
     """One phase fewer than the skeleton's bound is infeasible for the MILP itself."""
     problem = problem_of(scenario)
     bound = max(counting_bound(problem), skeleton(problem).phases)
-    milp = build(problem, bound - 1)
+    try:
+        milp = build(problem, bound - 1)
+    except Infeasible:  # building already proves it (a move no region of some rectangle allows)
+        return
     milp.model.optimize()
     assert milp.model.getStatus() == "infeasible"
 

@@ -243,6 +243,7 @@ def test_max_phases_below_need_is_infeasible():
     result = plan(one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),)), max_phases=4, lower_bound=False)
     assert result.status == "infeasible"
     assert result.stats["phases_tried"] == [3, 4]
+    assert result.stats["reason"] == "no plan with 3 to 4 phases (every model was infeasible)"
 
 
 def test_time_limit_without_a_plan():

@@ -8,6 +8,7 @@ from argparse import Namespace
 
 import pytest
 
+from expert import bench
 from fetchcarry_env.errors import UsageError
 from training.cli import main as fetchcarry
 from training.cli.bench import run_planner
@@ -52,3 +53,21 @@ def test_help_shows_no_docstring_markup(capsys):
             fetchcarry(["bench", what, "--help"])
         text = capsys.readouterr().out
         assert ":mod:" not in text and ":func:" not in text and "``" not in text, what
+
+
+def test_scale_families_are_in_the_benchmark():
+    groups = {c.group for c in bench.cases()}
+    assert {"4 obj", "5 obj", "6 obj", "cov 2", "cov 3"} <= groups
+
+
+@pytest.mark.parametrize("count", [2, 3])
+def test_covered_scenarios_cover_every_goal(count):
+    import numpy as np
+
+    from expert import bench_cases
+    from fetchcarry_env.scenario import check_rules
+
+    scenario = bench_cases.covered(count, np.random.default_rng(count))
+    assert check_rules(scenario) == [] and len(scenario.objects) == count
+    for obj in scenario.objects:
+        assert any(c.rect.overlaps_disc(obj.goal, obj.radius) for c in scenario.clutter), obj.id

@@ -86,6 +86,16 @@ def test_same_command_same_results_except_timing(tiny: Path, tmp_path: Path):
     assert _untimed(first) == _untimed(again)
 
 
+def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path, capsys: pytest.CaptureFixture):
+    argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
+    assert main([*argv, "--workers", "2", "--json", "--out", str(tmp_path)]) == 0
+    first = json.loads((tiny / "results.json").read_text())
+    again = json.loads((tmp_path / "results.json").read_text())
+    assert _untimed(first) == _untimed(again)
+    rows = json.loads(capsys.readouterr().out)
+    assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows] == [("expert", 1.0, 1.0), ("random", 0.0, None)]
+
+
 def test_scenario_folder(tmp_path: Path):
     folder = tmp_path / "mine"
     folder.mkdir()
@@ -113,12 +123,19 @@ def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
 
     demonstrations = bc.record_demonstrations("basic", range(3))
     bc.train_bc(demonstrations, bc.BCConfig(epochs=2, hidden=16), Capacity(), out=tmp_path / "bc-tiny")
+    import torch
+
+    threads = torch.get_num_threads()
     report = benchmark.run_benchmark([str(tmp_path / "bc-tiny")], split="iid", episodes=1, out=tmp_path / "out")
+    assert torch.get_num_threads() == threads  # one thread while deciding, given back afterwards
     names = [r["policy"] for r in report.records]
     assert names == ["expert", "random", "bc-tiny"]
     learned = report.records[2]
     assert learned["invalid_actions"] == 0  # the candidate masks are exact: a masked policy is never refused
     assert [row.policy for row in report.rows] == names
+    shutil.copytree(tmp_path / "bc-tiny", tmp_path / "expert")  # a run folder may not pose as a reference
+    with pytest.raises(benchmark.BenchmarkError, match="may not be named"):
+        runner.with_references([str(tmp_path / "expert")])
 
 
 def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
@@ -164,7 +181,8 @@ def _broken_run(tmp_path: Path) -> Path:
 def test_bad_input_exits_2(change, tmp_path: Path, capsys: pytest.CaptureFixture):
     broken, empty = _broken_run(tmp_path), tmp_path / "empty"
     empty.mkdir()
-    argv = ["benchmark", *[str(broken) if a == "BROKEN" else str(empty) if a == "EMPTY" else a for a in change]]
+    named = {"BROKEN": str(broken), "EMPTY": str(empty)}
+    argv = ["benchmark", *[named.get(a, a) for a in change]]
     assert _status([*argv, "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
     assert "Traceback" not in error and error.strip()
@@ -177,6 +195,13 @@ def _status(argv: list[str]) -> int:
         return main(argv)
     except SystemExit as error:
         return int(error.code)
+
+
+def test_a_policy_without_room_for_the_objects_is_refused():
+    small = benchmark.PolicySpec("two-slots", "phases", run="runs/x", env_options={"capacity": {"objects": 2}})
+    with pytest.raises(benchmark.BenchmarkError, match="two-slots cannot act in multi-3"):
+        runner.check_fits([small], benchmark.split_scenarios("more-objects", 2))
+    runner.check_fits([small], benchmark.split_scenarios("iid", 4))  # one and two objects fit
 
 
 def test_scenario_outside_the_trained_extent_is_refused(tmp_path: Path):
@@ -236,6 +261,9 @@ def test_plots_of_learning_curves_and_demonstrations(tmp_path: Path):
     run.mkdir()
     (run / "metrics.csv").write_text("epoch,loss,accuracy,seconds\n1,2.0,0.3,0.1\n2,1.0,0.6,0.2\n")
     assert benchmark.plot_learning_curve(run, tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
+    assert benchmark.plot_learning_curve(run, tmp_path / "time.png", ["loss"], x="seconds").exists()
+    with pytest.raises(ValueError, match="no column"):
+        benchmark.plot_learning_curve(run, tmp_path / "bad.png", x="steps")
     records = [{"policy": "bc", "demonstrations": n, "success": k < n // 10} for n in (10, 30, 100) for k in range(10)]
     assert benchmark.plot_demonstrations(records, tmp_path / "demos.png").read_bytes()[:4] == b"\x89PNG"
 
@@ -260,6 +288,34 @@ def test_split_names_and_versions():
     assert [item.source for item in iid] == list(TRAINING_FAMILIES) * 2
     assert [s.scenario for s in iid] == [s.scenario for s in benchmark.split_scenarios("iid-v0", 8)]
     assert [len(item.scenario.objects) for item in benchmark.split_scenarios("more-objects", 4)] == [3, 4, 3, 4]
+
+
+def test_a_split_version_never_changes():
+    # Digests of the first three scenarios of each split when it was published: a change needs a new version.
+    published = {
+        "iid-v0": "fc34ea4f9f628d50",
+        "more-objects-v0": "44b025e7ea45ee92",
+        "layouts-v0": "1f1698736be96064",
+        "push-required-v0": "56744d90abfa7852",
+    }
+    assert set(published) == set(benchmark.SPLITS)
+    for name, digest in published.items():
+        h = hashlib.sha256()
+        for item in benchmark.split_scenarios(name, 3):
+            h.update(json.dumps([item.seed, item.source, item.scenario.to_dict()], sort_keys=True).encode())
+        assert h.hexdigest()[:16] == digest, name
+
+
+def test_several_splits_in_one_run(tmp_path: Path):
+    report = benchmark.run_benchmark(["random"], split=["layouts", "push-required"], episodes=1, out=tmp_path)
+    assert [(r["policy"], r["split"]) for r in report.records] == [
+        ("expert", "layouts-v0"),
+        ("expert", "push-required-v0"),
+        ("random", "layouts-v0"),
+        ("random", "push-required-v0"),
+    ]
+    assert [(row.policy, row.split) for row in report.rows] == [(r["policy"], r["split"]) for r in report.records]
+    assert "Benchmark: layouts-v0, push-required-v0" in (tmp_path / "summary.md").read_text()
 
 
 def test_push_required_scenarios_have_clutter_on_a_goal():

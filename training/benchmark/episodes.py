@@ -35,6 +35,7 @@ mask_ms        mean wall time per decision of the env's ``action_masks()`` hande
 from __future__ import annotations
 
 import inspect
+import sys
 import time
 from typing import Any
 
@@ -48,6 +49,7 @@ from training.benchmark.splits import EvalScenario
 # env's reset rebuilds only what changed). A worker process runs one task at a time.
 _BUILT: dict[str, tuple[gym.Env, Any, bool]] = {}
 _MAX_BUILT = 4
+_TORCH_THREADS: list[int] = []  # torch's thread count before the benchmark set it to one (restored by close_all)
 
 
 def make_env(spec: PolicySpec) -> gym.Env:
@@ -70,6 +72,7 @@ def _built(spec: PolicySpec) -> tuple[gym.Env, Any, bool]:
             env.close()
         env = make_env(spec)
         policy = build(spec, env)
+        _one_torch_thread()
         parameters = inspect.signature(policy.predict).parameters
         takes_masks = "action_masks" in parameters or any(p.kind is p.VAR_KEYWORD for p in parameters.values())
         _BUILT[key] = (env, policy, takes_masks)
@@ -129,8 +132,24 @@ def run_task(task: tuple[PolicySpec, EvalScenario]) -> dict[str, Any]:
     return run_episode(*task)
 
 
+def _one_torch_thread() -> None:
+    """Run torch (if a policy loaded it) on one thread: a decision is measured on one core.
+
+    On this 2-core machine under load, two torch threads made a small set encoder's
+    decision about 100 times slower (220 ms against 2 ms, docs/benchmarks/benchmark.md).
+    """
+    torch = sys.modules.get("torch")
+    if torch is not None and torch.get_num_threads() != 1:
+        _TORCH_THREADS.append(torch.get_num_threads())
+        torch.set_num_threads(1)
+
+
 def close_all() -> None:
-    """Close the envs this process built (safe to call twice)."""
+    """Close the envs this process built and give torch back its threads (safe to call twice)."""
     while _BUILT:
         _, (env, _, _) = _BUILT.popitem()
         env.close()
+    torch = sys.modules.get("torch")
+    if torch is not None and _TORCH_THREADS:
+        torch.set_num_threads(_TORCH_THREADS[0])
+        _TORCH_THREADS.clear()

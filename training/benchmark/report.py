@@ -127,12 +127,20 @@ def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
     return Path(path)
 
 
-def plot_learning_curve(run_dir: str | Path, path: str | Path, columns: Sequence[str] | None = None) -> Path:
-    """A run folder's ``metrics.csv``: each numeric column (or ``columns``) against the first column."""
-    rows = list(csv.DictReader((Path(run_dir) / "metrics.csv").open()))
+def plot_learning_curve(
+    run_dir: str | Path, path: str | Path, columns: Sequence[str] | None = None, x: str | None = None
+) -> Path:
+    """A run folder's ``metrics.csv``: each numeric column (or ``columns``) against ``x`` (default: the first column).
+
+    ``x="seconds"`` (or whatever column holds wall-clock time) draws the curves against time.
+    """
+    with (Path(run_dir) / "metrics.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
     if not rows:
         raise ValueError(f"{Path(run_dir) / 'metrics.csv'} has no rows")
-    x_key = next(iter(rows[0]))
+    x_key = x if x is not None else next(iter(rows[0]))
+    if x_key not in rows[0]:
+        raise ValueError(f"{Path(run_dir) / 'metrics.csv'} has no column {x_key!r}")
     keys = list(columns) if columns is not None else [k for k in rows[0] if k != x_key and _numeric(rows, k)]
     plt = _pyplot()
     figure, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.2), squeeze=False)

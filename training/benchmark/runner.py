@@ -53,14 +53,17 @@ def run_benchmark(
     policies: list[str],
     *,
     out: str | Path,
-    split: str | None = None,
+    split: str | list[str] | None = None,
     scenarios: str | Path | None = None,
     episodes: int | None = None,
     workers: int = 1,
     backend: str = "process",
+    ray_address: str | None = None,
     progress: bool = False,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
+
+    ``split`` is a split's name or a list of names (the first ``episodes`` of each).
 
     Raises :class:`BenchmarkError` for bad input before any episode runs; a
     ``KeyboardInterrupt`` propagates after the finished episodes are written.
@@ -74,17 +77,23 @@ def run_benchmark(
     if episodes is not None and episodes < 1:
         raise BenchmarkError(f"the number of episodes must be at least 1, got {episodes}")
     specs = with_references(policies)
-    items = split_scenarios(split, episodes) if split is not None else folder_scenarios(scenarios, episodes)
+    if split is not None:
+        names = [split] if isinstance(split, str) else list(split)
+        if not names:
+            raise BenchmarkError("give at least one split")
+        items = [item for name in dict.fromkeys(names) for item in split_scenarios(name, episodes)]
+    else:
+        items = folder_scenarios(scenarios, episodes)
     check_fits(specs, items)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     tasks = [(spec, item) for spec in specs for item in items]
-    order = {(spec.name, item.index): k for k, (spec, item) in enumerate(tasks)}
+    order = {(spec.name, item.split, item.index): k for k, (spec, item) in enumerate(tasks)}
     records: list[dict[str, Any]] = []
     last_write = time.monotonic()
     bar = progress_bar(len(tasks), "benchmark", enabled=progress)
     try:
-        for record in run_tasks(tasks, workers=workers, backend=backend):
+        for record in run_tasks(tasks, workers=workers, backend=backend, ray_address=ray_address):
             records.append(record)
             bar.update(1)
             if time.monotonic() - last_write > WRITE_EVERY_S:
@@ -96,7 +105,7 @@ def run_benchmark(
         records = write_results(out, records, order)
         rows = summarise(records) if records else []
         if rows:
-            write_report(out, rows, title=f"Benchmark: {items[0].split}")
+            write_report(out, rows, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
     return BenchmarkReport(out, records, rows)
 
 
@@ -105,6 +114,9 @@ def with_references(policies: list[str]) -> list[PolicySpec]:
     if not policies:
         raise BenchmarkError("give at least one policy")
     specs = resolve_all(policies)
+    clashes = [s.run for s in specs if s.run is not None and s.name in (EXPERT, RANDOM)]
+    if clashes:
+        raise BenchmarkError(f"a run folder may not be named {EXPERT!r} or {RANDOM!r} (the references): {clashes[0]}")
     names = [s.name for s in specs]
     references = [resolve(name) for name in (EXPERT, RANDOM) if name not in names]
     ordered = references + specs
@@ -129,10 +141,10 @@ def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
         raise BenchmarkError("\n".join(problems[:10]))
 
 
-def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, int], int]) -> list[dict]:
+def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, str, int], int]) -> list[dict]:
     """Fill in the expert's costs, sort ``records`` into task order and write ``results.json`` atomically."""
     fill_expert_costs(records)
-    ordered = sorted(records, key=lambda r: order[(r["policy"], r["index"])])
+    ordered = sorted(records, key=lambda r: order[(r["policy"], r["split"], r["index"])])
     public = [{k: v for k, v in r.items() if k != "index"} for r in ordered]
     temporary = out / f".{RESULTS}.tmp"
     temporary.write_text(json.dumps(public, indent=1) + "\n")
@@ -146,10 +158,12 @@ def write_report(out: Path, rows: list[Row], title: str) -> None:
     plot_splits(rows, out / PLOT)
 
 
-def run_tasks(tasks: list[Task], *, workers: int = 1, backend: str = "process") -> Iterator[dict[str, Any]]:
-    """Each task's record (with its ``index`` in the split), as they finish."""
+def run_tasks(
+    tasks: list[Task], *, workers: int = 1, backend: str = "process", ray_address: str | None = None
+) -> Iterator[dict[str, Any]]:
+    """Each task's record (with its ``index`` in the split), as they finish (Ray: on ``ray_address``, if given)."""
     if backend == "ray":
-        yield from _run_ray(tasks, workers)
+        yield from _run_ray(tasks, workers, ray_address)
     elif workers == 1:
         for task in tasks:
             yield _indexed(task)
@@ -183,14 +197,16 @@ def _run_pool(function: Callable[[Task], dict], tasks: list[Task], workers: int)
         pool.shutdown(wait=finished_cleanly, cancel_futures=True)
 
 
-def _run_ray(tasks: list[Task], workers: int) -> Iterator[dict[str, Any]]:
+def _run_ray(tasks: list[Task], workers: int, address: str | None) -> Iterator[dict[str, Any]]:
     try:
         import ray
     except ModuleNotFoundError:
         raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
     started_here = not ray.is_initialized()
-    if started_here:
+    if started_here and address is None:
         ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
+    elif started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False)
     remote = ray.remote(num_cpus=1)(_indexed)
     queue, pending = list(tasks), []
     try:

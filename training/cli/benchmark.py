@@ -8,10 +8,13 @@ folder, an unusable scenario file); 130 interrupted (the finished episodes are k
 from __future__ import annotations
 
 import argparse
+import json
+import math
 import sys
+from dataclasses import asdict
 
 from fetchcarry_env.errors import UsageError
-from training.cli.arguments import positive_int
+from training.cli.arguments import add_worker_options, positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 
@@ -42,7 +45,12 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="expert, random, random-phases, greedy (where installed) or run folders (as fetchcarry train writes)",
     )
     where = parser.add_mutually_exclusive_group(required=True)
-    where.add_argument("--split", metavar="NAME", help="a split name, e.g. iid or iid-v0 (newest version if none)")
+    where.add_argument(
+        "--split",
+        nargs="+",
+        metavar="NAME",
+        help="one or more split names, e.g. iid or iid-v0 (the newest version if none is given)",
+    )
     where.add_argument(
         "--scenarios",
         metavar="DIR",
@@ -51,15 +59,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.add_argument(
         "--episodes", type=positive_int, metavar="N", help="episodes (default: the split's 100, or every file)"
     )
-    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
-    parser.add_argument(
-        "--backend",
-        choices=("process", "ray"),
-        default="process",
-        help="a local process pool (default) or Ray (optional extra: pip install ray)",
-    )
+    add_worker_options(parser)
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     parser.set_defaults(handler=run_benchmark_command)
 
 
@@ -76,6 +79,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             episodes=args.episodes,
             workers=args.workers,
             backend=args.backend,
+            ray_address=args.ray_address,
             progress=not args.no_progress,
         )
     except BenchmarkError as error:
@@ -84,6 +88,14 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}")
         return INTERRUPTED
+    if args.json:
+        print(json.dumps([_json_row(asdict(row)) for row in report.rows], indent=1))
+        return 0
     echo((report.out / SUMMARY).read_text())
     echo(f"wrote {len(report.records)} records to {report.out / RESULTS}")
     return 0
+
+
+def _json_row(row: dict) -> dict:
+    """A row with ``null`` for figures that do not exist (nan: a cost ratio without a success)."""
+    return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()}

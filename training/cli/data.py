@@ -12,7 +12,7 @@ import json
 import sys
 
 from fetchcarry_env.errors import UsageError
-from training.cli.arguments import positive_int, whole_number
+from training.cli.arguments import add_worker_options, positive_int, whole_number
 from training.cli.episodes import add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
@@ -50,14 +50,7 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
         "action_mask; an expert action no candidate expresses ends its episode with the outcome unexpressible)",
     )
     parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
-    parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
-    parser.add_argument(
-        "--backend",
-        choices=("process", "ray"),
-        default="process",
-        help="a local process pool (default) or Ray (optional extra: pip install ray)",
-    )
-    parser.add_argument("--ray-address", metavar="ADDR", help="a Ray cluster to join (default: start a local one)")
+    add_worker_options(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset with this id")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")

@@ -9,6 +9,7 @@ episode is the expert's whether or not each action is expressible.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -48,8 +49,6 @@ def expert_episode(
     env: gym.Env, expert: ExpertPolicy, seed: int, options: dict[str, Any] | None = None
 ) -> ExpertEpisode:
     """Run the expert for one episode (``reset(seed=seed)``) on a phase env and record it."""
-    import time
-
     index_of = env.get_wrapper_attr("index_of")
     masks = env.get_wrapper_attr("action_masks")
     step_env_action = env.get_wrapper_attr("step_env_action")
@@ -73,6 +72,22 @@ def expert_episode(
     record.success = bool(info["is_success"])
     record.travel_cost = float(info["travel_cost"])
     return record
+
+
+def nearest_move(env: gym.Env, action: np.ndarray) -> int | None:
+    """The allowed move candidate whose end lies nearest the end of the env move ``action``, or None.
+
+    A stand-in label for an expert move that no candidate expresses (the expert's
+    waypoints lie anywhere along a line, the candidates at fixed points).
+    """
+    if int(action[4]) != Mode.MOVE:
+        return None
+    table = env.get_wrapper_attr("table")
+    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    if moves.size == 0:
+        return None
+    gaps = np.abs(table.actions[moves, :2] - np.asarray(action[:2])).sum(axis=1)
+    return int(moves[int(np.argmin(gaps))])
 
 
 def mode_name(mode: int) -> str:

@@ -60,17 +60,20 @@ def speed(family: str, steps: int, seed: int = 0) -> dict[str, float]:
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
     masks = env.get_wrapper_attr("action_masks")
-    mask_s = 0.0
+    mask_s, refused, contacts = 0.0, 0, 0
     start = time.perf_counter()
     for _ in range(steps):
         t0 = time.perf_counter()
         mask = masks()
         mask_s += time.perf_counter() - t0
-        _obs, _r, terminated, truncated, _info = env.step(int(rng.choice(np.flatnonzero(mask))))
+        _obs, _r, terminated, truncated, info = env.step(int(rng.choice(np.flatnonzero(mask))))
+        refused += info["invalid_action"] is not None
+        contacts += info["contact"] is not None
         if terminated or truncated:
             env.reset()
     rates["phases_steps_per_s"] = steps / (time.perf_counter() - start)
     rates["mask_ms"] = 1e3 * mask_s / steps
+    rates["refused"], rates["contacts"] = refused, contacts
     env.close()
     plain = gym.make("FetchCarryPush-v0", family=family)
     policy = RandomMaskedPolicy(plain, seed=seed)
@@ -104,13 +107,15 @@ def main(argv: list[str] | None = None) -> None:
             f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}"
         )
     print(f"\nspeed ({args.steps} random masked steps per family; the machine is shared: compare the ratio)")
-    print(f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'plain steps/s':>14} {'ratio':>6}")
+    print(
+        f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'plain steps/s':>14} {'ratio':>6}  allowed steps refused"
+    )
     for family in args.families:
         r = speed(family, args.steps)
         ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
         print(
             f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} "
-            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}"
+            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}"
         )
 
 
