@@ -170,8 +170,11 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
 
 
 def _load_run(run: Path, env: Any) -> Any:
+    import torch
+
     from training import load_policy
 
+    torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
     try:
         return load_policy(run, env)
     except ValueError as error:

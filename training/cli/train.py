@@ -328,11 +328,14 @@ def run_train_ppo(args: argparse.Namespace) -> int:
 
 
 def run_bench_learned(args: argparse.Namespace) -> int:
+    import torch
+
     from training import load_policy
     from training.learning.evaluate import evaluate, expert_costs, summarise
     from training.sources import EpisodeSource
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
+    torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
     try:
         policies = {run: load_policy(run) for run in args.runs}
     except ValueError as error:
