@@ -281,7 +281,7 @@ class _Run:
         if pairs is not None:
             t_bound = time.perf_counter()
             bound = min_objective(problem, n_phases, pairs, deadline)
-            windows = action_windows(problem, n_phases, pairs, deadline)
+            windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
             stats["lower_bound_s"] += time.perf_counter() - t_bound
         t0 = time.perf_counter()

@@ -24,11 +24,13 @@ from typing import Any
 from pyscipopt import SCIP_PARAMSETTING, Model
 
 from expert.milp.actions import add_action_constraints
+from expert.milp.bounds import Windows
 from expert.milp.collision import add_arm_constraints, add_collision_constraints
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.fewest import add_fewest_phase_cuts
 from expert.milp.motion import add_motion_constraints, set_objective
 from expert.milp.objects import add_delivery_constraints
+from expert.milp.order import add_order_windows
 from expert.milp.postures import add_posture_constraints
 from expert.milp.problem import Problem
 from expert.milp.push import add_push_constraints
@@ -85,7 +87,7 @@ def build(
     n_phases: int,
     settings: SolverSettings | None = None,
     objective_bound: float | None = None,
-    windows: dict | None = None,
+    windows: Windows | None = None,
     deadline: Deadline = NEVER,
     fewest: bool = False,
 ) -> Milp:
@@ -108,6 +110,8 @@ def build(
     for add in (add_arm_constraints, add_push_constraints):
         deadline.check()
         add(milp)
+    if windows is not None:
+        add_order_windows(milp, windows)
     if fewest:
         add_fewest_phase_cuts(milp)
     set_objective(milp, objective_bound)
