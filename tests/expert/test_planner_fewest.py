@@ -1,4 +1,7 @@
-"""The fewest-phases cuts (``expert.milp.fewest``) are exact: same status, phases and Eq. 1 with and without them."""
+"""The fewest-phases cuts (``expert.milp.fewest``) are exact: same status, phases and Eq. 1 with and without them.
+
+Also what the action windows claim (``expert.milp.bounds.action_windows``): unions, not hulls.
+"""
 
 from __future__ import annotations
 
@@ -6,8 +9,11 @@ import numpy as np
 import pytest
 
 from expert import bench_cases
+from expert.milp.bounds import Connectivity, PairCosts, action_windows, skeleton
+from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
 
 
 def _cases():
@@ -55,3 +61,24 @@ def test_the_extra_phases_model_has_no_cuts():
     assert result.status == "optimal"
     solves = result.stats["solves"]
     assert solves[0]["fewest_cuts"] is True and solves[-1]["fewest_cuts"] is False
+
+
+def test_windows_are_unions_and_the_last_action_is_at_the_end():
+    """V-C: the pick is early (carried through the push) or late (after an empty-hand push), never between."""
+    scenario = bench_cases.push("A", np.random.default_rng(2024))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    free = Connectivity(problem)
+    n = skeleton(problem, free).phases
+    pairs = PairCosts(problem, free)
+    loose = action_windows(problem, n, pairs)
+    tight = action_windows(problem, n, pairs, last_at_end=True)
+    assert tight.phases[("place", "bottle")] == {n - 1} < loose.phases[("place", "bottle")]
+    picks = sorted(tight.phases[("pick", "bottle")])
+    assert picks != list(range(picks[0], picks[-1] + 1))  # a gap: not the hull
+    push = ("push", "block")
+    before = tight.given[(("pick", "bottle"), push, True)]
+    after = tight.given[(("pick", "bottle"), push, False)]
+    assert before and after and not before & after
+    result = plan(scenario)
+    assert result.status == "optimal" and len(result.phases) == n
+    assert result.phases[-1].action == "place"
