@@ -280,7 +280,7 @@ class _Run:
         bound = windows = None
         if pairs is not None:
             t_bound = time.perf_counter()
-            bound = min_objective(problem, n_phases, pairs, deadline)
+            bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
             windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
             stats["lower_bound_s"] += time.perf_counter() - t_bound

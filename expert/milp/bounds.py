@@ -256,7 +256,13 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
     return 0.0
 
 
-def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER) -> float:
+def min_objective(
+    problem: Problem,
+    n_phases: int,
+    pair: PairCosts | None = None,
+    deadline: Deadline = NEVER,
+    last_at_end: bool = False,
+) -> float:
     """A lower bound on Eq. 1 for plans with ``n_phases`` phases (the skeleton search, timed).
 
     With ``t_i`` the phase of object ``i``'s delivery, Eq. 1 is
@@ -266,13 +272,21 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
     travel of any of their pose pairs (both lower bounds), adds ``W1 * t`` at each place,
     and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
     Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
+
+    ``last_at_end``: every plan's last action is a place at phase ``N - 1`` (``N - 1``
+    phases admit no plan, :mod:`expert.milp.fewest`); a path's last place then counts
+    ``W1 * (N - 1)``, wherever the relaxation could have made it earlier.
     """
-    value, _ = cheapest_schedule(problem, n_phases, pair, deadline)
+    value, _ = cheapest_schedule(problem, n_phases, pair, deadline, last_at_end)
     return value
 
 
 def cheapest_schedule(
-    problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER
+    problem: Problem,
+    n_phases: int,
+    pair: PairCosts | None = None,
+    deadline: Deadline = NEVER,
+    last_at_end: bool = False,
 ) -> tuple[float, list[tuple[tuple[str, str], int]]]:
     """:func:`min_objective` and the schedule that attains it: ``[((kind, target), phase), ...]`` in order.
 
@@ -287,8 +301,11 @@ def cheapest_schedule(
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
             phases, travel = pair(last, key)
             reached = phase + phases
-            if reached <= n_phases - 1:
-                yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
+            if reached > n_phases - 1:
+                continue
+            if last_at_end and key[0] == "place" and _finished(problem, d, p):
+                reached = n_phases - 1
+            yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
 
     start = (frozenset(), problem.holding, frozenset(), None, 0)
     parents: dict = {}
