@@ -295,19 +295,32 @@ def cheapest_schedule(
     """
     pair = pair or PairCosts(problem, deadline=deadline)
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
+    grid, start_point = problem.grid, problem.scenario.robot.start
+    steps: dict = {}
+
+    def step(where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
+        if (where, entry, exit_box) not in steps:
+            travel = _gap_cost(grid, start_point, where, entry)
+            if kind == "push":
+                travel += _gap_cost(grid, start_point, entry, exit_box, touching=True)
+            steps[(where, entry, exit_box)] = (_step_cost(pair.free, problem, where, kind, entry), travel)
+        return steps[(where, entry, exit_box)]
 
     def expand(state):
-        delivered, held, pushed, last, phase = state
+        delivered, held, pushed, _, phase, where = state
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
-            phases, travel = pair(last, key)
-            reached = phase + phases
-            if reached > n_phases - 1:
-                continue
-            if last_at_end and key[0] == "place" and _finished(problem, d, p):
-                reached = n_phases - 1
-            yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
+            last = last_at_end and key[0] == "place" and _finished(problem, d, p)
+            for entry, exit_box in pair.actions[key].poses:
+                phases, travel = step(where, key[0], entry, exit_box)
+                reached = phase + phases
+                if reached > n_phases - 1:
+                    continue
+                if last:
+                    reached = n_phases - 1
+                bonus = DELIVERY_BONUS * reached if key[0] == "place" else 0.0
+                yield travel + bonus, (d, h, p, key, reached, exit_box)
 
-    start = (frozenset(), problem.holding, frozenset(), None, 0)
+    start = (frozenset(), problem.holding, frozenset(), None, 0, None)
     parents: dict = {}
     for spent, state in settle(start, expand, deadline, parents=parents):
         if _finished(problem, state[0], state[2]):
