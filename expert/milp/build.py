@@ -111,7 +111,7 @@ def build(
         deadline.check()
         add(milp)
     if windows is not None:
-        add_order_windows(milp, windows)
+        add_order_windows(milp, windows, deadline)
     if fewest:
         add_fewest_phase_cuts(milp)
     set_objective(milp, objective_bound)

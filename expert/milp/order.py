@@ -18,17 +18,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from expert.milp.deadline import NEVER, Deadline
 from expert.milp.variables import Expr, Milp
 
 if TYPE_CHECKING:
     from expert.milp.bounds import Windows
 
 
-def add_order_windows(milp: Milp, windows: Windows) -> None:
+def add_order_windows(milp: Milp, windows: Windows, deadline: Deadline = NEVER) -> None:
     """``A_k <= done_b[k-1]`` or ``<= 1 - done_b[k-1]`` where the windows given ``b`` exclude phase ``k``."""
     model = milp.model
     keys = sorted(windows.phases)
     for a in keys:
+        deadline.check()
         for b in keys:
             if b == a or (a[0] == "place" and b == ("pick", a[1])):  # a place follows its pick by Eq. 4-6 already
                 continue
