@@ -2,8 +2,8 @@
 
 ``tests/expert/data/recorded_optima.json`` holds, per scenario name, the status, the
 number of phases and Eq. 1 of the plan made by the planner of commit d6f6ec6 (without
-the fewest-phases cuts, the union windows and the order windows). Regenerate it with
-that commit on ``PYTHONPATH`` and ``python tests/expert/optima_cases.py OUT.json``.
+the fewest-phases cuts, the union and order windows and the bound on Eq. 1 per pose box).
+Regenerate it with that commit on ``PYTHONPATH`` and ``python tests/expert/optima_cases.py OUT.json``.
 """
 
 from __future__ import annotations

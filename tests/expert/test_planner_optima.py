@@ -1,7 +1,8 @@
 """Every exact reduction keeps the optimum: the planner's plans match optima recorded before them.
 
 The optima in ``data/recorded_optima.json`` were made by the planner without the
-fewest-phases cuts, the union and order windows (``optima_cases.py`` says how); the
+fewest-phases cuts, the union and order windows and the bound on Eq. 1 per pose box
+(``optima_cases.py`` says how); the
 plans made now must have the same status, number of phases and Eq. 1, and pass the
 validator.
 """
