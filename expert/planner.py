@@ -48,7 +48,7 @@ RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeepi
 DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts"}
 
 
 def optimality(extra_phases: int) -> str:
@@ -89,6 +89,8 @@ def plan(
             phases, compared by Eq. 1 over ``N + k`` phases (``stats["optimality"]``).
         **solver_options: ``integral`` (bool, default True: integer lattice bases),
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
+            ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
+            ``N - 1`` is proven to admit no plan, :mod:`expert.milp.fewest`),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
@@ -116,9 +118,10 @@ def plan(
         raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
     integral = bool(solver_options.pop("integral", True))
     use_bound = bool(solver_options.pop("lower_bound", True))
+    fewest_cuts = bool(solver_options.pop("fewest_cuts", True))
     settings = SolverSettings(**solver_options)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
-    run = _Run(scenario, started, deadline, settings, extra_phases)
+    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts)
     try:
         return run.plan(lattice, holding, integral, use_bound, max_phases)
     except TimeUp:
@@ -134,6 +137,7 @@ class _Run:
     deadline: Deadline
     settings: SolverSettings
     extra_phases: int
+    fewest_cuts: bool = True
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
@@ -188,18 +192,21 @@ class _Run:
             problem = dataclasses.replace(
                 problem, earliest=relaxation.earliest, min_travel=min_travel(problem, deadline)
             )
-            first = max(3, counting_bound(problem), relaxation.phases)
+            proven = max(counting_bound(problem), relaxation.phases)
         else:
-            first = max(3, counting_bound(problem))
+            proven = counting_bound(problem)
+        first = max(3, proven)
         stats["lower_bound"] = first
         stats["lower_bound_s"] += time.perf_counter() - t_bound
         if holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0):
             self.first_plan(problem, lattice, pairs, first)
         last = max_phases if max_phases is not None else first + EXTRA_PHASES
+        fewer_infeasible = first == proven  # N - 1 phases proven to admit no plan
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
-            outcome = self.solve(problem, n_phases, pairs)
+            outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
             if outcome == "infeasible":
+                fewer_infeasible = True
                 if n_phases == first:
                     t_reach = time.perf_counter()
                     reason = unreachable_reason(problem, deadline)
@@ -255,21 +262,31 @@ class _Run:
         self.stats["decoupled_objective"] = plan_objective(self.scenario, phases)
         self.warm = steps_of(problem, phases)
 
-    def solve(self, problem: Problem, n_phases: int, pairs: PairCosts | None, warm: list[Step] | None = None):
-        """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``."""
+    def solve(
+        self,
+        problem: Problem,
+        n_phases: int,
+        pairs: PairCosts | None,
+        warm: list[Step] | None = None,
+        fewest: bool = False,
+    ):
+        """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``.
+
+        ``fewest``: ``n_phases - 1`` phases are proven to admit no plan (adds :mod:`expert.milp.fewest`'s cuts).
+        """
         stats, deadline = self.stats, self.deadline
-        record: dict[str, Any] = {"phases": n_phases}
+        record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
         stats.setdefault("solves", []).append(record)
         bound = windows = None
         if pairs is not None:
             t_bound = time.perf_counter()
-            bound = min_objective(problem, n_phases, pairs, deadline)
-            windows = action_windows(problem, n_phases, pairs, deadline)
+            bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
+            windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
             stats["lower_bound_s"] += time.perf_counter() - t_bound
         t0 = time.perf_counter()
         try:
-            milp = build(problem, n_phases, self.settings, bound, windows, deadline)
+            milp = build(problem, n_phases, self.settings, bound, windows, deadline, fewest=fewest)
         except Infeasible:
             record.update(status="infeasible", build_s=time.perf_counter() - t0, solve_s=0.0, nodes=0)
             stats["build_s"] += record["build_s"]

@@ -256,7 +256,13 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
     return 0.0
 
 
-def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER) -> float:
+def min_objective(
+    problem: Problem,
+    n_phases: int,
+    pair: PairCosts | None = None,
+    deadline: Deadline = NEVER,
+    last_at_end: bool = False,
+) -> float:
     """A lower bound on Eq. 1 for plans with ``n_phases`` phases (the skeleton search, timed).
 
     With ``t_i`` the phase of object ``i``'s delivery, Eq. 1 is
@@ -266,13 +272,21 @@ def min_objective(problem: Problem, n_phases: int, pair: PairCosts | None = None
     travel of any of their pose pairs (both lower bounds), adds ``W1 * t`` at each place,
     and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
     Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
+
+    ``last_at_end``: every plan's last action is a place at phase ``N - 1`` (``N - 1``
+    phases admit no plan, :mod:`expert.milp.fewest`); a path's last place then counts
+    ``W1 * (N - 1)``, wherever the relaxation could have made it earlier.
     """
-    value, _ = cheapest_schedule(problem, n_phases, pair, deadline)
+    value, _ = cheapest_schedule(problem, n_phases, pair, deadline, last_at_end)
     return value
 
 
 def cheapest_schedule(
-    problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER
+    problem: Problem,
+    n_phases: int,
+    pair: PairCosts | None = None,
+    deadline: Deadline = NEVER,
+    last_at_end: bool = False,
 ) -> tuple[float, list[tuple[tuple[str, str], int]]]:
     """:func:`min_objective` and the schedule that attains it: ``[((kind, target), phase), ...]`` in order.
 
@@ -281,16 +295,32 @@ def cheapest_schedule(
     """
     pair = pair or PairCosts(problem, deadline=deadline)
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
+    grid, start_point = problem.grid, problem.scenario.robot.start
+    steps: dict = {}
+
+    def step(where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
+        if (where, entry, exit_box) not in steps:
+            travel = _gap_cost(grid, start_point, where, entry)
+            if kind == "push":
+                travel += _gap_cost(grid, start_point, entry, exit_box, touching=True)
+            steps[(where, entry, exit_box)] = (_step_cost(pair.free, problem, where, kind, entry), travel)
+        return steps[(where, entry, exit_box)]
 
     def expand(state):
-        delivered, held, pushed, last, phase = state
+        delivered, held, pushed, _, phase, where = state
         for key, (d, h, p) in _moves(problem, delivered, held, pushed):
-            phases, travel = pair(last, key)
-            reached = phase + phases
-            if reached <= n_phases - 1:
-                yield travel + (DELIVERY_BONUS * reached if key[0] == "place" else 0.0), (d, h, p, key, reached)
+            last = last_at_end and key[0] == "place" and _finished(problem, d, p)
+            for entry, exit_box in pair.actions[key].poses:
+                phases, travel = step(where, key[0], entry, exit_box)
+                reached = phase + phases
+                if reached > n_phases - 1:
+                    continue
+                if last:
+                    reached = n_phases - 1
+                bonus = DELIVERY_BONUS * reached if key[0] == "place" else 0.0
+                yield travel + bonus, (d, h, p, key, reached, exit_box)
 
-    start = (frozenset(), problem.holding, frozenset(), None, 0)
+    start = (frozenset(), problem.holding, frozenset(), None, 0, None)
     parents: dict = {}
     for spent, state in settle(start, expand, deadline, parents=parents):
         if _finished(problem, state[0], state[2]):
@@ -328,14 +358,28 @@ class PairCosts:
 
 
 def action_windows(
-    problem: Problem, n_phases: int, pair: PairCosts | None = None, deadline: Deadline = NEVER
-) -> dict[tuple[str, str], tuple[int, int]]:
-    """Per action ``(kind, target)``, the phases ``[first, last]`` at which any plan with ``n_phases`` can do it.
+    problem: Problem,
+    n_phases: int,
+    pair: PairCosts | None = None,
+    deadline: Deadline = NEVER,
+    last_at_end: bool = False,
+) -> Windows:
+    """Per action ``(kind, target)``, the phases at which any plan with ``n_phases`` can do it.
 
-    ``first``: the least phases from the start to the action over every order of actions
-    (the skeleton search at action level); ``last``: ``N - 1`` minus the least phases
-    still needed after it. Both use lower bounds on the phases between two actions, so
-    no plan does an action outside its window; the MILP creates no option binary there.
+    A plan passes through exactly one skeleton state right after each action; from that
+    state ``s`` the action lies in ``[arrival(s), N - 1 - remaining(s)]``: ``arrival``, the
+    least phases from the start to ``s`` over every order of actions, ``remaining`` the
+    least phases its remaining actions need. Both use lower bounds on the phases between
+    two actions, so no plan does an action outside the union of these ranges over its
+    states (not their hull: a pick may be possible early, before a push, and late, after
+    it, but not between); the MILP creates no option binary there. The same union over
+    the states where another action ``b`` was done before (or not) gives the phases of
+    the action given ``b`` (:attr:`Windows.given`).
+
+    ``last_at_end``: every plan's last action is at phase ``N - 1`` (true when ``N - 1``
+    phases admit no plan, :mod:`expert.milp.fewest`); an action done as the last one
+    (its state is finished) is then at ``N - 1`` exactly, so an action that is always
+    the last (the place of a single object) can only be at ``N - 1``.
     """
     pair = pair or PairCosts(problem, deadline=deadline)
 
@@ -347,14 +391,54 @@ def action_windows(
     start = (frozenset(), problem.holding, frozenset(), None)
     arrival = {state: int(phase) for phase, state in settle(start, expand, deadline, limit=n_phases)}
     remaining = _phases_still_needed(problem, arrival, pair, n_phases, deadline)
-    windows: dict[tuple[str, str], tuple[int, int]] = {}
+    keys = list(_actions_by_key(problem))
+    phases: dict[tuple[str, str], set[int]] = {}
+    given: dict[tuple[tuple[str, str], tuple[str, str], bool], set[int]] = {}
     for state, phase in arrival.items():
         key = state[3]
         if key is None:
             continue
-        first, last = windows.get(key, (n_phases, -1))
-        windows[key] = (min(first, phase), max(last, n_phases - 1 - remaining[state]))
-    return windows
+        last = n_phases - 1 - remaining[state]
+        if last_at_end and phase <= n_phases - 1 and _finished(problem, state[0], state[2]):
+            phase = n_phases - 1
+        at = set(range(max(phase, 1), last + 1))
+        phases.setdefault(key, set()).update(at)
+        for other in keys:
+            if other != key:
+                given.setdefault((key, other, _done_before(state, other)), set()).update(at)
+    return Windows(
+        {key: frozenset(at) for key, at in phases.items()},
+        {cond: frozenset(at) for cond, at in given.items()},
+    )
+
+
+@dataclass(frozen=True)
+class Windows:
+    """The phases at which each action can happen (:func:`action_windows`).
+
+    ``phases[(kind, target)]``: every phase at which some plan can do the action (an
+    action absent from it cannot happen at all). ``given[(key, other, before)]``: the
+    phases of ``key`` in the plans where ``other`` was done before it (``before``) or not;
+    a missing entry means no such plan.
+    """
+
+    phases: dict[tuple[str, str], frozenset[int]]
+    given: dict[tuple[tuple[str, str], tuple[str, str], bool], frozenset[int]]
+
+    def allows(self, key: tuple[str, str], k: int) -> bool:
+        """Whether some plan can do the action ``key`` at phase ``k``."""
+        return k in self.phases.get(key, ())
+
+
+def _done_before(state, other: tuple[str, str]) -> bool:
+    """Whether action ``other`` was done before the action that led to skeleton ``state``."""
+    delivered, held, pushed, key = state
+    kind, target = other
+    if kind == "push":
+        return target in pushed and key != other
+    if kind == "pick":
+        return (target in delivered or target == held) and key != other
+    return target in delivered and key != other
 
 
 def _phases_still_needed(

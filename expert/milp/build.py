@@ -24,10 +24,13 @@ from typing import Any
 from pyscipopt import SCIP_PARAMSETTING, Model
 
 from expert.milp.actions import add_action_constraints
+from expert.milp.bounds import Windows
 from expert.milp.collision import add_arm_constraints, add_collision_constraints
 from expert.milp.deadline import NEVER, Deadline
+from expert.milp.fewest import add_fewest_phase_cuts
 from expert.milp.motion import add_motion_constraints, set_objective
 from expert.milp.objects import add_delivery_constraints
+from expert.milp.order import add_order_windows
 from expert.milp.postures import add_posture_constraints
 from expert.milp.problem import Problem
 from expert.milp.push import add_push_constraints
@@ -84,14 +87,17 @@ def build(
     n_phases: int,
     settings: SolverSettings | None = None,
     objective_bound: float | None = None,
-    windows: dict | None = None,
+    windows: Windows | None = None,
     deadline: Deadline = NEVER,
+    fewest: bool = False,
 ) -> Milp:
     """The MILP of ``problem`` with ``n_phases`` phases (phase 0, the start, included).
 
     ``objective_bound``: a proven lower bound on Eq. 1 with this many phases
     (:func:`expert.milp.bounds.min_objective`), added as a valid inequality.
     ``windows``: the phases at which each action can happen (:func:`expert.milp.bounds.action_windows`).
+    ``fewest``: ``n_phases - 1`` phases are proven to admit no plan; adds the valid
+    inequalities of :mod:`expert.milp.fewest`.
     ``deadline``: checked between groups and per rectangle of Eq. 18 (raises :class:`~expert.milp.deadline.TimeUp`).
     """
     model = Model(f"fetchcarry_{problem.scenario.name}_{n_phases}")
@@ -104,5 +110,9 @@ def build(
     for add in (add_arm_constraints, add_push_constraints):
         deadline.check()
         add(milp)
+    if windows is not None:
+        add_order_windows(milp, windows, deadline)
+    if fewest:
+        add_fewest_phase_cuts(milp)
     set_objective(milp, objective_bound)
     return milp

@@ -23,11 +23,14 @@ them integral (Eq. 4-6 and 12 below are written as equalities).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pyscipopt import Model, quicksum
 
 from expert.milp.problem import Problem
+
+if TYPE_CHECKING:
+    from expert.milp.bounds import Windows
 
 Expr = Any  # a pyscipopt variable or linear expression
 
@@ -138,11 +141,11 @@ class Milp:
         return self._pushed_dir[key]
 
 
-def create_variables(problem: Problem, n_phases: int, model: Model, windows: dict | None = None) -> Milp:
+def create_variables(problem: Problem, n_phases: int, model: Model, windows: Windows | None = None) -> Milp:
     """Add every variable of the formulation with ``n_phases`` phases to ``model``.
 
-    ``windows``: per action ``(kind, target)``, the phases ``[first, last]`` at which it can
-    happen at all (:func:`expert.milp.bounds.action_windows`); no binary outside them.
+    ``windows``: the phases at which each action can happen at all
+    (:func:`expert.milp.bounds.action_windows`); no binary outside them.
     """
     milp = Milp(model, problem, n_phases)
     grid = problem.grid
@@ -167,9 +170,8 @@ def create_variables(problem: Problem, n_phases: int, model: Model, windows: dic
     milp._arm = [[] for _ in range(n_phases)]
     milp._push = [[] for _ in range(n_phases)]
     for o, option in enumerate(problem.options):
-        first, last = (windows or {}).get((option.kind, option.target), (0, n_phases))
         for k in option_phases(problem, option, n_phases):
-            if not first <= k <= last:
+            if windows is not None and not windows.allows((option.kind, option.target), k):
                 continue
             z = milp.z[k][o] = model.addVar(f"z_{option.kind}_{option.target}_{o}_{k}", vtype="B")
             (milp._push if option.kind == "push" else milp._arm)[k].append((o, z))

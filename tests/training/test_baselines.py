@@ -67,9 +67,10 @@ def test_run_folder_round_trip_and_deterministic_training(basic_demos, tmp_path)
 
 def test_set_encoder_learns_and_faces_more_slots(basic_demos):
     small = Demonstrations(basic_demos.observations[:64], basic_demos.masks[:64], basic_demos.labels[:64])
-    policy = train_bc(small, BCConfig(encoder="set", epochs=30, hidden=32, learning_rate=3e-3), Capacity())
+    policy = train_bc(small, BCConfig(encoder="set", epochs=80, hidden=32, learning_rate=3e-3), Capacity())
     actions = policy.predict(small.observations, action_masks=small.masks)[0]
-    assert (actions == small.labels).mean() > 0.6  # fits its training data
+    fit = (actions == small.labels).mean()
+    assert fit > 0.6, fit  # fits its training data
     bigger = Capacity(objects=6, clutter=10)
     from fetchcarry_env.phases import PhaseLayout
 

@@ -1,0 +1,84 @@
+"""The fewest-phases cuts (``expert.milp.fewest``) are exact: same status, phases and Eq. 1 with and without them.
+
+Also what the action windows claim (``expert.milp.bounds.action_windows``): unions, not hulls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from expert import bench_cases
+from expert.milp.bounds import Connectivity, PairCosts, action_windows, skeleton
+from expert.milp.problem import prepare
+from expert.planner import plan
+from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
+
+
+def _cases():
+    rng = np.random.default_rng(7)
+    cases = [bench_cases.basic(area, rng) for area in bench_cases.AREAS]
+    cases += [bench_cases.push(pattern, rng) for pattern in bench_cases.PATTERNS]
+    cases += [
+        bench_cases.corridor(rng),
+        bench_cases.multi(2, rng),
+        bench_cases.multi(2, rng),
+        bench_cases.multi(3, rng),
+    ]
+    cases.append(bench_cases.covered(2, rng))
+    return cases
+
+
+CASES = _cases()
+
+
+@pytest.mark.parametrize("scenario", CASES, ids=[f"{k}-{s.name}" for k, s in enumerate(CASES)])
+def test_the_cuts_keep_the_optimum(scenario):
+    with_cuts = plan(scenario, time_limit=60)
+    without = plan(scenario, time_limit=60, fewest_cuts=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts) == []
+    assert with_cuts.stats["solves"][-1]["fewest_cuts"] is True
+
+
+def test_the_cuts_keep_the_optimum_with_an_object_in_the_hand(spec_example):
+    """A held object may need only a place: N = 2 is then not excluded, so the cuts stay off at N = 3."""
+    with_cuts = plan(spec_example, holding="bottle")
+    without = plan(spec_example, holding="bottle", fewest_cuts=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert len(with_cuts.phases) == len(without.phases)
+    assert validate_plan(spec_example, with_cuts, holding="bottle") == []
+
+
+def test_the_extra_phases_model_has_no_cuts():
+    """Idle phases are how shorter plans live in the N + k model: the cuts would remove them."""
+    scenario = bench_cases.multi(2, np.random.default_rng(3))
+    result = plan(scenario, extra_phases=1)
+    assert result.status == "optimal"
+    solves = result.stats["solves"]
+    assert solves[0]["fewest_cuts"] is True and solves[-1]["fewest_cuts"] is False
+
+
+def test_windows_are_unions_and_the_last_action_is_at_the_end():
+    """V-C: the pick is early (carried through the push) or late (after an empty-hand push), never between."""
+    scenario = bench_cases.push("A", np.random.default_rng(2024))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    free = Connectivity(problem)
+    n = skeleton(problem, free).phases
+    pairs = PairCosts(problem, free)
+    loose = action_windows(problem, n, pairs)
+    tight = action_windows(problem, n, pairs, last_at_end=True)
+    assert tight.phases[("place", "bottle")] == {n - 1} < loose.phases[("place", "bottle")]
+    picks = sorted(tight.phases[("pick", "bottle")])
+    assert picks != list(range(picks[0], picks[-1] + 1))  # a gap: not the hull
+    push = ("push", "block")
+    before = tight.given[(("pick", "bottle"), push, True)]
+    after = tight.given[(("pick", "bottle"), push, False)]
+    assert before and after and not before & after
+    result = plan(scenario)
+    assert result.status == "optimal" and len(result.phases) == n
+    assert result.phases[-1].action == "place"
