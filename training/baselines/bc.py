@@ -26,29 +26,11 @@ import torch
 from torch import nn
 
 from fetchcarry_env.observation import Capacity
+from training.baselines.configs import BCConfig
 from training.baselines.encoders import build_network
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE = "config.json", "metrics.csv", "model.pt"
 KIND = "bc"
-
-
-@dataclass(frozen=True)
-class BCConfig:
-    """What a BC run trains (every field is saved in the run folder's ``config.json``)."""
-
-    encoder: str = "mlp"  # "mlp" or "set"
-    hidden: int = 256  # units per hidden layer (mlp) or token width (set)
-    epochs: int = 60
-    batch_size: int = 128
-    learning_rate: float = 1e-3
-    weight_decay: float = 1e-5
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        if self.encoder not in ("mlp", "set"):
-            raise ValueError(f"encoder must be 'mlp' or 'set', got {self.encoder!r}")
-        if min(self.hidden, self.epochs, self.batch_size) < 1 or self.learning_rate <= 0:
-            raise ValueError("hidden, epochs and batch_size must be positive, learning_rate > 0")
 
 
 @dataclass

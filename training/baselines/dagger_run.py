@@ -33,29 +33,11 @@ import torch
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations
+from training.baselines.configs import HELDOUT_SEED_BASE, DaggerOptions
 from training.baselines.encoders import build_network
 from training.baselines.imitation import finish, fit, run_config
 
 LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
-HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
-
-
-@dataclass(frozen=True)
-class DaggerOptions:
-    """A DAgger run's budget (the defaults are the published budget)."""
-
-    demonstrations: int = 100  # expert episodes of iteration 0
-    iterations: int = 4  # learner iterations after iteration 0
-    episodes_per_iteration: int = 50  # learner episodes labelled per iteration
-    eval_episodes: int = 50  # held-out episodes measured after each iteration
-    time_limit: float = 10.0  # seconds per planning call of the expert
-    epochs: int = 40  # epochs of each retraining
-
-    def __post_init__(self) -> None:
-        if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
-            raise ValueError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
-        if self.time_limit <= 0:
-            raise ValueError(f"the time limit must be positive, got {self.time_limit}")
 
 
 @dataclass(frozen=True)

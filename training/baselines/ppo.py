@@ -21,7 +21,7 @@ is complete but not bit-identical to an uninterrupted one).
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -31,36 +31,12 @@ import torch
 
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
-from training.baselines.bc import BCConfig
+from training.baselines.configs import BCConfig, PPOOptions
 from training.baselines.encoders import build_network
 from training.baselines.imitation import finish, run_config
 
 SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
 VALUE_LAYERS = (256, 256)  # units of the value MLP
-
-
-@dataclass(frozen=True)
-class PPOOptions:
-    """A PPO run's budget and settings (the defaults are the published budget)."""
-
-    steps: int = 20_000  # env steps in total
-    n_steps: int = 256  # env steps per rollout
-    batch_size: int = 64
-    n_epochs: int = 10
-    learning_rate: float = 3e-4
-    gamma: float = 0.99
-    checkpoint_every: int = 1024  # env steps between checkpoints
-    encoder: str = "mlp"  # the actor's network ("mlp" or "set"; with init, the init run's)
-    hidden: int = 256
-    seed: int = 0
-    init: str | None = None  # a bc or dagger run folder whose network starts the actor
-
-    def __post_init__(self) -> None:
-        if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
-            raise ValueError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
-        if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
-            raise ValueError("learning_rate must be positive and gamma in (0, 1]")
-        BCConfig(encoder=self.encoder, hidden=self.hidden)
 
 
 class FlatObservation(gym.ObservationWrapper):

@@ -29,7 +29,7 @@ RUN_EPILOG = (
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``train`` (``bc``, ``dagger``, ``ppo``) to the ``fetchcarry`` parser."""
-    from training.baselines.bc import BCConfig
+    from training.baselines.configs import BCConfig
 
     defaults = BCConfig()
     parser = commands.add_parser(
@@ -53,7 +53,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(bc)
     bc.set_defaults(handler=run_train_bc)
 
-    from training.baselines.dagger_run import DaggerOptions
+    from training.baselines.configs import DaggerOptions
 
     dagger_defaults = DaggerOptions()
     dagger = kinds.add_parser(
@@ -110,7 +110,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(dagger)
     dagger.set_defaults(handler=run_train_dagger)
 
-    from training.baselines.ppo import PPOOptions
+    from training.baselines.configs import PPOOptions
 
     ppo_defaults = PPOOptions()
     ppo = kinds.add_parser(
@@ -169,7 +169,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(ppo)
     ppo.set_defaults(handler=run_train_ppo)
 
-    from training.baselines.dagger_run import HELDOUT_SEED_BASE
+    from training.baselines.configs import HELDOUT_SEED_BASE
 
     learned = bench.add_parser(
         "learned",
@@ -238,7 +238,7 @@ def _run_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _network_config(args: argparse.Namespace) -> Any:
-    from training.baselines.bc import BCConfig
+    from training.baselines.configs import BCConfig
 
     try:
         return BCConfig(encoder=args.encoder, hidden=args.hidden, epochs=args.epochs, batch_size=args.batch_size,
