@@ -119,18 +119,6 @@ def test_greedy_delivers_through_the_env_actions(family, seeds):
         assert info["is_success"], seed
 
 
-def test_dagger_labels_the_learners_states_and_grows_the_data():
-    from training.baselines.dagger import train_dagger
-
-    rows = []
-    policy = train_dagger("basic", BCConfig(epochs=5, hidden=32), 6, 1, 3, progress=rows.append)
-    assert [r["round"] for r in rows] == [0, 1]
-    assert rows[1]["labelled"] > rows[0]["labelled"]  # the learner's states were labelled and added
-    assert rows[1]["policy"] is policy and 0 <= rows[1]["learner_successes"] <= 3
-    with pytest.raises(ValueError):
-        train_dagger("basic", BCConfig(), 0, 1, 1)
-
-
 def test_nearest_move_labels_an_expert_move_no_candidate_expresses():
     from training.learning.expert_phases import nearest_move
 

@@ -102,6 +102,11 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         metavar="S",
         help=f"seconds per planning call of the expert (default {dagger_defaults.time_limit:g})",
     )
+    dagger.add_argument(
+        "--nearest-moves",
+        action="store_true",
+        help="label an expert move no candidate expresses with the allowed move nearest it (default: no label)",
+    )
     dagger.add_argument("--workers", type=positive_int, default=1, metavar="W", help="labelling workers (default 1)")
     dagger.add_argument(
         "--backend", choices=("process", "ray"), default="process", help="a local process pool (default) or Ray"
@@ -277,7 +282,7 @@ def run_train_bc(args: argparse.Namespace) -> int:
 
 
 def run_train_dagger(args: argparse.Namespace) -> int:
-    from training.baselines.dagger_run import DaggerOptions, train_dagger
+    from training.baselines.dagger import DaggerOptions, train_dagger
     from training.sources import EpisodeSource
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
@@ -289,6 +294,7 @@ def run_train_dagger(args: argparse.Namespace) -> int:
         eval_episodes=args.eval_episodes,
         time_limit=args.time_limit,
         epochs=args.epochs,
+        nearest_moves=args.nearest_moves,
     )
 
     def train() -> str:
