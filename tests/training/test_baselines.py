@@ -14,7 +14,7 @@ from training.baselines import load_policy
 from training.baselines.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
 from training.baselines.encoders import SetScorer
 from training.baselines.random_phases import RandomPhasePolicy
-from training.learning.evaluate import evaluate, expert_costs, make_env, summarise, wilson
+from training.learning.evaluate import evaluate, expert_costs, make_env, summarise
 
 HELD_OUT = range(100_000, 100_015)
 
@@ -55,6 +55,9 @@ def test_run_folder_round_trip_and_deterministic_training(basic_demos, tmp_path)
         torch.testing.assert_close(a, b, rtol=0, atol=0)
     saved = json.loads((tmp_path / "run" / "config.json").read_text())
     assert saved["kind"] == "bc" and saved["config"]["encoder"] == "mlp"
+    assert saved["interface"] == "phases" and saved["complete"] and saved["candidates"] == small.masks.shape[1]
+    with pytest.raises(ValueError, match="already holds a run"):
+        train_bc(small, config, Capacity(), out=tmp_path / "run")
     with open(tmp_path / "run" / "metrics.csv") as handle:
         assert len(list(csv.DictReader(handle))) == 3
     loaded = load_policy(tmp_path / "run")
@@ -86,12 +89,6 @@ def test_random_phase_policy_draws_allowed_candidates_reproducibly():
     assert draws[0] == draws[1] and mask[draws[0]]
     batch = RandomPhasePolicy(seed=1).predict(None, action_masks=np.stack([mask, mask]))[0]
     assert batch.shape == (2,) and mask[batch].all()
-
-
-def test_wilson_interval():
-    low, high = wilson(9, 10)
-    assert low == pytest.approx(0.596, abs=1e-3) and high == pytest.approx(0.982, abs=1e-3)
-    assert wilson(0, 10)[0] == 0.0
 
 
 @pytest.mark.parametrize("options", [{"encoder": "cnn"}, {"epochs": 0}, {"learning_rate": 0.0}], ids=str)

@@ -34,10 +34,9 @@ import torch
 
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations
+from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.baselines.configs import HELDOUT_SEED_BASE, DaggerOptions
 from training.baselines.encoders import build_network
-from training.baselines.imitation import finish, fit, run_config
 
 LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
 
@@ -167,7 +166,7 @@ def train_dagger(
     features = int(probe.observation_space["observation"].shape[0])
     probe.close()
     run_options = {"family": family, **asdict(options), **asdict(config)}
-    config_json = run_config("dagger", run_options, config, capacity, candidates, features, {})
+    config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
@@ -233,5 +232,5 @@ def train_dagger(
             runs.write_metrics(folder, rows)
             bar.set_postfix_str(f"labels {len(aggregate)} held-out success {success:.0%}", refresh=False)
     config_json["data"] = {"expert_labels": len(aggregate), "episodes": episodes_done}
-    finish(folder, network, config_json)
+    runs.finish_run(folder, network, config_json)
     return rows

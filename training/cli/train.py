@@ -401,7 +401,10 @@ def run_check_bc(args: argparse.Namespace) -> int:
 
     _check_families(args.family, *args.also)
     out = Path(args.out) if args.out else None
-    check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, out, args.also, echo)
+    try:
+        check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, out, args.also, echo)
+    except ValueError as error:  # a run folder already in DIR
+        raise UsageError(str(error)) from None
     return 0
 
 

@@ -18,6 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 from expert import ExpertPolicy
+from training.benchmark.metrics import wilson
 from training.learning.expert_phases import expert_episode
 
 
@@ -128,7 +129,7 @@ def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
 
 
 def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary:
-    """Success (with a 95 % Wilson interval), cost ratio to the expert, phases and refusals."""
+    """Success (with its 95 % Wilson interval: :func:`training.benchmark.metrics.wilson`), cost ratio, phases."""
     n = len(results)
     wins = sum(r.success for r in results)
     low, high = wilson(wins, n)
@@ -143,13 +144,3 @@ def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary
         refused=float(np.mean([r.refused for r in results])) if results else math.nan,
         decision_ms=1e3 * sum(r.decision_s for r in results) / max(sum(r.phases for r in results), 1),
     )
-
-
-def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """The Wilson score interval of a success rate (95 % with the default ``z``)."""
-    if n == 0:
-        return (math.nan, math.nan)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
