@@ -60,38 +60,20 @@ def make_env(family: str, **options: Any) -> gym.Env:
 
 
 def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
-    """One episode per seed of ``policy`` on ``family`` through the candidate phases."""
-    env = make_env(family)
-    masks = env.get_wrapper_attr("action_masks")
-    results = []
-    for seed in seeds:
-        if hasattr(policy, "reset"):
-            policy.reset()
-        observation, info = env.reset(seed=seed)
-        refused, steps, start, decision = 0, 0, True, 0.0
-        while True:
-            mask = masks()
-            clock = time.perf_counter()
-            action, _ = policy.predict(
-                observation, episode_start=np.array([start]), deterministic=deterministic, action_masks=mask
-            )
-            decision += time.perf_counter() - clock
-            start = False
-            observation, _reward, terminated, truncated, info = env.step(int(np.asarray(action).reshape(-1)[0]))
-            steps += 1
-            refused += info["invalid_action"] is not None
-            if terminated or truncated:
-                break
-        results.append(
-            EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused, decision)
-        )
-    env.close()
-    return results
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
+    return _episodes(policy, make_env(family), seeds, deterministic, masked=True)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
     """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
-    env = gym.make("FetchCarryPush-v0", family=family)
+    return _episodes(policy, gym.make("FetchCarryPush-v0", family=family), seeds, True, masked=False)
+
+
+def _episodes(
+    policy: Any, env: gym.Env, seeds: Iterable[int], deterministic: bool, masked: bool
+) -> list[EpisodeResult]:
+    """Run ``policy`` one episode per seed in ``env`` (closed at the end); ``masked``: a candidate index per step."""
+    masks = env.get_wrapper_attr("action_masks") if masked else None
     results = []
     for seed in seeds:
         if hasattr(policy, "reset"):
@@ -99,10 +81,15 @@ def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list
         observation, info = env.reset(seed=seed)
         refused, steps, start, decision = 0, 0, True, 0.0
         while True:
+            given = {"action_masks": masks()} if masks is not None else {}
             clock = time.perf_counter()
-            action, _ = policy.predict(observation, episode_start=np.array([start]), deterministic=True)
+            action, _ = policy.predict(
+                observation, episode_start=np.array([start]), deterministic=deterministic, **given
+            )
             decision += time.perf_counter() - clock
             start = False
+            if masked:
+                action = int(np.asarray(action).reshape(-1)[0])
             observation, _reward, terminated, truncated, info = env.step(action)
             steps += 1
             refused += info["invalid_action"] is not None
