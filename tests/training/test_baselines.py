@@ -14,7 +14,7 @@ from training.baselines import load_policy
 from training.baselines.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
 from training.baselines.encoders import SetScorer
 from training.baselines.random_phases import RandomPhasePolicy
-from training.learning.evaluate import evaluate, expert_costs, make_env, summarise, wilson
+from training.learning.evaluate import evaluate, expert_costs, make_env, summarise
 
 HELD_OUT = range(100_000, 100_015)
 
@@ -55,6 +55,9 @@ def test_run_folder_round_trip_and_deterministic_training(basic_demos, tmp_path)
         torch.testing.assert_close(a, b, rtol=0, atol=0)
     saved = json.loads((tmp_path / "run" / "config.json").read_text())
     assert saved["kind"] == "bc" and saved["config"]["encoder"] == "mlp"
+    assert saved["interface"] == "phases" and saved["complete"] and saved["candidates"] == small.masks.shape[1]
+    with pytest.raises(ValueError, match="already holds a run"):
+        train_bc(small, config, Capacity(), out=tmp_path / "run")
     with open(tmp_path / "run" / "metrics.csv") as handle:
         assert len(list(csv.DictReader(handle))) == 3
     loaded = load_policy(tmp_path / "run")
@@ -88,12 +91,6 @@ def test_random_phase_policy_draws_allowed_candidates_reproducibly():
     assert batch.shape == (2,) and mask[batch].all()
 
 
-def test_wilson_interval():
-    low, high = wilson(9, 10)
-    assert low == pytest.approx(0.596, abs=1e-3) and high == pytest.approx(0.982, abs=1e-3)
-    assert wilson(0, 10)[0] == 0.0
-
-
 @pytest.mark.parametrize("options", [{"encoder": "cnn"}, {"epochs": 0}, {"learning_rate": 0.0}], ids=str)
 def test_bad_bc_config_raises(options):
     with pytest.raises(ValueError):
@@ -117,18 +114,6 @@ def test_greedy_delivers_through_the_env_actions(family, seeds):
             if terminated:
                 break
         assert info["is_success"], seed
-
-
-def test_dagger_labels_the_learners_states_and_grows_the_data():
-    from training.baselines.dagger import train_dagger
-
-    rows = []
-    policy = train_dagger("basic", BCConfig(epochs=5, hidden=32), 6, 1, 3, progress=rows.append)
-    assert [r["round"] for r in rows] == [0, 1]
-    assert rows[1]["labelled"] > rows[0]["labelled"]  # the learner's states were labelled and added
-    assert rows[1]["policy"] is policy and 0 <= rows[1]["learner_successes"] <= 3
-    with pytest.raises(ValueError):
-        train_dagger("basic", BCConfig(), 0, 1, 1)
 
 
 def test_nearest_move_labels_an_expert_move_no_candidate_expresses():

@@ -219,6 +219,8 @@ def test_wilson_interval_by_hand():
     assert (low, high) == pytest.approx((0.490157, 0.943319), abs=1e-6)
     assert benchmark.wilson(0, 4) == pytest.approx((0.0, 0.4899000), abs=1e-6)  # z²/(n + z²) = 3.8416/7.8416
     assert all(math.isnan(v) for v in benchmark.wilson(0, 0))
+    assert benchmark.wilson(9, 10) == pytest.approx((0.596, 0.982), abs=1e-3)
+    assert benchmark.wilson(0, 10)[0] == 0.0
 
 
 def test_spl_by_hand():

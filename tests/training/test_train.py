@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import gymnasium as gym
@@ -15,7 +16,7 @@ import fetchcarry_env  # noqa: F401  (registers the env ids)
 import training
 from training.baselines import runs
 from training.baselines.bc import BCConfig
-from training.baselines.dagger_run import DaggerOptions, train_dagger
+from training.baselines.dagger import DaggerOptions, train_dagger
 from training.baselines.imitation import demonstrations_from_dataset
 from training.baselines.ppo import PPOOptions, train_ppo
 from training.cli import main
@@ -198,12 +199,24 @@ def test_dagger_is_deterministic_and_counts_labels(tmp_path: Path) -> None:
     assert [row["iteration"] for row in first] == [0, 1]
     assert 0 < first[0]["expert_labels"] < first[1]["expert_labels"]
     assert all(0.0 <= row["heldout_success"] <= 1.0 for row in first)
+    assert math.isnan(first[0]["learner_success"]) and 0.0 <= first[1]["learner_success"] <= 1.0
     policy = training.load_policy(tmp_path / "a")
     env = gym.make("FetchCarryPushPhases-v0", family="basic")
     observation, _ = env.reset(seed=1)
     mask = env.get_wrapper_attr("action_masks")()
     action, _ = policy.predict(observation, action_masks=mask)
     assert mask[int(action)]
+
+
+def test_dagger_options_are_checked_and_nearest_moves_only_add_labels(tmp_path: Path) -> None:
+    with pytest.raises(ValueError):
+        DaggerOptions(demonstrations=0)
+    plain = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "a", progress=False)
+    nearest = DaggerOptions(**{**TINY_DAGGER.__dict__, "nearest_moves": True})
+    rows = train_dagger("basic", nearest, TINY_NET, tmp_path / "b", progress=False)
+    assert rows[0]["expert_labels"] == plain[0]["expert_labels"]  # iteration 0: the expert's own episodes
+    assert rows[1]["unexpressible"] <= plain[1]["unexpressible"]
+    assert rows[1]["expert_labels"] >= plain[1]["expert_labels"]
 
 
 def test_dagger_labels_the_same_on_a_worker_pool(tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""The training commands: rollout, demo, generate, dataset info/replay, evaluate-expert, bench generate.
+"""The training commands: rollout, demo, generate, dataset, evaluate-expert, bench generate|phases|learning-checks.
 
 Run in-process through ``training.cli.main``. Exit statuses: 0 success, 1 a negative
 answer, 2 bad input with a short message on stderr and never a traceback.
@@ -156,3 +156,26 @@ def test_bench_generate_prints_the_split_and_the_speed_up(capsys) -> None:
         assert run["simulation_s_per_episode"] > 0 and 0 < run["planning_share"] < 1
     status, out, _ = _run(capsys, "bench", "generate", "--families", "basic", "--episodes", "1", "--workers", "1")
     assert status == 0 and "ep/s/worker" in out and "speed-up" in out
+
+
+def test_bench_phases_prints_the_expert_in_the_interface_and_its_speed(capsys) -> None:
+    status, out, _ = _run(capsys, "bench", "phases", "--families", "basic,push", "--episodes", "2", "--steps", "20")
+    assert status == 0
+    expressed, speed = out.split("\nspeed ")
+    rows = [line.split() for line in expressed.splitlines()[2:]]
+    assert [row[0] for row in rows] == ["basic", "push"] and all(row[1] == "100%" for row in rows)
+    assert "pick 2/2" in expressed  # one pick per episode, each an allowed candidate
+    assert [line.split()[0] for line in speed.splitlines()[2:]] == ["basic", "push"]
+    assert "0, stopped at a contact 0" in speed  # the mask never allows a step the env refuses
+    status, _, err = _run(capsys, "bench", "phases", "--families", "nope")
+    assert status == 2 and "unknown family" in err
+
+
+def test_bench_learning_checks_bc_trains_and_compares_with_the_baselines(capsys, tmp_path: Path) -> None:
+    argv = ["bench", "learning-checks", "bc", "--episodes", "3", "--eval-episodes", "2", "--encoders", "mlp"]
+    status, out, _ = _run(capsys, *argv, "--epochs", "2", "--out", str(tmp_path))
+    assert status == 0 and "the expert solved 2/2 held-out seeds" in out
+    assert [line.split()[0] for line in out.splitlines()[-3:]] == ["random", "greedy", "bc-mlp"]
+    assert (tmp_path / "bc-mlp" / "model.pt").is_file()
+    status, _, err = _run(capsys, "bench", "learning-checks", "ppo", "--family", "nope")
+    assert status == 2 and "unknown family" in err

@@ -7,16 +7,17 @@ loss and when acting, so the policy always picks an allowed candidate (never a p
 the env would refuse). Two encoders (:mod:`training.baselines.encoders`): ``mlp``, a
 flat MLP over the observation vector, and ``set``, an object-centric set encoder.
 
-A run folder holds ``config.json`` (:class:`BCConfig` and the interface's sizes),
-``metrics.csv`` (one row per epoch) and ``model.pt`` (the weights); :func:`load_bc`
-reads one back as a :class:`BCPolicy` (stable-baselines3's ``predict`` protocol).
+:func:`fit` is the training loop (with a checkpoint after every epoch if asked), which
+``fetchcarry train bc`` and DAgger use too; :func:`train_bc` trains on demonstrations
+in memory and can write a run folder (:mod:`training.baselines.runs`), which
+:func:`training.load_policy` reads back as a :class:`BCPolicy` (stable-baselines3's
+``predict`` protocol).
 """
 
 from __future__ import annotations
 
-import csv
-import json
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -26,11 +27,9 @@ import torch
 from torch import nn
 
 from fetchcarry_env.observation import Capacity
+from training.baselines import runs
 from training.baselines.configs import BCConfig
 from training.baselines.encoders import build_network
-
-CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE = "config.json", "metrics.csv", "model.pt"
-KIND = "bc"
 
 
 @dataclass
@@ -116,20 +115,24 @@ class BCPolicy:
         return (actions if batched else actions[0]), state
 
 
-def train_bc(
+def fit(
     demonstrations: Demonstrations,
     config: BCConfig,
     capacity: Capacity,
-    out: str | Path | None = None,
-    progress: Any = None,
-) -> BCPolicy:
-    """Train on ``demonstrations`` (cross-entropy over the allowed candidates); write a run folder to ``out``.
+    *,
+    checkpoint: dict[str, Any] | None = None,
+    save: Callable[[dict[str, Any]], None] | None = None,
+    on_epoch: Callable[[dict[str, Any]], None] | None = None,
+) -> tuple[nn.Module, list[dict[str, Any]]]:
+    """Train a fresh network for ``config.epochs`` epochs; return it and one metrics row per epoch.
 
-    Deterministic on CPU for one ``config.seed``. ``progress``, if given, is called
-    with each epoch's metrics (a dict).
+    ``checkpoint`` (what ``save`` was last given) resumes training after its epoch;
+    ``save`` is called with the training state after every epoch. Deterministic on CPU
+    for one ``config.seed``, interrupted or not.
     """
     if len(demonstrations) == 0:
         raise ValueError("no labelled demonstrations to learn from")
+    torch.set_num_threads(1)  # faster here than two threads, and the same sums every run
     torch.manual_seed(config.seed)
     observations = torch.as_tensor(demonstrations.observations)
     masks = torch.as_tensor(demonstrations.masks)
@@ -137,9 +140,18 @@ def train_bc(
     network = build_network(config, capacity, masks.shape[1], observations)
     optimiser = torch.optim.Adam(network.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay)
     order = torch.Generator().manual_seed(config.seed)
-    metrics = []
-    start = time.perf_counter()
-    for epoch in range(config.epochs):
+    metrics: list[dict[str, Any]] = []
+    first = 0
+    elapsed = 0.0
+    if checkpoint is not None:
+        network.load_state_dict(checkpoint["network"])
+        optimiser.load_state_dict(checkpoint["optimiser"])
+        order.set_state(checkpoint["order"])
+        metrics = [dict(row) for row in checkpoint["metrics"]]
+        first = int(checkpoint["epoch"])
+        elapsed = float(metrics[-1]["seconds"]) if metrics else 0.0
+    start = time.perf_counter() - elapsed
+    for epoch in range(first, config.epochs):
         network.train()
         total = correct = 0
         loss_sum = 0.0
@@ -152,55 +164,38 @@ def train_bc(
             loss_sum += loss.item() * len(batch)
             correct += int((logits.argmax(dim=1) == labels[batch]).sum())
             total += len(batch)
-        row = {
-            "epoch": epoch + 1,
-            "loss": loss_sum / total,
-            "accuracy": correct / total,
-            "seconds": time.perf_counter() - start,
-        }
+        row = {"epoch": epoch + 1, "loss": loss_sum / total, "accuracy": correct / total,
+               "seconds": time.perf_counter() - start}  # fmt: skip
         metrics.append(row)
-        if progress is not None:
-            progress(row)
-    policy = BCPolicy(network, config, capacity)
+        if save is not None:
+            save({"network": network.state_dict(), "optimiser": optimiser.state_dict(), "order": order.get_state(),
+                  "metrics": metrics, "epoch": epoch + 1})  # fmt: skip
+        if on_epoch is not None:
+            on_epoch(row)
+    return network.eval(), metrics
+
+
+def train_bc(
+    demonstrations: Demonstrations,
+    config: BCConfig,
+    capacity: Capacity,
+    out: str | Path | None = None,
+    progress: Callable[[dict[str, Any]], None] | None = None,
+) -> BCPolicy:
+    """Train on ``demonstrations`` with :func:`fit`; write a ``bc`` run folder to ``out`` (a new folder).
+
+    Deterministic on CPU for one ``config.seed``. ``progress``, if given, is called
+    with each epoch's metrics (a dict). The run folder (:mod:`training.baselines.runs`)
+    loads with :func:`training.load_policy`; ``ValueError`` if ``out`` holds a run already.
+    """
+    candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
+    folder = None
     if out is not None:
-        save_run(Path(out), policy, masks.shape[1], observations.shape[1], metrics, demonstrations.stats)
-    return policy
-
-
-def save_run(
-    out: Path, policy: BCPolicy, candidates: int, features: int, metrics: list[dict], data: dict[str, Any]
-) -> None:
-    """Write ``config.json``, ``metrics.csv`` and ``model.pt`` into ``out`` (created if needed)."""
-    out.mkdir(parents=True, exist_ok=True)
-    config = {
-        "kind": KIND,
-        "config": asdict(policy.config),
-        "capacity": asdict(policy.capacity),
-        "candidates": candidates,
-        "features": features,
-        "data": data,
-    }
-    (out / CONFIG_FILE).write_text(json.dumps(config, indent=2) + "\n")
-    with open(out / METRICS_FILE, "w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(metrics[0]))
-        writer.writeheader()
-        writer.writerows(metrics)
-    torch.save(policy.network.state_dict(), out / WEIGHTS_FILE)
-
-
-def load_bc(path: str | Path, env: Any = None) -> BCPolicy:
-    """The :class:`BCPolicy` of a run folder; ``ValueError`` if it is not a BC run folder."""
-    path = Path(path)
-    try:
-        saved = json.loads((path / CONFIG_FILE).read_text())
-    except FileNotFoundError:
-        raise ValueError(f"{path} is not a run folder: no {CONFIG_FILE}") from None
-    except json.JSONDecodeError as error:
-        raise ValueError(f"{path / CONFIG_FILE} is not valid JSON: {error}") from None
-    if saved.get("kind") != KIND:
-        raise ValueError(f"{path} holds a {saved.get('kind')!r} run, not a {KIND!r} run")
-    config = BCConfig(**saved["config"])
-    capacity = Capacity(**saved["capacity"])
-    network = build_network(config, capacity, saved["candidates"], torch.zeros(1, saved["features"]))
-    network.load_state_dict(torch.load(path / WEIGHTS_FILE, weights_only=True))
-    return BCPolicy(network, config, capacity, env)
+        config_json = runs.run_config("bc", asdict(config), config, capacity, candidates, features,
+                                      demonstrations.stats)  # fmt: skip
+        folder, _ = runs.start_run(out, config_json, resume=False)
+    network, metrics = fit(demonstrations, config, capacity, on_epoch=progress)
+    if folder is not None:
+        runs.write_metrics(folder, metrics)
+        runs.finish_run(folder, network, config_json)
+    return BCPolicy(network, config, capacity)

@@ -64,6 +64,7 @@ class DaggerOptions:
     eval_episodes: int = 50  # held-out episodes measured after each iteration
     time_limit: float = 10.0  # seconds per planning call of the expert
     epochs: int = 40  # epochs of each retraining
+    nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
 
     def __post_init__(self) -> None:
         if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:

@@ -1,113 +1,236 @@
-"""DAgger on the candidate-phase interface: the expert labels the states the learner visits.
+"""DAgger into a run folder (``fetchcarry train dagger``), labelling on the worker pool of ``fetchcarry generate``.
 
-Round 0 is behaviour cloning on the expert's own episodes. Each later round runs the
-current policy for some episodes on fresh seeds, asks :class:`expert.ExpertPolicy`
-(which plans from any observation) what it would do in every state visited, adds the
-states whose expert action is a candidate to the data, and trains again from scratch on
-everything gathered (Ross, Gordon and Bagnell, 2011, with the learner acting alone).
-In-process and sequential: the expert plans in this process.
+Iteration 0 is behaviour cloning on ``demonstrations`` expert episodes (seeds ``0 ..
+demonstrations-1`` of the family: the seeds ``fetchcarry generate`` uses by default,
+so BC on such a dataset and DAgger start from the same scenarios). Each later
+iteration runs the current learner (deterministic, masked) for
+``episodes_per_iteration`` episodes on new seeds (from :data:`LEARNER_SEED_BASE`); at
+every state it visits, :class:`expert.ExpertPolicy` says what it would do, mapped to
+the allowed candidate that stands for it (an expert action no candidate expresses, or
+the expert's idle fallback, gives no label, unless ``nearest_moves``: then an expert move
+no candidate expresses is labelled with the allowed move nearest it,
+:func:`training.learning.expert_phases.nearest_move`; a state visited again in the same episode,
+as by a learner going round in circles, is labelled once). The labelled states join the aggregate
+and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), as in
+Ross et al. (2011) with beta = 0 after the first iteration.
+
+Labelling episodes run on the worker pool (or Ray) of ``fetchcarry generate``
+(:func:`training.generate.run_episodes`): the learner's weights travel with the task.
+After each iteration the learner is measured on held-out seeds (from
+:data:`HELDOUT_SEED_BASE`, never trained on) and ``metrics.csv`` gains a row: the
+expert labels so far and the held-out success. A checkpoint after every iteration
+(the aggregate, the weights, the metrics) lets an interrupted run resume.
 """
 
 from __future__ import annotations
 
+import time
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
 
 from fetchcarry_env.observation import Capacity
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, record_demonstrations, train_bc
+from training.baselines import runs
+from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.baselines.configs import HELDOUT_SEED_BASE, DaggerOptions
+from training.baselines.encoders import build_network
+
+LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
 
 
-def label_learner_episodes(
-    policy: BCPolicy, family: str, seeds: range | list[int], nearest_moves: bool = False
-) -> tuple[Demonstrations, int, int]:
-    """Run ``policy`` on ``seeds``; label each visited state with the expert's candidate.
+@dataclass(frozen=True)
+class LabelTask:
+    """One labelling job for a worker: whose episodes (expert or learner) on which seeds (picklable)."""
 
-    Returns the labelled states, the learner's successes and the number of states visited.
+    family: str
+    seed_base: int  # episode k uses seed_base + k
+    time_limit: float
+    network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
+    nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
 
-    A state whose expert action no candidate expresses is left out, or, with
-    ``nearest_moves``, labelled with the allowed move nearest the expert's move
-    (:func:`training.learning.expert_phases.nearest_move`).
-    """
-    from expert import ExpertPolicy
-    from training.learning.evaluate import make_env
+
+@dataclass
+class LabelledEpisode:
+    """The labelled states of one episode."""
+
+    observations: np.ndarray  # (n, D) float32
+    masks: np.ndarray  # (n, K) bool
+    labels: np.ndarray  # (n,) int64
+    steps: int  # steps of the episode
+    success: bool
+    unexpressible: int  # states whose expert action no allowed candidate expressed (no label)
+
+
+def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
+    """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the env ids)
+    from expert.policy import ExpertPolicy
     from training.learning.expert_phases import nearest_move
 
-    env = make_env(family)
-    expert = ExpertPolicy(env)
-    masks_of = env.get_wrapper_attr("action_masks")
-    index_of = env.get_wrapper_attr("index_of")
-    observations, masks, labels = [], [], []
-    successes = visited = 0
-    for seed in seeds:
-        observation, info = env.reset(seed=seed)
-        expert.reset()
-        for step in range(env.spec.max_episode_steps):
+    torch.set_num_threads(1)
+    env = gym.make(runs.ENV_ID, family=task.family)
+    try:
+        expert = ExpertPolicy(env, time_limit=task.time_limit)
+        learner = _learner(task.network) if task.network is not None else None
+        masks_of = env.get_wrapper_attr("action_masks")
+        index_of = env.get_wrapper_attr("index_of")
+        step_env_action = env.get_wrapper_attr("step_env_action")
+        observation, info = env.reset(seed=task.seed_base + index)
+        observations, masks, labels = [], [], []
+        seen: set[bytes] = set()
+        steps = unexpressible = 0
+        while True:
             mask = masks_of()
-            visited += 1
-            label, _ = expert.predict(observation, episode_start=step == 0, deterministic=True)
-            index = index_of(label)
-            if index is None and nearest_moves:
-                index = nearest_move(env, label)
-            if index is not None:
-                observations.append(observation["observation"].copy())
+            action, _ = expert.predict(observation, episode_start=np.array([steps == 0]), deterministic=True)
+            decision = expert.last_decision
+            label = index_of(action) if decision is None or decision.failure is None else None
+            if label is None and task.nearest_moves and (decision is None or decision.failure is None):
+                label = nearest_move(env, action)
+            key = np.asarray(observation["observation"]).tobytes()
+            if label is None:
+                unexpressible += 1
+            elif key not in seen:  # a learner going round in circles labels each state once
+                seen.add(key)
+                observations.append(np.asarray(observation["observation"], np.float32))
                 masks.append(mask)
-                labels.append(index)
-            action, _ = policy.predict(observation, action_masks=mask)
-            observation, _reward, terminated, truncated, info = env.step(int(action))
+                labels.append(int(label))
+            if learner is not None:
+                choice, _ = learner.predict(observation, action_masks=mask, deterministic=True)
+                observation, _, terminated, truncated, info = env.step(int(choice))
+            else:  # the expert's own episode, whether or not a candidate expresses its action
+                observation, _, terminated, truncated, info = step_env_action(action)
+            steps += 1
             if terminated or truncated:
                 break
-        successes += bool(info["is_success"])
-    env.close()
-    size = env.action_space.n
-    data = Demonstrations(
-        np.asarray(observations, dtype=np.float32).reshape(len(labels), -1),
-        np.asarray(masks, dtype=bool).reshape(len(labels), size),
-        np.asarray(labels, dtype=np.int64),
+        size = env.action_space.n
+    finally:
+        env.close()
+    return LabelledEpisode(
+        np.asarray(observations, np.float32).reshape(len(labels), -1),
+        np.asarray(masks, bool).reshape(len(labels), size),
+        np.asarray(labels, np.int64),
+        steps,
+        bool(info.get("is_success", False)),
+        unexpressible,
     )
-    return data, successes, visited
+
+
+def _learner(network: dict[str, Any]) -> BCPolicy:
+    config = BCConfig(**network["config"])
+    capacity = Capacity(**network["capacity"])
+    model = build_network(config, capacity, network["candidates"], torch.zeros(1, network["features"]))
+    model.load_state_dict({k: torch.as_tensor(v) for k, v in network["weights"].items()})
+    return BCPolicy(model, config, capacity)
+
+
+def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, candidates: int, features: int):
+    weights = {k: v.detach().numpy().copy() for k, v in model.state_dict().items()}
+    return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates, "features": features,
+            "weights": weights}  # fmt: skip
+
+
+def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
+    """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
+    from training.learning.evaluate import evaluate
+
+    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
+    return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
 
 
 def train_dagger(
     family: str,
+    options: DaggerOptions,
     config: BCConfig,
-    demonstrations: int,
-    rounds: int,
-    episodes_per_round: int,
-    capacity: Capacity | None = None,
-    out: str | Path | None = None,
-    progress: Any = None,
-    nearest_moves: bool = False,
-) -> BCPolicy:
-    """BC on ``demonstrations`` expert episodes (seeds 0...), then ``rounds`` of DAgger on fresh seeds.
+    out: str | Path,
+    *,
+    workers: int = 1,
+    backend: str = "process",
+    resume: bool = False,
+    progress: bool = True,
+) -> list[dict[str, Any]]:
+    """Run DAgger into the run folder ``out``; return its metrics rows (one per iteration, 0 first)."""
+    import gymnasium as gym
+    from tqdm import tqdm
 
-    ``progress``, if given, is called after each training (round 0 is the BC) with a dict:
-    ``round``, ``labelled`` (states in the data), ``learner_successes`` (in the episodes
-    that round labelled; None for round 0) and ``policy``; from round 1, ``visited``
-    (states the learner visited) and ``new_labels`` (those the round labelled). The run folder (``out``) is a
-    BC run folder of the final policy. ``nearest_moves``: see :func:`label_learner_episodes`.
-    """
-    if rounds < 0 or demonstrations < 1 or episodes_per_round < 1:
-        raise ValueError("demonstrations and episodes_per_round must be positive, rounds not negative")
-    capacity = capacity or Capacity()
-    data = record_demonstrations(family, range(demonstrations))
-    policy = train_bc(data, config, capacity, out=out if rounds == 0 else None)
-    if progress is not None:
-        progress({"round": 0, "labelled": len(data), "learner_successes": None, "policy": policy})
-    next_seed = demonstrations
-    for round_ in range(1, rounds + 1):
-        seeds = range(next_seed, next_seed + episodes_per_round)
-        next_seed += episodes_per_round
-        new, successes, visited = label_learner_episodes(policy, family, seeds, nearest_moves)
-        data = Demonstrations(
-            np.concatenate([data.observations, new.observations]),
-            np.concatenate([data.masks, new.masks]),
-            np.concatenate([data.labels, new.labels]),
-            {**data.stats, "dagger_rounds": round_, "labelled": len(data) + len(new)},
-        )
-        policy = train_bc(data, config, capacity, out=out if round_ == rounds else None)
-        if progress is not None:
-            row = {"round": round_, "labelled": len(data), "learner_successes": successes, "policy": policy}
-            progress({**row, "visited": visited, "new_labels": len(new)})
-    return policy
+    import fetchcarry_env  # noqa: F401
+    from training.generate import run_episodes
+
+    config = BCConfig(**{**asdict(config), "epochs": options.epochs})
+    probe = gym.make(runs.ENV_ID, family=family)
+    capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
+    features = int(probe.observation_space["observation"].shape[0])
+    probe.close()
+    run_options = {"family": family, **asdict(options), **asdict(config)}
+    config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
+    folder, checkpoint = runs.start_run(out, config_json, resume=resume)
+    if runs.read_config(folder).get("complete"):
+        return runs.read_metrics(folder)
+    if checkpoint is not None:
+        aggregate = Demonstrations(checkpoint["observations"].numpy(), checkpoint["masks"].numpy(),
+                                   checkpoint["labels"].numpy())  # fmt: skip
+        rows = [dict(r) for r in checkpoint["metrics"]]
+        episodes_done = int(checkpoint["episodes"])
+        network = build_network(config, capacity, candidates, torch.zeros(1, features))
+        network.load_state_dict(checkpoint["network"])
+    else:
+        aggregate = Demonstrations(np.zeros((0, features), np.float32), np.zeros((0, candidates), bool),
+                                   np.zeros(0, np.int64))  # fmt: skip
+        rows, episodes_done, network = [], 0, None
+    total = options.demonstrations + options.iterations * options.episodes_per_iteration
+    started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
+    with tqdm(total=total, initial=episodes_done, desc=f"dagger {folder.name}", unit="episode",
+              disable=not progress) as bar:  # fmt: skip
+        for iteration in range(len(rows), options.iterations + 1):
+            if iteration == 0:
+                task = LabelTask(family, 0, options.time_limit)
+                count = options.demonstrations
+            else:
+                base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
+                task = LabelTask(family, base, options.time_limit,
+                                 _network_task(network, config, capacity, candidates, features),
+                                 options.nearest_moves)  # fmt: skip
+                count = options.episodes_per_iteration
+            labelled: dict[int, LabelledEpisode] = {}
+            for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
+                                               episode=label_episode):  # fmt: skip
+                labelled[index] = episode
+                bar.update(1)
+            ordered = [labelled[k] for k in range(count)]
+            aggregate = Demonstrations(
+                np.concatenate([aggregate.observations, *(e.observations for e in ordered)]),
+                np.concatenate([aggregate.masks, *(e.masks for e in ordered)]),
+                np.concatenate([aggregate.labels, *(e.labels for e in ordered)]),
+            )
+            episodes_done += count
+            network, fit_rows = fit(aggregate, config, capacity)
+            policy = BCPolicy(network, config, capacity)
+            success, cost = heldout_success(policy, family, options.eval_episodes)
+            rows.append(
+                {
+                    "iteration": iteration,
+                    "episodes": episodes_done,
+                    "expert_labels": len(aggregate),
+                    "unexpressible": sum(e.unexpressible for e in ordered),
+                    "learner_success": float(np.mean([e.success for e in ordered])) if iteration else float("nan"),
+                    "loss": fit_rows[-1]["loss"],
+                    "accuracy": fit_rows[-1]["accuracy"],
+                    "heldout_success": success,
+                    "heldout_cost": cost,
+                    "seconds": time.perf_counter() - started,
+                }
+            )
+            runs.save_checkpoint(folder, {
+                "observations": torch.as_tensor(aggregate.observations), "masks": torch.as_tensor(aggregate.masks),
+                "labels": torch.as_tensor(aggregate.labels), "network": network.state_dict(), "metrics": rows,
+                "episodes": episodes_done,
+            })  # fmt: skip
+            runs.write_metrics(folder, rows)
+            bar.set_postfix_str(f"labels {len(aggregate)} held-out success {success:.0%}", refresh=False)
+    config_json["data"] = {"expert_labels": len(aggregate), "episodes": episodes_done}
+    runs.finish_run(folder, network, config_json)
+    return rows

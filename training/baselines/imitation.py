@@ -6,29 +6,23 @@ indices and its per-step info ``action_mask`` holds each state's mask, so nothin
 the dataset is needed. Steps whose action the mask does not allow (the refused stand-in
 that ends an episode at an unexpressible expert action) are dropped.
 
-:func:`fit` is BC's training loop (:func:`training.baselines.bc.train_bc`'s loss:
-cross-entropy over the allowed candidates) with a checkpoint after every epoch, so
-that an interrupted run resumes where it stopped and ends with the same weights as an
-uninterrupted one. :func:`train_bc_run` puts the two together into a run folder
+:func:`train_bc_run` trains on them with BC's loop (:func:`training.baselines.bc.fit`,
+a checkpoint after every epoch, so that an interrupted run resumes where it stopped and
+ends with the same weights as an uninterrupted one) into a run folder
 (:mod:`training.baselines.runs`).
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
-from torch import nn
 
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations
-from training.baselines.encoders import build_network
+from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.phase_recording import MASK_INFO
 
 
@@ -78,82 +72,6 @@ def demonstrations_from_dataset(dataset_id: str) -> tuple[Demonstrations, Capaci
     return demonstrations, capacity
 
 
-def fit(
-    demonstrations: Demonstrations,
-    config: BCConfig,
-    capacity: Capacity,
-    *,
-    checkpoint: dict[str, Any] | None = None,
-    save: Callable[[dict[str, Any]], None] | None = None,
-    on_epoch: Callable[[dict[str, Any]], None] | None = None,
-) -> tuple[nn.Module, list[dict[str, Any]]]:
-    """Train a fresh network for ``config.epochs`` epochs; return it and one metrics row per epoch.
-
-    ``checkpoint`` (what ``save`` was last given) resumes training after its epoch;
-    ``save`` is called with the training state after every epoch. Deterministic on CPU
-    for one ``config.seed``, interrupted or not.
-    """
-    if len(demonstrations) == 0:
-        raise ValueError("no labelled demonstrations to learn from")
-    torch.set_num_threads(1)  # faster here than two threads, and the same sums every run
-    torch.manual_seed(config.seed)
-    observations = torch.as_tensor(demonstrations.observations)
-    masks = torch.as_tensor(demonstrations.masks)
-    labels = torch.as_tensor(demonstrations.labels)
-    network = build_network(config, capacity, masks.shape[1], observations)
-    optimiser = torch.optim.Adam(network.parameters(), lr=config.learning_rate, weight_decay=config.weight_decay)
-    order = torch.Generator().manual_seed(config.seed)
-    metrics: list[dict[str, Any]] = []
-    first = 0
-    elapsed = 0.0
-    if checkpoint is not None:
-        network.load_state_dict(checkpoint["network"])
-        optimiser.load_state_dict(checkpoint["optimiser"])
-        order.set_state(checkpoint["order"])
-        metrics = [dict(row) for row in checkpoint["metrics"]]
-        first = int(checkpoint["epoch"])
-        elapsed = float(metrics[-1]["seconds"]) if metrics else 0.0
-    start = time.perf_counter() - elapsed
-    for epoch in range(first, config.epochs):
-        network.train()
-        total = correct = 0
-        loss_sum = 0.0
-        for batch in torch.randperm(len(labels), generator=order).split(config.batch_size):
-            logits = network(observations[batch]).masked_fill(~masks[batch], -1e9)
-            loss = nn.functional.cross_entropy(logits, labels[batch])
-            optimiser.zero_grad()
-            loss.backward()
-            optimiser.step()
-            loss_sum += loss.item() * len(batch)
-            correct += int((logits.argmax(dim=1) == labels[batch]).sum())
-            total += len(batch)
-        row = {"epoch": epoch + 1, "loss": loss_sum / total, "accuracy": correct / total,
-               "seconds": time.perf_counter() - start}  # fmt: skip
-        metrics.append(row)
-        if save is not None:
-            save({"network": network.state_dict(), "optimiser": optimiser.state_dict(), "order": order.get_state(),
-                  "metrics": metrics, "epoch": epoch + 1})  # fmt: skip
-        if on_epoch is not None:
-            on_epoch(row)
-    return network.eval(), metrics
-
-
-def run_config(kind: str, options: dict[str, Any], config: BCConfig, capacity: Capacity,
-               candidates: int, features: int, data: dict[str, Any]) -> dict[str, Any]:  # fmt: skip
-    """The ``config.json`` of a run (see :mod:`training.baselines.runs`)."""
-    return {
-        "kind": kind,
-        "interface": runs.INTERFACE,
-        "env_id": runs.ENV_ID,
-        "options": options,
-        "config": asdict(config),
-        "capacity": asdict(capacity),
-        "candidates": candidates,
-        "features": features,
-        "data": data,
-    }
-
-
 def train_bc_run(
     dataset_id: str,
     config: BCConfig,
@@ -168,7 +86,7 @@ def train_bc_run(
     demonstrations, capacity = demonstrations_from_dataset(dataset_id)
     options = {"dataset": dataset_id, **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
-    config_json = run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)
+    config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.load_policy(folder)
@@ -190,11 +108,5 @@ def train_bc_run(
             save=lambda state: runs.save_checkpoint(folder, state),
             on_epoch=on_epoch,
         )
-    finish(folder, network, config_json)
+    runs.finish_run(folder, network, config_json)
     return BCPolicy(network, config, capacity)
-
-
-def finish(folder: Path, network: nn.Module, config_json: dict[str, Any]) -> None:
-    """Write the final weights and mark the run complete."""
-    runs.save_weights(folder, network)
-    runs.write_config(folder, {**config_json, "complete": True})

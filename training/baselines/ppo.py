@@ -33,7 +33,6 @@ from fetchcarry_env.observation import Capacity
 from training.baselines import runs
 from training.baselines.configs import BCConfig, PPOOptions
 from training.baselines.encoders import build_network
-from training.baselines.imitation import finish, run_config
 
 SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
 VALUE_LAYERS = (256, 256)  # units of the value MLP
@@ -166,7 +165,7 @@ def train_ppo(
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
         raise ValueError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
     run_options = {"family": family, **asdict(options)}
-    config_json = run_config("ppo", run_options, config, capacity, candidates, features,
+    config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
                              {"init": options.init, "steps": options.steps})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
@@ -206,7 +205,7 @@ def train_ppo(
                 model.learn(options.steps - done, callback=_metrics_callback(rows, folder, options, started, bar),
                             reset_num_timesteps=checkpoint is None)  # fmt: skip
         save_ppo_checkpoint(folder, model, rows)
-        finish(folder, model.policy.action_net, config_json)
+        runs.finish_run(folder, model.policy.action_net, config_json)
     finally:
         env.close()
     return rows

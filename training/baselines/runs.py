@@ -27,7 +27,7 @@ import json
 import math
 import os
 import tempfile
-from dataclasses import fields
+from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
 
@@ -215,3 +215,25 @@ def start_run(out: str | Path, config: dict[str, Any], *, resume: bool) -> tuple
         raise ValueError(f"{out} exists and is not an empty folder or a run folder")
     write_config(out, {**config, "complete": False})
     return out, None
+
+
+def run_config(kind: str, options: dict[str, Any], config: Any, capacity: Capacity,
+               candidates: int, features: int, data: dict[str, Any]) -> dict[str, Any]:  # fmt: skip
+    """The ``config.json`` of a run (see above)."""
+    return {
+        "kind": kind,
+        "interface": INTERFACE,
+        "env_id": ENV_ID,
+        "options": options,
+        "config": asdict(config),
+        "capacity": asdict(capacity),
+        "candidates": candidates,
+        "features": features,
+        "data": data,
+    }
+
+
+def finish_run(folder: Path, network: torch.nn.Module, config_json: dict[str, Any]) -> None:
+    """Write the final weights and mark the run complete."""
+    save_weights(folder, network)
+    write_config(folder, {**config_json, "complete": True})

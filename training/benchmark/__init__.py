@@ -16,12 +16,11 @@ normalised score), :mod:`~training.benchmark.report` (``summary.md`` and plots) 
 """
 
 from training.benchmark.errors import BenchmarkError
-from training.benchmark.metrics import Row, fill_expert_costs, spl, summarise
+from training.benchmark.metrics import Row, fill_expert_costs, spl, summarise, wilson
 from training.benchmark.policies import FACTORIES, Factory, PolicySpec, available, resolve
 from training.benchmark.report import plot_demonstrations, plot_learning_curve, plot_splits, summary_markdown
 from training.benchmark.runner import BenchmarkReport, run_benchmark
 from training.benchmark.splits import EVAL_SEED_BASE, SPLITS, EvalScenario, folder_scenarios, get_split, split_scenarios
-from training.learning.evaluate import wilson
 
 __all__ = [
     "EVAL_SEED_BASE",

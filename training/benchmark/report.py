@@ -15,8 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from training.benchmark.metrics import Z_95, Row
-from training.learning.evaluate import wilson
+from training.benchmark.metrics import Z_95, Row, wilson
 
 COLUMNS = (
     ("policy", "policy", "{}"),

@@ -1,7 +1,8 @@
-"""``fetchcarry bench env|planner|generate``: the benchmarks' options and printed tables.
+"""``fetchcarry bench env|planner|generate|phases``: the benchmarks' options and printed tables.
 
 The measurements live next to what they measure (``fetchcarry_env.bench``,
-``expert.bench``, ``training.generate.bench_generation``); this module parses the
+``expert.bench``, ``training.generate.bench_generation``,
+``training.learning.phase_bench``); this module parses the
 options, runs them and prints the figures for people (or as JSON with ``--json``).
 """
 
@@ -37,10 +38,11 @@ PLANNER_DESCRIPTION = (
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``env``, ``planner`` and ``generate`` to ``fetchcarry bench``."""
+    """Add ``env``, ``planner``, ``generate`` and ``phases`` to ``fetchcarry bench``."""
     _register_env(bench)
     _register_planner(bench)
     _register_generate(bench)
+    _register_phases(bench)
 
 
 # ---------------------------------------------------------------------------- bench env
@@ -342,5 +344,67 @@ def run_bench_generate(args: argparse.Namespace) -> int:
             f"{row['episodes_per_s_per_worker']:>11.2f} {row['planning_s_per_episode']:>9.4f} "
             f"{row['policy_s_per_episode']:>11.4f} {row['simulation_s_per_episode']:>8.4f} "
             f"{100 * row['planning_share']:>6.1f} {row['speed_up']:>8.2f}"
+        )
+    return 0
+
+
+# ---------------------------------------------------------------------------- bench phases
+PHASE_FAMILIES = "basic,push,corridor,multi-2"
+
+
+def _register_phases(bench: argparse._SubParsersAction) -> None:
+    parser = bench.add_parser(
+        "phases",
+        help="the candidate-phase interface: expert actions it expresses, its speed next to the plain env's",
+        description="Run the MILP expert through FetchCarryPushPhases-v0 (seeds from 0) and print, per family, "
+        "its success, how many of its actions an allowed candidate stands for (by mode, and whole episodes) and "
+        "the time of the action mask; then the steps per second of a random masked policy over the candidates "
+        "next to the random masked policy of FetchCarryPush-v0, measured in the same run (compare the ratio: "
+        "the machine may be shared).",
+    )
+    parser.add_argument(
+        "--families", default=PHASE_FAMILIES, metavar="A,B", help=f"comma-separated families (default {PHASE_FAMILIES})"
+    )
+    parser.add_argument(
+        "--episodes", type=positive_int, default=100, metavar="N", help="expert episodes per family (default 100)"
+    )
+    parser.add_argument(
+        "--steps", type=positive_int, default=1000, metavar="N", help="steps per speed figure (default 1000)"
+    )
+    parser.set_defaults(handler=run_bench_phases)
+
+
+def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Print the expressibility table, then the speed table, of the candidate-phase interface."""
+    from training.learning.phase_bench import expressibility, speed
+
+    out = out if out is not None else sys.stdout
+    names = families(args.families)
+    print(f"expert actions expressible as candidates ({args.episodes} episodes per family, seeds from 0)", file=out)
+    print(
+        f"{'family':10} {'success':>8} {'actions':>8} {'expressible':>12} {'episodes':>9} {'mask ms':>8}  by mode",
+        file=out,
+    )
+    for family in names:
+        r = expressibility(family, args.episodes)
+        modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
+        print(
+            f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
+            f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}",
+            file=out,
+        )
+    print(f"\nspeed ({args.steps} random masked steps per family; the machine is shared: compare the ratio)", file=out)
+    print(
+        f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'plain steps/s':>14} {'ratio':>6}  "
+        "allowed steps refused",
+        file=out,
+    )
+    for family in names:
+        r = speed(family, args.steps)
+        ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
+        print(
+            f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} "
+            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
+            file=out,
         )
     return 0

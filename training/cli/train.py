@@ -1,4 +1,4 @@
-"""The training commands: ``fetchcarry train bc|dagger|ppo``.
+"""The training commands: ``fetchcarry train bc|dagger|ppo``, ``fetchcarry bench learned|learning-checks``.
 
 Each writes a run folder (``config.json``, ``metrics.csv``, ``checkpoint.pt``,
 ``model.pt``; see :mod:`training.baselines.runs`) that ``fetchcarry benchmark`` and
@@ -102,6 +102,11 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         metavar="S",
         help=f"seconds per planning call of the expert (default {dagger_defaults.time_limit:g})",
     )
+    dagger.add_argument(
+        "--nearest-moves",
+        action="store_true",
+        help="label an expert move no candidate expresses with the allowed move nearest it (default: no label)",
+    )
     dagger.add_argument("--workers", type=positive_int, default=1, metavar="W", help="labelling workers (default 1)")
     dagger.add_argument(
         "--backend", choices=("process", "ray"), default="process", help="a local process pool (default) or Ray"
@@ -190,6 +195,39 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help=f"the first held-out seed (default {HELDOUT_SEED_BASE}: never trained on)",
     )
     learned.set_defaults(handler=run_bench_learned)
+    _register_learning_checks(bench, defaults)
+
+
+def _register_learning_checks(bench: argparse._SubParsersAction, defaults: Any) -> None:
+    parser = bench.add_parser(
+        "learning-checks",
+        help="quick in-process checks: does a small BC or MaskablePPO learn on the candidate phases?",
+        description="In-process learning checks on FetchCarryPushPhases-v0, evaluated on held-out seeds (from "
+        "100000) next to the masked random policy and the MILP expert: bc records the expert's episodes, trains "
+        "BC with each encoder and adds the greedy baseline; ppo trains MaskablePPO with the learning reward and "
+        "evaluates it five times on the way. Figures print as they are measured.",
+    )
+    checks = parser.add_subparsers(dest="check", metavar="CHECK", required=True)
+    bc = checks.add_parser("bc", help="behaviour cloning from expert episodes recorded in this process")
+    bc.add_argument("--family", default="basic", metavar="NAME", help="scenario family (default basic)")
+    bc.add_argument(
+        "--episodes", type=positive_int, default=300, metavar="N", help="expert episodes to learn from (default 300)"
+    )
+    bc.add_argument("--eval-episodes", type=positive_int, default=100, metavar="N", help="held-out seeds (default 100)")
+    bc.add_argument("--encoders", nargs="+", choices=("mlp", "set"), default=["mlp", "set"], help="(default both)")
+    bc.add_argument(
+        "--epochs", type=positive_int, default=defaults.epochs, metavar="N", help=f"epochs (default {defaults.epochs})"
+    )
+    bc.add_argument("--out", metavar="DIR", help="write a run folder per encoder into DIR")
+    bc.add_argument("--also", nargs="*", default=[], metavar="NAME", help="other families to evaluate on (multi-3)")
+    bc.set_defaults(handler=run_check_bc)
+    ppo = checks.add_parser("ppo", help="MaskablePPO with the learning reward")
+    ppo.add_argument("--family", default="basic", metavar="NAME", help="scenario family (default basic)")
+    ppo.add_argument("--steps", type=positive_int, default=20_000, metavar="N", help="env steps (default 20000)")
+    ppo.add_argument("--eval-episodes", type=positive_int, default=50, metavar="N", help="held-out seeds (default 50)")
+    ppo.add_argument("--seed", type=whole_number, default=0, metavar="N", help="training seed (default 0)")
+    ppo.add_argument("--out", metavar="DIR", help="write ppo.zip and metrics.csv into DIR")
+    ppo.set_defaults(handler=run_check_ppo)
 
 
 def _network_arguments(parser: argparse.ArgumentParser, defaults: Any, epochs: int | None = None) -> None:
@@ -277,7 +315,7 @@ def run_train_bc(args: argparse.Namespace) -> int:
 
 
 def run_train_dagger(args: argparse.Namespace) -> int:
-    from training.baselines.dagger_run import DaggerOptions, train_dagger
+    from training.baselines.dagger import DaggerOptions, train_dagger
     from training.sources import EpisodeSource
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
@@ -289,6 +327,7 @@ def run_train_dagger(args: argparse.Namespace) -> int:
         eval_episodes=args.eval_episodes,
         time_limit=args.time_limit,
         epochs=args.epochs,
+        nearest_moves=args.nearest_moves,
     )
 
     def train() -> str:
@@ -345,4 +384,35 @@ def run_bench_learned(args: argparse.Namespace) -> int:
     echo(f"{args.family}: {args.episodes} held-out seeds from {args.first_seed}; the expert solves {len(expert)}")
     for run, policy in policies.items():
         echo(summarise(evaluate(policy, args.family, seeds), expert).line(run))
+    return 0
+
+
+def _check_families(*names: str) -> None:
+    from training.sources import EpisodeSource
+
+    for name in names:
+        EpisodeSource(family=name)  # checks the family's name (UsageError)
+
+
+def run_check_bc(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from training.learning.checks import check_bc
+
+    _check_families(args.family, *args.also)
+    out = Path(args.out) if args.out else None
+    try:
+        check_bc(args.family, args.episodes, args.eval_episodes, args.encoders, args.epochs, out, args.also, echo)
+    except ValueError as error:  # a run folder already in DIR
+        raise UsageError(str(error)) from None
+    return 0
+
+
+def run_check_ppo(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from training.learning.checks import check_ppo
+
+    _check_families(args.family)
+    check_ppo(args.family, args.steps, args.eval_episodes, args.seed, Path(args.out) if args.out else None, echo)
     return 0

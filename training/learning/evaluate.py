@@ -18,6 +18,7 @@ import gymnasium as gym
 import numpy as np
 
 from expert import ExpertPolicy
+from training.benchmark.metrics import wilson
 from training.learning.expert_phases import expert_episode
 
 
@@ -59,38 +60,20 @@ def make_env(family: str, **options: Any) -> gym.Env:
 
 
 def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
-    """One episode per seed of ``policy`` on ``family`` through the candidate phases."""
-    env = make_env(family)
-    masks = env.get_wrapper_attr("action_masks")
-    results = []
-    for seed in seeds:
-        if hasattr(policy, "reset"):
-            policy.reset()
-        observation, info = env.reset(seed=seed)
-        refused, steps, start, decision = 0, 0, True, 0.0
-        while True:
-            mask = masks()
-            clock = time.perf_counter()
-            action, _ = policy.predict(
-                observation, episode_start=np.array([start]), deterministic=deterministic, action_masks=mask
-            )
-            decision += time.perf_counter() - clock
-            start = False
-            observation, _reward, terminated, truncated, info = env.step(int(np.asarray(action).reshape(-1)[0]))
-            steps += 1
-            refused += info["invalid_action"] is not None
-            if terminated or truncated:
-                break
-        results.append(
-            EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused, decision)
-        )
-    env.close()
-    return results
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
+    return _episodes(policy, make_env(family), seeds, deterministic, masked=True)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
     """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
-    env = gym.make("FetchCarryPush-v0", family=family)
+    return _episodes(policy, gym.make("FetchCarryPush-v0", family=family), seeds, True, masked=False)
+
+
+def _episodes(
+    policy: Any, env: gym.Env, seeds: Iterable[int], deterministic: bool, masked: bool
+) -> list[EpisodeResult]:
+    """Run ``policy`` one episode per seed in ``env`` (closed at the end); ``masked``: a candidate index per step."""
+    masks = env.get_wrapper_attr("action_masks") if masked else None
     results = []
     for seed in seeds:
         if hasattr(policy, "reset"):
@@ -98,10 +81,15 @@ def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list
         observation, info = env.reset(seed=seed)
         refused, steps, start, decision = 0, 0, True, 0.0
         while True:
+            given = {"action_masks": masks()} if masks is not None else {}
             clock = time.perf_counter()
-            action, _ = policy.predict(observation, episode_start=np.array([start]), deterministic=True)
+            action, _ = policy.predict(
+                observation, episode_start=np.array([start]), deterministic=deterministic, **given
+            )
             decision += time.perf_counter() - clock
             start = False
+            if masked:
+                action = int(np.asarray(action).reshape(-1)[0])
             observation, _reward, terminated, truncated, info = env.step(action)
             steps += 1
             refused += info["invalid_action"] is not None
@@ -128,7 +116,7 @@ def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
 
 
 def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary:
-    """Success (with a 95 % Wilson interval), cost ratio to the expert, phases and refusals."""
+    """Success (with its 95 % Wilson interval: :func:`training.benchmark.metrics.wilson`), cost ratio, phases."""
     n = len(results)
     wins = sum(r.success for r in results)
     low, high = wilson(wins, n)
@@ -143,13 +131,3 @@ def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary
         refused=float(np.mean([r.refused for r in results])) if results else math.nan,
         decision_ms=1e3 * sum(r.decision_s for r in results) / max(sum(r.phases for r in results), 1),
     )
-
-
-def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    """The Wilson score interval of a success rate (95 % with the default ``z``)."""
-    if n == 0:
-        return (math.nan, math.nan)
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))

@@ -1,15 +1,14 @@
 """Benchmark of the candidate-phase interface: the expert's actions in it, and its speed.
 
-``python -m training.learning.phase_bench`` prints, per scenario family, how many of
-the MILP expert's actions an allowed candidate stands for (by mode, and whole episodes),
-then the speed of the interface: a step of ``FetchCarryPushPhases-v0`` with its mask
-(a random masked policy over the candidates) next to a step of ``FetchCarryPush-v0``
-(the random masked ``MultiDiscrete`` policy) measured in the same run.
+:func:`expressibility` measures, per scenario family, how many of the MILP expert's
+actions an allowed candidate stands for (by mode, and whole episodes); :func:`speed`
+measures a step of ``FetchCarryPushPhases-v0`` with its mask (a random masked policy
+over the candidates) next to a step of ``FetchCarryPush-v0`` (the random masked
+``MultiDiscrete`` policy) in the same run. ``fetchcarry bench phases`` prints both.
 """
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections import Counter
 from typing import Any
@@ -87,37 +86,3 @@ def speed(family: str, steps: int, seed: int = 0) -> dict[str, float]:
     rates["plain_steps_per_s"] = steps / (time.perf_counter() - start)
     plain.close()
     return rates
-
-
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--families", nargs="+", default=list(FAMILIES), help="scenario families (default: %(default)s)"
-    )
-    parser.add_argument("--episodes", type=int, default=100, help="expert episodes per family (default: %(default)s)")
-    parser.add_argument("--steps", type=int, default=1000, help="steps per speed figure (default: %(default)s)")
-    args = parser.parse_args(argv)
-    print(f"expert actions expressible as candidates ({args.episodes} episodes per family, seeds from 0)")
-    print(f"{'family':10} {'success':>8} {'actions':>8} {'expressible':>12} {'episodes':>9} {'mask ms':>8}  by mode")
-    for family in args.families:
-        r = expressibility(family, args.episodes)
-        modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
-        print(
-            f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
-            f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}"
-        )
-    print(f"\nspeed ({args.steps} random masked steps per family; the machine is shared: compare the ratio)")
-    print(
-        f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'plain steps/s':>14} {'ratio':>6}  allowed steps refused"
-    )
-    for family in args.families:
-        r = speed(family, args.steps)
-        ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
-        print(
-            f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} "
-            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}"
-        )
-
-
-if __name__ == "__main__":
-    main()
