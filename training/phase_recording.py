@@ -39,10 +39,11 @@ UNEXPRESSIBLE = "unexpressible"  # the failure status (and episode outcome) of a
 class PhaseExpert:
     """:class:`expert.ExpertPolicy` on a phase env, answering with candidate indices (``predict`` protocol)."""
 
-    def __init__(self, env: Any, *, time_limit: float) -> None:
+    def __init__(self, env: Any, *, time_limit: float, rule: str = "end") -> None:
         from expert.policy import ExpertPolicy
 
         self.env = env
+        self.rule = rule  # how a move no candidate expresses is projected (see nearest_move)
         self.expert = ExpertPolicy(env, time_limit=time_limit)
         self.last_decision: Decision | None = None
         self.last_projected = False  # the last answer is a projected move (the nearest move candidate)
@@ -79,7 +80,7 @@ class PhaseExpert:
         index = self.env.get_wrapper_attr("index_of")(action)
         self.last_projected = False
         if index is None and decision is not None and decision.failure is None:
-            index = nearest_move(self.env, action)
+            index = nearest_move(self.env, action, self.rule)
             if index is not None:
                 self.projected += 1
                 self.last_projected = True
