@@ -103,9 +103,15 @@ def test_phase_generation_resumes_after_an_interruption() -> None:
     assert replay(config.dataset_id, 0).reproduced
 
 
-def test_cli_generate_phases_and_train_bc_rejects_an_env_dataset(tmp_path: Path) -> None:
+def test_cli_generate_phases_and_train_bc_rejects_an_env_dataset(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["generate", "--family", "basic", "--episodes", "1", "--interface", "phases", "--dataset-id",
                  "fetchcarry/p-v0", "--no-progress"]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert main(["dataset", "info", "fetchcarry/p-v0"]) == 0
+    out = capsys.readouterr().out  # basic seed 0 has one projected move
+    assert "projected   1 expert moves recorded as their nearest move candidate (1.00 per episode)" in out
     assert main(["generate", "--family", "basic", "--episodes", "1", "--dataset-id", "fetchcarry/e-v0",
                  "--no-progress"]) == 0  # fmt: skip
     status = main(["train", "bc", "--dataset", "fetchcarry/e-v0", "--epochs", "1", "--out", str(tmp_path / "r")])

@@ -174,7 +174,10 @@ def run_dataset_info(args: argparse.Namespace) -> int:
                 f"{summary['replans']} replans, {summary['repairs']} repairs, "
                 f"{summary['planner_failures']} planner failures",
                 *(
-                    [f"projected   {summary['projected_moves']} expert moves recorded as their nearest move candidate"]
+                    [
+                        f"projected   {summary['projected_moves']} expert moves recorded as their nearest move "
+                        f"candidate ({summary['projected_moves'] / summary['episodes']:.2f} per episode)"
+                    ]
                     if summary["projected_moves"] is not None
                     else []
                 ),
