@@ -5,6 +5,12 @@
 candidate mask and the expert's action as a candidate index (``-1`` when no allowed
 candidate stands for it), and it executes the expert's own env action, so that the
 episode is the expert's whether or not each action is expressible.
+
+:func:`nearest_move` is the stand-in for an expert move no candidate expresses (phase
+datasets record it, :mod:`training.phase_recording`); :func:`check_projection` runs the
+expert through that projection and on its own on the same seeds, and
+``python -m training.learning.expert_phases --family F --episodes N`` prints the figures
+(success, projected moves per episode, extra travel cost).
 """
 
 from __future__ import annotations
