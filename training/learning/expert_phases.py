@@ -196,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rule", choices=NEAREST_RULES, default="end")
     parser.add_argument("--time-limit", type=float, default=10.0)
     args = parser.parse_args(argv)
+    if args.episodes < 1:
+        parser.error(f"--episodes must be at least 1, got {args.episodes}")
     rows = check_projection(
         args.family, range(args.seed, args.seed + args.episodes), time_limit=args.time_limit, rule=args.rule
     )
