@@ -14,6 +14,9 @@ observations, actions, rewards and flags, each episode stores:
 - per-step infos (:data:`training.rollout.INFO_KEYS`): the seconds the planner took
   before each step, whether it planned or replanned, whether the action was the
   fallback, refused, or stopped at a contact, and how many objects are delivered.
+  A ``phases`` dataset adds each state's candidate mask (``action_mask``), whether each
+  step is an expert move projected onto its nearest candidate (``projected``), and the
+  episode's count of those in its metadata (``projected``).
 
 Read the episode metadata with ``dataset.storage.get_episode_metadata([k])``.
 
@@ -39,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
+from training.phase_recording import PROJECTED_INFO
 from training.rollout import EpisodeRecord
 from training.sources import GenerationConfig, make_env
 from training.staging import Staging, datasets_root
@@ -265,6 +269,8 @@ def _buffers(staging: Staging, episodes: range, metadata: list[dict[str, Any]]) 
 def _episode_metadata(record: EpisodeRecord) -> dict[str, Any]:
     """HDF5 attributes of an episode: the scenario JSON and the figures (``None`` is stored as NaN)."""
     metadata: dict[str, Any] = {"scenario": json.dumps(record.scenario)}
+    if PROJECTED_INFO in record.infos:  # phases: expert moves projected onto their nearest candidate
+        metadata["projected"] = int(np.count_nonzero(record.infos[PROJECTED_INFO]))
     for key, value in record.figures.to_dict().items():
         if key == "seed":
             continue  # Minari stores the seed itself
@@ -319,6 +325,7 @@ def info(dataset_id: str) -> dict[str, Any]:
     scenario = kwargs.get("scenario")
     steps = np.array([e["steps"] for e in episodes])
     planning = np.array([e["planning_s"] for e in episodes])
+    projected = [int(e["projected"]) for e in episodes if "projected" in e]
     return {
         "dataset_id": dataset_id,
         "path": str(dataset_path(dataset_id)),
@@ -338,6 +345,8 @@ def info(dataset_id: str) -> dict[str, Any]:
         "replans": int(sum(e["replans"] for e in episodes)),
         "repairs": int(sum(e["repairs"] for e in episodes)),
         "planner_failures": int(sum(e["planner_failures"] for e in episodes)),
+        # phases datasets: expert moves recorded as their nearest move candidate (None when not recorded)
+        "projected_moves": sum(projected) if len(projected) == len(episodes) else None,
         "size_mb": float(metadata.get("dataset_size", 0.0)),
     }
 

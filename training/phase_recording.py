@@ -5,17 +5,26 @@ each state's candidate mask as the per-step info ``action_mask``
 (:data:`MASK_INFO`), so a learner trains from the Minari dataset alone.
 
 The expert plans in env actions; :class:`PhaseExpert` maps each of them to the allowed
-candidate that stands for it (:meth:`PhaseActions.index_of`). An expert action that
-no allowed candidate expresses ends the episode there, *unexpressible*: the recorded
-last step is a masked candidate (the env refuses it and changes nothing; its mask row
-says it was not allowed, so learners drop it) and the episode is truncated with the
-outcome ``unexpressible`` (counted in the dataset's outcomes). Recording the expert's
-own env action instead would put an action outside ``Discrete(K)`` into the dataset,
-and replay would no longer be exact.
+candidate that stands for it (:meth:`PhaseActions.index_of`). Picks, places and pushes
+always have one; an expert *move* may not (its waypoints lie anywhere along a line, the
+candidates at fixed points). Such a move is *projected*: the allowed move candidate whose
+end lies nearest the expert's is executed and recorded instead
+(:func:`training.learning.expert_phases.nearest_move`), the base ends off the expert's
+plan, and the expert plans again from there (it replans when the state departs from its
+plan). Every recorded action is then an allowed candidate and the episode runs to its
+end; the per-step info ``projected`` (:data:`PROJECTED_INFO`) marks the projected steps.
+
+Any other action that no allowed candidate expresses (none is known to occur) ends the
+episode there, *unexpressible*: the recorded last step is a masked candidate (the env
+refuses it and changes nothing; its mask row says it was not allowed, so learners drop
+it) and the episode is truncated with the outcome ``unexpressible``. Recording the
+expert's own env action instead would put an action outside ``Discrete(K)`` into the
+dataset, and replay would no longer be exact.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -23,19 +32,23 @@ import numpy as np
 from expert.policy import Decision
 
 MASK_INFO = "action_mask"  # per-step info of a phases dataset: the state's candidate mask (bool, K)
+PROJECTED_INFO = "projected"  # per-step info of a phases dataset: the step is a projected expert move (bool)
 UNEXPRESSIBLE = "unexpressible"  # the failure status (and episode outcome) of an expert action no candidate expresses
 
 
 class PhaseExpert:
     """:class:`expert.ExpertPolicy` on a phase env, answering with candidate indices (``predict`` protocol)."""
 
-    def __init__(self, env: Any, *, time_limit: float) -> None:
+    def __init__(self, env: Any, *, time_limit: float, rule: str = "end") -> None:
         from expert.policy import ExpertPolicy
 
         self.env = env
+        self.rule = rule  # how a move no candidate expresses is projected (see nearest_move)
         self.expert = ExpertPolicy(env, time_limit=time_limit)
         self.last_decision: Decision | None = None
-        self.unexpressible = 0  # expert actions no candidate expressed (one ends an episode)
+        self.last_projected = False  # the last answer is a projected move (the nearest move candidate)
+        self.projected = 0  # expert moves projected onto their nearest candidate this episode
+        self.unexpressible = 0  # other expert actions no candidate expressed (one ends an episode)
 
     @property
     def stats(self) -> Any:
@@ -44,6 +57,8 @@ class PhaseExpert:
     def reset(self) -> None:
         self.expert.reset()
         self.last_decision = None
+        self.last_projected = False
+        self.projected = 0
 
     def predict(
         self,
@@ -53,10 +68,25 @@ class PhaseExpert:
         deterministic: bool = True,
         action_masks: np.ndarray | None = None,
     ) -> tuple[np.ndarray, Any]:
-        """The candidate that stands for the expert's action; a masked one (refused) when none does."""
+        """The candidate that stands for the expert's action, the nearest move for a move none stands for.
+
+        An action other than a move that no candidate stands for gets a masked candidate
+        (the env refuses it) and a decision whose ``failure`` ends the episode.
+        """
+        from training.learning.expert_phases import nearest_move
+
         action, _ = self.expert.predict(observation, episode_start=episode_start, deterministic=True)
         decision = self.expert.last_decision
         index = self.env.get_wrapper_attr("index_of")(action)
+        self.last_projected = False
+        if index is None and decision is not None and decision.failure is None:
+            index = nearest_move(self.env, action, self.rule)
+            if index is not None:
+                self.projected += 1
+                self.last_projected = True
+                reason = f"{decision.reason}; move projected onto candidate {index}"
+                self.last_decision = replace(decision, reason=reason)
+                return np.int64(index), state
         if index is None:
             self.unexpressible += 1
             mask = self.env.get_wrapper_attr("action_masks")()

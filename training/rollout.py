@@ -27,7 +27,7 @@ import numpy as np
 from expert.policy import Decision
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
-from training.phase_recording import MASK_INFO, UNEXPRESSIBLE
+from training.phase_recording import MASK_INFO, PROJECTED_INFO, UNEXPRESSIBLE
 
 # The per-step infos recorded for every episode (Minari needs the same keys at every step):
 # seconds in the planner before the step, whether the policy planned / replanned / repaired its
@@ -117,7 +117,9 @@ def run_episode(
     state (the env must have ``render_mode="rgb_array"``). ``max_steps`` caps the episode
     for envs without a time limit. ``record_masks`` (an env with ``action_masks()``, such
     as ``FetchCarryPushPhases-v0``) adds the per-step info ``action_mask``: each state's
-    mask, the reset's first (the mask the step from that state was chosen under).
+    mask, the reset's first (the mask the step from that state was chosen under); and
+    ``projected``: whether the step's action is an expert move projected onto its nearest
+    candidate (the policy's ``last_projected``; False for the reset and other policies).
     """
     _reset_policy(policy, seed)
     clock = _Clock()
@@ -135,6 +137,7 @@ def run_episode(
     infos = [{**dict.fromkeys(INFO_KEYS, 0), "objective": math.nan, "delivered": _delivered(unwrapped)}]
     if masks is not None:
         infos[0][MASK_INFO] = masks()
+        infos[0][PROJECTED_INFO] = False
     failure: Decision | None = None
     first_objective: float | None = None
     episode_start = True
@@ -173,6 +176,7 @@ def run_episode(
         )
         if masks is not None:
             infos[-1][MASK_INFO] = masks()
+            infos[-1][PROJECTED_INFO] = bool(getattr(policy, "last_projected", False))
         if render:
             frames.append(env.render())
         if terminated or truncated:

@@ -16,6 +16,7 @@ PHASES_ENV_ID = "FetchCarryPushPhases-v0"
 INTERFACES = ("env", "phases")  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
+PROJECTION = "nearest move candidate"  # what a phases dataset records for an expert move no candidate expresses
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,8 @@ class GenerationConfig:
         manifest = {"dataset_id": self.dataset_id, **asdict(self.source)}
         if manifest["interface"] == "env":  # datasets made before the interface existed keep their manifest
             del manifest["interface"]
+        else:  # phases: how an expert move no candidate expresses is recorded (truncated datasets did not say)
+            manifest["inexpressible_moves"] = PROJECTION
         return manifest
 
 

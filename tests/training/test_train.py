@@ -20,14 +20,14 @@ from training.baselines.dagger import DaggerOptions, train_dagger
 from training.baselines.imitation import demonstrations_from_dataset
 from training.baselines.ppo import PPOOptions, train_ppo
 from training.cli import main
-from training.datasets import replay
+from training.datasets import info, replay
 from training.generate import EpisodeSource, GenerationConfig, generate
-from training.phase_recording import MASK_INFO, UNEXPRESSIBLE
+from training.phase_recording import MASK_INFO, PROJECTED_INFO
 from training.staging import Staging
 
 PHASES_ID = "fetchcarry/basic-phases-test-v0"
 SOURCE = EpisodeSource(family="basic", seed=0, interface="phases")
-EPISODES = 6  # seeds 0..5 of basic: both delivered and unexpressible episodes (see the first test)
+EPISODES = 6  # seeds 0..5 of basic: before projection seeds 0, 2 and 3 ended unexpressible (see the first test)
 
 
 @pytest.fixture(scope="module")
@@ -61,31 +61,33 @@ def _without_seconds(rows: list[dict]) -> str:
 
 
 # ---------------------------------------------------------------------------- datasets in the phases interface
-def test_phase_dataset_stores_candidates_and_masks_and_replays(phases_dataset: str) -> None:
+def test_phase_dataset_is_complete_with_projected_moves_and_replays(phases_dataset: str) -> None:
     dataset = minari.load_dataset(phases_dataset)
     size = gym.make("FetchCarryPushPhases-v0", family="basic").action_space.n
-    outcomes = []
+    projected = []
     for k, episode in enumerate(dataset.iterate_episodes()):
         mask = episode.infos[MASK_INFO]
         assert mask.shape == (len(episode.actions) + 1, size) and mask.dtype == bool
-        allowed = mask[np.arange(len(episode.actions)), episode.actions]
-        outcome = dataset.storage.get_episode_metadata([k]).__next__()["outcome"]
-        outcomes.append(outcome)
-        if outcome == UNEXPRESSIBLE:  # the last step is the refused stand-in, every earlier one allowed
-            assert allowed[:-1].all() and not allowed[-1] and episode.truncations[-1]
-        else:
-            assert allowed.all()
+        assert mask[np.arange(len(episode.actions)), episode.actions].all()  # every action is an allowed candidate
+        metadata = dataset.storage.get_episode_metadata([k]).__next__()
+        assert metadata["outcome"] == "delivered" and episode.terminations[-1]  # none cut short: complete episodes
+        steps = episode.infos[PROJECTED_INFO]
+        assert not steps[0] and metadata["projected"] == steps.sum()
+        projected.append(int(metadata["projected"]))
         assert replay(phases_dataset, k).reproduced
-    assert "delivered" in outcomes and UNEXPRESSIBLE in outcomes  # both cases are exercised
+    assert projected[0] >= 1 and projected[2] >= 1 and projected[3] >= 1  # the seeds that used to be unexpressible
+    assert info(phases_dataset)["projected_moves"] == sum(projected)
     demonstrations, _ = demonstrations_from_dataset(phases_dataset)
-    assert demonstrations.stats["dropped"] == outcomes.count(UNEXPRESSIBLE)
+    assert demonstrations.stats["dropped"] == 0
+    assert len(demonstrations) == dataset.total_steps
     assert demonstrations.masks[np.arange(len(demonstrations)), demonstrations.labels].all()
 
 
 def test_env_interface_manifest_is_unchanged() -> None:
     manifest = GenerationConfig("fetchcarry/x-v0", 1, EpisodeSource(family="basic")).manifest()
     assert "interface" not in manifest  # datasets made before --interface keep matching their staging
-    assert GenerationConfig("fetchcarry/x-v0", 1, SOURCE).manifest()["interface"] == "phases"
+    phases = GenerationConfig("fetchcarry/x-v0", 1, SOURCE).manifest()
+    assert phases["interface"] == "phases" and phases["inexpressible_moves"] == "nearest move candidate"
 
 
 def test_phase_generation_resumes_after_an_interruption() -> None:
@@ -102,9 +104,15 @@ def test_phase_generation_resumes_after_an_interruption() -> None:
     assert replay(config.dataset_id, 0).reproduced
 
 
-def test_cli_generate_phases_and_train_bc_rejects_an_env_dataset(tmp_path: Path) -> None:
+def test_cli_generate_phases_and_train_bc_rejects_an_env_dataset(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["generate", "--family", "basic", "--episodes", "1", "--interface", "phases", "--dataset-id",
                  "fetchcarry/p-v0", "--no-progress"]) == 0  # fmt: skip
+    capsys.readouterr()
+    assert main(["dataset", "info", "fetchcarry/p-v0"]) == 0
+    out = capsys.readouterr().out  # basic seed 0 has one projected move
+    assert "projected   1 expert moves recorded as their nearest move candidate (1.00 per episode)" in out
     assert main(["generate", "--family", "basic", "--episodes", "1", "--dataset-id", "fetchcarry/e-v0",
                  "--no-progress"]) == 0  # fmt: skip
     status = main(["train", "bc", "--dataset", "fetchcarry/e-v0", "--epochs", "1", "--out", str(tmp_path / "r")])

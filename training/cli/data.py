@@ -47,7 +47,8 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
         default="env",
         help="record the env's own actions (FetchCarryPush-v0, default) or candidate phases "
         "(FetchCarryPushPhases-v0: actions are candidate indices, each state's mask is the per-step info "
-        "action_mask; an expert action no candidate expresses ends its episode with the outcome unexpressible)",
+        "action_mask; an expert move no candidate expresses is recorded as the nearest allowed move candidate and "
+        "the expert plans again from where it left the robot; the per-step info projected marks those steps)",
     )
     parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
     add_worker_options(parser)
@@ -172,6 +173,14 @@ def run_dataset_info(args: argparse.Namespace) -> int:
                 f"planning    {summary['mean_planning_s']:.3f} s per episode (max {summary['max_planning_s']:.2f} s), "
                 f"{summary['replans']} replans, {summary['repairs']} repairs, "
                 f"{summary['planner_failures']} planner failures",
+                *(
+                    [
+                        f"projected   {summary['projected_moves']} expert moves recorded as their nearest move "
+                        f"candidate ({summary['projected_moves'] / summary['episodes']:.2f} per episode)"
+                    ]
+                    if summary["projected_moves"] is not None
+                    else []
+                ),
             ]
         )
     )
