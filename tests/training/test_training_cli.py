@@ -171,6 +171,15 @@ def test_bench_phases_prints_the_expert_in_the_interface_and_its_speed(capsys) -
     assert status == 2 and "unknown family" in err
 
 
+def test_bench_projection_compares_the_recorded_expert_with_its_own_episodes(capsys) -> None:
+    status, out, _ = _run(capsys, "bench", "projection", "--family", "basic", "--episodes", "3")
+    figures = json.loads(out)
+    assert status == 0 and figures["episodes"] == 3 and figures["success"] == figures["expert_success"] == 1.0
+    assert 0 <= figures["episodes_with_projection"] <= 1 and figures["projected_per_episode"] >= 0
+    status, _, err = _run(capsys, "bench", "projection", "--family", "nope")
+    assert status == 2 and "unknown family" in err
+
+
 def test_bench_learning_checks_bc_trains_and_compares_with_the_baselines(capsys, tmp_path: Path) -> None:
     argv = ["bench", "learning-checks", "bc", "--episodes", "3", "--eval-episodes", "2", "--encoders", "mlp"]
     status, out, _ = _run(capsys, *argv, "--epochs", "2", "--out", str(tmp_path))

@@ -4,7 +4,8 @@
 interface (``fetchcarry generate --interface phases``): its actions are candidate
 indices and its per-step info ``action_mask`` holds each state's mask, so nothing but
 the dataset is needed. Steps whose action the mask does not allow (the refused stand-in
-that ends an episode at an unexpressible expert action) are dropped.
+that ends an episode at an expert action no candidate expresses, which only a non-move
+action can be now: moves are projected to the nearest allowed one) are dropped.
 
 :func:`train_bc_run` trains on them with BC's loop (:func:`training.baselines.bc.fit`,
 a checkpoint after every epoch, so that an interrupted run resumes where it stopped and

@@ -3,8 +3,8 @@
 One module per group of commands (:mod:`~training.cli.planning`: ``plan``,
 ``validate``; :mod:`~training.cli.episodes`: ``rollout``, ``demo``,
 ``evaluate-expert``; :mod:`~training.cli.data`: ``generate``, ``dataset``;
-:mod:`~training.cli.bench`: ``bench env|planner|generate``; :mod:`~training.cli.benchmark`:
-``benchmark``; :mod:`~training.cli.train`: ``train bc|dagger|ppo``), each with a
+:mod:`~training.cli.bench`: ``bench env|planner|generate|phases|projection``; :mod:`~training.cli.benchmark`:
+``benchmark``; :mod:`~training.cli.train`: ``train bc|dagger|ppo``, ``bench learned|learning-checks``), each with a
 ``register(commands, bench)`` function. Library code never speaks of flags or exit
 statuses: this package turns its exceptions into them (:mod:`~training.cli.exits`).
 

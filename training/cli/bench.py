@@ -18,6 +18,7 @@ from typing import Any, TextIO
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.episodes import families
+from training.cli.text import echo
 
 ENV_DESCRIPTION = (
     "Run, in this process, the example scenario of the scenario format and the MILP expert's optimal plan for it "
@@ -38,11 +39,12 @@ PLANNER_DESCRIPTION = (
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``env``, ``planner``, ``generate`` and ``phases`` to ``fetchcarry bench``."""
+    """Add ``env``, ``planner``, ``generate``, ``phases`` and ``projection`` to ``fetchcarry bench``."""
     _register_env(bench)
     _register_planner(bench)
     _register_generate(bench)
     _register_phases(bench)
+    _register_projection(bench)
 
 
 # ---------------------------------------------------------------------------- bench env
@@ -407,4 +409,39 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
             f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
             file=out,
         )
+    return 0
+
+
+# ---------------------------------------------------------------------------- bench projection
+def _register_projection(bench: argparse._SubParsersAction) -> None:
+    from training.learning.expert_phases import NEAREST_RULES
+
+    parser = bench.add_parser(
+        "projection",
+        help="the expert recorded in candidate phases (inexpressible moves projected) against its own episodes",
+        description="Run the MILP expert through FetchCarryPushPhases-v0 as `generate --interface phases` records "
+        "it (a move no candidate expresses replaced by the nearest allowed move, then the expert plans again) and "
+        "on its own, on the same seeds, and print both success rates, the projected moves per episode and the "
+        "extra travel cost of the projection (JSON).",
+    )
+    parser.add_argument("--family", required=True, metavar="F", help="scenario family, e.g. basic or push")
+    parser.add_argument("--episodes", type=positive_int, default=100, metavar="N", help="episodes (default 100)")
+    parser.add_argument("--seed", type=whole_number, default=0, metavar="S", help="first seed (default 0)")
+    parser.add_argument(
+        "--rule", choices=NEAREST_RULES, default="end", help="which allowed move stands in (default end)"
+    )
+    parser.add_argument(
+        "--time-limit", type=positive_float, default=10.0, metavar="S", help="seconds per planning call (default 10)"
+    )
+    parser.set_defaults(handler=run_bench_projection)
+
+
+def run_bench_projection(args: argparse.Namespace) -> int:
+    """Print the projection's figures as one JSON object."""
+    from training.learning.expert_phases import check_projection, summarise_projection
+
+    families(args.family)  # an unknown family is bad input
+    seeds = range(args.seed, args.seed + args.episodes)
+    rows = check_projection(args.family, seeds, time_limit=args.time_limit, rule=args.rule)
+    echo(json.dumps({"family": args.family, "rule": args.rule, **summarise_projection(rows)}, indent=2))
     return 0

@@ -9,7 +9,7 @@ episode is the expert's whether or not each action is expressible.
 :func:`nearest_move` is the stand-in for an expert move no candidate expresses (phase
 datasets record it, :mod:`training.phase_recording`); :func:`check_projection` runs the
 expert through that projection and on its own on the same seeds, and
-``python -m training.learning.expert_phases --family F --episodes N`` prints the figures
+``fetchcarry bench projection --family F --episodes N`` prints the figures
 (success, projected moves per episode, extra travel cost).
 """
 
@@ -184,30 +184,5 @@ def summarise_projection(rows: list[ProjectionCheck]) -> dict[str, float]:
     }
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m training.learning.expert_phases --family F --episodes N``: print the projection's figures."""
-    import argparse
-    import json
-
-    parser = argparse.ArgumentParser(description="The expert through the candidate projection vs its own episodes.")
-    parser.add_argument("--family", required=True)
-    parser.add_argument("--episodes", type=int, default=100)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--rule", choices=NEAREST_RULES, default="end")
-    parser.add_argument("--time-limit", type=float, default=10.0)
-    args = parser.parse_args(argv)
-    if args.episodes < 1:
-        parser.error(f"--episodes must be at least 1, got {args.episodes}")
-    rows = check_projection(
-        args.family, range(args.seed, args.seed + args.episodes), time_limit=args.time_limit, rule=args.rule
-    )
-    print(json.dumps({"family": args.family, "rule": args.rule, **summarise_projection(rows)}, indent=2))
-    return 0
-
-
 def mode_name(mode: int) -> str:
     return Mode(mode).name.lower()
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
