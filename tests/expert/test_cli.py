@@ -13,24 +13,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_run import run
 
 from expert.plans import Plan
 from expert.validate import validate_plan
 from fetchcarry_env.scenario import Scenario
-from training.cli import main
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    """``fetchcarry argv...`` in-process: (exit status, stdout, stderr); argparse's own exits included."""
-    try:
-        status = main([str(a) for a in argv])
-    except SystemExit as exit_:
-        status = exit_.code
-    captured = capsys.readouterr()
-    assert "Traceback" not in captured.err
-    return status, captured.out, captured.err
 
 
 @pytest.fixture

@@ -24,6 +24,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from cli_run import run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import file_bytes, mutated, nudged, to_json_text
@@ -32,7 +33,6 @@ from expert.plans import Phase, Plan, PlanFormatError
 from expert.validate import validate_plan
 from fetchcarry_env.geometry import to_world_frame
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
-from training.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIO_FILE = ROOT / "examples" / "push_basic.json"
@@ -198,12 +198,9 @@ def test_a_carried_object_in_the_hand_breaks_no_rule_7(heading, base):
 
 # ---------------------------------------------------------------------- the command line
 def run_cli(capsys, *argv) -> tuple[int, str]:
-    try:
-        status = main([str(a) for a in argv])
-    except SystemExit as exit_:  # argparse's own exits
-        status = exit_.code
-    captured = capsys.readouterr()
-    return status, captured.err
+    """``fetchcarry argv...`` in-process (no traceback allowed): the exit status and stderr."""
+    status, _, err = run(capsys, *argv)
+    return status, err
 
 
 @fuzz(80)

@@ -16,23 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_run import run
 
-from training.cli import main
 from training.datasets import dataset_path
 from training.staging import DatasetLock, Staging
 
 DATASET_ID = "fetchcarry/hard-v0"
-
-
-def run(capsys: pytest.CaptureFixture, *argv: str) -> tuple[int, str, str]:
-    """``fetchcarry argv...`` in-process: (exit status, stdout, stderr); never a traceback."""
-    try:
-        status = main([str(a) for a in argv])
-    except SystemExit as exit_:
-        status = exit_.code
-    out, err = capsys.readouterr()
-    assert "Traceback" not in err
-    return status, out, err
 
 
 def generate_random(capsys: pytest.CaptureFixture, dataset_id: str = DATASET_ID, episodes: int = 2, *extra: str):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import h5py
 import pytest
+from cli_run import run
 from PIL import Image
 
 from fetchcarry_env.scenario import Scenario
@@ -21,16 +22,9 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
 DATASET_ID = "fetchcarry/cli-v0"
 
 
-def _run(capsys: pytest.CaptureFixture, *argv: str) -> tuple[int, str, str]:
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    assert "Traceback" not in err
-    return status, out, err
-
-
 # ---------------------------------------------------------------------------- rollout and demo
 def test_rollout_prints_the_figures_as_json(capsys) -> None:
-    status, out, _ = _run(capsys, "rollout", "--scenario", str(EXAMPLE), "--json")
+    status, out, _ = run(capsys, "rollout", "--scenario", str(EXAMPLE), "--json")
     figures = json.loads(out)
     assert status == 0 and figures["success"] and figures["outcome"] == "delivered"
     assert figures["delivered"] == figures["objects"] == 1 and figures["plans"] == 1
@@ -38,7 +32,7 @@ def test_rollout_prints_the_figures_as_json(capsys) -> None:
 
 def test_rollout_writes_a_gif_of_every_state(capsys, tmp_path: Path) -> None:
     gif = tmp_path / "episode.gif"
-    status, out, _ = _run(capsys, "rollout", "--family", "push", "--seed", "3", "--render", str(gif))
+    status, out, _ = run(capsys, "rollout", "--family", "push", "--seed", "3", "--render", str(gif))
     assert status == 0 and f"picture    {gif}" in out
     steps = int(out.split(" after ")[1].split(" steps")[0])
     with Image.open(gif) as image:
@@ -46,7 +40,7 @@ def test_rollout_writes_a_gif_of_every_state(capsys, tmp_path: Path) -> None:
 
 
 def test_rollout_without_a_plan_is_a_negative_answer(capsys) -> None:
-    status, out, _ = _run(capsys, "rollout", "--scenario", str(EXAMPLE), "--time-limit", "0.0001")
+    status, out, _ = run(capsys, "rollout", "--scenario", str(EXAMPLE), "--time-limit", "0.0001")
     assert status == 1
     assert "outcome    planner_failed (time_limit): 0/1 object(s)" in out and "failure    no plan" in out
 
@@ -62,13 +56,13 @@ def test_rollout_without_a_plan_is_a_negative_answer(capsys) -> None:
     ],
 )
 def test_bad_input_is_a_short_message_and_exit_2(capsys, argv: list[str], message: str) -> None:
-    status, out, err = _run(capsys, *argv)
+    status, out, err = run(capsys, *argv)
     assert status == 2 and message in err and out == ""
 
 
 def test_demo_writes_the_episode_picture_and_its_figures(capsys, tmp_path: Path) -> None:
     picture = tmp_path / "episode.png"
-    status, out, _ = _run(capsys, "demo", "--out", str(picture))
+    status, out, _ = run(capsys, "demo", "--out", str(picture))
     assert status == 0
     assert "outcome    delivered: 1/1 object(s) at the goal" in out and "delivered: delivered" not in out
     with Image.open(picture) as image:
@@ -78,7 +72,7 @@ def test_demo_writes_the_episode_picture_and_its_figures(capsys, tmp_path: Path)
 # ---------------------------------------------------------------------------- datasets
 @pytest.fixture
 def dataset(capsys) -> str:
-    status, out, _ = _run(
+    status, out, _ = run(
         capsys, "generate", "--family", "push", "--seed", "5", "--episodes", "2", "--dataset-id", DATASET_ID,
         "--no-progress",
     )  # fmt: skip
@@ -87,25 +81,25 @@ def dataset(capsys) -> str:
 
 
 def test_generate_refuses_an_existing_id(capsys, dataset: str) -> None:
-    status, _, err = _run(capsys, "generate", "--family", "push", "--episodes", "2", "--dataset-id", dataset)
+    status, _, err = run(capsys, "generate", "--family", "push", "--episodes", "2", "--dataset-id", dataset)
     assert status == 2 and "already exists" in err and "--overwrite" in err
 
 
 def test_dataset_info(capsys, dataset: str) -> None:
-    status, out, _ = _run(capsys, "dataset", "info", dataset)
+    status, out, _ = run(capsys, "dataset", "info", dataset)
     assert status == 0 and "episodes    2" in out and "success rate 100.0%" in out
-    status, out, _ = _run(capsys, "dataset", "info", dataset, "--json")
+    status, out, _ = run(capsys, "dataset", "info", dataset, "--json")
     assert status == 0 and json.loads(out)["seeds"] == [5, 6]
 
 
 def test_dataset_replay_exit_statuses(capsys, dataset: str) -> None:
-    status, out, _ = _run(capsys, "dataset", "replay", dataset, "--episode", "1")
+    status, out, _ = run(capsys, "dataset", "replay", dataset, "--episode", "1")
     assert status == 0 and ": reproduced" in out
-    status, _, err = _run(capsys, "dataset", "replay", dataset, "--episode", "2")
+    status, _, err = run(capsys, "dataset", "replay", dataset, "--episode", "2")
     assert status == 2 and "out of range" in err
     with h5py.File(dataset_path(dataset) / "data" / "main_data.hdf5", "r+") as file:
         file["episode_0"]["observations"]["observation"][3, 0] += 0.5
-    status, out, _ = _run(capsys, "dataset", "replay", dataset, "--episode", "0")
+    status, out, _ = run(capsys, "dataset", "replay", dataset, "--episode", "0")
     assert status == 1 and "NOT reproduced" in out and "first divergence at state 3" in out
 
 
@@ -119,7 +113,7 @@ def test_dataset_replay_exit_statuses(capsys, dataset: str) -> None:
     ],
 )
 def test_dataset_bad_input_is_exit_2(capsys, argv: list[str], message: str) -> None:
-    status, _, err = _run(capsys, *argv)
+    status, _, err = run(capsys, *argv)
     assert status == 2 and message in err
 
 
@@ -133,7 +127,7 @@ def test_bad_numbers_are_argparse_errors(capsys) -> None:
 def test_evaluate_expert_writes_every_failure_as_a_replayable_scenario(capsys, tmp_path: Path) -> None:
     """With a time limit too short to plan, every episode fails: each one is written out with its seed."""
     failures = tmp_path / "failures"
-    status, out, _ = _run(
+    status, out, _ = run(
         capsys, "evaluate-expert", "--families", "basic", "--episodes", "2", "--seed", "4", "--time-limit", "0.0001",
         "--failures-dir", str(failures), "--no-progress",
     )  # fmt: skip
@@ -147,19 +141,19 @@ def test_evaluate_expert_writes_every_failure_as_a_replayable_scenario(capsys, t
 
 def test_bench_generate_prints_the_split_and_the_speed_up(capsys) -> None:
     argv = ["bench", "generate", "--families", "basic,push", "--episodes", "2", "--workers", "1", "--json"]
-    status, out, _ = _run(capsys, *argv)
+    status, out, _ = run(capsys, *argv)
     runs = json.loads(out)["runs"]
-    assert status == 0 and [run["family"] for run in runs] == ["basic", "push"]
-    for run in runs:
-        assert run["speed_up"] == 1.0 and run["successes"] == 2
-        assert 0 < run["planning_s_per_episode"] <= run["policy_s_per_episode"]
-        assert run["simulation_s_per_episode"] > 0 and 0 < run["planning_share"] < 1
-    status, out, _ = _run(capsys, "bench", "generate", "--families", "basic", "--episodes", "1", "--workers", "1")
+    assert status == 0 and [row["family"] for row in runs] == ["basic", "push"]
+    for row in runs:
+        assert row["speed_up"] == 1.0 and row["successes"] == 2
+        assert 0 < row["planning_s_per_episode"] <= row["policy_s_per_episode"]
+        assert row["simulation_s_per_episode"] > 0 and 0 < row["planning_share"] < 1
+    status, out, _ = run(capsys, "bench", "generate", "--families", "basic", "--episodes", "1", "--workers", "1")
     assert status == 0 and "ep/s/worker" in out and "speed-up" in out
 
 
 def test_bench_phases_prints_the_expert_in_the_interface_and_its_speed(capsys) -> None:
-    status, out, _ = _run(capsys, "bench", "phases", "--families", "basic,push", "--episodes", "2", "--steps", "20")
+    status, out, _ = run(capsys, "bench", "phases", "--families", "basic,push", "--episodes", "2", "--steps", "20")
     assert status == 0
     expressed, speed = out.split("\nspeed ")
     rows = [line.split() for line in expressed.splitlines()[2:]]
@@ -167,24 +161,24 @@ def test_bench_phases_prints_the_expert_in_the_interface_and_its_speed(capsys) -
     assert "pick 2/2" in expressed  # one pick per episode, each an allowed candidate
     assert [line.split()[0] for line in speed.splitlines()[2:]] == ["basic", "push"]
     assert "0, stopped at a contact 0" in speed  # the mask never allows a step the env refuses
-    status, _, err = _run(capsys, "bench", "phases", "--families", "nope")
+    status, _, err = run(capsys, "bench", "phases", "--families", "nope")
     assert status == 2 and "unknown family" in err
 
 
 def test_bench_projection_compares_the_recorded_expert_with_its_own_episodes(capsys) -> None:
-    status, out, _ = _run(capsys, "bench", "projection", "--family", "basic", "--episodes", "3")
+    status, out, _ = run(capsys, "bench", "projection", "--family", "basic", "--episodes", "3")
     figures = json.loads(out)
     assert status == 0 and figures["episodes"] == 3 and figures["success"] == figures["expert_success"] == 1.0
     assert 0 <= figures["episodes_with_projection"] <= 1 and figures["projected_per_episode"] >= 0
-    status, _, err = _run(capsys, "bench", "projection", "--family", "nope")
+    status, _, err = run(capsys, "bench", "projection", "--family", "nope")
     assert status == 2 and "unknown family" in err
 
 
 def test_bench_learning_checks_bc_trains_and_compares_with_the_baselines(capsys, tmp_path: Path) -> None:
     argv = ["bench", "learning-checks", "bc", "--episodes", "3", "--eval-episodes", "2", "--encoders", "mlp"]
-    status, out, _ = _run(capsys, *argv, "--epochs", "2", "--out", str(tmp_path))
+    status, out, _ = run(capsys, *argv, "--epochs", "2", "--out", str(tmp_path))
     assert status == 0 and "the expert solved 2/2 held-out seeds" in out
     assert [line.split()[0] for line in out.splitlines()[-3:]] == ["random", "greedy", "bc-mlp"]
     assert (tmp_path / "bc-mlp" / "model.pt").is_file()
-    status, _, err = _run(capsys, "bench", "learning-checks", "ppo", "--family", "nope")
+    status, _, err = run(capsys, "bench", "learning-checks", "ppo", "--family", "nope")
     assert status == 2 and "unknown family" in err
