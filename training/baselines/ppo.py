@@ -147,6 +147,7 @@ def train_ppo(
 ) -> list[dict[str, Any]]:
     """Train MaskablePPO on ``family`` into the run folder ``out``; return the learning-curve rows."""
     from sb3_contrib import MaskablePPO
+    from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import DummyVecEnv
     from tqdm import tqdm
 
@@ -187,6 +188,7 @@ def train_ppo(
         verbose=0,
         policy_kwargs={"actor": actor, "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)}},
     )
+    model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes an empty folder in /tmp per run
     rows: list[dict[str, Any]] = []
     if checkpoint is not None:
         model.policy.load_state_dict(checkpoint["policy"])

@@ -75,10 +75,12 @@ def check_ppo(
     """
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
 
     torch.set_num_threads(1)
     env = make_vec_env(lambda: make_env(family, reward="learning"), n_envs=1, seed=seed)
     model = MaskablePPO("MultiInputPolicy", env, n_steps=512, batch_size=128, gamma=0.99, seed=seed, verbose=0)
+    model.set_logger(Logger(folder=None, output_formats=[]))  # no empty SB3-* folder in /tmp
     start = time.perf_counter()
     curve: list[tuple[int, float, float, float]] = []
     seeds = range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + eval_episodes)
