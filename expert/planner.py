@@ -47,6 +47,7 @@ EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not g
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
 DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
+FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time and the first is skipped
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts"}
@@ -96,9 +97,9 @@ def plan(
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
     From four objects (three with pushes) a decoupled plan (:mod:`expert.decoupled`) is
-    made first, before the lower bounds (nearest object first, each sub-plan SCIP's first
-    solution: tens of milliseconds), and again in the relaxation's order when it has
-    more phases than the lower bound: the answer if time runs out before SCIP finds
+    made first when ``time_limit`` is under ``FIRST_PLAN_BELOW_S``, before the lower bounds
+    (nearest object first, each sub-plan SCIP's first solution: tens of milliseconds),
+    and after the bounds in the relaxation's order: the answer if time runs out before SCIP finds
     better (``stats["gap"]`` None: no bound covers it), and SCIP's first incumbent when it
     has no more phases than the model.
 
@@ -198,7 +199,7 @@ class _Run:
             stats["phases_tried"].append(1)
             return self.finish("optimal", phases_of(problem, []))
         many = holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0)
-        if many:
+        if many and deadline.left() < FIRST_PLAN_BELOW_S:
             self.first_plan(problem, lattice)
         t_bound = time.perf_counter()
         free = Connectivity(problem, deadline)

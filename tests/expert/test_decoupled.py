@@ -102,6 +102,7 @@ def test_first_plan_comes_before_the_bounds(monkeypatch):
         return connectivity(problem, *args, **kwargs)
 
     monkeypatch.setattr(planner, "Connectivity", out_of_time)
+    monkeypatch.setattr(planner, "FIRST_PLAN_BELOW_S", float("inf"))  # the first plan also with a long limit
     scenario = bench_cases.covered(3, np.random.default_rng(2024))
     result = plan(scenario, time_limit=30.0)
     assert result.status == "feasible"
