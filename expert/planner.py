@@ -47,7 +47,7 @@ EXTRA_PHASES = 8  # phases tried beyond the lower bound when max_phases is not g
 RESERVE_S = 0.01  # seconds kept back from each solve for decoding and bookkeeping
 DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan comes first (costs 5-10 %)
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
-FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time and the first is skipped
+FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts"}
@@ -375,8 +375,8 @@ def _better(scenario: Scenario, phases: tuple, than: tuple) -> bool:
 
 
 def _first_solution_planner(scenario: Scenario, **kwargs: Any) -> Plan:
-    """:func:`plan` that stops at SCIP's first solution at the fewest phases, with fast presolving (for sub-plans)."""
-    return plan(scenario, presolving="fast", params={"limits/solutions": 1}, **kwargs)
+    """:func:`plan` stopping at SCIP's first solution at the fewest phases, fast presolving and heuristics."""
+    return plan(scenario, presolving="fast", heuristics="fast", params={"limits/solutions": 1}, **kwargs)
 
 
 def _without_trailing_idle(steps: list[Step]) -> list[Step]:
