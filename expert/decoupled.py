@@ -6,7 +6,9 @@ where they are, as if delivered; pushed clutter where it was pushed). Single-obj
 models solve in tens of milliseconds, so the whole plan comes quickly. It is a valid
 plan of the full problem (every sub-plan obeys the same rules, and the state carries
 over exactly), usually with as many phases as the optimum or a few more, and a
-higher Eq. 1. :func:`expert.planner.plan` uses it as the answer of last resort
+higher Eq. 1. :func:`expert.planner.plan` makes one first, nearest object first
+with SCIP stopped at its first solution of each sub-plan (before any bound of the whole
+problem, so that a short time limit has a valid plan), and uses it as the answer of last resort
 (status ``feasible``) and, when it has no more phases than the model being solved,
 as SCIP's first incumbent (:mod:`expert.milp.warm`).
 
@@ -16,6 +18,7 @@ Units are metres and seconds.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 
 from expert.milp.deadline import Deadline, TimeUp
@@ -36,8 +39,12 @@ def decoupled_plan(
     deadline: Deadline,
     planner: Planner,
     lookahead: int = 1,
+    nearest: bool = False,
 ) -> tuple[Phase, ...] | None:
     """Phases of a plan delivering the objects one at a time, trying them in ``order``; None if it fails.
+
+    ``nearest``: ignore ``order``'s sequence and take, at each step, the object whose
+    start is closest to the base (Euclidean distance): an order that needs no search.
 
     Each step solves the MILP for the next ``lookahead`` objects of ``order`` (the others
     standing where they are) and keeps its phases up to its first place: with
@@ -52,6 +59,8 @@ def decoupled_plan(
     clutter = {c.id: c.rect.center for c in scenario.clutter}
     todo = list(order)
     while todo:
+        if nearest:
+            todo.sort(key=lambda i: math.dist(objects[i], base))
         for first in range(len(todo)):
             left = deadline.left()
             if left <= 0:

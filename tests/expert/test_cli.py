@@ -250,3 +250,15 @@ def test_plan_with_extra_phases_says_which_optimality_it_proves(capsys, tmp_path
     assert [s["phases"] for s in result.stats["solves"]][-1] == result.stats["fewest_phases"] + 2
     status, _, err = run(capsys, "plan", str(EXAMPLE), "-o", str(output), "--extra-phases", "-1")
     assert status == 2 and "--extra-phases" in err
+
+
+@pytest.mark.parametrize(("gap", "says"), [(0.0123, "(proven gap 1.2%)"), (None, "(no proven gap")])
+def test_a_feasible_plan_says_its_proven_gap_or_that_it_has_none(gap, says):
+    """A time-limited plan states its proven gap, or says that no bound covers it (the decoupled plan)."""
+    from expert.planner import plan
+    from training.cli.planning import _plan_summary_text
+
+    found = plan(Scenario.load(EXAMPLE))
+    feasible = Plan(found.scenario, "feasible", found.objective, found.phases, {**found.stats, "gap": gap})
+    text = _plan_summary_text(EXAMPLE, feasible, Path("plan.json"), None, 10.0)
+    assert says in text

@@ -73,3 +73,39 @@ def test_lookahead_keeps_phases_through_the_first_place_and_stays_valid():
     assert phases is not None
     assert sum(p.action == "place" for p in phases) == len(scenario.objects)
     assert validate_plan(scenario, Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})) == []
+
+
+@pytest.mark.parametrize(("family", "count"), [("multi", 6), ("covered", 3)])
+def test_nearest_first_plan_with_first_solutions_is_valid(family, count):
+    """The planner's first plan: nearest object first, each sub-plan SCIP's first solution at the fewest phases."""
+    from expert.planner import _first_solution_planner
+
+    scenario = getattr(bench_cases, family)(count, np.random.default_rng(2024))
+    lattice = Lattice.over(scenario.area, 0.05)
+    order = [o.id for o in scenario.objects]
+    phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), _first_solution_planner, nearest=True)
+    assert phases is not None
+    assert sum(p.action == "place" for p in phases) == count
+    assert validate_plan(scenario, Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {})) == []
+
+
+def test_first_plan_comes_before_the_bounds(monkeypatch):
+    """Time running out in the lower bounds (simulated) still answers with the valid first plan, no gap claimed."""
+    import expert.planner as planner
+    from expert.milp.deadline import TimeUp
+
+    connectivity = planner.Connectivity
+
+    def out_of_time(problem, *args, **kwargs):
+        if len(problem.deliver) > 1:  # the whole problem, not the decoupled plan's single-object sub-plans
+            raise TimeUp
+        return connectivity(problem, *args, **kwargs)
+
+    monkeypatch.setattr(planner, "Connectivity", out_of_time)
+    monkeypatch.setattr(planner, "FIRST_PLAN_BELOW_S", float("inf"))  # the first plan also with a long limit
+    scenario = bench_cases.covered(3, np.random.default_rng(2024))
+    result = plan(scenario, time_limit=30.0)
+    assert result.status == "feasible"
+    assert result.stats["timed_out"] and result.stats["gap"] is None
+    assert result.stats["decoupled"] == "nearest"
+    assert validate_plan(scenario, result) == []

@@ -130,7 +130,10 @@ def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path:
         lines.append(f"why        {no_plan_reason(plan, time_limit)}")
     elif plan.stats.get("optimality"):
         gap = plan.stats.get("gap")
-        proven = f" (proven gap {gap:.1%})" if plan.status == "feasible" and isinstance(gap, float) else ""
+        proven = ""
+        if plan.status == "feasible":
+            no_gap = " (no proven gap: no bound covers its phases)"
+            proven = f" (proven gap {gap:.1%})" if isinstance(gap, float) else no_gap
         lines.append(f"meaning    {plan.stats['optimality']}{proven}")
     lines += [
         f"phases     {len(plan.phases)}" + _phases_tried(plan),

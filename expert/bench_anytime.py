@@ -1,0 +1,119 @@
+"""The planner under short time limits: first plans, their quality and their proven gaps.
+
+Plans the scale families of the planner benchmark (``bench_cases.multi`` with 4, 5 and
+6 objects, ``bench_cases.covered`` with 3; seed 2024, the first ``COUNTS`` scenarios of
+each) at every time limit of ``LIMITS`` and at ``REFERENCE_S`` (the reference: usually
+proven optimal), checks every plan with the validator, and prints per group and limit
+how many calls returned a valid plan, how many are optimal, how many have the
+reference's phases and how far their Eq. 1 is above it, and the proven gaps. Only the
+public planner is used, so the same file measures an older checkout too::
+
+    PYTHONPATH=$PWD python expert/bench_anytime.py after.json
+    PYTHONPATH=/path/to/old/checkout python expert/bench_anytime.py before.json
+    PYTHONPATH=$PWD python expert/bench_anytime.py after.json before.json   # print both
+
+The first path is where the records are written (JSON, one per call); with a second
+path, that file's records are summarised too, against this run's reference plans.
+Times are wall-clock seconds of one in-process call each (one untimed warm-up first).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from expert import bench_cases, plan
+from expert.validate import validate_plan
+
+LIMITS = (0.1, 1.0)  # seconds
+REFERENCE_S = 30.0  # seconds: the reference call's limit
+SEED = 2024
+COUNTS = {"4 obj": 5, "5 obj": 5, "6 obj": 3, "cov 3": 5}
+WITHIN = 0.05  # the issue's goal: at a 1 s limit within 5 % of the optimum
+
+
+def _draw(group: str, rng: np.random.Generator):
+    if group == "cov 3":
+        return bench_cases.covered(3, rng)
+    return bench_cases.multi(int(group[0]), rng)
+
+
+def measure(limits=LIMITS, reference_s: float = REFERENCE_S) -> list[dict]:
+    """One record per call: group, index, limit, status, phases, Eq. 1, gap, seconds, valid."""
+    plan(bench_cases.basic("I", np.random.default_rng(0)))  # warm-up: imports and SCIP's first model
+    records = []
+    for group, count in COUNTS.items():
+        rng = np.random.default_rng(SEED)
+        for index in range(count):
+            scenario = _draw(group, rng)
+            for limit in (*limits, reference_s):
+                t0 = time.perf_counter()
+                result = plan(scenario, time_limit=limit)
+                seconds = time.perf_counter() - t0
+                records.append(
+                    {
+                        "group": group,
+                        "index": index,
+                        "limit": limit,
+                        "reference": limit == reference_s,
+                        "status": result.status,
+                        "phases": len(result.phases),
+                        "objective": result.objective,
+                        "gap": result.stats.get("gap"),
+                        "seconds": round(seconds, 4),
+                        "valid": bool(result.phases) and validate_plan(scenario, result) == [],
+                    }
+                )
+                print(json.dumps(records[-1]), file=sys.stderr, flush=True)
+    return records
+
+
+def summary(records: list[dict], reference: list[dict]) -> list[str]:
+    """Lines of the table: per group and limit, against the reference records."""
+    best = {(r["group"], r["index"]): r for r in reference if r["reference"]}
+    lines = [
+        f"{'group':6} {'limit s':>7} {'valid':>7} {'optimal':>7} {'ref phases':>10} "
+        f"{'within 5%':>9}  Eq. 1 above the reference (%) / proven gaps (%)"
+    ]
+    for group in COUNTS:
+        for limit in sorted({r["limit"] for r in records if not r["reference"]}):
+            rows = [r for r in records if r["group"] == group and r["limit"] == limit and not r["reference"]]
+            above, gaps, within = [], [], 0
+            for r in rows:
+                ref = best.get((group, r["index"]))
+                if r["valid"] and ref is not None and r["phases"] == ref["phases"]:
+                    excess = (r["objective"] - ref["objective"]) / abs(ref["objective"])
+                    above.append(f"{100 * excess:.2f}")
+                    within += ref["status"] == "optimal" and excess <= WITHIN
+                if r["gap"] is not None:
+                    gaps.append(f"{100 * r['gap']:.2f}")
+            valid = sum(r["valid"] for r in rows)
+            optimal = sum(r["status"] == "optimal" for r in rows)
+            lines.append(
+                f"{group:6} {limit:7.2f} {valid:3}/{len(rows):<3} {optimal:7} {len(above):10} {within:9}  "
+                f"{', '.join(above) or '-'} / {', '.join(gaps) or '-'}"
+            )
+    return lines
+
+
+def main(argv: list[str]) -> int:
+    if not argv or len(argv) > 2:
+        print("usage: python expert/bench_anytime.py OUT.json [OTHER.json]", file=sys.stderr)
+        return 2
+    records = measure()
+    Path(argv[0]).write_text(json.dumps(records, indent=1))
+    print("this run:")
+    print("\n".join(summary(records, records)))
+    if len(argv) == 2:
+        other = json.loads(Path(argv[1]).read_text())
+        print(f"\n{argv[1]} (against this run's reference plans):")
+        print("\n".join(summary(other, records)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
