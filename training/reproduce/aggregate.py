@@ -100,7 +100,8 @@ def _demonstrations(record: dict[str, Any], curve: Sequence[Baseline]) -> int | 
 
 HEADER = (
     "| baseline | seeds | success, pooled [95 % CI] | success per seed | delivered / ep | cost ratio | SPL (cost) "
-    "| phases (expert) | pushes (expert) | invalid / ep | contacts / ep | ms / decision (planner) | score | expert labels |"
+    "| phases (expert) | pushes (expert) | invalid / ep | contacts / ep | ms / decision (planner) | score "
+    "| expert labels |"
 )
 
 
