@@ -155,6 +155,18 @@ def test_train_bc_is_deterministic_and_resumes_to_the_same_weights(
     assert _bc(phases_dataset, tmp_path / "c", "--resume") == 0  # complete: nothing to do
 
 
+def test_train_bc_on_the_first_episodes_of_a_dataset(phases_dataset: str, tmp_path: Path, capsys) -> None:
+    assert _bc(phases_dataset, tmp_path / "all") == 0
+    assert _bc(phases_dataset, tmp_path / "two", "--episodes", "2") == 0
+    everything, two = (json.loads((tmp_path / n / runs.CONFIG_FILE).read_text()) for n in ("all", "two"))
+    assert "episodes" not in everything["options"] and two["options"]["episodes"] == 2
+    assert two["data"]["episodes"] == 2 and everything["data"]["episodes"] == EPISODES
+    assert 0 < two["data"]["labelled"] < everything["data"]["labelled"]
+    capsys.readouterr()
+    assert _bc(phases_dataset, tmp_path / "many", "--episodes", str(EPISODES + 1)) == 2
+    assert f"has {EPISODES} episodes" in capsys.readouterr().err
+
+
 def test_rollout_takes_a_run_folder(phases_dataset: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert _bc(phases_dataset, tmp_path / "run") == 0
     capsys.readouterr()
