@@ -25,6 +25,7 @@ with another) and ``DIR/timings.json`` the seconds of every stage and run.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import time
@@ -42,6 +43,7 @@ SPLIT_NAMES = ("iid", "more-objects", "layouts", "push-required")
 CURVE_SPLIT = "iid"  # where the demonstrations curve is measured
 REFERENCES = ("expert", "random", "random-phases", "greedy")
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
+WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
 MINARI_ENV = "MINARI_DATASETS_PATH"
 
 
@@ -238,6 +240,7 @@ def _stage_benchmark(
         folder = out / "benchmark" / split
         total = len(policies) * budget.episodes
         started = time.perf_counter()
+        forget_retrained(folder, [runs / name for b in learned for name in b.runs])
         report = run_benchmark(policies, out=folder, split=split, episodes=budget.episodes, workers=workers,
                                progress=progress, resume=True)  # fmt: skip
         if report.resumed == total:
@@ -246,3 +249,29 @@ def _stage_benchmark(
         timings.add("stages", f"benchmark {split}", time.perf_counter() - started)
         say(f"[3/4] benchmark {get_split(split).name}: {total} episodes ({report.resumed} resumed) "
             f"in {time.perf_counter() - started:.0f} s")  # fmt: skip
+
+
+def forget_retrained(folder: Path, runs: list[Path]) -> None:
+    """Drop from ``folder/results.json`` the episodes of runs whose weights changed since they were benchmarked.
+
+    ``folder/weights.json`` keeps a digest of each run's ``model.pt`` as benchmarked, so
+    a run folder trained again (deleted and retrained with other weights) is benchmarked
+    again rather than kept with the episodes of its former weights.
+    """
+    from training.benchmark.runner import RESULTS
+
+    file = folder / WEIGHTS_DIGESTS
+    try:
+        before = json.loads(file.read_text())
+    except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        before = {}
+    now = {run.name: hashlib.sha256((run / "model.pt").read_bytes()).hexdigest() for run in runs}
+    changed = {name for name in now if before.get(name) != now[name]}
+    results = folder / RESULTS
+    if changed and results.is_file():
+        records = json.loads(results.read_text())
+        kept = [r for r in records if not (isinstance(r, dict) and r.get("policy") in changed)]
+        if len(kept) < len(records):
+            results.write_text(json.dumps(kept, indent=1) + "\n")
+    folder.mkdir(parents=True, exist_ok=True)
+    file.write_text(json.dumps(now, indent=1) + "\n")
