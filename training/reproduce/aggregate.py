@@ -81,8 +81,10 @@ def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, se
         lines += _curve_table(curve_split, curve, [b for b in baselines if b.label == "dagger"], per_run, pooled,
                               labels, budget)  # fmt: skip
         lines.append("")
-    lines += ["## Time", "", "| stage or run | seconds |", "| --- | --- |"]
-    lines += [f"| {name} | {seconds:.0f} |" for name, seconds in timings.get("stages", {}).items()]
+    lines += ["## Time", "", "| stage | wall-clock s | CPU s |", "| --- | --- | --- |"]
+    for name, entry in timings.get("stages", {}).items():
+        if isinstance(entry, dict):
+            lines.append(f"| {name} | {entry['wall']:.0f} | {entry['cpu']:.0f} |")
     lines += ["", f"Plots: {SPLITS_PLOT}, {CURVES_PLOT}, {DEMONSTRATIONS_PLOT}; every record: {RESULTS}.", ""]
     (out / SUMMARY).write_text("\n".join(lines))
     shown = references + [b.label for b in main]

@@ -47,12 +47,12 @@ def is_complete(job: TrainJob) -> bool:
     return (folder / CONFIG_FILE).is_file() and bool(read_config(folder).get("complete"))
 
 
-def run_job(job: TrainJob) -> float:
-    """Train ``job`` (resuming its run folder); return the seconds it took."""
+def run_job(job: TrainJob) -> tuple[float, float]:
+    """Train ``job`` (resuming its run folder); return the wall-clock and CPU seconds it took (this process)."""
     import torch
 
     torch.set_num_threads(1)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     if job.kind == "bc":
         from training.baselines.imitation import train_bc_run
 
@@ -67,11 +67,11 @@ def run_job(job: TrainJob) -> float:
         train_ppo(job.family, job.ppo, job.out, resume=True, progress=False)
     else:
         raise ValueError(f"unknown kind of training job {job.kind!r}")
-    return time.perf_counter() - started
+    return time.perf_counter() - started, time.process_time() - cpu
 
 
-def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob, float]]:
-    """Train ``jobs`` (in list order, each after its ``needs``); yield each with its seconds as it finishes."""
+def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
+    """Train ``jobs`` (in list order, each after its ``needs``); yield each with its wall and CPU seconds."""
     names = {job.name for job in jobs}
     unknown = sorted({need for job in jobs for need in job.needs} - names)
     if unknown:
@@ -86,7 +86,7 @@ def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob,
     yield from _run_pool(jobs, workers)
 
 
-def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, float]]:
+def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
     from training.generate import _terminate_workers, worker_setup
 
     pool = ProcessPoolExecutor(

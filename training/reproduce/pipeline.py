@@ -145,7 +145,11 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
 
 
 class Timings:
-    """Seconds per stage and per run, kept in ``DIR/timings.json`` across interrupted calls."""
+    """Wall-clock and CPU seconds per stage and per run, kept in ``DIR/timings.json`` across interrupted calls.
+
+    CPU seconds count this process and its finished workers (``getrusage``): on a shared
+    machine they say what a stage costs better than its wall-clock time does.
+    """
 
     def __init__(self, out: Path) -> None:
         self.file = out / TIMINGS_FILE
@@ -156,9 +160,26 @@ class Timings:
         self.data.setdefault("stages", {})
         self.data.setdefault("runs", {})
 
-    def add(self, group: str, name: str, seconds: float) -> None:
-        self.data[group][name] = round(self.data[group].get(name, 0.0) + seconds, 1)
+    def add(self, group: str, name: str, wall: float, cpu: float) -> None:
+        entry = self.data[group].get(name)
+        entry = entry if isinstance(entry, dict) else {"wall": 0.0, "cpu": 0.0}
+        self.data[group][name] = {"wall": round(entry["wall"] + wall, 1), "cpu": round(entry["cpu"] + cpu, 1)}
         self.file.write_text(json.dumps(self.data, indent=2) + "\n")
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        """Add the block's wall-clock and CPU seconds (this process and its workers) to stage ``name``."""
+        started, cpu = time.perf_counter(), cpu_seconds()
+        yield
+        self.add("stages", name, time.perf_counter() - started, cpu_seconds() - cpu)
+
+
+def cpu_seconds() -> float:
+    """CPU seconds (user and system) of this process and of its children that have finished."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def reproduce(
@@ -190,9 +211,8 @@ def reproduce(
         _stage_benchmark(out, seeds, budget, workers, progress, timings, say)
     from training.reproduce.aggregate import write_published
 
-    started = time.perf_counter()
-    summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data)
-    timings.add("stages", "report", time.perf_counter() - started)
+    with timings.stage("report"):
+        summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data)
     say(f"[4/4] report: {summary}, {out / 'results.json'} and the plots in {out}")
     return summary
 
@@ -204,11 +224,12 @@ def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timin
     source = EpisodeSource(family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit)
     config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
     say(f"[1/4] datasets: {DATASET_ID}, {budget.demonstrations} expert episodes of family {TRAINING_FAMILY}")
+    started, cpu = time.perf_counter(), cpu_seconds()
     report = generate(config, workers=workers, progress=progress)
     if report.already_complete:
         say("[1/4] datasets: already complete")
         return
-    timings.add("stages", "datasets", report.wall_s)
+    timings.add("stages", "datasets", time.perf_counter() - started, cpu_seconds() - cpu)
     say(f"[1/4] datasets: done in {report.wall_s:.0f} s ({report.resumed} episodes resumed)")
 
 
@@ -220,11 +241,10 @@ def _stage_training(out: Path, seeds: int, budget: Budget, workers: int, timings
         return
     complete = {job.name for job in jobs} - {job.name for job in todo}
     todo = [replace(job, needs=tuple(n for n in job.needs if n not in complete)) for job in todo]
-    started = time.perf_counter()
-    for count, (job, seconds) in enumerate(run_jobs(todo, workers), start=1):
-        timings.add("runs", job.name, seconds)
-        say(f"[2/4] training {count}/{len(todo)}: {job.name} done in {seconds:.0f} s")
-    timings.add("stages", "training", time.perf_counter() - started)
+    with timings.stage("training"):
+        for count, (job, (wall, cpu)) in enumerate(run_jobs(todo, workers), start=1):
+            timings.add("runs", job.name, wall, cpu)
+            say(f"[2/4] training {count}/{len(todo)}: {job.name} done in {wall:.0f} s ({cpu:.0f} CPU s)")
 
 
 def _stage_benchmark(
@@ -239,14 +259,14 @@ def _stage_benchmark(
         policies = references + [str(runs / name) for b in learned for name in b.runs]
         folder = out / "benchmark" / split
         total = len(policies) * budget.episodes
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), cpu_seconds()
         forget_retrained(folder, [runs / name for b in learned for name in b.runs])
         report = run_benchmark(policies, out=folder, split=split, episodes=budget.episodes, workers=workers,
                                progress=progress, resume=True)  # fmt: skip
         if report.resumed == total:
             say(f"[3/4] benchmark {get_split(split).name}: already complete ({total} episodes)")
             continue
-        timings.add("stages", f"benchmark {split}", time.perf_counter() - started)
+        timings.add("stages", f"benchmark {split}", time.perf_counter() - started, cpu_seconds() - cpu)
         say(f"[3/4] benchmark {get_split(split).name}: {total} episodes ({report.resumed} resumed) "
             f"in {time.perf_counter() - started:.0f} s")  # fmt: skip
 
