@@ -1,7 +1,8 @@
 """The budgets of the published table: how much ``fetchcarry reproduce`` records, trains and evaluates.
 
-Two budgets: ``full`` (the published table; about 75-90 minutes for three training seeds
-on a quiet 2-core machine with two workers, docs/benchmarks/learning.md) and ``smoke``
+Two budgets: ``full`` (the published table; about 80 minutes for three training seeds on
+a quiet 2-core machine with two workers, estimated from the CPU seconds of smaller runs in
+docs/benchmarks/learning.md, "The published table") and ``smoke``
 (every stage at a toy size, in about a minute: what the tests run). Every field is
 saved in ``DIR/reproduce.json``, so a folder is never continued with another budget.
 """
@@ -79,7 +80,7 @@ FULL = Budget(
     dagger_episodes=50,
     dagger_epochs=40,
     dagger_eval=20,
-    ppo_steps=20_000,
+    ppo_steps=50_000,
     ppo_rollout=256,
     ppo_batch=64,
     episodes=100,
