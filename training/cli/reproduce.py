@@ -26,15 +26,15 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "reproduce",
         help="the published table: expert data, every learned baseline per training seed, every split",
         description="Make the published table in one folder: (1) the MILP expert's episodes on the training "
-        "family (basic, push, corridor or multi-2) as a candidate-phase Minari dataset under OUT/datasets; "
+        "family (basic, push, corridor or multi-2) as a candidate-phase Minari dataset under DIR/datasets; "
         "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, MaskablePPO from scratch and "
-        "from the BC weights, and BC on fewer demonstrations, each a run folder in OUT/runs; (3) the benchmark "
+        "from the BC weights, and BC on fewer demonstrations, each a run folder in DIR/runs; (3) the benchmark "
         "of expert, random, random-phases, greedy and every run on the splits iid, more-objects, layouts and "
-        "push-required (OUT/benchmark/SPLIT); (4) OUT/summary.md (per split, each baseline's mean over the "
-        "seeds with its range, success pooled over seeds with a 95 % Wilson interval), OUT/results.json and "
+        "push-required (DIR/benchmark/SPLIT); (4) OUT/summary.md (per split, each baseline's mean over the "
+        "seeds with its range, success pooled over seeds with a 95 % Wilson interval), DIR/results.json and "
         f"plots. Every stage is skipped when complete. The full budget takes {FULL_ESTIMATE} on a quiet 2-core "
         "machine with 2 workers.",
-        epilog="Exit status: 0 done, 2 bad input (another budget in OUT, a bad number), 130 interrupted (what "
+        epilog="Exit status: 0 done, 2 bad input (another budget in DIR, a bad number), 130 interrupted (what "
         "finished is kept: run the same command again to continue).",
     )
     parser.add_argument("--out", required=True, metavar="DIR", help="the reproduction's folder")
