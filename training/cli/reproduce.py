@@ -30,7 +30,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, MaskablePPO from scratch and "
         "from the BC weights, and BC on fewer demonstrations, each a run folder in DIR/runs; (3) the benchmark "
         "of expert, random, random-phases, greedy and every run on the splits iid, more-objects, layouts and "
-        "push-required (DIR/benchmark/SPLIT); (4) OUT/summary.md (per split, each baseline's mean over the "
+        "push-required (DIR/benchmark/SPLIT); (4) DIR/summary.md (per split, each baseline's mean over the "
         "seeds with its range, success pooled over seeds with a 95 % Wilson interval), DIR/results.json and "
         f"plots. Every stage is skipped when complete. The full budget takes {FULL_ESTIMATE} on a quiet 2-core "
         "machine with 2 workers.",
