@@ -239,6 +239,19 @@ def test_dagger_options_are_checked_and_nearest_moves_only_add_labels(tmp_path: 
     assert rows[1]["expert_labels"] >= plain[1]["expert_labels"]
 
 
+def test_an_episode_without_a_label_gives_empty_arrays(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A learner episode whose every state has an expert action no candidate expresses (seen on the
+    # training family at DAgger's default budget) labels nothing; the aggregate must still take it.
+    from fetchcarry_env.phase_env import PhaseActions
+    from training.baselines.dagger import LabelTask, label_episode
+
+    monkeypatch.setattr(PhaseActions, "index_of", lambda self, action: None)
+    episode = label_episode(LabelTask("basic", 0, 10.0), 0)
+    assert episode.unexpressible == episode.steps > 0
+    assert episode.observations.shape[0] == episode.masks.shape[0] == episode.labels.shape[0] == 0
+    assert episode.observations.shape[1] > 0 and episode.masks.shape[1] > 0
+
+
 def test_dagger_labels_the_same_on_a_worker_pool(tmp_path: Path) -> None:
     serial = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "a", progress=False)
     pooled = train_dagger("basic", TINY_DAGGER, TINY_NET, tmp_path / "b", workers=2, progress=False)
