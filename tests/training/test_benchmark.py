@@ -154,6 +154,14 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     records = json.loads((tmp_path / "results.json").read_text())
     assert [r["policy"] for r in records] == ["expert", "expert"]
     assert (tmp_path / "summary.md").exists()
+    # --resume keeps those two and runs only the random policy's episodes
+    calls.clear()
+    monkeypatch.setattr(runner, "run_task", lambda task: calls.append(task) or real(task))
+    assert main([*argv, "--resume", "--out", str(tmp_path)]) == 0
+    assert [task[0].name for task in calls] == ["random", "random"]
+    records = json.loads((tmp_path / "results.json").read_text())
+    assert [r["policy"] for r in records] == ["expert", "expert", "random", "random"]
+    assert all(r["expert_cost"] is not None for r in records)
 
 
 # ------------------------------------------------------------------ bad input
