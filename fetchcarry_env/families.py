@@ -17,6 +17,9 @@ corridor   IV-F: two rooms joined by an L-shaped or straight corridor; the rest 
            room is obstacles
 multi      2 to 4 objects between two or three tables (``multi-2`` ... ``multi-4``: fixed)
 mixed      one of basic, push, corridor and multi, uniformly
+training   one of basic, push, corridor and multi-2, uniformly: the families learners are
+           trained on (one and two objects; the benchmark's ``iid`` split cycles through
+           the same four)
 =========  ==============================================================================
 
 Held-out layouts (for evaluation, never drawn by the families above): ``turned-room``
@@ -386,6 +389,14 @@ def draw_mixed(rng: np.random.Generator) -> Scenario:
     return (draw_basic, draw_push, draw_corridor, draw_multi)[int(rng.integers(4))](rng)
 
 
+def draw_training(rng: np.random.Generator) -> Scenario:
+    """One of basic, push, corridor and multi-2 (two objects), uniformly: what learners are trained on."""
+    choice = int(rng.integers(4))
+    if choice == 3:
+        return draw_multi(rng, 2)
+    return (draw_basic, draw_push, draw_corridor)[choice](rng)
+
+
 FAMILIES: dict[str, Family] = {
     family.name: family
     for family in (
@@ -398,6 +409,7 @@ FAMILIES: dict[str, Family] = {
             for n in (2, 3, 4)
         ),
         Family("mixed", "basic, push, corridor or multi, uniformly", EXTENT, draw_mixed),
+        Family("training", "basic, push, corridor or multi-2, uniformly (one and two objects)", EXTENT, draw_training),
         Family("turned-room", "held out: a basic or push room turned a quarter turn", EXTENT, draw_turned_room),
         Family("turned-corridor", "held out: a corridor turned a quarter turn", EXTENT, draw_turned_corridor),
     )

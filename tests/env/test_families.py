@@ -72,3 +72,10 @@ def test_unreachable_goal_is_detected(spec_example):
     )
     boxed_in = replace(spec_example, obstacles=walls)
     assert "object 'bottle' goal" in unreachable_targets(boxed_in)
+
+
+def test_training_family_draws_the_iid_families_with_one_or_two_objects():
+    scenarios = [get_family("training").sample(np.random.default_rng(seed)) for seed in range(60)]
+    kinds = {next(k for k in ("basic", "push", "corridor", "multi2") if s.name.startswith(k)) for s in scenarios}
+    assert kinds == {"basic", "push", "corridor", "multi2"}, kinds
+    assert {len(s.objects) for s in scenarios} == {1, 2}

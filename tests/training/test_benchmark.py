@@ -154,6 +154,14 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     records = json.loads((tmp_path / "results.json").read_text())
     assert [r["policy"] for r in records] == ["expert", "expert"]
     assert (tmp_path / "summary.md").exists()
+    # --resume keeps those two and runs only the random policy's episodes
+    calls.clear()
+    monkeypatch.setattr(runner, "run_task", lambda task: calls.append(task) or real(task))
+    assert main([*argv, "--resume", "--out", str(tmp_path)]) == 0
+    assert [task[0].name for task in calls] == ["random", "random"]
+    records = json.loads((tmp_path / "results.json").read_text())
+    assert [r["policy"] for r in records] == ["expert", "expert", "random", "random"]
+    assert all(r["expert_cost"] is not None for r in records)
 
 
 # ------------------------------------------------------------------ bad input
@@ -329,7 +337,7 @@ def test_push_required_scenarios_have_clutter_on_a_goal():
 def test_layouts_are_held_out_of_training():
     # Every training family starts the robot in the bottom-left room; the held-out layouts are turned
     # a quarter turn, so the robot starts in the bottom-right one: no training draw looks like them.
-    for name in (*TRAINING_FAMILIES, "multi", "mixed"):
+    for name in (*TRAINING_FAMILIES, "multi", "mixed", "training"):
         for seed in range(30):
             assert FAMILIES[name].sample(np.random.default_rng(seed)).robot.start[0] < 1.0, (name, seed)
     layouts = benchmark.split_scenarios("layouts", 20)

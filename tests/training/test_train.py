@@ -155,6 +155,18 @@ def test_train_bc_is_deterministic_and_resumes_to_the_same_weights(
     assert _bc(phases_dataset, tmp_path / "c", "--resume") == 0  # complete: nothing to do
 
 
+def test_train_bc_on_the_first_episodes_of_a_dataset(phases_dataset: str, tmp_path: Path, capsys) -> None:
+    assert _bc(phases_dataset, tmp_path / "all") == 0
+    assert _bc(phases_dataset, tmp_path / "two", "--episodes", "2") == 0
+    everything, two = (json.loads((tmp_path / n / runs.CONFIG_FILE).read_text()) for n in ("all", "two"))
+    assert "episodes" not in everything["options"] and two["options"]["episodes"] == 2
+    assert two["data"]["episodes"] == 2 and everything["data"]["episodes"] == EPISODES
+    assert 0 < two["data"]["labelled"] < everything["data"]["labelled"]
+    capsys.readouterr()
+    assert _bc(phases_dataset, tmp_path / "many", "--episodes", str(EPISODES + 1)) == 2
+    assert f"has {EPISODES} episodes" in capsys.readouterr().err
+
+
 def test_rollout_takes_a_run_folder(phases_dataset: str, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     assert _bc(phases_dataset, tmp_path / "run") == 0
     capsys.readouterr()
@@ -225,6 +237,19 @@ def test_dagger_options_are_checked_and_nearest_moves_only_add_labels(tmp_path: 
     assert rows[0]["expert_labels"] == plain[0]["expert_labels"]  # iteration 0: the expert's own episodes
     assert rows[1]["unexpressible"] <= plain[1]["unexpressible"]
     assert rows[1]["expert_labels"] >= plain[1]["expert_labels"]
+
+
+def test_an_episode_without_a_label_gives_empty_arrays(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A learner episode whose every state has an expert action no candidate expresses (seen on the
+    # training family at DAgger's default budget) labels nothing; the aggregate must still take it.
+    from fetchcarry_env.phase_env import PhaseActions
+    from training.baselines.dagger import LabelTask, label_episode
+
+    monkeypatch.setattr(PhaseActions, "index_of", lambda self, action: None)
+    episode = label_episode(LabelTask("basic", 0, 10.0), 0)
+    assert episode.unexpressible == episode.steps > 0
+    assert episode.observations.shape[0] == episode.masks.shape[0] == episode.labels.shape[0] == 0
+    assert episode.observations.shape[1] > 0 and episode.masks.shape[1] > 0
 
 
 def test_dagger_labels_the_same_on_a_worker_pool(tmp_path: Path) -> None:

@@ -107,11 +107,11 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
             steps += 1
             if terminated or truncated:
                 break
-        size = env.action_space.n
+        size, features = env.action_space.n, env.observation_space["observation"].shape[0]
     finally:
         env.close()
     return LabelledEpisode(
-        np.asarray(observations, np.float32).reshape(len(labels), -1),
+        np.asarray(observations, np.float32).reshape(len(labels), features),  # also an episode with no label
         np.asarray(masks, bool).reshape(len(labels), size),
         np.asarray(labels, np.int64),
         steps,

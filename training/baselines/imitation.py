@@ -27,8 +27,8 @@ from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.phase_recording import MASK_INFO
 
 
-def demonstrations_from_dataset(dataset_id: str) -> tuple[Demonstrations, Capacity]:
-    """The labelled states of a phases dataset and the observation capacity of its env.
+def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) -> tuple[Demonstrations, Capacity]:
+    """The labelled states of a phases dataset (its first ``episodes``, or all) and the capacity of its env.
 
     Raises ``UsageError`` (a ``ValueError``-like bad input) when the dataset was not
     recorded in the candidate-phase interface.
@@ -37,6 +37,8 @@ def demonstrations_from_dataset(dataset_id: str) -> tuple[Demonstrations, Capaci
     from training.datasets import load, make_recorded_env
 
     dataset = load(dataset_id)
+    if episodes is not None and not 1 <= episodes <= dataset.total_episodes:
+        raise UsageError(f"dataset {dataset_id!r} has {dataset.total_episodes} episodes, not the first {episodes}")
     env = make_recorded_env(dataset, dataset_id)
     try:
         if env.spec is None or env.spec.id != runs.ENV_ID:
@@ -49,8 +51,9 @@ def demonstrations_from_dataset(dataset_id: str) -> tuple[Demonstrations, Capaci
     finally:
         env.close()
     observations, masks, labels = [], [], []
+    chosen = None if episodes is None else list(range(episodes))
     episodes = steps = dropped = successes = 0
-    for episode in dataset.iterate_episodes():
+    for episode in dataset.iterate_episodes(chosen):
         if MASK_INFO not in episode.infos:
             raise UsageError(f"dataset {dataset_id!r} stores no candidate masks (per-step info {MASK_INFO!r})")
         mask = np.asarray(episode.infos[MASK_INFO], dtype=bool)[:-1]
@@ -80,12 +83,16 @@ def train_bc_run(
     *,
     resume: bool = False,
     progress: bool = True,
+    episodes: int | None = None,
 ) -> BCPolicy:
-    """Behaviour cloning on the phases dataset ``dataset_id`` into the run folder ``out`` (resumable)."""
+    """Behaviour cloning on the phases dataset ``dataset_id`` (its first ``episodes``, or all) into ``out``.
+
+    Resumable: an interrupted run continues from its last epoch; a complete one is loaded.
+    """
     from tqdm import tqdm
 
-    demonstrations, capacity = demonstrations_from_dataset(dataset_id)
-    options = {"dataset": dataset_id, **asdict(config)}
+    demonstrations, capacity = demonstrations_from_dataset(dataset_id, episodes)
+    options = {"dataset": dataset_id, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
     config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)

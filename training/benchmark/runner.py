@@ -10,8 +10,10 @@ their parent.
 ``OUT_DIR/results.json`` is rewritten as episodes finish (at most every
 :data:`WRITE_EVERY_S` seconds) and once more at the end, so an interrupted run keeps
 its finished episodes; ``summary.md`` and ``splits.png`` are written at the end and on
-an interrupt. Records are kept in a fixed order (policy, then episode), so the same
-command gives the same file, timings aside.
+an interrupt. With ``resume``, the episodes already in ``results.json`` are kept and
+only the others run (an interrupted benchmark continues where it stopped). Records are
+kept in a fixed order (policy, then episode), so the same command gives the same file,
+timings aside.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from training.benchmark.splits import EvalScenario, folder_scenarios, split_scen
 from training.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
 
 RESULTS, SUMMARY, PLOT = "results.json", "summary.md", "splits.png"
+RECORD_KEYS = (("policy", str), ("split", str), ("seed", int))  # what identifies a record's episode (resume)
 WRITE_EVERY_S = 1.0  # seconds between rewrites of results.json while episodes finish
 
 Task = tuple[PolicySpec, EvalScenario]
@@ -47,6 +50,7 @@ class BenchmarkReport:
     out: Path
     records: list[dict[str, Any]]
     rows: list[Row]
+    resumed: int = 0  # episodes found in results.json and not run again (resume)
 
 
 def run_benchmark(
@@ -60,10 +64,13 @@ def run_benchmark(
     backend: str = "process",
     ray_address: str | None = None,
     progress: bool = False,
+    resume: bool = False,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
 
     ``split`` is a split's name or a list of names (the first ``episodes`` of each).
+    ``resume`` keeps the records of ``out/results.json`` that belong to this run's
+    episodes (same policy, split and seed) and runs only the others.
 
     Raises :class:`BenchmarkError` for bad input before any episode runs; a
     ``KeyboardInterrupt`` propagates after the finished episodes are written.
@@ -89,9 +96,12 @@ def run_benchmark(
     out.mkdir(parents=True, exist_ok=True)
     tasks = [(spec, item) for spec in specs for item in items]
     order = {(spec.name, item.split, item.index): k for k, (spec, item) in enumerate(tasks)}
-    records: list[dict[str, Any]] = []
+    records = finished_records(out, tasks) if resume else []
+    done = {(r["policy"], r["split"], r["index"]) for r in records}
+    tasks = [(spec, item) for spec, item in tasks if (spec.name, item.split, item.index) not in done]
+    resumed = len(records)
     last_write = time.monotonic()
-    bar = progress_bar(len(tasks), "benchmark", enabled=progress)
+    bar = progress_bar(len(tasks) + resumed, "benchmark", initial=resumed, enabled=progress)
     try:
         for record in run_tasks(tasks, workers=workers, backend=backend, ray_address=ray_address):
             records.append(record)
@@ -106,7 +116,26 @@ def run_benchmark(
         rows = summarise(records) if records else []
         if rows:
             write_report(out, rows, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
-    return BenchmarkReport(out, records, rows)
+    return BenchmarkReport(out, records, rows, resumed)
+
+
+def finished_records(out: Path, tasks: list[Task]) -> list[dict[str, Any]]:
+    """The records of ``out/results.json`` that are episodes of ``tasks`` (with their ``index``); [] if none."""
+    try:
+        saved = json.loads((out / RESULTS).read_text())
+    except FileNotFoundError:
+        return []
+    except (json.JSONDecodeError, UnicodeDecodeError) as error:
+        raise BenchmarkError(f"{out / RESULTS} cannot be resumed: it is not valid JSON ({error})") from None
+    index = {(spec.name, item.split, item.seed): item.index for spec, item in tasks}
+    kept = {}
+    for record in saved if isinstance(saved, list) else []:
+        if not (isinstance(record, dict) and all(isinstance(record.get(k), t) for k, t in RECORD_KEYS)):
+            continue
+        key = (record["policy"], record["split"], record["seed"])
+        if key in index:
+            kept[key] = {**record, "index": index[key]}
+    return list(kept.values())
 
 
 def with_references(policies: list[str]) -> list[PolicySpec]:

@@ -62,6 +62,9 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     add_worker_options(parser)
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--resume", action="store_true", help="keep the episodes already in OUT_DIR/results.json and run the others"
+    )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     parser.set_defaults(handler=run_benchmark_command)
 
@@ -81,12 +84,13 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             backend=args.backend,
             ray_address=args.ray_address,
             progress=not args.no_progress,
+            resume=args.resume,
         )
     except BenchmarkError as error:
         raise UsageError(str(error)) from None
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
-        say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}")
+        say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}; add --resume to finish them")
         return INTERRUPTED
     if args.json:
         print(json.dumps([_json_row(asdict(row)) for row in report.rows], indent=1))

@@ -49,6 +49,9 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         epilog=RUN_EPILOG,
     )
     bc.add_argument("--dataset", required=True, metavar="ID", help="Minari dataset id (made with --interface phases)")
+    bc.add_argument(
+        "--episodes", type=positive_int, metavar="N", help="train on the dataset's first N episodes (default: all)"
+    )
     _network_arguments(bc, defaults)
     _run_arguments(bc)
     bc.set_defaults(handler=run_train_bc)
@@ -306,7 +309,8 @@ def run_train_bc(args: argparse.Namespace) -> int:
     config = _network_config(args)
 
     def train() -> str:
-        train_bc_run(args.dataset, config, args.out, resume=args.resume, progress=not args.no_progress)
+        train_bc_run(args.dataset, config, args.out, resume=args.resume, progress=not args.no_progress,
+                     episodes=args.episodes)  # fmt: skip
         last = read_metrics(args.out)[-1]
         return (f"bc ({config.encoder}) on {args.dataset}: {int(last['epoch'])} epochs, loss {last['loss']:.3f}, "
                 f"accuracy {last['accuracy']:.1%}\nrun folder {args.out}")  # fmt: skip

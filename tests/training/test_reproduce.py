@@ -1,0 +1,124 @@
+"""``fetchcarry reproduce``: the published table end to end at the smoke budget, its resume, its bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from tests.cli_run import run
+from training.reproduce import SMOKE
+from training.reproduce.pipeline import REFERENCES, baselines, training_jobs
+
+SPLITS = ("iid-v0", "more-objects-v0", "layouts-v0", "push-required-v0")
+MAIN = ("bc-mlp", "bc-set", "dagger", "ppo-scratch", "ppo-bc")
+
+
+@pytest.fixture(scope="module")
+def smoke(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One smoke reproduction (1 training seed, 2 workers), made once for the module; its folder."""
+    from training.cli import main
+
+    out = tmp_path_factory.mktemp("reproduce") / "table"
+    assert main(["reproduce", "--out", str(out), "--seeds", "1", "--budget", "smoke", "--no-progress"]) == 0
+    return out
+
+
+def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
+    out = smoke
+    summary = (out / "summary.md").read_text()
+    for split in SPLITS:
+        assert f"## {split}" in summary
+    for name in (*REFERENCES, *MAIN):
+        assert f"| {name} |" in summary
+    records = json.loads((out / "results.json").read_text())
+    seen = {(r["baseline"], r["split"]) for r in records}
+    for split in SPLITS:
+        for name in (*REFERENCES, *MAIN):
+            assert (name, split) in seen, (name, split)
+    assert {r["training_seed"] for r in records if r["baseline"] in MAIN} == {0}
+    assert {r["training_seed"] for r in records if r["baseline"] in REFERENCES} == {None}
+    # the demonstrations curve's runs are measured on iid only
+    curve = {r["split"] for r in records if r["baseline"].startswith("bc-mlp-n")}
+    assert curve == {"iid-v0"}
+    for plot in ("splits.png", "ppo_curves.png", "demonstrations.png"):
+        assert (out / plot).stat().st_size > 1000, plot
+    for job in training_jobs(out, 1, SMOKE):
+        config = json.loads((Path(job.out) / "config.json").read_text())
+        assert config["complete"] and config["kind"] == job.kind
+    # the expert dataset stays in the reproduction's folder, and the caller's Minari folder is left alone
+    assert (out / "datasets" / "fetchcarry" / "training-phases-v0").is_dir()
+    assert not any(Path(os.environ["MINARI_DATASETS_PATH"]).iterdir())
+
+
+def test_a_second_call_skips_every_finished_stage(smoke: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "copy"
+    shutil.copytree(smoke, out)
+    # what a Ctrl-C during the benchmark of iid, before that of layouts, during one curve run would have left
+    iid = out / "benchmark" / "iid" / "results.json"
+    iid.write_text(json.dumps(json.loads(iid.read_text())[:-3]))
+    shutil.rmtree(out / "benchmark" / "layouts")
+    shutil.rmtree(out / "runs" / "bc-mlp-n2-s0")
+    # and a run trained again with other weights since it was benchmarked on push-required
+    digests = out / "benchmark" / "push-required" / "weights.json"
+    digests.write_text(json.dumps({**json.loads(digests.read_text()), "bc-set-s0": "other weights"}))
+    weights = {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/model.pt")}
+    status, stdout, _ = run(capsys, "reproduce", "--out", out, "--seeds", 1, "--budget", "smoke", "--workers", 1,
+                            "--no-progress")  # fmt: skip
+    assert status == 0
+    assert "[1/4] datasets: already complete" in stdout
+    assert f"{len(training_jobs(out, 1, SMOKE)) - 1} already complete" in stdout
+    assert "training 1/1: bc-mlp-n2-s0 done" in stdout  # retrained to the same weights: its episodes stay
+    assert all(p.stat().st_mtime_ns == mtime for p, mtime in weights.items())  # nothing finished trained again
+    n = SMOKE.episodes
+    everywhere = 4 + sum(len(b.runs) for b in baselines(1, SMOKE) if not b.label.startswith("bc-mlp-n"))
+    assert f"benchmark iid-v0: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
+    assert "benchmark more-objects-v0: already complete" in stdout
+    assert f"benchmark layouts-v0: {everywhere * n} episodes (0 resumed)" in stdout
+    assert f"benchmark push-required-v0: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
+    records = json.loads((out / "results.json").read_text())
+    assert len(records) == len(json.loads((smoke / "results.json").read_text()))
+    assert {(r["baseline"], r["split"]) for r in records} == {
+        (r["baseline"], r["split"]) for r in json.loads((smoke / "results.json").read_text())
+    }
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--seeds", "0"], "expected a positive number"),
+        (["--budget", "huge"], "invalid choice"),
+        (["--workers", "x"], "expected a whole number"),
+    ],
+)
+def test_bad_numbers_exit_2(capsys, tmp_path: Path, argv: list[str], message: str) -> None:
+    status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", *argv)
+    assert status == 2 and message in err
+
+
+def test_a_folder_of_another_budget_or_of_other_files_is_refused(capsys, smoke: Path, tmp_path) -> None:
+    out = tmp_path / "copy"
+    shutil.copytree(smoke, out)
+    status, _, err = run(capsys, "reproduce", "--out", out, "--seeds", 1, "--no-progress")  # the full budget
+    assert status == 2 and "another budget (smoke)" in err
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    status, _, err = run(capsys, "reproduce", "--out", tmp_path / "other", "--budget", "smoke", "--no-progress")
+    assert status == 2 and "not an empty folder" in err
+    assert (tmp_path / "other" / "notes.txt").read_text() == "mine"
+
+
+def test_ctrl_c_exits_130_and_says_how_to_continue(capsys, tmp_path: Path, monkeypatch) -> None:
+    from training.reproduce import pipeline
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pipeline, "_stage_datasets", interrupted)
+    before = os.environ["MINARI_DATASETS_PATH"]
+    status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", "--budget", "smoke", "--no-progress")
+    assert status == 130 and "run the same command again to continue" in err
+    assert os.environ["MINARI_DATASETS_PATH"] == before

@@ -1,0 +1,78 @@
+"""The ``fetchcarry reproduce`` command: the published table (every baseline, every split, N training seeds).
+
+Exit statuses: 0 done (also when the folder already held the finished table); 2 bad
+input (a folder made with another budget, a number below 1); 130 interrupted (what
+finished is kept: the same command continues where it stopped).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from fetchcarry_env.errors import UsageError
+from training.cli.arguments import positive_int
+from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.text import echo
+
+FULL_ESTIMATE = "about 80 minutes for three seeds"  # measured: docs/benchmarks/learning.md, "The published table"
+
+
+def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+    """Add ``reproduce`` to the ``fetchcarry`` parser."""
+    from training.reproduce.budgets import BUDGETS, FULL
+
+    parser = commands.add_parser(
+        "reproduce",
+        help="the published table: expert data, every learned baseline per training seed, every split",
+        description="Make the published table in one folder: (1) the MILP expert's episodes on the training "
+        "family (basic, push, corridor or multi-2) as a candidate-phase Minari dataset under DIR/datasets; "
+        "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, MaskablePPO from scratch and "
+        "from the BC weights, and BC on fewer demonstrations, each a run folder in DIR/runs; (3) the benchmark "
+        "of expert, random, random-phases, greedy and every run on the splits iid, more-objects, layouts and "
+        "push-required (DIR/benchmark/SPLIT); (4) DIR/summary.md (per split, each baseline's mean over the "
+        "seeds with its range, success pooled over seeds with a 95 % Wilson interval), DIR/results.json and "
+        f"plots. Every stage is skipped when complete. The full budget takes {FULL_ESTIMATE} on a quiet 2-core "
+        "machine with 2 workers.",
+        epilog="Exit status: 0 done, 2 bad input (another budget in DIR, a bad number), 130 interrupted (what "
+        "finished is kept: run the same command again to continue).",
+    )
+    parser.add_argument("--out", required=True, metavar="DIR", help="the reproduction's folder")
+    parser.add_argument(
+        "--seeds", type=positive_int, default=3, metavar="N", help="training seeds 0 .. N-1 (default 3)"
+    )
+    parser.add_argument(
+        "--budget",
+        choices=tuple(BUDGETS),
+        default=FULL.name,
+        help="full: the published budget (default); smoke: every stage at a toy size, about a minute",
+    )
+    parser.add_argument(
+        "--workers",
+        type=positive_int,
+        default=2,
+        metavar="W",
+        help="processes for expert episodes and benchmark episodes, and training runs at a time (default 2)",
+    )
+    parser.add_argument(
+        "--datasets", metavar="PATH", help="the Minari datasets folder for the expert dataset (default DIR/datasets)"
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bars (the stage lines stay)")
+    parser.set_defaults(handler=run_reproduce)
+
+
+def run_reproduce(args: argparse.Namespace) -> int:
+    from training.benchmark import BenchmarkError
+    from training.reproduce import BUDGETS, reproduce
+
+    try:
+        summary = reproduce(args.out, seeds=args.seeds, budget=BUDGETS[args.budget], workers=args.workers,
+                            progress=not args.no_progress, datasets=args.datasets, say=echo)  # fmt: skip
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
+        say(f"interrupted: what finished is kept in {args.out}; run the same command again to continue")
+        return INTERRUPTED
+    except (ValueError, BenchmarkError) as error:
+        raise UsageError(str(error)) from None
+    echo(f"the published table: {summary}")
+    return 0

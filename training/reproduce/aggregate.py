@@ -1,0 +1,209 @@
+"""The published table from a reproduction's benchmark outputs: ``summary.md``, ``results.json`` and plots.
+
+Every learned baseline was trained once per training seed, and each run was evaluated
+on the same scenarios. Per split, ``summary.md`` gives each baseline's figures as the
+mean over the training seeds with their range (min-max), and its success pooled over
+the seeds (every episode of every seed) with a 95 % Wilson interval; the references
+(expert, random, random-phases, greedy) have one evaluation each. ``results.json``
+holds every episode record of every split, with two keys added to the benchmark's:
+``baseline`` (the label without the seed) and ``training_seed`` (``null`` for the
+references). Plots: ``splits.png`` (success and cost ratio per split, pooled over the
+seeds, with 95 % intervals), ``ppo_curves.png`` (MaskablePPO's training success and
+return against env steps and wall-clock seconds, one line per run) and
+``demonstrations.png`` (BC's success on ``iid`` against its expert episodes).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from training.benchmark.metrics import Row, summarise
+from training.benchmark.report import _pyplot, plot_demonstrations, plot_splits
+from training.benchmark.runner import RESULTS
+from training.reproduce.budgets import Budget
+from training.reproduce.pipeline import CURVE_SPLIT, SPLIT_NAMES, Baseline
+
+SUMMARY, SPLITS_PLOT = "summary.md", "splits.png"
+CURVES_PLOT, DEMONSTRATIONS_PLOT = "ppo_curves.png", "demonstrations.png"
+PPO_BASELINES = ("ppo-scratch", "ppo-bc")
+
+
+def collect(out: Path, baselines: Sequence[Baseline]) -> list[dict[str, Any]]:
+    """Every benchmark record of the reproduction in ``out``, with ``baseline`` and ``training_seed``."""
+    owner = {name: (b.label, seed) for b in baselines for seed, name in enumerate(b.runs)}
+    records = []
+    for split in SPLIT_NAMES:
+        for record in json.loads((out / "benchmark" / split / RESULTS).read_text()):
+            label, seed = owner.get(record["policy"], (record["policy"], None))
+            records.append({**record, "baseline": label, "training_seed": seed})
+    return records
+
+
+def expert_labels(run: Path) -> int | None:
+    """The expert labels a bc or dagger run was trained on (from its config.json), None for ppo."""
+    data = json.loads((run / "config.json").read_text()).get("data") or {}
+    for key in ("labelled", "expert_labels"):
+        if isinstance(data.get(key), int):
+            return data[key]
+    return None
+
+
+def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, seeds: int, timings: dict) -> Path:
+    """Write ``summary.md``, ``results.json`` and the plots of the reproduction in ``out``; return summary.md's path."""
+    records = collect(out, baselines)
+    (out / RESULTS).write_text(json.dumps(records, indent=1) + "\n")
+    per_run = {(row.policy, row.split): row for row in summarise(records)}
+    pooled = {(row.policy, row.split): row for row in summarise([{**r, "policy": r["baseline"]} for r in records])}
+    labels = {name: expert_labels(out / "runs" / name) for b in baselines for name in b.runs}
+    main = [b for b in baselines if not b.label.startswith("bc-mlp-n")]
+    references = list(dict.fromkeys(r["baseline"] for r in records if r["training_seed"] is None))
+    lines = [
+        "# The published table",
+        "",
+        f"Budget `{budget.name}`, {seeds} training seed(s), {budget.episodes} episodes per split; learners trained "
+        "on the `training` family (basic, push, corridor, multi-2). Learned baselines: the mean over training seeds "
+        "with the range (min-max) in brackets; success also pooled over the seeds' episodes with its 95 % Wilson "
+        "interval. Cost ratio: travel cost over the MILP expert's on the same scenario (episodes both solved).",
+        "",
+    ]
+    for split in dict.fromkeys(r["split"] for r in records):
+        lines += [f"## {split}", "", *_table(split, references, main, per_run, pooled, labels), ""]
+    curve = [b for b in baselines if b.demonstrations is not None and b.label.startswith("bc-mlp")]
+    curve_split = next((s for s in dict.fromkeys(r["split"] for r in records) if s.startswith(CURVE_SPLIT)), None)
+    if curve_split is not None:
+        lines += [f"## BC (flat MLP) against expert demonstrations, {curve_split}", ""]
+        lines += _curve_table(curve_split, curve, [b for b in baselines if b.label == "dagger"], per_run, pooled,
+                              labels, budget)  # fmt: skip
+        lines.append("")
+    lines += ["## Time", "", "| stage | wall-clock s | CPU s |", "| --- | --- | --- |"]
+    for name, entry in timings.get("stages", {}).items():
+        if isinstance(entry, dict):
+            lines.append(f"| {name} | {entry['wall']:.0f} | {entry['cpu']:.0f} |")
+    lines += ["", f"Plots: {SPLITS_PLOT}, {CURVES_PLOT}, {DEMONSTRATIONS_PLOT}; every record: {RESULTS}.", ""]
+    (out / SUMMARY).write_text("\n".join(lines))
+    shown = references + [b.label for b in main]
+    plot_splits([row for key, row in pooled.items() if key[0] in shown], out / SPLITS_PLOT)
+    plot_ppo_curves(out / "runs", [b for b in baselines if b.label in PPO_BASELINES], out / CURVES_PLOT)
+    points = [{**r, "policy": "bc-mlp", "demonstrations": _demonstrations(r, curve)} for r in records
+              if curve_split is not None and r["split"] == curve_split and _demonstrations(r, curve)]  # fmt: skip
+    plot_demonstrations(points, out / DEMONSTRATIONS_PLOT)
+    return out / SUMMARY
+
+
+def _demonstrations(record: dict[str, Any], curve: Sequence[Baseline]) -> int | None:
+    return next((b.demonstrations for b in curve if b.label == record["baseline"]), None)
+
+
+HEADER = (
+    "| baseline | seeds | success, pooled [95 % CI] | success per seed | delivered / ep | cost ratio | SPL (cost) "
+    "| phases (expert) | pushes (expert) | invalid / ep | contacts / ep | ms / decision (planner) | score "
+    "| expert labels |"
+)
+
+
+def _table(split: str, references: list[str], main: Sequence[Baseline], per_run: dict, pooled: dict,
+           labels: dict) -> list[str]:  # fmt: skip
+    lines = [HEADER, "|" + " --- |" * HEADER.count(" | ") + " --- |"]
+    for name in references:
+        row = per_run.get((name, split))
+        if row is not None:
+            lines.append(
+                _line(name, [row], pooled[(name, split)], [None]).replace(f"| {name} | 1 |", f"| {name} | - |")
+            )
+    for baseline in main:
+        rows = [per_run[(name, split)] for name in baseline.runs if (name, split) in per_run]
+        if rows:
+            counts = [labels[n] for n in baseline.runs]
+            lines.append(_line(baseline.label, rows, pooled[(baseline.label, split)], counts))
+    return lines
+
+
+def _line(label: str, rows: list[Row], pooled: Row, labels: list[int | None]) -> str:
+    def cell(key: str, fmt: str) -> str:
+        return _spread([getattr(r, key) for r in rows], fmt)
+
+    cells = [
+        label,
+        str(len(rows)),
+        f"{pooled.success:.1%} [{pooled.success_low:.1%}, {pooled.success_high:.1%}]",
+        cell("success", "{:.1%}"),
+        cell("delivered", "{:.2f}"),
+        cell("cost_ratio", "{:.3f}"),
+        cell("spl", "{:.3f}"),
+        f"{cell('phases', '{:.1f}')} ({rows[0].expert_phases:.1f})",
+        f"{cell('pushes', '{:.2f}')} ({rows[0].expert_pushes:.2f})",
+        cell("invalid_actions", "{:.2f}"),
+        cell("contacts", "{:.2f}"),
+        f"{cell('decision_ms', '{:.2f}')} ({rows[0].planner_ms:.1f})",
+        cell("score", "{:.1f}"),
+        _spread([float(n) for n in labels if n is not None], "{:.0f}"),
+    ]
+    return "| " + " | ".join(cells) + " |"
+
+
+def _spread(values: list[float], fmt: str) -> str:
+    """``mean (min-max)`` of the finite ``values``, ``mean`` for one, ``-`` for none."""
+    finite = [v for v in values if not math.isnan(v)]
+    if not finite:
+        return "-"
+    mean = fmt.format(float(np.mean(finite)))
+    if len(finite) == 1:
+        return mean
+    return f"{mean} ({fmt.format(min(finite))}-{fmt.format(max(finite))})"
+
+
+def _curve_table(split: str, curve: Sequence[Baseline], dagger: Sequence[Baseline], per_run: dict, pooled: dict,
+                 labels: dict, budget: Budget) -> list[str]:  # fmt: skip
+    lines = [
+        "| baseline | expert episodes | expert labels | success, pooled [95 % CI] | success per seed | cost ratio |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    dagger_episodes = budget.dagger_demonstrations + budget.dagger_iterations * budget.dagger_episodes
+    entries = sorted(((b.demonstrations, b) for b in curve), key=lambda e: e[0])
+    entries += [(dagger_episodes, b) for b in dagger]
+    for episodes, baseline in entries:
+        rows = [per_run[(n, split)] for n in baseline.runs if (n, split) in per_run]
+        if not rows:
+            continue
+        row = pooled[(baseline.label, split)]
+        counts = _spread([float(labels[n]) for n in baseline.runs if labels[n]], "{:.0f}")
+        lines.append(
+            f"| {baseline.label} | {episodes} | {counts} "
+            f"| {row.success:.1%} [{row.success_low:.1%}, {row.success_high:.1%}] "
+            f"| {_spread([r.success for r in rows], '{:.1%}')} | {_spread([r.cost_ratio for r in rows], '{:.3f}')} |"
+        )
+    return lines
+
+
+def plot_ppo_curves(runs: Path, ppo: Sequence[Baseline], path: Path) -> Path:
+    """Training success and return of every PPO run against env steps and wall-clock seconds, as one PNG."""
+    from training.baselines.runs import read_metrics
+
+    plt = _pyplot()
+    figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, baseline in enumerate(ppo):
+        for j, name in enumerate(baseline.runs):
+            rows = read_metrics(runs / name) if (runs / name / "metrics.csv").is_file() else []
+            if not rows:
+                continue
+            for r, key in enumerate(("success", "return")):
+                for c, x in enumerate(("steps", "seconds")):
+                    axes[r][c].plot([row[x] for row in rows], [row[key] for row in rows], color=colours[k % 10],
+                                    alpha=0.8, label=baseline.label if j == 0 else None)  # fmt: skip
+    for r, key in enumerate(("training success (episodes of the rollout)", "return (learning reward)")):
+        for c, x in enumerate(("env steps", "wall-clock seconds")):
+            axes[r][c].set_xlabel(x)
+            axes[r][c].set_ylabel(key)
+    axes[0][0].legend(fontsize="small")
+    figure.suptitle("MaskablePPO learning curves (one line per training seed)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+    return path

@@ -1,0 +1,104 @@
+"""The budgets of the published table: how much ``fetchcarry reproduce`` records, trains and evaluates.
+
+Two budgets: ``full`` (the published table; about 80 minutes for three training seeds on
+a quiet 2-core machine with two workers, estimated from the CPU seconds of smaller runs in
+docs/benchmarks/learning.md, "The published table") and ``smoke``
+(every stage at a toy size, in about a minute: what the tests run). Every field is
+saved in ``DIR/reproduce.json``, so a folder is never continued with another budget.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from training.baselines.configs import BCConfig, DaggerOptions, PPOOptions
+
+TRAINING_FAMILY = "training"  # basic, push, corridor or multi-2, uniformly: the iid split's families
+
+
+@dataclass(frozen=True)
+class Budget:
+    """What one reproduction records, trains and evaluates (per training seed where it says so)."""
+
+    name: str
+    demonstrations: int  # expert episodes of the training dataset (seeds 0 .. demonstrations - 1)
+    curve: tuple[int, ...]  # BC (flat MLP) on the dataset's first N episodes too: the demonstrations plot
+    bc_epochs: int  # epochs of BC with the flat MLP (per run)
+    set_epochs: int  # epochs of BC with the set encoder (slower per epoch)
+    dagger_demonstrations: int  # DAgger's expert episodes before its first iteration
+    dagger_iterations: int
+    dagger_episodes: int  # learner episodes labelled by the expert per iteration
+    dagger_epochs: int  # epochs of each retraining
+    dagger_eval: int  # held-out episodes measured after each iteration (its metrics.csv)
+    ppo_steps: int  # env steps of each PPO run (rounded up to whole rollouts)
+    ppo_rollout: int  # env steps per rollout
+    ppo_batch: int  # PPO minibatch size
+    episodes: int  # benchmark episodes per split (every policy on the same scenarios)
+    time_limit: float = 10.0  # seconds per planning call of the expert (datasets and DAgger's labels)
+
+    def __post_init__(self) -> None:
+        counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
+        if min(counts) < 1 or any(n < 1 or n > self.demonstrations for n in self.curve):
+            raise ValueError("a budget's counts must be positive and its curve within its demonstrations")
+        self.dagger_options()  # their own checks
+        self.ppo_options(0)
+
+    def bc_config(self, encoder: str, seed: int) -> BCConfig:
+        """The BC network of ``encoder`` for training seed ``seed``."""
+        epochs = self.set_epochs if encoder == "set" else self.bc_epochs
+        return BCConfig(encoder=encoder, epochs=epochs, seed=seed)
+
+    def dagger_options(self) -> DaggerOptions:
+        return DaggerOptions(
+            demonstrations=self.dagger_demonstrations,
+            iterations=self.dagger_iterations,
+            episodes_per_iteration=self.dagger_episodes,
+            eval_episodes=self.dagger_eval,
+            time_limit=self.time_limit,
+            epochs=self.dagger_epochs,
+        )
+
+    def ppo_options(self, seed: int, init: str | None = None) -> PPOOptions:
+        return PPOOptions(
+            steps=self.ppo_steps,
+            n_steps=self.ppo_rollout,
+            batch_size=self.ppo_batch,
+            checkpoint_every=self.ppo_rollout * 4,
+            seed=seed,
+            init=init,
+        )
+
+
+FULL = Budget(
+    name="full",
+    demonstrations=1000,
+    curve=(10, 30, 100, 300),
+    bc_epochs=60,
+    set_epochs=60,
+    dagger_demonstrations=100,
+    dagger_iterations=4,
+    dagger_episodes=50,
+    dagger_epochs=40,
+    dagger_eval=20,
+    ppo_steps=50_000,
+    ppo_rollout=256,
+    ppo_batch=64,
+    episodes=100,
+)
+SMOKE = Budget(
+    name="smoke",
+    demonstrations=6,
+    curve=(2,),
+    bc_epochs=2,
+    set_epochs=1,
+    dagger_demonstrations=2,
+    dagger_iterations=1,
+    dagger_episodes=2,
+    dagger_epochs=2,
+    dagger_eval=2,
+    ppo_steps=32,
+    ppo_rollout=32,
+    ppo_batch=32,
+    episodes=2,
+)
+BUDGETS = {budget.name: budget for budget in (FULL, SMOKE)}

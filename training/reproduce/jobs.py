@@ -1,0 +1,121 @@
+"""Training jobs of a reproduction, up to ``workers`` at a time, each a resumable run folder.
+
+A :class:`TrainJob` is one ``fetchcarry train`` run (bc, dagger or ppo) described by
+plain, picklable fields; :func:`run_job` trains it through the library functions the
+commands use, with ``resume=True`` (a complete run folder is left as it is; an
+interrupted one continues from its checkpoint) and torch on one thread. :func:`run_jobs`
+runs jobs in this process (one worker) or on a spawned process pool (the worker set-up
+of ``fetchcarry generate``: workers ignore Ctrl-C and die with their parent), starting a
+job once the jobs it needs (a PPO run's BC init) are done.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from training.baselines.configs import BCConfig, DaggerOptions, PPOOptions
+
+
+@dataclass(frozen=True)
+class TrainJob:
+    """One run folder to train: ``kind`` with its settings, after the jobs named in ``needs``."""
+
+    name: str  # the run folder's name (unique: the benchmark labels policies by it)
+    kind: str  # "bc", "dagger" or "ppo"
+    out: str  # the run folder
+    seed: int  # the training seed
+    config: BCConfig | None = None  # bc and dagger: the network
+    dataset: str | None = None  # bc: the Minari dataset id
+    episodes: int | None = None  # bc: the dataset's first episodes (None: all)
+    family: str | None = None  # dagger and ppo: the scenario family
+    dagger: DaggerOptions | None = None
+    ppo: PPOOptions | None = None
+    needs: tuple[str, ...] = field(default=())  # names of jobs that must finish first
+
+
+def is_complete(job: TrainJob) -> bool:
+    """Whether ``job``'s run folder holds a finished run."""
+    from training.baselines.runs import CONFIG_FILE, read_config
+
+    folder = Path(job.out)
+    return (folder / CONFIG_FILE).is_file() and bool(read_config(folder).get("complete"))
+
+
+def run_job(job: TrainJob) -> tuple[float, float]:
+    """Train ``job`` (resuming its run folder); return the wall-clock and CPU seconds it took (this process)."""
+    import torch
+
+    torch.set_num_threads(1)
+    started, cpu = time.perf_counter(), time.process_time()
+    if job.kind == "bc":
+        from training.baselines.imitation import train_bc_run
+
+        train_bc_run(job.dataset, job.config, job.out, resume=True, progress=False, episodes=job.episodes)
+    elif job.kind == "dagger":
+        from training.baselines.dagger import train_dagger
+
+        train_dagger(job.family, job.dagger, job.config, job.out, workers=1, resume=True, progress=False)
+    elif job.kind == "ppo":
+        from training.baselines.ppo import train_ppo
+
+        train_ppo(job.family, job.ppo, job.out, resume=True, progress=False)
+    else:
+        raise ValueError(f"unknown kind of training job {job.kind!r}")
+    return time.perf_counter() - started, time.process_time() - cpu
+
+
+def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
+    """Train ``jobs`` (in list order, each after its ``needs``); yield each with its wall and CPU seconds."""
+    names = {job.name for job in jobs}
+    unknown = sorted({need for job in jobs for need in job.needs} - names)
+    if unknown:
+        raise ValueError(f"training jobs need jobs that are not given: {', '.join(unknown)}")
+    if workers == 1:
+        done: set[str] = set()
+        while len(done) < len(jobs):
+            job = next(j for j in jobs if j.name not in done and set(j.needs) <= done)
+            yield job, run_job(job)
+            done.add(job.name)
+        return
+    yield from _run_pool(jobs, workers)
+
+
+def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
+    from training.generate import _terminate_workers, worker_setup
+
+    pool = ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=worker_setup,
+        initargs=(os.getpid(),),
+    )
+    waiting, done = list(jobs), set()
+    running: dict[Future, TrainJob] = {}
+    finished_cleanly = False
+
+    def start_ready(submit: Callable[[TrainJob], Future]) -> None:
+        for job in [j for j in waiting if set(j.needs) <= done][: workers - len(running)]:
+            waiting.remove(job)
+            running[submit(job)] = job
+
+    try:
+        start_ready(lambda job: pool.submit(run_job, job))
+        while running:
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                job = running.pop(future)
+                seconds = future.result()
+                done.add(job.name)
+                yield job, seconds
+            start_ready(lambda job: pool.submit(run_job, job))
+        finished_cleanly = True
+    finally:
+        if not finished_cleanly:  # Ctrl-C or an error: stop the running jobs now (their checkpoints stay)
+            _terminate_workers(pool)
+        pool.shutdown(wait=finished_cleanly, cancel_futures=True)

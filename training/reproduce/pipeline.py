@@ -1,0 +1,297 @@
+"""The published table in one call: expert data, every learned baseline per training seed, the benchmark, the report.
+
+:func:`reproduce` runs four stages into one folder ``DIR``:
+
+1. **datasets**: the expert's episodes in the candidate-phase interface, on the
+   ``training`` family (basic, push, corridor or multi-2: one and two objects, the
+   ``iid`` split's families), as the Minari dataset ``fetchcarry/training-phases-v0``
+   under ``DIR/datasets`` (``fetchcarry generate``'s resumable generation, on ``workers``);
+2. **training**: per training seed, BC with the flat MLP and with the set encoder,
+   DAgger (the expert labels the learner's states), MaskablePPO from scratch and started
+   from the BC (flat MLP) weights, and BC on the first 10, 30, ... episodes (the
+   demonstrations curve), each a run folder ``DIR/runs/NAME-sSEED``, up to ``workers``
+   at a time (:mod:`training.reproduce.jobs`);
+3. **benchmark**: the references (expert, random, random-phases, greedy) and every run
+   folder on every split, ``DIR/benchmark/SPLIT`` (``fetchcarry benchmark``'s outputs;
+   the demonstrations curve's runs on ``iid`` only);
+4. **report**: ``DIR/summary.md``, ``DIR/results.json`` and the plots
+   (:mod:`training.reproduce.aggregate`).
+
+Every stage is skipped when complete, and each run folder, dataset and benchmark
+resumes where it stopped, so running the same call again after an interruption loses
+nothing finished. ``DIR/reproduce.json`` holds the budget (a folder is never continued
+with another) and ``DIR/timings.json`` the seconds of every stage and run.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from training.reproduce.budgets import TRAINING_FAMILY, Budget
+from training.reproduce.jobs import TrainJob, is_complete, run_jobs
+
+DATASET_ID = "fetchcarry/training-phases-v0"
+SPLIT_NAMES = ("iid", "more-objects", "layouts", "push-required")
+CURVE_SPLIT = "iid"  # where the demonstrations curve is measured
+REFERENCES = ("expert", "random", "random-phases", "greedy")
+SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
+WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
+MINARI_ENV = "MINARI_DATASETS_PATH"
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """A learned baseline of the table: its label, and the run folders of each training seed."""
+
+    label: str  # e.g. "bc-mlp"
+    runs: tuple[str, ...]  # run folder names, one per training seed
+    demonstrations: int | None = None  # expert episodes it was trained on (the demonstrations curve), if fixed
+
+
+def run_name(label: str, seed: int) -> str:
+    """The run folder name of baseline ``label`` for training seed ``seed``."""
+    return f"{label}-s{seed}"
+
+
+def curve_label(episodes: int) -> str:
+    return f"bc-mlp-n{episodes}"
+
+
+def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
+    """Every run of the table, longest-first within what can start (a PPO run from BC waits for its BC run)."""
+    runs = out.resolve() / "runs"
+    jobs: list[TrainJob] = []
+    for seed in range(seeds):
+        jobs.append(_bc(runs, "bc-mlp", seed, budget, "mlp"))
+    for seed in range(seeds):
+        init = str(runs / run_name("bc-mlp", seed))
+        for label, options in (("ppo-scratch", budget.ppo_options(seed)), ("ppo-bc", budget.ppo_options(seed, init))):
+            needs = (run_name("bc-mlp", seed),) if options.init else ()
+            name = run_name(label, seed)
+            jobs.append(TrainJob(name, "ppo", str(runs / name), seed, family=TRAINING_FAMILY, ppo=options, needs=needs))
+    for seed in range(seeds):
+        name = run_name("dagger", seed)
+        jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
+                             family=TRAINING_FAMILY, dagger=budget.dagger_options()))  # fmt: skip
+        jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
+    for seed in range(seeds):
+        jobs += [_bc(runs, curve_label(n), seed, budget, "mlp", n) for n in budget.curve]
+    return jobs
+
+
+def _bc(runs: Path, label: str, seed: int, budget: Budget, encoder: str, episodes: int | None = None) -> TrainJob:
+    name = run_name(label, seed)
+    return TrainJob(name, "bc", str(runs / name), seed, config=budget.bc_config(encoder, seed), dataset=DATASET_ID,
+                    episodes=episodes)  # fmt: skip
+
+
+def baselines(seeds: int, budget: Budget) -> list[Baseline]:
+    """The learned baselines of the table (the curve's BC runs last)."""
+    main = [
+        Baseline("bc-mlp", _names("bc-mlp", seeds), budget.demonstrations),
+        Baseline("bc-set", _names("bc-set", seeds), budget.demonstrations),
+        Baseline("dagger", _names("dagger", seeds)),
+        Baseline("ppo-scratch", _names("ppo-scratch", seeds)),
+        Baseline("ppo-bc", _names("ppo-bc", seeds)),
+    ]
+    return main + [Baseline(curve_label(n), _names(curve_label(n), seeds), n) for n in budget.curve]
+
+
+def _names(label: str, seeds: int) -> tuple[str, ...]:
+    return tuple(run_name(label, seed) for seed in range(seeds))
+
+
+@contextmanager
+def minari_root(path: Path) -> Iterator[None]:
+    """Minari's datasets under ``path`` while the block runs (spawned workers inherit it)."""
+    before = os.environ.get(MINARI_ENV)
+    os.environ[MINARI_ENV] = str(path)
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(MINARI_ENV, None)
+        else:
+            os.environ[MINARI_ENV] = before
+
+
+def check_settings(out: Path, seeds: int, budget: Budget) -> None:
+    """Refuse a folder made with another budget (``ValueError``); record this one's settings."""
+    if seeds < 1:
+        raise ValueError(f"the number of training seeds must be at least 1, got {seeds}")
+    file = out / SETTINGS_FILE
+    settings = {"budget": asdict(budget)}
+    if file.is_file():
+        try:
+            saved = json.loads(file.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{file} is not valid JSON: {error}") from None
+        saved_budget = saved.get("budget") if isinstance(saved, dict) else None
+        if json.loads(json.dumps(settings["budget"])) != saved_budget:
+            name = saved_budget.get("name") if isinstance(saved_budget, dict) else "?"
+            raise ValueError(f"{out} holds a reproduction with another budget ({name}): use another folder")
+    elif out.exists() and any(out.iterdir()):
+        raise ValueError(f"{out} exists and is not an empty folder or a reproduction folder")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / SETTINGS_FILE).write_text(json.dumps({**settings, "seeds": seeds}, indent=2) + "\n")
+
+
+class Timings:
+    """Wall-clock and CPU seconds per stage and per run, kept in ``DIR/timings.json`` across interrupted calls.
+
+    CPU seconds count this process and its finished workers (``getrusage``): on a shared
+    machine they say what a stage costs better than its wall-clock time does.
+    """
+
+    def __init__(self, out: Path) -> None:
+        self.file = out / TIMINGS_FILE
+        try:
+            self.data: dict[str, Any] = json.loads(self.file.read_text())
+        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+            self.data = {}
+        self.data.setdefault("stages", {})
+        self.data.setdefault("runs", {})
+
+    def add(self, group: str, name: str, wall: float, cpu: float) -> None:
+        entry = self.data[group].get(name)
+        entry = entry if isinstance(entry, dict) else {"wall": 0.0, "cpu": 0.0}
+        self.data[group][name] = {"wall": round(entry["wall"] + wall, 1), "cpu": round(entry["cpu"] + cpu, 1)}
+        self.file.write_text(json.dumps(self.data, indent=2) + "\n")
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        """Add the block's wall-clock and CPU seconds (this process and its workers) to stage ``name``."""
+        started, cpu = time.perf_counter(), cpu_seconds()
+        yield
+        self.add("stages", name, time.perf_counter() - started, cpu_seconds() - cpu)
+
+
+def cpu_seconds() -> float:
+    """CPU seconds (user and system) of this process and of its children that have finished."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def reproduce(
+    out: str | Path,
+    *,
+    seeds: int = 3,
+    budget: Budget,
+    workers: int = 2,
+    progress: bool = True,
+    datasets: str | Path | None = None,
+    say: Callable[[str], None] = print,
+) -> Path:
+    """Run (or finish) the published table into ``out``; return the path of its ``summary.md``.
+
+    ``datasets`` is the Minari root for the expert dataset (default ``out/datasets``).
+    ``say`` gets one line per stage and per finished run. Bad input raises
+    ``ValueError`` (or the project's ``UsageError``); ``KeyboardInterrupt`` propagates
+    with everything finished kept.
+    """
+    if workers < 1:
+        raise ValueError(f"the number of workers must be at least 1, got {workers}")
+    out = Path(out)
+    check_settings(out, seeds, budget)
+    timings = Timings(out)
+    root = Path(datasets) if datasets is not None else out / "datasets"
+    with minari_root(root.resolve()):
+        _stage_datasets(budget, workers, progress, timings, say)
+        _stage_training(out, seeds, budget, workers, timings, say)
+        _stage_benchmark(out, seeds, budget, workers, progress, timings, say)
+    from training.reproduce.aggregate import write_published
+
+    with timings.stage("report"):
+        summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data)
+    say(f"[4/4] report: {summary}, {out / 'results.json'} and the plots in {out}")
+    return summary
+
+
+def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable) -> None:
+    from training.generate import generate
+    from training.sources import EpisodeSource, GenerationConfig
+
+    source = EpisodeSource(family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit)
+    config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
+    say(f"[1/4] datasets: {DATASET_ID}, {budget.demonstrations} expert episodes of family {TRAINING_FAMILY}")
+    started, cpu = time.perf_counter(), cpu_seconds()
+    report = generate(config, workers=workers, progress=progress)
+    if report.already_complete:
+        say("[1/4] datasets: already complete")
+        return
+    timings.add("stages", "datasets", time.perf_counter() - started, cpu_seconds() - cpu)
+    say(f"[1/4] datasets: done in {report.wall_s:.0f} s ({report.resumed} episodes resumed)")
+
+
+def _stage_training(out: Path, seeds: int, budget: Budget, workers: int, timings: Timings, say: Callable) -> None:
+    jobs = training_jobs(out, seeds, budget)
+    todo = [job for job in jobs if not is_complete(job)]
+    say(f"[2/4] training: {len(jobs)} runs in {out / 'runs'}, {len(jobs) - len(todo)} already complete")
+    if not todo:
+        return
+    complete = {job.name for job in jobs} - {job.name for job in todo}
+    todo = [replace(job, needs=tuple(n for n in job.needs if n not in complete)) for job in todo]
+    with timings.stage("training"):
+        for count, (job, (wall, cpu)) in enumerate(run_jobs(todo, workers), start=1):
+            timings.add("runs", job.name, wall, cpu)
+            say(f"[2/4] training {count}/{len(todo)}: {job.name} done in {wall:.0f} s ({cpu:.0f} CPU s)")
+
+
+def _stage_benchmark(
+    out: Path, seeds: int, budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable
+) -> None:
+    from training.benchmark import available, get_split, run_benchmark
+
+    references = [name for name in REFERENCES if name in available()]
+    runs = out / "runs"
+    for split in SPLIT_NAMES:
+        learned = [b for b in baselines(seeds, budget) if split == CURVE_SPLIT or not b.label.startswith("bc-mlp-n")]
+        policies = references + [str(runs / name) for b in learned for name in b.runs]
+        folder = out / "benchmark" / split
+        total = len(policies) * budget.episodes
+        started, cpu = time.perf_counter(), cpu_seconds()
+        forget_retrained(folder, [runs / name for b in learned for name in b.runs])
+        report = run_benchmark(policies, out=folder, split=split, episodes=budget.episodes, workers=workers,
+                               progress=progress, resume=True)  # fmt: skip
+        if report.resumed == total:
+            say(f"[3/4] benchmark {get_split(split).name}: already complete ({total} episodes)")
+            continue
+        timings.add("stages", f"benchmark {split}", time.perf_counter() - started, cpu_seconds() - cpu)
+        say(f"[3/4] benchmark {get_split(split).name}: {total} episodes ({report.resumed} resumed) "
+            f"in {time.perf_counter() - started:.0f} s")  # fmt: skip
+
+
+def forget_retrained(folder: Path, runs: list[Path]) -> None:
+    """Drop from ``folder/results.json`` the episodes of runs whose weights changed since they were benchmarked.
+
+    ``folder/weights.json`` keeps a digest of each run's ``model.pt`` as benchmarked, so
+    a run folder trained again (deleted and retrained with other weights) is benchmarked
+    again rather than kept with the episodes of its former weights.
+    """
+    from training.benchmark.runner import RESULTS
+
+    file = folder / WEIGHTS_DIGESTS
+    try:
+        before = json.loads(file.read_text())
+    except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        before = {}
+    now = {run.name: hashlib.sha256((run / "model.pt").read_bytes()).hexdigest() for run in runs}
+    changed = {name for name in now if before.get(name) != now[name]}
+    results = folder / RESULTS
+    if changed and results.is_file():
+        records = json.loads(results.read_text())
+        kept = [r for r in records if not (isinstance(r, dict) and r.get("policy") in changed)]
+        if len(kept) < len(records):
+            results.write_text(json.dumps(kept, indent=1) + "\n")
+    folder.mkdir(parents=True, exist_ok=True)
+    file.write_text(json.dumps(now, indent=1) + "\n")
