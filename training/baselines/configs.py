@@ -22,6 +22,8 @@ class BCConfig:
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
     seed: int = 0
+    relative: bool = False  # mlp: append positions relative to the base and clutter relative to goals
+    avoid_repeats: bool = False  # acting: in a state met before this episode, not the candidates chosen there
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):

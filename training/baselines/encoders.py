@@ -2,7 +2,10 @@
 
 ``mlp``
     The observation vector, standardised with the demonstrations' mean and spread,
-    through two hidden layers to one score per candidate.
+    through two hidden layers to one score per candidate. With ``relative`` (the
+    default), :class:`RelativeFeatures` appends positions relative to the base and
+    each piece of clutter relative to each goal, which the flat vector only holds in
+    absolute coordinates.
 ``set``
     Object-centric: one token per slot of the observation (a robot token holding the
     area and the base, then each posture, object, piece of clutter, table and
@@ -33,18 +36,70 @@ SET_LAYERS = 2  # Transformer layers of the set encoder
 def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:
     """The network ``config.encoder`` names, for ``candidates`` scores; ``observations`` set the MLP's scaling."""
     if config.encoder == "mlp":
-        return FlatMLP(observations, candidates, config.hidden)
+        features = RelativeFeatures(capacity) if getattr(config, "relative", False) else None
+        return FlatMLP(observations, candidates, config.hidden, features)
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
     return SetScorer(capacity, layout, width=min(config.hidden, 128))
 
 
-class FlatMLP(nn.Module):
-    """Standardised observation vector -> two ReLU layers -> one score per candidate."""
+class RelativeFeatures(nn.Module):
+    """The flat observation vector followed by what a flat MLP finds hard to compute: differences of positions.
 
-    def __init__(self, observations: torch.Tensor, candidates: int, hidden: int) -> None:
+    Appended, each multiplied by its slots' presence flags (metres): every object's
+    position and goal relative to the base and its goal relative to itself; every
+    piece of clutter's, table's and obstacle's rectangle relative to the base; and every
+    piece of clutter's centre relative to every object's goal (whether it covers it).
+    No weights: a function of the vector alone.
+    """
+
+    def __init__(self, capacity: Capacity) -> None:
         super().__init__()
+        self.capacity = capacity
+        self.slices = observation_layout(capacity)
+        self.size = self.extra_width(capacity)
+
+    @staticmethod
+    def extra_width(capacity: Capacity) -> int:
+        """How many features are appended for ``capacity``."""
+        rects = capacity.clutter + capacity.tables + capacity.obstacles
+        return 6 * capacity.objects + 4 * rects + 2 * capacity.clutter * capacity.objects
+
+    def _rows(self, flat: torch.Tensor, group: str, kind: str) -> torch.Tensor:
+        return flat[:, self.slices[group]].reshape(len(flat), getattr(self.capacity, group), len(FIELDS[kind]))
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        robot = flat[:, self.slices["robot"]]
+        base = robot[:, None, :2]  # (B, 1, 2): x, y
+        objects = self._rows(flat, "objects", "object")
+        there = objects[..., :1]  # presence flags
+        position, goal = objects[..., 1:3], objects[..., 4:6]
+        parts = [torch.cat([position - base, goal - base, goal - position], dim=-1) * there]
+        centres = []
+        for group, kind in (("clutter", "clutter"), ("tables", "table"), ("obstacles", "obstacle")):
+            rows = self._rows(flat, group, kind)
+            corners = rows[..., 1:5] - base.repeat(1, 1, 2)
+            parts.append(corners * rows[..., :1])
+            if group == "clutter":
+                centres.append(((rows[..., 1:3] + rows[..., 3:5]) / 2, rows[..., :1]))
+        centre, present = centres[0]
+        between = (centre[:, :, None, :] - goal[:, None, :, :]) * present[:, :, None, :] * there[:, None, :, :]
+        parts.append(between)
+        extra = torch.cat([part.reshape(len(flat), -1) for part in parts], dim=1)
+        return torch.cat([flat, extra], dim=1)
+
+
+class FlatMLP(nn.Module):
+    """Standardised observation vector (with :class:`RelativeFeatures` if given) -> two ReLU layers -> scores."""
+
+    def __init__(
+        self, observations: torch.Tensor, candidates: int, hidden: int, features: nn.Module | None = None
+    ) -> None:
+        super().__init__()
+        self.features = features if features is not None else nn.Identity()
+        with torch.no_grad():
+            observations = self.features(observations)
         mean = observations.mean(dim=0) if len(observations) > 1 else torch.zeros(observations.shape[1])
         spread = observations.std(dim=0) if len(observations) > 1 else torch.ones(observations.shape[1])
         self.register_buffer("mean", mean)
@@ -58,7 +113,7 @@ class FlatMLP(nn.Module):
         )
 
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
-        return self.layers((flat - self.mean) / self.spread)
+        return self.layers((self.features(flat) - self.mean) / self.spread)
 
 
 class SetScorer(nn.Module):

@@ -1,0 +1,84 @@
+"""The BC learner's options: relative features for the flat MLP, and not repeating a choice in a state met again."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from fetchcarry_env.observation import Capacity, observation_layout
+from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.baselines.encoders import FlatMLP, RelativeFeatures, build_network
+from training.learning.evaluate import make_env
+
+
+@pytest.fixture(scope="module")
+def push_state() -> tuple[np.ndarray, np.ndarray]:
+    env = make_env("push")
+    observation, _ = env.reset(seed=3)
+    mask = env.get_wrapper_attr("action_masks")()
+    env.close()
+    return np.asarray(observation["observation"], np.float32), mask
+
+
+def test_relative_features_are_differences_to_the_base_and_the_goals(push_state):
+    flat, _ = push_state
+    capacity = Capacity()
+    features = RelativeFeatures(capacity)
+    out = features(torch.as_tensor(flat[None]))[0].numpy()
+    assert out.shape == (len(flat) + RelativeFeatures.extra_width(capacity),)
+    np.testing.assert_array_equal(out[: len(flat)], flat)  # the vector itself comes first
+    layout = observation_layout(capacity)
+    base = flat[layout["robot"]][:2]
+    first = flat[layout["object_0"]]  # present, x, y, z, goal x, goal y, ...
+    extra = out[len(flat) :]
+    np.testing.assert_allclose(extra[:6], [*(first[1:3] - base), *(first[4:6] - base), *(first[4:6] - first[1:3])])
+    assert not extra[6:12].any()  # the second object slot is empty: its features are zero
+    clutter = flat[layout["clutter_0"]]
+    start = 6 * capacity.objects
+    np.testing.assert_allclose(extra[start : start + 4], clutter[1:5] - np.tile(base, 2), atol=1e-6)
+    between = extra[-2 * capacity.clutter * capacity.objects :].reshape(capacity.clutter, capacity.objects, 2)
+    centre = (clutter[1:3] + clutter[3:5]) / 2
+    np.testing.assert_allclose(between[0, 0], centre - first[4:6], atol=1e-6)
+    assert not between[:, 1:].any()
+
+
+def test_flat_mlp_with_relative_features_trains_and_loads(push_state):
+    flat, mask = push_state
+    allowed = np.flatnonzero(mask)
+    moved = flat.copy()
+    moved[observation_layout(Capacity())["robot"].start] += 0.5  # the base half a metre further along x
+    observations = np.stack([flat, moved] * 4)
+    labels = np.array([allowed[0], allowed[-1]] * 4)
+    demos = Demonstrations(observations, np.repeat(mask[None], 8, 0), labels)
+    config = BCConfig(epochs=100, hidden=32, relative=True)
+    network, _ = fit(demos, config, Capacity())
+    assert isinstance(network, FlatMLP) and isinstance(network.features, RelativeFeatures)
+    again = build_network(config, Capacity(), mask.size, torch.zeros(1, flat.size))
+    again.load_state_dict(network.state_dict())
+    policy = BCPolicy(again, config, Capacity())
+    np.testing.assert_array_equal(policy.predict(observations[:2], action_masks=demos.masks[:2])[0], labels[:2])
+
+
+class _Fixed(torch.nn.Module):
+    """Scores that prefer lower candidate numbers: the choice is the first allowed one."""
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        return -torch.arange(4, dtype=torch.float32).expand(len(flat), 4)
+
+
+def test_avoid_repeats_tries_another_candidate_in_a_state_met_again():
+    state, other = np.zeros(3, np.float32), np.ones(3, np.float32)
+    mask = np.array([True, True, False, True])
+    plain = BCPolicy(_Fixed(), BCConfig(), Capacity())
+    assert [int(plain.predict(state, action_masks=mask)[0]) for _ in range(3)] == [0, 0, 0]
+    policy = BCPolicy(_Fixed(), BCConfig(avoid_repeats=True), Capacity())
+    choices = [int(policy.predict(state, action_masks=mask)[0]) for _ in range(4)]
+    assert choices == [0, 1, 3, 0]  # the best not yet chosen here; once all were, the best again
+    assert int(policy.predict(other, action_masks=mask)[0]) == 0  # another state has its own memory
+    policy.predict(state, action_masks=mask, episode_start=np.array([True]))
+    assert int(policy.predict(state, action_masks=mask)[0]) == 1  # a new episode forgot the old one
+    policy.reset()
+    assert int(policy.predict(state, action_masks=mask)[0]) == 0
+    batch = policy.predict(np.stack([state, state]), action_masks=np.stack([mask, mask]))[0]
+    assert batch.tolist() == [0, 0]  # batched calls have no memory
