@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 import torch
 
-from fetchcarry_env.observation import Capacity, observation_layout
+from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
+from fetchcarry_env.phases import PhaseLayout
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.baselines.encoders import FlatMLP, RelativeFeatures, build_network
+from training.baselines.encoders import RELATIVE_COLUMNS, FlatMLP, RelativeFeatures, SetScorer, build_network
 from training.learning.evaluate import make_env
 
 
@@ -58,6 +59,24 @@ def test_flat_mlp_with_relative_features_trains_and_loads(push_state):
     again.load_state_dict(network.state_dict())
     policy = BCPolicy(again, config, Capacity())
     np.testing.assert_array_equal(policy.predict(observations[:2], action_masks=demos.masks[:2])[0], labels[:2])
+
+
+def test_set_encoder_with_relative_columns_sees_the_base_move(push_state):
+    flat, _ = push_state
+    capacity = Capacity()
+    network = build_network(
+        BCConfig(encoder="set", hidden=32, relative=True), capacity, 4080, torch.zeros(1, flat.size)
+    )
+    assert network.embed["object"].in_features == len(FIELDS["object"]) + len(RELATIVE_COLUMNS["object"])
+    moved = flat.copy()
+    moved[observation_layout(capacity)["robot"].start] += 0.5
+    with torch.no_grad():
+        scores = network(torch.as_tensor(np.stack([flat, moved])))
+    assert scores.shape == (2, 4080) and not torch.equal(scores[0], scores[1])
+    bigger = Capacity(objects=6, clutter=10)
+    SetScorer(bigger, PhaseLayout.for_postures(capacity=bigger), width=32, relative=True).load_state_dict(
+        network.state_dict()
+    )  # still independent of the slot counts
 
 
 class _Fixed(torch.nn.Module):

@@ -11,7 +11,8 @@
     area and the base, then each posture, object, piece of clutter, table and
     obstacle; :func:`fetchcarry_env.observation.observation_layout` names the slices),
     each kind projected by its own layer, mixed by a small Transformer in which absent
-    slots (presence flag 0) are masked out. Each token scores its own candidates: an
+    slots (presence flag 0) are masked out (with ``relative``, each token also holds its
+    x, y columns minus the base's). Each token scores its own candidates: an
     object token its pick and place poses, a clutter token its pushes and approach
     poses, a table or obstacle token its waypoints; so the weights do not depend on
     how many slots there are, and a network built for a larger capacity loads them.
@@ -31,6 +32,14 @@ from fetchcarry_env.phases import PhaseLayout
 COORD_SCALE = 5.0  # metres: coordinates are divided by this in the set encoder (the families' floor is 7 m)
 SET_HEADS = 4  # attention heads of the set encoder
 SET_LAYERS = 2  # Transformer layers of the set encoder
+RELATIVE_COLUMNS: dict[str, tuple[int, ...]] = {
+    "posture": (),
+    "object": (1, 2, 4, 5),  # x, y, goal_x, goal_y
+    "clutter": (1, 2, 3, 4),  # min_x, min_y, max_x, max_y
+    "table": (1, 2, 3, 4),
+    "obstacle": (1, 2, 3, 4),
+}
+"""Columns of each slot (:data:`FIELDS`) that are x, y pairs: the set encoder's relative features subtract the base."""
 
 
 def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:
@@ -41,7 +50,7 @@ def build_network(config: Any, capacity: Capacity, candidates: int, observations
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
-    return SetScorer(capacity, layout, width=min(config.hidden, 128))
+    return SetScorer(capacity, layout, width=min(config.hidden, 128), relative=getattr(config, "relative", False))
 
 
 class RelativeFeatures(nn.Module):
@@ -119,14 +128,14 @@ class FlatMLP(nn.Module):
 class SetScorer(nn.Module):
     """Tokens per slot, a masked Transformer, and per-token heads scoring each token's candidates."""
 
-    def __init__(self, capacity: Capacity, layout: PhaseLayout, width: int = 64) -> None:
+    def __init__(self, capacity: Capacity, layout: PhaseLayout, width: int = 64, relative: bool = False) -> None:
         super().__init__()
-        self.capacity, self.layout = capacity, layout
+        self.capacity, self.layout, self.relative = capacity, layout, relative
         self.slices = observation_layout(capacity)
         self.robot_width = len(FIELDS["area"]) + len(FIELDS["robot"])
         self.embed = nn.ModuleDict(
             {
-                kind: nn.Linear(len(FIELDS[kind]), width)
+                kind: nn.Linear(len(FIELDS[kind]) + (len(RELATIVE_COLUMNS[kind]) if relative else 0), width)
                 for kind in ("posture", "object", "clutter", "table", "obstacle")
             }
         )
@@ -142,11 +151,20 @@ class SetScorer(nn.Module):
         )
 
     def _tokens(self, flat: torch.Tensor, group: str, kind: str) -> tuple[torch.Tensor, torch.Tensor]:
-        """``(tokens, present)`` of one group of slots: embedded features and presence flags."""
+        """``(tokens, present)`` of one group of slots: embedded features and presence flags.
+
+        With ``relative``, each token also holds its x and y columns minus the base's
+        (:data:`RELATIVE_COLUMNS`), zero in absent slots.
+        """
         count = getattr(self.capacity, group)
         rows = flat[:, self.slices[group]].reshape(len(flat), count, len(FIELDS[kind]))
-        scaled = torch.cat([rows[..., :1], rows[..., 1:] / COORD_SCALE], dim=-1)
-        return self.embed[kind](scaled), rows[..., 0] > 0.5
+        parts = [rows[..., :1], rows[..., 1:] / COORD_SCALE]
+        if self.relative and RELATIVE_COLUMNS[kind]:
+            base = flat[:, self.slices["robot"]][:, None, :2]
+            columns = torch.tensor(RELATIVE_COLUMNS[kind])
+            offsets = base[..., torch.tensor([k % 2 for k in range(len(columns))])]  # x, y, x, y, ...
+            parts.append((rows[..., columns] - offsets) * rows[..., :1] / COORD_SCALE)
+        return self.embed[kind](torch.cat(parts, dim=-1)), rows[..., 0] > 0.5
 
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
         batch = len(flat)
