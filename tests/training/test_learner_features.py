@@ -9,7 +9,14 @@ import torch
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
 from fetchcarry_env.phases import PhaseLayout
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.baselines.encoders import RELATIVE_COLUMNS, FlatMLP, RelativeFeatures, SetScorer, build_network
+from training.baselines.encoders import (
+    RELATIVE_COLUMNS,
+    FlatMLP,
+    PushScores,
+    RelativeFeatures,
+    SetScorer,
+    build_network,
+)
 from training.learning.evaluate import make_env
 
 
@@ -101,3 +108,44 @@ def test_avoid_repeats_tries_another_candidate_in_a_state_met_again():
     assert int(policy.predict(state, action_masks=mask)[0]) == 0
     batch = policy.predict(np.stack([state, state]), action_masks=np.stack([mask, mask]))[0]
     assert batch.tolist() == [0, 0]  # batched calls have no memory
+
+
+def _one_goal_one_clutter() -> np.ndarray:
+    """An observation vector with one object (goal at 1, 1, radius 0.035) and one 0.2 m piece of clutter on it."""
+    capacity = Capacity()
+    layout = observation_layout(capacity)
+    flat = np.zeros(layout["obstacles"].stop, np.float32)
+    flat[layout["object_0"]] = [1, 0.0, 0.0, 0.8, 1.0, 1.0, 0.8, 0.035, 0.2, 0, 0]
+    flat[layout["clutter_0"]] = [1, 0.9, 0.95, 1.1, 1.15, 0.1]  # centre (1.0, 1.05): covers the goal
+    return flat
+
+
+def test_push_scores_margins_follow_the_shifted_clutter():
+    capacity = Capacity()
+    scores = PushScores(capacity, PhaseLayout.for_postures(capacity=capacity))
+    after, before, present = scores.margins(torch.as_tensor(_one_goal_one_clutter()[None]))
+    assert present[0].tolist() == [True] + [False] * (capacity.clutter - 1)
+    assert before[0, 0] == pytest.approx(-0.035)  # the goal lies inside the rectangle
+    # Along +x by s cells the rectangle's min x is 0.9 + 0.05 s: clear of the goal disc once 0.05 s - 0.1 > 0.035.
+    np.testing.assert_allclose(after[0, 0, 0].numpy(), [-0.035, -0.035, 0.015, 0.065, 0.115, 0.165], atol=1e-6)
+    # Along +y the rectangle leaves the goal's side: min y 0.95 + 0.05 s against the goal's 1.0.
+    np.testing.assert_allclose(after[0, 0, 1, :3].numpy(), [-0.035, 0.015, 0.065], atol=1e-6)
+
+
+def test_push_scores_add_to_the_push_and_approach_candidates_only():
+    capacity = Capacity()
+    flat = _one_goal_one_clutter()
+    config = BCConfig(hidden=16, relative=True, push_scores=True)
+    network = build_network(config, capacity, 4080, torch.as_tensor(np.stack([flat, flat * 0.9])))
+    assert isinstance(network.push, PushScores)
+    layout = PhaseLayout.for_postures(capacity=capacity)
+    extra = network.push(torch.as_tensor(flat[None]))[0]
+    others = np.ones(layout.size, bool)
+    others[layout.kind_slice("push")] = others[layout.kind_slice("approach")] = False
+    assert not extra[torch.as_tensor(others)].any()
+    pushes = extra[layout.kind_slice("push")].reshape(layout.shape("push"))
+    assert not pushes[1:].any()  # empty clutter slots score nothing
+    assert pushes[0, 0, 0, 0] != pushes[0, 0, 0, 3]  # strokes that do and do not clear differ
+    again = build_network(config, capacity, 4080, torch.zeros(1, flat.size))
+    again.load_state_dict(network.state_dict())
+    torch.testing.assert_close(again(torch.as_tensor(flat[None])), network(torch.as_tensor(flat[None])))

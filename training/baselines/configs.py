@@ -23,6 +23,7 @@ class BCConfig:
     weight_decay: float = 1e-5
     seed: int = 0
     relative: bool = False  # mlp: append positions relative to the base and clutter relative to goals
+    push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
     avoid_repeats: bool = False  # acting: in a state met before this episode, not the candidates chosen there
 
     def __post_init__(self) -> None:

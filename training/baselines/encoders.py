@@ -26,6 +26,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from fetchcarry_env.geometry import HEADINGS, heading_vector
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
 from fetchcarry_env.phases import PhaseLayout
 
@@ -46,7 +47,13 @@ def build_network(config: Any, capacity: Capacity, candidates: int, observations
     """The network ``config.encoder`` names, for ``candidates`` scores; ``observations`` set the MLP's scaling."""
     if config.encoder == "mlp":
         features = RelativeFeatures(capacity) if getattr(config, "relative", False) else None
-        return FlatMLP(observations, candidates, config.hidden, features)
+        network = FlatMLP(observations, candidates, config.hidden, features)
+        if getattr(config, "push_scores", False):
+            layout = PhaseLayout.for_postures(capacity=capacity)
+            if layout.size != candidates:
+                raise ValueError(f"push scores need the default candidate layout ({layout.size}), got {candidates}")
+            network.push = PushScores(capacity, layout)
+        return network
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
@@ -121,8 +128,79 @@ class FlatMLP(nn.Module):
             nn.Linear(hidden, candidates),
         )
 
+        self.push: nn.Module | None = None  # a PushScores added to the scores, if set
+
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
-        return self.layers((self.features(flat) - self.mean) / self.spread)
+        scores = self.layers((self.features(flat) - self.mean) / self.spread)
+        return scores if self.push is None else scores + self.push(flat)
+
+
+class PushScores(nn.Module):
+    """Scores from what each push would do: does the piece of clutter still cover a goal afterwards?
+
+    For the push candidate of clutter ``c`` along ``d`` by ``s`` cells, the piece's
+    rectangle shifted ``s`` cells along ``d`` (the stroke moves it as far as the base)
+    is compared with every goal not yet delivered: the margin is the least distance
+    from the shifted rectangle to a goal's centre minus that object's radius (metres;
+    positive: no goal covered, as the env's place check asks). Its features (margin
+    after, margin before, whether it clears, the stroke) go through a small MLP to a
+    score added to that candidate's. Each approach candidate of ``c`` along ``d``
+    gets one from the best push along ``d`` (its margin, whether one clears, the
+    shortest stroke that does). The heading and the pose offsets get nothing here: the
+    flat network scores those. Zero for empty slots.
+    """
+
+    def __init__(self, capacity: Capacity, layout: PhaseLayout, resolution: float = 0.05, hidden: int = 16) -> None:
+        super().__init__()
+        self.capacity, self.layout = capacity, layout
+        self.slices = observation_layout(capacity)
+        units = torch.tensor([heading_vector(h) for h in HEADINGS], dtype=torch.float32)  # (4, 2)
+        strokes = torch.arange(1, layout.strokes + 1, dtype=torch.float32)
+        self.register_buffer("shifts", units[:, None, :] * strokes[None, :, None] * resolution)  # (4, S, 2)
+        self.push_head = nn.Sequential(nn.Linear(4, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+        self.approach_head = nn.Sequential(nn.Linear(3, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+
+    def margins(self, flat: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """``(after, before, present)``: margins (B, C, 4, S) after each push, (B, C) before; clutter flags (B, C)."""
+        batch, cap = len(flat), self.capacity
+        clutter = flat[:, self.slices["clutter"]].reshape(batch, cap.clutter, len(FIELDS["clutter"]))
+        objects = flat[:, self.slices["objects"]].reshape(batch, cap.objects, len(FIELDS["object"]))
+        present = clutter[..., 0] > 0.5
+        waiting = (objects[..., 0] > 0.5) & (objects[..., 10] < 0.5)  # present, not delivered
+        goal, radius = objects[..., 4:6], objects[..., 7]
+
+        def margin(low: torch.Tensor, high: torch.Tensor) -> torch.Tensor:
+            # low, high: (..., 2) rectangle corners; least over goals of distance to the centre minus the radius
+            point = goal.reshape(batch, *([1] * (low.dim() - 2)), cap.objects, 2)
+            gap = torch.clamp(torch.maximum(low[..., None, :] - point, point - high[..., None, :]), min=0.0)
+            value = gap.norm(dim=-1) - radius.reshape(point.shape[:-1])
+            value = value.masked_fill(~waiting.reshape(point.shape[:-1]), 1.0)
+            return value.min(dim=-1).values.clamp(max=1.0)
+
+        low, high = clutter[..., 1:3], clutter[..., 3:5]  # (B, C, 2)
+        before = margin(low, high)  # (B, C)
+        shifted_low = low[:, :, None, None, :] + self.shifts  # (B, C, 4, S, 2)
+        shifted_high = high[:, :, None, None, :] + self.shifts
+        after = margin(shifted_low, shifted_high)
+        return after, before, present
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        batch, layout = len(flat), self.layout
+        after, before, present = self.margins(flat)
+        strokes = layout.strokes
+        stroke = (torch.arange(1, strokes + 1, dtype=flat.dtype) / strokes).expand_as(after)
+        clears = (after > 0).to(flat.dtype)
+        push_features = torch.stack([after, before[:, :, None, None].expand_as(after), clears, stroke], dim=-1)
+        push = self.push_head(push_features)[..., 0] * present[:, :, None, None]  # (B, C, 4, S)
+        first = torch.where(clears > 0, stroke, torch.full_like(stroke, 2.0)).min(dim=-1).values  # (B, C, 4)
+        approach_features = torch.stack([after.max(dim=-1).values, clears.max(dim=-1).values, first], dim=-1)
+        approach = self.approach_head(approach_features)[..., 0] * present[:, :, None]  # (B, C, 4)
+        scores = flat.new_zeros(batch, layout.size)
+        push_shape, approach_shape = layout.shape("push"), layout.shape("approach")  # (C, 4, 3, S), (C, 4, 3, F, L)
+        scores[:, layout.kind_slice("push")] = push[:, :, :, None, :].expand(batch, *push_shape).reshape(batch, -1)
+        per_pose = approach[:, :, :, None, None, None].expand(batch, *approach_shape)
+        scores[:, layout.kind_slice("approach")] = per_pose.reshape(batch, -1)
+        return scores
 
 
 class SetScorer(nn.Module):
