@@ -96,7 +96,7 @@ class _Fixed(torch.nn.Module):
 def test_avoid_repeats_tries_another_candidate_in_a_state_met_again():
     state, other = np.zeros(3, np.float32), np.ones(3, np.float32)
     mask = np.array([True, True, False, True])
-    plain = BCPolicy(_Fixed(), BCConfig(), Capacity())
+    plain = BCPolicy(_Fixed(), BCConfig(avoid_repeats=False), Capacity())
     assert [int(plain.predict(state, action_masks=mask)[0]) for _ in range(3)] == [0, 0, 0]
     policy = BCPolicy(_Fixed(), BCConfig(avoid_repeats=True), Capacity())
     choices = [int(policy.predict(state, action_masks=mask)[0]) for _ in range(4)]
@@ -149,3 +149,22 @@ def test_push_scores_add_to_the_push_and_approach_candidates_only():
     again = build_network(config, capacity, 4080, torch.zeros(1, flat.size))
     again.load_state_dict(network.state_dict())
     torch.testing.assert_close(again(torch.as_tensor(flat[None])), network(torch.as_tensor(flat[None])))
+
+
+def test_a_run_folder_from_before_the_new_fields_loads_as_it_was(push_state, tmp_path):
+    import json
+
+    from training.baselines import load_policy
+    from training.baselines.bc import train_bc
+
+    flat, mask = push_state
+    demos = Demonstrations(flat[None], mask[None], np.flatnonzero(mask)[:1])
+    train_bc(demos, BCConfig(epochs=1, hidden=8, relative=False, avoid_repeats=False), Capacity(), out=tmp_path / "old")
+    file = tmp_path / "old" / "config.json"
+    saved = json.loads(file.read_text())
+    for name in ("relative", "push_scores", "avoid_repeats"):
+        del saved["config"][name]  # a config.json written before these fields existed
+    file.write_text(json.dumps(saved))
+    policy = load_policy(tmp_path / "old")
+    assert not policy.config.relative and not policy.config.avoid_repeats and not policy.config.push_scores
+    assert BCConfig().relative and BCConfig().avoid_repeats  # new runs get the new defaults
