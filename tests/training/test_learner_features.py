@@ -168,3 +168,15 @@ def test_a_run_folder_from_before_the_new_fields_loads_as_it_was(push_state, tmp
     policy = load_policy(tmp_path / "old")
     assert not policy.config.relative and not policy.config.avoid_repeats and not policy.config.push_scores
     assert BCConfig().relative and BCConfig().avoid_repeats  # new runs get the new defaults
+
+
+def test_the_policy_sets_subnormal_weights_to_zero():
+    from training.baselines.bc import flush_subnormal
+
+    network = torch.nn.Linear(3, 2)
+    with torch.no_grad():
+        network.weight[0, 0] = 1e-40  # subnormal in float32
+        network.weight[0, 1] = 2e-38  # normal
+    BCPolicy(network, BCConfig(), Capacity())
+    assert network.weight[0, 0].item() == 0 and network.weight[0, 1].item() == pytest.approx(2e-38)
+    assert flush_subnormal(network) is network

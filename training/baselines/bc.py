@@ -91,7 +91,7 @@ class BCPolicy:
     """
 
     def __init__(self, network: nn.Module, config: BCConfig, capacity: Capacity, env: Any = None) -> None:
-        self.network = network.eval()
+        self.network = flush_subnormal(network).eval()
         self.config = config
         self.capacity = capacity
         self.env = env
@@ -138,6 +138,21 @@ class BCPolicy:
         if remember:
             chosen.add(int(actions[0]))
         return (actions if batched else actions[0]), state
+
+
+def flush_subnormal(network: nn.Module) -> nn.Module:
+    """Set the network's subnormal weights (below float32's smallest normal, ~1.2e-38) to zero, in place.
+
+    Weight decay drives the weights of candidates that never win towards zero, through
+    the subnormal range, where CPU arithmetic is many times slower: a trained flat MLP's
+    decision took 2.1 ms with them and 0.2 ms without (one thread). Their share of any
+    score is below 1e-37, so no decision changes.
+    """
+    with torch.no_grad():
+        for parameter in network.parameters():
+            if parameter.is_floating_point():
+                parameter[parameter.abs() < torch.finfo(parameter.dtype).tiny] = 0.0
+    return network
 
 
 def fit(
