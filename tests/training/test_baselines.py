@@ -77,7 +77,7 @@ def test_set_encoder_learns_and_faces_more_slots(basic_demos):
     bigger = Capacity(objects=6, clutter=10)
     from fetchcarry_env.phases import PhaseLayout
 
-    network = SetScorer(bigger, PhaseLayout.for_postures(capacity=bigger), width=32)
+    network = SetScorer(bigger, PhaseLayout.for_postures(capacity=bigger), width=32, relative=policy.config.relative)
     network.load_state_dict(policy.network.state_dict())  # the weights do not depend on the slot counts
 
 

@@ -22,6 +22,9 @@ class BCConfig:
     learning_rate: float = 1e-3
     weight_decay: float = 1e-5
     seed: int = 0
+    relative: bool = True  # append positions relative to the base (mlp: and clutter relative to goals; set: per token)
+    push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
+    avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):

@@ -2,13 +2,17 @@
 
 ``mlp``
     The observation vector, standardised with the demonstrations' mean and spread,
-    through two hidden layers to one score per candidate.
+    through two hidden layers to one score per candidate. With ``relative`` (the
+    default), :class:`RelativeFeatures` appends positions relative to the base and
+    each piece of clutter relative to each goal, which the flat vector only holds in
+    absolute coordinates.
 ``set``
     Object-centric: one token per slot of the observation (a robot token holding the
     area and the base, then each posture, object, piece of clutter, table and
     obstacle; :func:`fetchcarry_env.observation.observation_layout` names the slices),
     each kind projected by its own layer, mixed by a small Transformer in which absent
-    slots (presence flag 0) are masked out. Each token scores its own candidates: an
+    slots (presence flag 0) are masked out (with ``relative``, each token also holds its
+    x, y columns minus the base's). Each token scores its own candidates: an
     object token its pick and place poses, a clutter token its pushes and approach
     poses, a table or obstacle token its waypoints; so the weights do not depend on
     how many slots there are, and a network built for a larger capacity loads them.
@@ -22,29 +26,96 @@ import numpy as np
 import torch
 from torch import nn
 
+from fetchcarry_env.geometry import HEADINGS, heading_vector
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
 from fetchcarry_env.phases import PhaseLayout
 
 COORD_SCALE = 5.0  # metres: coordinates are divided by this in the set encoder (the families' floor is 7 m)
 SET_HEADS = 4  # attention heads of the set encoder
 SET_LAYERS = 2  # Transformer layers of the set encoder
+RELATIVE_COLUMNS: dict[str, tuple[int, ...]] = {
+    "posture": (),
+    "object": (1, 2, 4, 5),  # x, y, goal_x, goal_y
+    "clutter": (1, 2, 3, 4),  # min_x, min_y, max_x, max_y
+    "table": (1, 2, 3, 4),
+    "obstacle": (1, 2, 3, 4),
+}
+"""Columns of each slot (:data:`FIELDS`) that are x, y pairs: the set encoder's relative features subtract the base."""
 
 
 def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:
     """The network ``config.encoder`` names, for ``candidates`` scores; ``observations`` set the MLP's scaling."""
     if config.encoder == "mlp":
-        return FlatMLP(observations, candidates, config.hidden)
+        features = RelativeFeatures(capacity) if getattr(config, "relative", False) else None
+        network = FlatMLP(observations, candidates, config.hidden, features)
+        if getattr(config, "push_scores", False):
+            layout = PhaseLayout.for_postures(capacity=capacity)
+            if layout.size != candidates:
+                raise ValueError(f"push scores need the default candidate layout ({layout.size}), got {candidates}")
+            network.push = PushScores(capacity, layout)
+        return network
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
-    return SetScorer(capacity, layout, width=min(config.hidden, 128))
+    return SetScorer(capacity, layout, width=min(config.hidden, 128), relative=getattr(config, "relative", False))
+
+
+class RelativeFeatures(nn.Module):
+    """The flat observation vector followed by what a flat MLP finds hard to compute: differences of positions.
+
+    Appended, each multiplied by its slots' presence flags (metres): every object's
+    position and goal relative to the base and its goal relative to itself; every
+    piece of clutter's, table's and obstacle's rectangle relative to the base; and every
+    piece of clutter's centre relative to every object's goal (whether it covers it).
+    No weights: a function of the vector alone.
+    """
+
+    def __init__(self, capacity: Capacity) -> None:
+        super().__init__()
+        self.capacity = capacity
+        self.slices = observation_layout(capacity)
+        self.size = self.extra_width(capacity)
+
+    @staticmethod
+    def extra_width(capacity: Capacity) -> int:
+        """How many features are appended for ``capacity``."""
+        rects = capacity.clutter + capacity.tables + capacity.obstacles
+        return 6 * capacity.objects + 4 * rects + 2 * capacity.clutter * capacity.objects
+
+    def _rows(self, flat: torch.Tensor, group: str, kind: str) -> torch.Tensor:
+        return flat[:, self.slices[group]].reshape(len(flat), getattr(self.capacity, group), len(FIELDS[kind]))
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        robot = flat[:, self.slices["robot"]]
+        base = robot[:, None, :2]  # (B, 1, 2): x, y
+        objects = self._rows(flat, "objects", "object")
+        there = objects[..., :1]  # presence flags
+        position, goal = objects[..., 1:3], objects[..., 4:6]
+        parts = [torch.cat([position - base, goal - base, goal - position], dim=-1) * there]
+        centres = []
+        for group, kind in (("clutter", "clutter"), ("tables", "table"), ("obstacles", "obstacle")):
+            rows = self._rows(flat, group, kind)
+            corners = rows[..., 1:5] - base.repeat(1, 1, 2)
+            parts.append(corners * rows[..., :1])
+            if group == "clutter":
+                centres.append(((rows[..., 1:3] + rows[..., 3:5]) / 2, rows[..., :1]))
+        centre, present = centres[0]
+        between = (centre[:, :, None, :] - goal[:, None, :, :]) * present[:, :, None, :] * there[:, None, :, :]
+        parts.append(between)
+        extra = torch.cat([part.reshape(len(flat), -1) for part in parts], dim=1)
+        return torch.cat([flat, extra], dim=1)
 
 
 class FlatMLP(nn.Module):
-    """Standardised observation vector -> two ReLU layers -> one score per candidate."""
+    """Standardised observation vector (with :class:`RelativeFeatures` if given) -> two ReLU layers -> scores."""
 
-    def __init__(self, observations: torch.Tensor, candidates: int, hidden: int) -> None:
+    def __init__(
+        self, observations: torch.Tensor, candidates: int, hidden: int, features: nn.Module | None = None
+    ) -> None:
         super().__init__()
+        self.features = features if features is not None else nn.Identity()
+        with torch.no_grad():
+            observations = self.features(observations)
         mean = observations.mean(dim=0) if len(observations) > 1 else torch.zeros(observations.shape[1])
         spread = observations.std(dim=0) if len(observations) > 1 else torch.ones(observations.shape[1])
         self.register_buffer("mean", mean)
@@ -57,21 +128,92 @@ class FlatMLP(nn.Module):
             nn.Linear(hidden, candidates),
         )
 
+        self.push: nn.Module | None = None  # a PushScores added to the scores, if set
+
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
-        return self.layers((flat - self.mean) / self.spread)
+        scores = self.layers((self.features(flat) - self.mean) / self.spread)
+        return scores if self.push is None else scores + self.push(flat)
+
+
+class PushScores(nn.Module):
+    """Scores from what each push would do: does the piece of clutter still cover a goal afterwards?
+
+    For the push candidate of clutter ``c`` along ``d`` by ``s`` cells, the piece's
+    rectangle shifted ``s`` cells along ``d`` (the stroke moves it as far as the base)
+    is compared with every goal not yet delivered: the margin is the least distance
+    from the shifted rectangle to a goal's centre minus that object's radius (metres;
+    positive: no goal covered, as the env's place check asks). Its features (margin
+    after, margin before, whether it clears, the stroke) go through a small MLP to a
+    score added to that candidate's. Each approach candidate of ``c`` along ``d``
+    gets one from the best push along ``d`` (its margin, whether one clears, the
+    shortest stroke that does). The heading and the pose offsets get nothing here: the
+    flat network scores those. Zero for empty slots.
+    """
+
+    def __init__(self, capacity: Capacity, layout: PhaseLayout, resolution: float = 0.05, hidden: int = 16) -> None:
+        super().__init__()
+        self.capacity, self.layout = capacity, layout
+        self.slices = observation_layout(capacity)
+        units = torch.tensor([heading_vector(h) for h in HEADINGS], dtype=torch.float32)  # (4, 2)
+        strokes = torch.arange(1, layout.strokes + 1, dtype=torch.float32)
+        self.register_buffer("shifts", units[:, None, :] * strokes[None, :, None] * resolution)  # (4, S, 2)
+        self.push_head = nn.Sequential(nn.Linear(4, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+        self.approach_head = nn.Sequential(nn.Linear(3, hidden), nn.ReLU(), nn.Linear(hidden, 1))
+
+    def margins(self, flat: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """``(after, before, present)``: margins (B, C, 4, S) after each push, (B, C) before; clutter flags (B, C)."""
+        batch, cap = len(flat), self.capacity
+        clutter = flat[:, self.slices["clutter"]].reshape(batch, cap.clutter, len(FIELDS["clutter"]))
+        objects = flat[:, self.slices["objects"]].reshape(batch, cap.objects, len(FIELDS["object"]))
+        present = clutter[..., 0] > 0.5
+        waiting = (objects[..., 0] > 0.5) & (objects[..., 10] < 0.5)  # present, not delivered
+        goal, radius = objects[..., 4:6], objects[..., 7]
+
+        def margin(low: torch.Tensor, high: torch.Tensor) -> torch.Tensor:
+            # low, high: (..., 2) rectangle corners; least over goals of distance to the centre minus the radius
+            point = goal.reshape(batch, *([1] * (low.dim() - 2)), cap.objects, 2)
+            gap = torch.clamp(torch.maximum(low[..., None, :] - point, point - high[..., None, :]), min=0.0)
+            value = gap.norm(dim=-1) - radius.reshape(point.shape[:-1])
+            value = value.masked_fill(~waiting.reshape(point.shape[:-1]), 1.0)
+            return value.min(dim=-1).values.clamp(max=1.0)
+
+        low, high = clutter[..., 1:3], clutter[..., 3:5]  # (B, C, 2)
+        before = margin(low, high)  # (B, C)
+        shifted_low = low[:, :, None, None, :] + self.shifts  # (B, C, 4, S, 2)
+        shifted_high = high[:, :, None, None, :] + self.shifts
+        after = margin(shifted_low, shifted_high)
+        return after, before, present
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        batch, layout = len(flat), self.layout
+        after, before, present = self.margins(flat)
+        strokes = layout.strokes
+        stroke = (torch.arange(1, strokes + 1, dtype=flat.dtype) / strokes).expand_as(after)
+        clears = (after > 0).to(flat.dtype)
+        push_features = torch.stack([after, before[:, :, None, None].expand_as(after), clears, stroke], dim=-1)
+        push = self.push_head(push_features)[..., 0] * present[:, :, None, None]  # (B, C, 4, S)
+        first = torch.where(clears > 0, stroke, torch.full_like(stroke, 2.0)).min(dim=-1).values  # (B, C, 4)
+        approach_features = torch.stack([after.max(dim=-1).values, clears.max(dim=-1).values, first], dim=-1)
+        approach = self.approach_head(approach_features)[..., 0] * present[:, :, None]  # (B, C, 4)
+        scores = flat.new_zeros(batch, layout.size)
+        push_shape, approach_shape = layout.shape("push"), layout.shape("approach")  # (C, 4, 3, S), (C, 4, 3, F, L)
+        scores[:, layout.kind_slice("push")] = push[:, :, :, None, :].expand(batch, *push_shape).reshape(batch, -1)
+        per_pose = approach[:, :, :, None, None, None].expand(batch, *approach_shape)
+        scores[:, layout.kind_slice("approach")] = per_pose.reshape(batch, -1)
+        return scores
 
 
 class SetScorer(nn.Module):
     """Tokens per slot, a masked Transformer, and per-token heads scoring each token's candidates."""
 
-    def __init__(self, capacity: Capacity, layout: PhaseLayout, width: int = 64) -> None:
+    def __init__(self, capacity: Capacity, layout: PhaseLayout, width: int = 64, relative: bool = False) -> None:
         super().__init__()
-        self.capacity, self.layout = capacity, layout
+        self.capacity, self.layout, self.relative = capacity, layout, relative
         self.slices = observation_layout(capacity)
         self.robot_width = len(FIELDS["area"]) + len(FIELDS["robot"])
         self.embed = nn.ModuleDict(
             {
-                kind: nn.Linear(len(FIELDS[kind]), width)
+                kind: nn.Linear(len(FIELDS[kind]) + (len(RELATIVE_COLUMNS[kind]) if relative else 0), width)
                 for kind in ("posture", "object", "clutter", "table", "obstacle")
             }
         )
@@ -87,11 +229,20 @@ class SetScorer(nn.Module):
         )
 
     def _tokens(self, flat: torch.Tensor, group: str, kind: str) -> tuple[torch.Tensor, torch.Tensor]:
-        """``(tokens, present)`` of one group of slots: embedded features and presence flags."""
+        """``(tokens, present)`` of one group of slots: embedded features and presence flags.
+
+        With ``relative``, each token also holds its x and y columns minus the base's
+        (:data:`RELATIVE_COLUMNS`), zero in absent slots.
+        """
         count = getattr(self.capacity, group)
         rows = flat[:, self.slices[group]].reshape(len(flat), count, len(FIELDS[kind]))
-        scaled = torch.cat([rows[..., :1], rows[..., 1:] / COORD_SCALE], dim=-1)
-        return self.embed[kind](scaled), rows[..., 0] > 0.5
+        parts = [rows[..., :1], rows[..., 1:] / COORD_SCALE]
+        if self.relative and RELATIVE_COLUMNS[kind]:
+            base = flat[:, self.slices["robot"]][:, None, :2]
+            columns = torch.tensor(RELATIVE_COLUMNS[kind])
+            offsets = base[..., torch.tensor([k % 2 for k in range(len(columns))])]  # x, y, x, y, ...
+            parts.append((rows[..., columns] - offsets) * rows[..., :1] / COORD_SCALE)
+        return self.embed[kind](torch.cat(parts, dim=-1)), rows[..., 0] > 0.5
 
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
         batch = len(flat)

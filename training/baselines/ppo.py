@@ -21,7 +21,7 @@ is complete but not bit-identical to an uninterrupted one).
 from __future__ import annotations
 
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -159,6 +159,9 @@ def train_ppo(
         options = PPOOptions(**{**asdict(options), "encoder": init["config"]["encoder"],
                                 "hidden": init["config"]["hidden"]})  # fmt: skip
     config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed)
+    if options.init is not None:  # the init run's network features too, so that its weights fit
+        start = runs.network_config(init)
+        config = replace(config, relative=start.relative, push_scores=start.push_scores)
     env = DummyVecEnv([lambda: make_training_env(family)])
     base = env.envs[0].unwrapped
     capacity, candidates = base.capacity, int(env.action_space.n)

@@ -92,11 +92,19 @@ def _check_fields(file: Path, key: str, value: Any, cls: type) -> None:
             raise RunFolderError(f"{file}: {key}.{name} must be a {expected.__name__}, got {item!r}")
 
 
+LEGACY_CONFIG: dict[str, Any] = {"relative": False, "push_scores": False, "avoid_repeats": False}
+"""BCConfig fields added after run folders were first written: a config without them meant these values."""
+
+
 def network_config(saved: dict[str, Any]) -> Any:
-    """The :class:`BCConfig` of a checked config (its own checks raise ``ValueError``)."""
+    """The :class:`BCConfig` of a checked config (its own checks raise ``ValueError``).
+
+    A field missing from an older run folder takes the value it had before the field
+    existed (:data:`LEGACY_CONFIG`), so old runs load and act as they did.
+    """
     from training.baselines.bc import BCConfig
 
-    return BCConfig(**saved["config"])
+    return BCConfig(**{**LEGACY_CONFIG, **saved["config"]})
 
 
 def load_policy(path: str | Path, env: Any = None) -> Any:
