@@ -5,24 +5,16 @@ Plans the scale families of the planner benchmark (``bench_cases.multi`` with 4,
 each) at every time limit of ``LIMITS`` and at ``REFERENCE_S`` (the reference: usually
 proven optimal), checks every plan with the validator, and prints per group and limit
 how many calls returned a valid plan, how many are optimal, how many have the
-reference's phases and how far their Eq. 1 is above it, and the proven gaps. Only the
-public planner is used, so the same file measures an older checkout too::
-
-    PYTHONPATH=$PWD python expert/bench_anytime.py after.json
-    PYTHONPATH=/path/to/old/checkout python expert/bench_anytime.py before.json
-    PYTHONPATH=$PWD python expert/bench_anytime.py after.json before.json   # print both
-
-The first path is where the records are written (JSON, one per call); with a second
-path, that file's records are summarised too, against this run's reference plans.
-Times are wall-clock seconds of one in-process call each (one untimed warm-up first).
+reference's phases and how far their Eq. 1 is above it, and the proven gaps
+(``fetchcarry bench anytime``). Only the public planner is used, so records written by
+an older checkout can be summarised against this run's reference plans. Times are
+wall-clock seconds of one in-process call each (one untimed warm-up first).
 """
 
 from __future__ import annotations
 
-import json
-import sys
 import time
-from pathlib import Path
+from collections.abc import Callable
 
 import numpy as np
 
@@ -42,8 +34,13 @@ def _draw(group: str, rng: np.random.Generator):
     return bench_cases.multi(int(group[0]), rng)
 
 
-def measure(limits=LIMITS, reference_s: float = REFERENCE_S) -> list[dict]:
-    """One record per call: group, index, limit, status, phases, Eq. 1, gap, seconds, valid."""
+def measure(
+    limits: tuple[float, ...] = LIMITS, reference_s: float = REFERENCE_S, report: Callable[[dict], None] | None = None
+) -> list[dict]:
+    """One record per call: group, index, limit (s), status, phases, Eq. 1, gap, seconds, valid.
+
+    ``report``, if given, is called with each record as soon as it is measured.
+    """
     plan(bench_cases.basic("I", np.random.default_rng(0)))  # warm-up: imports and SCIP's first model
     records = []
     for group, count in COUNTS.items():
@@ -68,7 +65,8 @@ def measure(limits=LIMITS, reference_s: float = REFERENCE_S) -> list[dict]:
                         "valid": bool(result.phases) and validate_plan(scenario, result) == [],
                     }
                 )
-                print(json.dumps(records[-1]), file=sys.stderr, flush=True)
+                if report is not None:
+                    report(records[-1])
     return records
 
 
@@ -98,22 +96,3 @@ def summary(records: list[dict], reference: list[dict]) -> list[str]:
                 f"{', '.join(above) or '-'} / {', '.join(gaps) or '-'}"
             )
     return lines
-
-
-def main(argv: list[str]) -> int:
-    if not argv or len(argv) > 2:
-        print("usage: python expert/bench_anytime.py OUT.json [OTHER.json]", file=sys.stderr)
-        return 2
-    records = measure()
-    Path(argv[0]).write_text(json.dumps(records, indent=1))
-    print("this run:")
-    print("\n".join(summary(records, records)))
-    if len(argv) == 2:
-        other = json.loads(Path(argv[1]).read_text())
-        print(f"\n{argv[1]} (against this run's reference plans):")
-        print("\n".join(summary(other, records)))
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))

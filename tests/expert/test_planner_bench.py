@@ -71,3 +71,34 @@ def test_covered_scenarios_cover_every_goal(count):
     assert check_rules(scenario) == [] and len(scenario.objects) == count
     for obj in scenario.objects:
         assert any(c.rect.overlaps_disc(obj.goal, obj.radius) for c in scenario.clutter), obj.id
+
+
+def _anytime_record(index: int, limit: float, objective: float, phases: int = 8, **changes) -> dict:
+    record = {"group": "4 obj", "index": index, "limit": limit, "reference": limit == 30.0, "status": "optimal",
+              "phases": phases, "objective": objective, "gap": 0.0, "seconds": 0.05, "valid": True}  # fmt: skip
+    return {**record, **changes}
+
+
+def test_anytime_summary_compares_each_plan_with_its_reference():
+    from expert.bench_anytime import summary
+
+    reference = [_anytime_record(0, 30.0, 10.0), _anytime_record(1, 30.0, 20.0)]
+    short = [
+        _anytime_record(0, 0.1, 10.4, status="time_limit", gap=None),  # 4 % above: within 5 %
+        _anytime_record(1, 0.1, 22.0, status="time_limit", gap=0.08),  # 10 % above
+    ]
+    lines = summary(short + reference, reference)
+    row = next(line for line in lines if line.startswith("4 obj") and "0.10" in line)
+    assert row.split()[3:7] == ["2/2", "0", "2", "1"]  # valid, optimal, reference's phases, within 5 %
+    assert "4.00, 10.00 / 8.00" in row
+
+
+def test_anytime_refuses_records_it_did_not_write(capsys, tmp_path):
+    from cli_run import run
+
+    bad = tmp_path / "records.json"
+    bad.write_text('{"not": "a list"}')
+    status, _, err = run(capsys, "bench", "anytime", "--compare", bad)
+    assert status == 2 and "not a list of bench anytime records" in err
+    status, _, err = run(capsys, "bench", "anytime", "--compare", tmp_path / "missing.json")
+    assert status == 2 and "not found" in err

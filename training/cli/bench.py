@@ -1,4 +1,4 @@
-"""``fetchcarry bench env|planner|generate|phases``: the benchmarks' options and printed tables.
+"""``fetchcarry bench env|planner|anytime|generate|phases``: the benchmarks' options and printed tables.
 
 The measurements live next to what they measure (``fetchcarry_env.bench``,
 ``expert.bench``, ``training.generate.bench_generation``,
@@ -13,11 +13,13 @@ import json
 import sys
 import time
 from dataclasses import asdict
+from pathlib import Path
 from typing import Any, TextIO
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.episodes import families
+from training.cli.files import check_readable, check_writable
 from training.cli.text import echo
 
 ENV_DESCRIPTION = (
@@ -39,9 +41,10 @@ PLANNER_DESCRIPTION = (
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``env``, ``planner``, ``generate``, ``phases`` and ``projection`` to ``fetchcarry bench``."""
+    """Add ``env``, ``planner``, ``anytime``, ``generate``, ``phases`` and ``projection`` to ``fetchcarry bench``."""
     _register_env(bench)
     _register_planner(bench)
+    _register_anytime(bench)
     _register_generate(bench)
     _register_phases(bench)
     _register_projection(bench)
@@ -288,6 +291,60 @@ def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
         extra = sum(len(r.phases_tried) - 1 for r in selected) / len(selected)
         shares = " ".join(f"{100 * p / total:>{w}.0f}%" for p, w in zip([*parts, other], (12, 6, 9, 8, 5), strict=True))
         print(f"{group:<8} {shares} {extra:>13.2f}", file=out)
+
+
+# ---------------------------------------------------------------------------- bench anytime
+ANYTIME_KEYS = ("group", "index", "limit", "reference", "status", "phases", "objective", "gap", "valid")
+
+
+def _register_anytime(bench: argparse._SubParsersAction) -> None:
+    parser = bench.add_parser(
+        "anytime",
+        help="the planner under 0.1 s and 1 s limits: first plans, how good they are, their proven gaps",
+        description="Plan the scale cases of bench planner (4, 5 and 6 objects, every goal covered with 3; "
+        "seed 2024) at time limits of 0.1 s and 1 s and once at 30 s as the reference, check every plan with "
+        "the validator, and print per case and limit: valid plans, optimal ones, plans with the reference's "
+        "phases, how many lie within 5 %% of a proven optimum, how far each one's Eq. 1 lies above the "
+        "reference and the gaps the planner proved. Takes several minutes.",
+    )
+    parser.add_argument("--out", metavar="JSON", help="also write one record per planning call to this file")
+    parser.add_argument(
+        "--compare",
+        metavar="JSON",
+        help="records another checkout wrote with --out: summarised too, against this run's reference plans",
+    )
+    parser.set_defaults(handler=run_bench_anytime)
+
+
+def _anytime_records(path: Path) -> list[dict[str, Any]]:
+    """The records of an earlier ``bench anytime --out``; :class:`UsageError` names what is wrong."""
+    check_readable(path, "records file")
+    try:
+        records = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise UsageError(f"{path}: not JSON written by bench anytime --out ({error})") from None
+    if not isinstance(records, list) or not all(isinstance(r, dict) and set(ANYTIME_KEYS) <= r.keys() for r in records):
+        raise UsageError(f"{path}: not a list of bench anytime records (each with {', '.join(ANYTIME_KEYS)})")
+    return records
+
+
+def run_bench_anytime(args: argparse.Namespace) -> int:
+    from expert.bench_anytime import measure, summary
+
+    out = Path(args.out) if args.out else None
+    if out is not None:
+        check_writable(out, "records file")
+    other = _anytime_records(Path(args.compare)) if args.compare else None
+    records = measure(report=lambda r: echo(f"{r['group']} #{r['index']} limit {r['limit']:g} s: {r['status']}, "
+                                             f"{r['seconds']:.3f} s", file=sys.stderr))  # fmt: skip
+    if out is not None:
+        out.write_text(json.dumps(records, indent=1), encoding="utf-8")
+    print("this run:")
+    print("\n".join(summary(records, records)))
+    if other is not None:
+        print(f"\n{args.compare} (against this run's reference plans):")
+        print("\n".join(summary(other, records)))
+    return 0
 
 
 # ---------------------------------------------------------------------------- bench generate
