@@ -231,6 +231,14 @@ def test_wilson_interval_by_hand():
     assert benchmark.wilson(0, 10)[0] == 0.0
 
 
+def test_wilson_interval_contains_the_rate_at_0_and_100_percent():
+    # rounding once put 100 % of 6 episodes above the interval's top, and the plots refused a negative error bar
+    for n in range(1, 400):
+        for wins in (0, n):
+            low, high = benchmark.wilson(wins, n)
+            assert low <= wins / n <= high
+
+
 def test_spl_by_hand():
     assert benchmark.spl(True, 12.0, 10.0) == pytest.approx(10 / 12)
     assert benchmark.spl(True, 9.0, 10.0) == 1.0  # never above 1, even below the expert's cost

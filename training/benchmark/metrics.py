@@ -38,7 +38,8 @@ def wilson(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
     p = successes / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    # min/max with p: at 0 % or 100 % rounding can put an end a hair past p, which the interval contains
+    return (min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half)))
 
 
 def spl(success: bool, cost: float, expert_cost: float) -> float:
