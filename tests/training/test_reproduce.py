@@ -34,6 +34,7 @@ def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
         assert f"## {split}" in summary
     for name in (*REFERENCES, *MAIN):
         assert f"| {name} |" in summary
+    assert "Per scenario source (iid-v0)" in summary and "| baseline | basic | push |" in summary
     records = json.loads((out / "results.json").read_text())
     seen = {(r["baseline"], r["split"]) for r in records}
     for split in SPLITS:
