@@ -123,3 +123,15 @@ def test_ctrl_c_exits_130_and_says_how_to_continue(capsys, tmp_path: Path, monke
     status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", "--budget", "smoke", "--no-progress")
     assert status == 130 and "run the same command again to continue" in err
     assert os.environ["MINARI_DATASETS_PATH"] == before
+
+
+def test_an_internal_error_is_exit_3_not_bad_input(capsys, tmp_path: Path, monkeypatch) -> None:
+    # a plotting ValueError inside the pipeline once printed as bad input (exit 2)
+    from training.reproduce import pipeline
+
+    def broken(*args, **kwargs):
+        raise ValueError("'yerr' must not contain negative values")
+
+    monkeypatch.setattr(pipeline, "_stage_datasets", broken)
+    status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", "--budget", "smoke", "--no-progress")
+    assert status == 3 and "yerr" in err

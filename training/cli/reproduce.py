@@ -64,6 +64,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 def run_reproduce(args: argparse.Namespace) -> int:
     from training.benchmark import BenchmarkError
     from training.reproduce import BUDGETS, reproduce
+    from training.reproduce.pipeline import ReproduceError
 
     try:
         summary = reproduce(args.out, seeds=args.seeds, budget=BUDGETS[args.budget], workers=args.workers,
@@ -72,7 +73,7 @@ def run_reproduce(args: argparse.Namespace) -> int:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         say(f"interrupted: what finished is kept in {args.out}; run the same command again to continue")
         return INTERRUPTED
-    except (ValueError, BenchmarkError) as error:
+    except (ReproduceError, BenchmarkError) as error:  # other errors are bugs: exit 3 with a crash report
         raise UsageError(str(error)) from None
     echo(f"the published table: {summary}")
     return 0

@@ -47,6 +47,10 @@ WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run
 MINARI_ENV = "MINARI_DATASETS_PATH"
 
 
+class ReproduceError(ValueError):
+    """A reproduction cannot start or continue with what it was given (its folder, seeds, workers)."""
+
+
 @dataclass(frozen=True)
 class Baseline:
     """A learned baseline of the table: its label, and the run folders of each training seed."""
@@ -124,22 +128,22 @@ def minari_root(path: Path) -> Iterator[None]:
 
 
 def check_settings(out: Path, seeds: int, budget: Budget) -> None:
-    """Refuse a folder made with another budget (``ValueError``); record this one's settings."""
+    """Refuse a folder made with another budget (:class:`ReproduceError`); record this one's settings."""
     if seeds < 1:
-        raise ValueError(f"the number of training seeds must be at least 1, got {seeds}")
+        raise ReproduceError(f"the number of training seeds must be at least 1, got {seeds}")
     file = out / SETTINGS_FILE
     settings = {"budget": asdict(budget)}
     if file.is_file():
         try:
             saved = json.loads(file.read_text())
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
-            raise ValueError(f"{file} is not valid JSON: {error}") from None
+            raise ReproduceError(f"{file} is not valid JSON: {error}") from None
         saved_budget = saved.get("budget") if isinstance(saved, dict) else None
         if json.loads(json.dumps(settings["budget"])) != saved_budget:
             name = saved_budget.get("name") if isinstance(saved_budget, dict) else "?"
-            raise ValueError(f"{out} holds a reproduction with another budget ({name}): use another folder")
+            raise ReproduceError(f"{out} holds a reproduction with another budget ({name}): use another folder")
     elif out.exists() and any(out.iterdir()):
-        raise ValueError(f"{out} exists and is not an empty folder or a reproduction folder")
+        raise ReproduceError(f"{out} exists and is not an empty folder or a reproduction folder")
     out.mkdir(parents=True, exist_ok=True)
     (out / SETTINGS_FILE).write_text(json.dumps({**settings, "seeds": seeds}, indent=2) + "\n")
 
@@ -196,11 +200,11 @@ def reproduce(
 
     ``datasets`` is the Minari root for the expert dataset (default ``out/datasets``).
     ``say`` gets one line per stage and per finished run. Bad input raises
-    ``ValueError`` (or the project's ``UsageError``); ``KeyboardInterrupt`` propagates
-    with everything finished kept.
+    :class:`ReproduceError` (a ``ValueError``); any other exception is a bug;
+    ``KeyboardInterrupt`` propagates with everything finished kept.
     """
     if workers < 1:
-        raise ValueError(f"the number of workers must be at least 1, got {workers}")
+        raise ReproduceError(f"the number of workers must be at least 1, got {workers}")
     out = Path(out)
     check_settings(out, seeds, budget)
     timings = Timings(out)
