@@ -102,16 +102,15 @@ def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
             x = j + (k - (len(policies) - 1) / 2) * width
             xs.append(x)
             success.append(row.success)
-            # max(0, ...): at 0 % or 100 % the interval's end can miss the point by a rounding error
-            s_err[0].append(max(0.0, row.success - row.success_low))
-            s_err[1].append(max(0.0, row.success_high - row.success))
+            s_err[0].append(row.success - row.success_low)
+            s_err[1].append(row.success_high - row.success)
             if not math.isnan(row.cost_ratio):
                 r_xs.append(x)
                 ratio.append(row.cost_ratio)
                 low = row.cost_ratio_low if not math.isnan(row.cost_ratio_low) else row.cost_ratio
                 high = row.cost_ratio_high if not math.isnan(row.cost_ratio_high) else row.cost_ratio
-                r_err[0].append(max(0.0, row.cost_ratio - low))
-                r_err[1].append(max(0.0, high - row.cost_ratio))
+                r_err[0].append(row.cost_ratio - low)
+                r_err[1].append(high - row.cost_ratio)
         left.bar(xs, success, width, yerr=s_err, capsize=3, label=policy)
         right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, label=policy)
     for axis, label in ((left, "success rate (95 % Wilson)"), (right, "cost ratio to the expert (95 % CI)")):

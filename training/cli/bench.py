@@ -294,9 +294,6 @@ def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
 
 
 # ---------------------------------------------------------------------------- bench anytime
-ANYTIME_KEYS = ("group", "index", "limit", "reference", "status", "phases", "objective", "gap", "valid")
-
-
 def _register_anytime(bench: argparse._SubParsersAction) -> None:
     parser = bench.add_parser(
         "anytime",
@@ -318,13 +315,15 @@ def _register_anytime(bench: argparse._SubParsersAction) -> None:
 
 def _anytime_records(path: Path) -> list[dict[str, Any]]:
     """The records of an earlier ``bench anytime --out``; :class:`UsageError` names what is wrong."""
+    from expert.bench_anytime import RECORD_KEYS
+
     check_readable(path, "records file")
     try:
         records = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise UsageError(f"{path}: not JSON written by bench anytime --out ({error})") from None
-    if not isinstance(records, list) or not all(isinstance(r, dict) and set(ANYTIME_KEYS) <= r.keys() for r in records):
-        raise UsageError(f"{path}: not a list of bench anytime records (each with {', '.join(ANYTIME_KEYS)})")
+    if not isinstance(records, list) or not all(isinstance(r, dict) and set(RECORD_KEYS) <= r.keys() for r in records):
+        raise UsageError(f"{path}: not a list of bench anytime records (each with {', '.join(RECORD_KEYS)})")
     return records
 
 

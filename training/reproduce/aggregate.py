@@ -174,9 +174,14 @@ def _source_table(split: str, records: list[dict[str, Any]], names: list[str]) -
     ]
     for name in names:
         cells = [rows.get((name, source)) for source in sources]
-        text = [f"{c.success:.0%} ({c.cost_ratio:.2f})" if c is not None else "-" for c in cells]
-        lines.append(f"| {name} | " + " | ".join(text).replace("(nan)", "(-)") + " |")
+        text = [_success_and_ratio(c) if c is not None else "-" for c in cells]
+        lines.append(f"| {name} | " + " | ".join(text) + " |")
     return [*lines, ""]
+
+
+def _success_and_ratio(row: Row) -> str:
+    ratio = "-" if math.isnan(row.cost_ratio) else f"{row.cost_ratio:.2f}"
+    return f"{row.success:.0%} ({ratio})"
 
 
 def _curve_table(split: str, curve: Sequence[Baseline], dagger: Sequence[Baseline], per_run: dict, pooled: dict,
