@@ -74,6 +74,10 @@ def test_set_encoder_learns_and_faces_more_slots(basic_demos):
     actions = policy.predict(small.observations, action_masks=small.masks)[0]
     fit = (actions == small.labels).mean()
     assert fit > 0.6, fit  # fits its training data
+    rows = torch.as_tensor(small.observations)
+    with torch.inference_mode():  # decisions run a frozen trace of the network: the same numbers, bit for bit
+        for batch in (rows, rows[:1]):
+            torch.testing.assert_close(policy.scores(batch), policy.network(batch), rtol=0, atol=0)
     bigger = Capacity(objects=6, clutter=10)
     from fetchcarry_env.phases import PhaseLayout
 

@@ -17,6 +17,7 @@ in memory and can write a run folder (:mod:`training.baselines.runs`), which
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -97,6 +98,10 @@ class BCPolicy:
         self.env = env
         self.rng = torch.Generator().manual_seed(config.seed)
         self.chosen: dict[bytes, set[int]] = {}  # this episode: state (observation bytes) -> candidates chosen there
+        self.traced: dict[int, torch.jit.ScriptModule] = {}  # batch size -> the network as a frozen TorchScript trace
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "traced": {}}  # traces do not pickle; they are made again on first use
 
     def reset(self) -> None:
         """Forget the episode's states (a new episode starts)."""
@@ -127,8 +132,8 @@ class BCPolicy:
             fresh[0, list(chosen)] = False
             if fresh.any():
                 masks = fresh
-        with torch.no_grad():
-            logits = self.network(torch.as_tensor(flat.reshape(masks.shape[0], -1)))
+        with torch.inference_mode():
+            logits = self.scores(torch.as_tensor(flat.reshape(masks.shape[0], -1)))
             logits = logits.masked_fill(~masks, -torch.inf)
             if deterministic:
                 actions = logits.argmax(dim=1)
@@ -138,6 +143,22 @@ class BCPolicy:
         if remember:
             chosen.add(int(actions[0]))
         return (actions if batched else actions[0]), state
+
+    def scores(self, observations: torch.Tensor) -> torch.Tensor:
+        """The network's candidate scores for a batch of observation vectors (rows).
+
+        Runs a TorchScript trace of the network, made on the first call with each batch
+        size and frozen: the same operations on the same weights, without the Python of
+        every module call, which is most of a single decision's time (about 1.6 against
+        1.0 ms for the set encoder on one core).
+        """
+        traced = self.traced.get(len(observations))
+        if traced is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", torch.jit.TracerWarning)  # batch size baked in: one trace per size
+                traced = torch.jit.freeze(torch.jit.trace(self.network, observations, check_trace=False))
+            self.traced[len(observations)] = traced
+        return traced(observations)
 
 
 def flush_subnormal(network: nn.Module) -> nn.Module:

@@ -227,6 +227,12 @@ class SetScorer(nn.Module):
         self.heads = nn.ModuleDict(
             {kind: nn.Linear(2 * width, sum(self.splits[kind])) for kind in ("object", "clutter", "blocker")}
         )
+        # Index tensors and slot bounds, built once (a decision is a few hundred microseconds of small ops).
+        self.groups = (("postures", "posture"), ("objects", "object"), ("clutter", "clutter"))
+        self.groups += (("tables", "table"), ("obstacles", "obstacle"))
+        self.bounds = [int(b) for b in np.cumsum([1, *(getattr(capacity, g) for g, _ in self.groups)])]
+        self.columns = {kind: torch.tensor(columns) for kind, columns in RELATIVE_COLUMNS.items() if columns}
+        self.axes = {kind: torch.arange(len(columns)) % 2 for kind, columns in self.columns.items()}  # x, y, x, y
 
     def _tokens(self, flat: torch.Tensor, group: str, kind: str) -> tuple[torch.Tensor, torch.Tensor]:
         """``(tokens, present)`` of one group of slots: embedded features and presence flags.
@@ -237,26 +243,23 @@ class SetScorer(nn.Module):
         count = getattr(self.capacity, group)
         rows = flat[:, self.slices[group]].reshape(len(flat), count, len(FIELDS[kind]))
         parts = [rows[..., :1], rows[..., 1:] / COORD_SCALE]
-        if self.relative and RELATIVE_COLUMNS[kind]:
+        if self.relative and kind in self.columns:
             base = flat[:, self.slices["robot"]][:, None, :2]
-            columns = torch.tensor(RELATIVE_COLUMNS[kind])
-            offsets = base[..., torch.tensor([k % 2 for k in range(len(columns))])]  # x, y, x, y, ...
-            parts.append((rows[..., columns] - offsets) * rows[..., :1] / COORD_SCALE)
+            offsets = base[..., self.axes[kind]]
+            parts.append((rows[..., self.columns[kind]] - offsets) * rows[..., :1] / COORD_SCALE)
         return self.embed[kind](torch.cat(parts, dim=-1)), rows[..., 0] > 0.5
 
     def forward(self, flat: torch.Tensor) -> torch.Tensor:
         batch = len(flat)
         robot = self.embed["robot"](flat[:, : self.robot_width] / COORD_SCALE)[:, None, :]
-        groups = [("postures", "posture"), ("objects", "object"), ("clutter", "clutter")]
-        groups += [("tables", "table"), ("obstacles", "obstacle")]
         tokens, present = [robot], [torch.ones(batch, 1, dtype=torch.bool)]
-        for group, kind in groups:
+        for group, kind in self.groups:
             t, p = self._tokens(flat, group, kind)
             tokens.append(t)
             present.append(p)
         mixed = self.mixer(torch.cat(tokens, dim=1), src_key_padding_mask=~torch.cat(present, dim=1))
         context = mixed[:, :1, :]  # the robot token, after mixing: what every head also sees
-        bounds = np.cumsum([1, *(getattr(self.capacity, g) for g, _ in groups)])
+        bounds = self.bounds
         objects = mixed[:, bounds[1] : bounds[2]]
         clutter = mixed[:, bounds[2] : bounds[3]]
         blockers = mixed[:, bounds[3] : bounds[5]]
