@@ -129,7 +129,10 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
         network.load_state_dict(state)
     except (RuntimeError, KeyError, TypeError, EOFError, OSError) as error:
         raise RunFolderError(f"{weights} does not fit the network its config.json describes: {error}") from None
-    return BCPolicy(network, config, capacity, env)
+    policy = BCPolicy(network, config, capacity, env)
+    with torch.inference_mode():
+        policy.scores(torch.zeros(1, saved["features"]))  # trace it now, so that the first decision is not slower
+    return policy
 
 
 # ---------------------------------------------------------------------------- writing
