@@ -33,6 +33,7 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
+from expert.milp.conditional import add_conditional_cuts, conditional_bounds
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
@@ -50,7 +51,7 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional"}
 
 
 def optimality(extra_phases: int) -> str:
@@ -124,9 +125,10 @@ def plan(
     integral = bool(solver_options.pop("integral", True))
     use_bound = bool(solver_options.pop("lower_bound", True))
     fewest_cuts = bool(solver_options.pop("fewest_cuts", True))
+    conditional = bool(solver_options.pop("conditional", True))
     settings = SolverSettings(**solver_options)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
-    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts)
+    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts, conditional)
     try:
         return run.plan(lattice, holding, integral, use_bound, max_phases)
     except TimeUp:
@@ -143,6 +145,7 @@ class _Run:
     settings: SolverSettings
     extra_phases: int
     fewest_cuts: bool = True
+    conditional: bool = True
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
@@ -324,12 +327,14 @@ class _Run:
         stats, deadline = self.stats, self.deadline
         record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
         stats.setdefault("solves", []).append(record)
-        bound = windows = None
+        bound = windows = cond = None
         if pairs is not None:
             t_bound = time.perf_counter()
             bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
             windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
+            if self.conditional:
+                cond = conditional_bounds(problem, n_phases, pairs, deadline, last_at_end=fewest)
             stats["lower_bound_s"] += time.perf_counter() - t_bound
         t0 = time.perf_counter()
         try:
@@ -343,8 +348,14 @@ class _Run:
         stats["build_s"] += t1 - t0
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
+        incumbent = None
         if warm is not None:
             record["warm_start"] = add_warm_start(milp, warm)
+            known = phases_of(problem, warm)
+            if record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's value
+                incumbent = plan_objective(self.scenario, known)
+        if cond is not None:
+            record["conditional_fixed"] = add_conditional_cuts(milp, cond, incumbent)
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp
