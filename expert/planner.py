@@ -330,11 +330,13 @@ class _Run:
         bound = windows = cond = None
         if pairs is not None:
             t_bound = time.perf_counter()
-            bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
+            if self.conditional:  # its least value is min_objective's
+                cond = conditional_bounds(problem, n_phases, pairs, deadline, last_at_end=fewest)
+                bound = cond.least if cond.bound else -math.inf
+            else:
+                bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
             windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
-            if self.conditional:
-                cond = conditional_bounds(problem, n_phases, pairs, deadline, last_at_end=fewest)
             stats["lower_bound_s"] += time.perf_counter() - t_bound
         t0 = time.perf_counter()
         try:

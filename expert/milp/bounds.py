@@ -295,16 +295,7 @@ def cheapest_schedule(
     """
     pair = pair or PairCosts(problem, deadline=deadline)
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
-    grid, start_point = problem.grid, problem.scenario.robot.start
-    steps: dict = {}
-
-    def step(where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
-        if (where, entry, exit_box) not in steps:
-            travel = _gap_cost(grid, start_point, where, entry)
-            if kind == "push":
-                travel += _gap_cost(grid, start_point, entry, exit_box, touching=True)
-            steps[(where, entry, exit_box)] = (_step_cost(pair.free, problem, where, kind, entry), travel)
-        return steps[(where, entry, exit_box)]
+    step = pair.step
 
     def expand(state):
         delivered, held, pushed, _, phase, where = state
@@ -340,6 +331,22 @@ class PairCosts:
         self.actions = _actions_by_key(problem)
         self.free = free or Connectivity(problem, deadline)
         self.cache: dict = {}
+        self.steps: dict = {}
+
+    def step(self, where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
+        """Least phases and least travel (metres) from base set ``where`` (None: the start) through one pose.
+
+        The pose is entered at ``entry`` and left at ``exit_box``; a push's travel includes its stroke (cached).
+        """
+        key = (where, entry, exit_box)
+        found = self.steps.get(key)
+        if found is None:
+            grid, start = self.problem.grid, self.problem.scenario.robot.start
+            travel = _gap_cost(grid, start, where, entry)
+            if kind == "push":
+                travel += _gap_cost(grid, start, entry, exit_box, touching=True)
+            found = self.steps[key] = (_step_cost(self.free, self.problem, where, kind, entry), travel)
+        return found
 
     def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
         if (previous, key) not in self.cache:

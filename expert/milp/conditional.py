@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from expert.milp.bounds import PairCosts, _finished, _gap_cost, _moves, _step_cost
+from expert.milp.bounds import PairCosts, _finished, _moves
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.problem import Problem
@@ -47,6 +47,11 @@ class Conditional:
 
     n_phases: int
     bound: dict[tuple[Key, IndexBox], np.ndarray]  # per phase 0..N-1; inf where no plan does it
+
+    @property
+    def least(self) -> float:
+        """The least bound over every action, pose box and phase: :func:`expert.milp.bounds.min_objective`."""
+        return min((float(np.min(row)) for row in self.bound.values()), default=math.inf)
 
     def at(self, key: Key, exit_box: IndexBox, k: int) -> float:
         row = self.bound.get((key, exit_box))
@@ -68,18 +73,8 @@ def conditional_bounds(
     n = n_phases
     inf = math.inf
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
-    grid, start_point = problem.grid, problem.scenario.robot.start
     phases = np.arange(n, dtype=float)
-    step_memo: dict = {}
-
-    def step(where, kind, entry, exit_box):
-        memo_key = (where, entry, exit_box)
-        if memo_key not in step_memo:
-            travel = _gap_cost(grid, start_point, where, entry)
-            if kind == "push":
-                travel += _gap_cost(grid, start_point, entry, exit_box, touching=True)
-            step_memo[memo_key] = (_step_cost(pair.free, problem, where, kind, entry), travel)
-        return step_memo[memo_key]
+    step = pair.step
 
     # The states, level by level (each action adds one to the count of actions done).
     start = (frozenset(), problem.holding, frozenset(), None, None)
