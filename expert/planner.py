@@ -33,7 +33,7 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
-from expert.milp.conditional import add_conditional_cuts, conditional_bounds
+from expert.milp.conditional import add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
@@ -350,14 +350,13 @@ class _Run:
         stats["build_s"] += t1 - t0
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
-        incumbent = None
+        if cond is not None:
+            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
         if warm is not None:
             record["warm_start"] = add_warm_start(milp, warm)
             known = phases_of(problem, warm)
-            if record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's value
-                incumbent = plan_objective(self.scenario, known)
-        if cond is not None:
-            record["conditional_fixed"] = add_conditional_cuts(milp, cond, incumbent)
+            if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
+                record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp

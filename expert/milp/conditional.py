@@ -15,7 +15,7 @@ least of it over the states of one action and pose box gives :class:`Conditional
 ``bound[(kind, target), exit box][t]``, a lower bound on Eq. 1 of every plan that does
 the action from a pose of that box at phase ``t`` (``inf``: no plan does).
 
-The MILP uses it twice (:func:`add_conditional_cuts`), both exact:
+The MILP uses it twice (:func:`add_conditional_cuts`, :func:`fix_above`), both exact:
 
 - every action is done exactly once, so for each action ``a``
   ``Eq. 1 >= sum_{k, o in a} bound(o, k) z[k][o]`` is valid; the LP then pays for an
@@ -31,6 +31,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from pyscipopt import quicksum
 
 from expert.milp.bounds import PairCosts, _finished, _moves
 from expert.milp.deadline import NEVER, Deadline
@@ -167,10 +168,10 @@ def exit_box_of(option) -> IndexBox:
     return option.box.shifted(*option.push.cells) if option.push is not None else option.box
 
 
-def add_conditional_cuts(milp, conditional: Conditional, incumbent: float | None = None) -> int:
-    """The cuts and fixings of the module docstring; returns how many option binaries were fixed to 0.
+def add_conditional_cuts(milp, conditional: Conditional) -> int:
+    """The cuts of the module docstring; options with no bound (no plan does them at that phase) are fixed to 0.
 
-    ``incumbent``: Eq. 1 of a plan known to be feasible in this model (None: no fixing by it).
+    Returns how many were fixed.
     """
     model, problem = milp.model, milp.problem
     groups: dict[Key, list] = {}
@@ -180,7 +181,7 @@ def add_conditional_cuts(milp, conditional: Conditional, incumbent: float | None
             option = problem.options[o]
             key = (option.kind, option.target)
             value = conditional.at(key, exit_box_of(option), k)
-            if not math.isfinite(value) or (incumbent is not None and value > incumbent + 1e-6):
+            if not math.isfinite(value):
                 model.chgVarUb(z, 0.0)
                 fixed += 1
                 continue
@@ -189,6 +190,22 @@ def add_conditional_cuts(milp, conditional: Conditional, incumbent: float | None
         floor = min(value for value, _ in terms)
         if all(value <= floor + 1e-9 for value, _ in terms):
             continue
-        expr = sum((value - floor) * z for value, z in terms if value > floor + 1e-9)
+        expr = quicksum((value - floor) * z for value, z in terms if value > floor + 1e-9)
         model.addCons(milp.objective >= floor - 1e-6 + expr, name=f"conditional_{key[0]}_{key[1]}")
+    return fixed
+
+
+def fix_above(milp, conditional: Conditional, incumbent: float) -> int:
+    """Fix to 0 the options whose bound exceeds ``incumbent``, Eq. 1 of a plan SCIP accepted in this model.
+
+    No plan through them beats the one at hand, so the optimum stays in the model. Returns how many.
+    """
+    fixed = 0
+    for k, chosen in enumerate(milp.z):
+        for o, z in chosen.items():
+            option = milp.problem.options[o]
+            value = conditional.at((option.kind, option.target), exit_box_of(option), k)
+            if math.isfinite(value) and value > incumbent + 1e-6:
+                milp.model.chgVarUb(z, 0.0)
+                fixed += 1
     return fixed
