@@ -72,94 +72,96 @@ def conditional_bounds(
     no plan), as in :func:`expert.milp.bounds.min_objective`.
     """
     n = n_phases
-    inf = math.inf
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
-    phases = np.arange(n, dtype=float)
     step = pair.step
 
-    # The states, level by level (each action adds one to the count of actions done).
+    # The states (ids in order of discovery), level by level: each action adds one to the actions done,
+    # so every edge goes from one level to the next, and a level's edges are listed by their source.
     start = (frozenset(), problem.holding, frozenset(), None, None)
-    levels = [[start]]
-    edges: dict = {}
-    seen = {start}
-    while levels[-1]:
-        nxt_level = []
-        for state in levels[-1]:
+    states, ids = [start], {start: 0}
+    level_starts = [0, 1]  # states of level L: level_starts[L] .. level_starts[L + 1] - 1
+    edge_starts = [0]  # edges out of level L: edge_starts[L] .. edge_starts[L + 1] - 1
+    src: list[int] = []
+    dst: list[int] = []
+    qs: list[int] = []
+    ts: list[float] = []
+    while level_starts[-1] > level_starts[-2]:
+        for sid in range(level_starts[-2], level_starts[-1]):
             deadline.check()
-            delivered, held, pushed, _, where = state
-            out = []
+            delivered, held, pushed, _, where = states[sid]
             for key, (d, h, p) in _moves(problem, delivered, held, pushed):
                 for entry, exit_box in pair.actions[key].poses:
                     q, t = step(where, key[0], entry, exit_box)
                     if q > n - 1:
                         continue
                     succ = (d, h, p, key, exit_box)
-                    out.append((succ, q, t))
-                    if succ not in seen:
-                        seen.add(succ)
-                        nxt_level.append(succ)
-            edges[state] = out
-        levels.append(nxt_level)
+                    j = ids.get(succ)
+                    if j is None:
+                        j = ids[succ] = len(states)
+                        states.append(succ)
+                    src.append(sid)
+                    dst.append(j)
+                    qs.append(q)
+                    ts.append(t)
+        edge_starts.append(len(src))
+        level_starts.append(len(states))
+    count = len(states)
+    src_a, dst_a = np.asarray(src, dtype=np.intp), np.asarray(dst, dtype=np.intp)
+    q_a, t_a = np.asarray(qs, dtype=np.intp), np.asarray(ts, dtype=float)
+    cols = np.arange(n)
 
-    def bonus(state) -> np.ndarray:
-        """Eq. 1's ``W1 t`` for arriving at ``state`` at each phase ``t`` (inf where it cannot arrive)."""
-        key = state[3]
-        if key is None or key[0] != "place":
-            return np.zeros(n)
-        if last_at_end and _finished(problem, state[0], state[2]):
-            out = np.full(n, inf)
-            out[n - 1] = DELIVERY_BONUS * (n - 1)
-            return out
-        return DELIVERY_BONUS * phases
-
-    # Forward: arrive[s][t], the cheapest path to s at exactly t, then slack (prefix minimum) and the bonus.
-    forward: dict = {}
-    arrive: dict = {start: np.concatenate(([0.0], np.full(n - 1, inf)))}
-    for level in levels:
-        for state in level:
-            deadline.check()
-            row = arrive.pop(state, None)
-            if row is None:
-                forward[state] = np.full(n, inf)
-                continue
-            row = (np.minimum.accumulate(row) if state[3] is not None else row) + bonus(state)
-            forward[state] = row
-            if not np.isfinite(row).any():
-                continue
-            for succ, q, t in edges[state]:
-                shifted = np.full(n, inf)
-                shifted[q:] = row[: n - q] + t
-                if succ in arrive:
-                    np.minimum(arrive[succ], shifted, out=arrive[succ])
-                else:
-                    arrive[succ] = shifted
-
-    # Backward: leave[s][t], the cheapest way to finish from s at t; through[s'][t] = bonus + leave, suffix minimum.
-    suffix: dict = {}
-    bound: dict = {}
-    for level in reversed(levels):
-        for state in level:
-            deadline.check()
-            if _finished(problem, state[0], state[2]):
-                leave = np.zeros(n)
+    # Eq. 1's W1 t for arriving at each state at phase t (inf where a last place cannot be).
+    bonus = np.zeros((count, n))
+    finished = np.zeros(count, dtype=bool)
+    for sid, (delivered, _, pushed, key, _) in enumerate(states):
+        finished[sid] = _finished(problem, delivered, pushed)
+        if key is not None and key[0] == "place":
+            if last_at_end and finished[sid]:
+                bonus[sid, : n - 1] = math.inf
+                bonus[sid, n - 1] = DELIVERY_BONUS * (n - 1)
             else:
-                leave = np.full(n, inf)
-                for succ, q, t in edges[state]:
-                    later = suffix.get(succ)
-                    if later is None:
-                        continue
-                    shifted = np.full(n, inf)
-                    shifted[: n - q] = later[q:] + t
-                    np.minimum(leave, shifted, out=leave)
-            through = bonus(state) + leave
-            suffix[state] = np.minimum.accumulate(through[::-1])[::-1]
-            if state[3] is not None:
-                total = forward[state] + leave + constant
-                slot = (state[3], state[4])
-                if slot in bound:
-                    np.minimum(bound[slot], total, out=bound[slot])
-                else:
-                    bound[slot] = total
+                bonus[sid] = DELIVERY_BONUS * cols
+
+    # Forward: the cheapest path to s at phase t, with slack (a prefix minimum over t), bonus included.
+    forward = np.full((count, 2 * n), math.inf)  # left half: inf, so that a shift by q reads inf
+    forward[0, n] = 0.0
+    for level in range(len(edge_starts) - 1):
+        e0, e1 = edge_starts[level], edge_starts[level + 1]
+        if e0 == e1:
+            continue
+        deadline.check()
+        order = e0 + np.argsort(dst_a[e0:e1], kind="stable")
+        targets = dst_a[order]
+        values = forward[src_a[order][:, None], (n - q_a[order])[:, None] + cols] + t_a[order][:, None]
+        firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
+        arrive = np.minimum.reduceat(values, firsts, axis=0)
+        reached = targets[firsts]
+        forward[reached, n:] = np.minimum.accumulate(arrive, axis=1) + bonus[reached]
+    forward = forward[:, n:]
+
+    # Backward: the cheapest way to finish from s at phase t; through = bonus + leave, suffix minimum over t.
+    leave = np.full((count, n), math.inf)
+    leave[finished] = 0.0
+    suffix = np.full((count, 2 * n), math.inf)  # right half: inf (no phase beyond N - 1)
+    for level in range(len(level_starts) - 2, -1, -1):
+        deadline.check()
+        e0, e1 = edge_starts[level], edge_starts[level + 1] if level + 1 < len(edge_starts) else len(src)
+        if e1 > e0:
+            sources = src_a[e0:e1]
+            values = suffix[dst_a[e0:e1][:, None], q_a[e0:e1][:, None] + cols] + t_a[e0:e1][:, None]
+            firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
+            leave[sources[firsts]] = np.minimum.reduceat(values, firsts, axis=0)
+        rows = slice(level_starts[level], level_starts[level + 1])
+        suffix[rows, :n] = np.minimum.accumulate((bonus[rows] + leave[rows])[:, ::-1], axis=1)[:, ::-1]
+
+    total = forward + leave + constant
+    bound: dict = {}
+    for sid in range(1, count):
+        slot = (states[sid][3], states[sid][4])
+        if slot in bound:
+            np.minimum(bound[slot], total[sid], out=bound[slot])
+        else:
+            bound[slot] = total[sid].copy()
     return Conditional(n, bound)
 
 
