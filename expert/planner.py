@@ -94,6 +94,9 @@ def plan(
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
             ``N - 1`` is proven to admit no plan, :mod:`expert.milp.fewest`),
+            ``conditional`` (bool, default True: Eq. 1's lower bound per action, pose box and
+            phase as cuts, and the options that cannot beat the warm start fixed to 0,
+            :mod:`expert.milp.conditional`),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
