@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from pyscipopt import quicksum
 
-from expert.milp.bounds import PairCosts, _finished, _moves
+from expert.milp.bounds import PairCosts, all_done, skeleton_moves
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.problem import Problem
@@ -89,7 +89,7 @@ def conditional_bounds(
         for sid in range(level_starts[-2], level_starts[-1]):
             deadline.check()
             delivered, held, pushed, _, where = states[sid]
-            for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+            for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
                 for entry, exit_box in pair.actions[key].poses:
                     q, t = step(where, key[0], entry, exit_box)
                     if q > n - 1:
@@ -114,7 +114,7 @@ def conditional_bounds(
     bonus = np.zeros((count, n))
     finished = np.zeros(count, dtype=bool)
     for sid, (delivered, _, pushed, key, _) in enumerate(states):
-        finished[sid] = _finished(problem, delivered, pushed)
+        finished[sid] = all_done(problem, delivered, pushed)
         if key is not None and key[0] == "place":
             if last_at_end and finished[sid]:
                 bonus[sid, : n - 1] = math.inf
