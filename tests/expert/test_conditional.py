@@ -72,3 +72,26 @@ def test_an_action_at_a_phase_too_early_for_it_has_no_bound():
     assert places and all(math.isinf(row[1]) for row in places.values())  # a place needs a pick before it
     for object_id in problem.deliver:  # but every object can be placed at some later phase
         assert any(math.isfinite(float(np.min(row))) for (key, _), row in places.items() if key[1] == object_id)
+
+
+@pytest.mark.parametrize("extra", [1, 2])
+def test_extra_phases_keep_their_optimum(extra):
+    """The ``N + k`` model (idle phases allowed, no fewest-phases cuts) gets the cuts too: same answer as without."""
+    scenario = bench_cases.multi(2, np.random.default_rng(3))
+    with_cuts = plan(scenario, time_limit=60, extra_phases=extra)
+    without = plan(scenario, time_limit=60, extra_phases=extra, conditional=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts) == []
+
+
+def test_an_object_in_the_hand_keeps_its_optimum():
+    scenario = bench_cases.multi(3, np.random.default_rng(4))
+    held = scenario.objects[0].id
+    with_cuts = plan(scenario, time_limit=60, holding=held)
+    without = plan(scenario, time_limit=60, holding=held, conditional=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts, holding=held) == []
