@@ -33,7 +33,7 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
-from expert.milp.conditional import add_conditional_cuts, conditional_bounds, fix_above
+from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
@@ -152,6 +152,7 @@ class _Run:
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
+    conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -221,10 +222,10 @@ class _Run:
         first = max(3, proven)
         stats["lower_bound"] = first
         stats["lower_bound_s"] += time.perf_counter() - t_bound
-        if many:
-            self.better_first_plan(problem, lattice, pairs, first)
-        last = max_phases if max_phases is not None else first + EXTRA_PHASES
         fewer_infeasible = first == proven  # N - 1 phases proven to admit no plan
+        if many:
+            self.better_first_plan(problem, lattice, pairs, first, fewer_infeasible and self.fewest_cuts)
+        last = max_phases if max_phases is not None else first + EXTRA_PHASES
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
             outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
@@ -276,7 +277,9 @@ class _Run:
         if found is not None:
             self._keep_decoupled(found, "nearest")
 
-    def better_first_plan(self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int) -> None:
+    def better_first_plan(
+        self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int, fewest: bool
+    ) -> None:
         """The decoupled plan again in the order of the relaxation's cheapest schedule, with optimal
         sub-plans, then two objects at a time (while the best has more than ``n_phases``
         phases, the lower bound, or is still the first plan), in ``DECOUPLED_SHARE`` of the
@@ -286,12 +289,18 @@ class _Run:
         greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
         5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
         the first plan had the lower bound's phases and the schedule's one phase more.
+
+        ``fewest``: the model with ``n_phases`` will get the fewest-phases cuts; the
+        conditional bounds that give the order are then the ones that model uses (computed once).
         """
         t0 = time.perf_counter()
         order = list(problem.deliver)
         if pairs is not None:
-            _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
-            picks = [key[1] for key, _ in schedule if key[0] == "pick"]
+            if self.conditional:
+                picks = self.conditional_bounds(problem, n_phases, pairs, fewest).order("pick")
+            else:
+                _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
+                picks = [key[1] for key, _ in schedule if key[0] == "pick"]
             order = picks + [i for i in order if i not in picks]
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
         for lookahead in (1, 2):
@@ -308,6 +317,13 @@ class _Run:
         self.stats["decoupled_s"] = self.stats.get("decoupled_s", 0.0) + time.perf_counter() - t0
         if self.best is not None:
             self.warm = steps_of(problem, self.best[1])
+
+    def conditional_bounds(self, problem: Problem, n_phases: int, pairs: PairCosts, fewest: bool) -> Conditional:
+        """:func:`expert.milp.conditional.conditional_bounds`, once per phase count and ``fewest``."""
+        key = (n_phases, fewest)
+        if key not in self.conditionals:
+            self.conditionals[key] = conditional_bounds(problem, n_phases, pairs, self.deadline, last_at_end=fewest)
+        return self.conditionals[key]
 
     def _keep_decoupled(self, phases: tuple, how: str) -> None:
         self.best = ("feasible", phases)
@@ -334,7 +350,7 @@ class _Run:
         if pairs is not None:
             t_bound = time.perf_counter()
             if self.conditional:  # its least value is min_objective's
-                cond = conditional_bounds(problem, n_phases, pairs, deadline, last_at_end=fewest)
+                cond = self.conditional_bounds(problem, n_phases, pairs, fewest)
                 bound = cond.least if cond.bound else -math.inf
             else:
                 bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)

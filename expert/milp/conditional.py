@@ -54,6 +54,23 @@ class Conditional:
         """The least bound over every action, pose box and phase: :func:`expert.milp.bounds.min_objective`."""
         return min((float(np.min(row)) for row in self.bound.values()), default=math.inf)
 
+    def order(self, kind: str) -> list[str]:
+        """Targets of the actions of ``kind``, by the first phase at which one lies on a cheapest path.
+
+        A cheapest path of the relaxation is the schedule :func:`expert.milp.bounds.cheapest_schedule`
+        finds; where several tie, an action takes its earliest phase over them. Actions on no
+        cheapest path are left out.
+        """
+        least = self.least
+        first: dict[str, int] = {}
+        for (key, _), row in self.bound.items():
+            if key[0] != kind:
+                continue
+            hits = np.flatnonzero(row <= least + 1e-6)
+            if hits.size:
+                first[key[1]] = min(first.get(key[1], self.n_phases), int(hits[0]))
+        return sorted(first, key=lambda target: (first[target], target))
+
     def at(self, key: Key, exit_box: IndexBox, k: int) -> float:
         row = self.bound.get((key, exit_box))
         return math.inf if row is None else float(row[k])

@@ -14,7 +14,7 @@ import pytest
 
 from expert import bench_cases
 from expert.decoupled import steps_of
-from expert.milp.bounds import Connectivity, PairCosts, min_objective
+from expert.milp.bounds import Connectivity, PairCosts, cheapest_schedule, min_objective, skeleton
 from expert.milp.conditional import conditional_bounds, exit_box_of
 from expert.milp.problem import prepare
 from expert.planner import plan
@@ -95,3 +95,15 @@ def test_an_object_in_the_hand_keeps_its_optimum():
     assert len(with_cuts.phases) == len(without.phases)
     assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
     assert validate_plan(scenario, with_cuts, holding=held) == []
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_order_of_picks_is_the_cheapest_schedules(seed):
+    """The decoupled plan's order, read off the bounds, is the one ``cheapest_schedule`` finds."""
+    scenario = bench_cases.multi(4, np.random.default_rng(seed))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem, Connectivity(problem))
+    n_phases = skeleton(problem, pairs.free).phases + 1
+    _, schedule = cheapest_schedule(problem, n_phases, pairs)
+    picks = [key[1] for key, _ in schedule if key[0] == "pick"]
+    assert conditional_bounds(problem, n_phases, pairs).order("pick") == picks
