@@ -33,6 +33,7 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
+from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
@@ -50,7 +51,7 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional"}
 
 
 def optimality(extra_phases: int) -> str:
@@ -93,6 +94,9 @@ def plan(
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
             ``N - 1`` is proven to admit no plan, :mod:`expert.milp.fewest`),
+            ``conditional`` (bool, default True: Eq. 1's lower bound per action, pose box and
+            phase as cuts, and the options that cannot beat the warm start fixed to 0,
+            :mod:`expert.milp.conditional`),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
@@ -124,9 +128,10 @@ def plan(
     integral = bool(solver_options.pop("integral", True))
     use_bound = bool(solver_options.pop("lower_bound", True))
     fewest_cuts = bool(solver_options.pop("fewest_cuts", True))
+    conditional = bool(solver_options.pop("conditional", True))
     settings = SolverSettings(**solver_options)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
-    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts)
+    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts, conditional)
     try:
         return run.plan(lattice, holding, integral, use_bound, max_phases)
     except TimeUp:
@@ -143,9 +148,11 @@ class _Run:
     settings: SolverSettings
     extra_phases: int
     fewest_cuts: bool = True
+    conditional: bool = True
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
+    conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -215,10 +222,10 @@ class _Run:
         first = max(3, proven)
         stats["lower_bound"] = first
         stats["lower_bound_s"] += time.perf_counter() - t_bound
-        if many:
-            self.better_first_plan(problem, lattice, pairs, first)
-        last = max_phases if max_phases is not None else first + EXTRA_PHASES
         fewer_infeasible = first == proven  # N - 1 phases proven to admit no plan
+        if many:
+            self.better_first_plan(problem, lattice, pairs, first, fewer_infeasible and self.fewest_cuts)
+        last = max_phases if max_phases is not None else first + EXTRA_PHASES
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
             outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
@@ -270,7 +277,9 @@ class _Run:
         if found is not None:
             self._keep_decoupled(found, "nearest")
 
-    def better_first_plan(self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int) -> None:
+    def better_first_plan(
+        self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int, fewest: bool
+    ) -> None:
         """The decoupled plan again in the order of the relaxation's cheapest schedule, with optimal
         sub-plans, then two objects at a time (while the best has more than ``n_phases``
         phases, the lower bound, or is still the first plan), in ``DECOUPLED_SHARE`` of the
@@ -280,12 +289,22 @@ class _Run:
         greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
         5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
         the first plan had the lower bound's phases and the schedule's one phase more.
+
+        ``fewest``: the model with ``n_phases`` will get the fewest-phases cuts; the
+        conditional bounds that give the order are then the ones that model uses (computed once).
         """
+        if pairs is not None and self.conditional:  # a bound of the first model: counted as bound time
+            t_bound = time.perf_counter()
+            self.conditional_bounds(problem, n_phases, pairs, fewest)
+            self.stats["lower_bound_s"] += time.perf_counter() - t_bound
         t0 = time.perf_counter()
         order = list(problem.deliver)
         if pairs is not None:
-            _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
-            picks = [key[1] for key, _ in schedule if key[0] == "pick"]
+            if self.conditional:
+                picks = self.conditional_bounds(problem, n_phases, pairs, fewest).order("pick")
+            else:
+                _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
+                picks = [key[1] for key, _ in schedule if key[0] == "pick"]
             order = picks + [i for i in order if i not in picks]
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
         for lookahead in (1, 2):
@@ -302,6 +321,13 @@ class _Run:
         self.stats["decoupled_s"] = self.stats.get("decoupled_s", 0.0) + time.perf_counter() - t0
         if self.best is not None:
             self.warm = steps_of(problem, self.best[1])
+
+    def conditional_bounds(self, problem: Problem, n_phases: int, pairs: PairCosts, fewest: bool) -> Conditional:
+        """:func:`expert.milp.conditional.conditional_bounds`, once per phase count and ``fewest``."""
+        key = (n_phases, fewest)
+        if key not in self.conditionals:
+            self.conditionals[key] = conditional_bounds(problem, n_phases, pairs, self.deadline, last_at_end=fewest)
+        return self.conditionals[key]
 
     def _keep_decoupled(self, phases: tuple, how: str) -> None:
         self.best = ("feasible", phases)
@@ -324,10 +350,14 @@ class _Run:
         stats, deadline = self.stats, self.deadline
         record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
         stats.setdefault("solves", []).append(record)
-        bound = windows = None
+        bound = windows = cond = None
         if pairs is not None:
             t_bound = time.perf_counter()
-            bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
+            if self.conditional:  # its least value is min_objective's
+                cond = self.conditional_bounds(problem, n_phases, pairs, fewest)
+                bound = cond.least if math.isfinite(cond.least) else -math.inf  # no path: no cut, as min_objective
+            else:
+                bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
             windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
             record["objective_bound"] = bound if math.isfinite(bound) else None
             stats["lower_bound_s"] += time.perf_counter() - t_bound
@@ -343,8 +373,13 @@ class _Run:
         stats["build_s"] += t1 - t0
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
+        if cond is not None:
+            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
         if warm is not None:
             record["warm_start"] = add_warm_start(milp, warm)
+            known = phases_of(problem, warm)
+            if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
+                record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp

@@ -192,7 +192,7 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
 
     def expand(state):
         delivered, held, pushed, where = state
-        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
             action = actions[key]
             for entry, exit_box in action.poses:
                 yield _step_cost(free, problem, where, action.kind, entry), (d, h, p, exit_box)
@@ -210,7 +210,7 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
     return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(count + 1)))
 
 
-def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
+def skeleton_moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
     """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``."""
     moves = []
     if held is not None:
@@ -226,7 +226,8 @@ def _moves(problem: Problem, delivered: frozenset, held: str | None, pushed: fro
     return moves
 
 
-def _finished(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
+def all_done(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
+    """Whether a skeleton state has every object delivered and every covering piece pushed."""
     return len(delivered) == len(problem.deliver) and len(pushed) == len(problem.pushes.pushable)
 
 
@@ -243,7 +244,7 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
 
     def expand(state):
         delivered, held, pushed, where = state
-        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
             for entry, exit_box in actions[key].poses:
                 step = _gap_cost(grid, start, where, entry)
                 if key[0] == "push":
@@ -251,7 +252,7 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
                 yield step, (d, h, p, exit_box)
 
     for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
-        if _finished(problem, delivered, pushed):
+        if all_done(problem, delivered, pushed):
             return spent
     return 0.0
 
@@ -295,21 +296,12 @@ def cheapest_schedule(
     """
     pair = pair or PairCosts(problem, deadline=deadline)
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
-    grid, start_point = problem.grid, problem.scenario.robot.start
-    steps: dict = {}
-
-    def step(where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
-        if (where, entry, exit_box) not in steps:
-            travel = _gap_cost(grid, start_point, where, entry)
-            if kind == "push":
-                travel += _gap_cost(grid, start_point, entry, exit_box, touching=True)
-            steps[(where, entry, exit_box)] = (_step_cost(pair.free, problem, where, kind, entry), travel)
-        return steps[(where, entry, exit_box)]
+    step = pair.step
 
     def expand(state):
         delivered, held, pushed, _, phase, where = state
-        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
-            last = last_at_end and key[0] == "place" and _finished(problem, d, p)
+        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
+            last = last_at_end and key[0] == "place" and all_done(problem, d, p)
             for entry, exit_box in pair.actions[key].poses:
                 phases, travel = step(where, key[0], entry, exit_box)
                 reached = phase + phases
@@ -323,7 +315,7 @@ def cheapest_schedule(
     start = (frozenset(), problem.holding, frozenset(), None, 0, None)
     parents: dict = {}
     for spent, state in settle(start, expand, deadline, parents=parents):
-        if _finished(problem, state[0], state[2]):
+        if all_done(problem, state[0], state[2]):
             schedule = []
             while state != start:
                 schedule.append((state[3], state[4]))
@@ -340,6 +332,22 @@ class PairCosts:
         self.actions = _actions_by_key(problem)
         self.free = free or Connectivity(problem, deadline)
         self.cache: dict = {}
+        self.steps: dict = {}
+
+    def step(self, where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
+        """Least phases and least travel (metres) from base set ``where`` (None: the start) through one pose.
+
+        The pose is entered at ``entry`` and left at ``exit_box``; a push's travel includes its stroke (cached).
+        """
+        key = (where, entry, exit_box)
+        found = self.steps.get(key)
+        if found is None:
+            grid, start = self.problem.grid, self.problem.scenario.robot.start
+            travel = _gap_cost(grid, start, where, entry)
+            if kind == "push":
+                travel += _gap_cost(grid, start, entry, exit_box, touching=True)
+            found = self.steps[key] = (_step_cost(self.free, self.problem, where, kind, entry), travel)
+        return found
 
     def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
         if (previous, key) not in self.cache:
@@ -385,7 +393,7 @@ def action_windows(
 
     def expand(state):
         delivered, held, pushed, last = state
-        for key, (d, h, p) in _moves(problem, delivered, held, pushed):
+        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
             yield pair(last, key)[0], (d, h, p, key)
 
     start = (frozenset(), problem.holding, frozenset(), None)
@@ -399,7 +407,7 @@ def action_windows(
         if key is None:
             continue
         last = n_phases - 1 - remaining[state]
-        if last_at_end and phase <= n_phases - 1 and _finished(problem, state[0], state[2]):
+        if last_at_end and phase <= n_phases - 1 and all_done(problem, state[0], state[2]):
             phase = n_phases - 1
         at = set(range(max(phase, 1), last + 1))
         phases.setdefault(key, set()).update(at)
@@ -455,10 +463,10 @@ def _phases_still_needed(
                 continue
             deadline.check()
             delivered, held, pushed, last = state
-            if _finished(problem, delivered, pushed):
+            if all_done(problem, delivered, pushed):
                 remaining[stack.pop()] = 0
                 continue
-            nexts = [(key, (d, h, p, key)) for key, (d, h, p) in _moves(problem, delivered, held, pushed)]
+            nexts = [(key, (d, h, p, key)) for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed)]
             todo = [nxt for _, nxt in nexts if nxt not in remaining]
             if todo:
                 stack.extend(todo)

@@ -44,4 +44,5 @@ def set_objective(milp: Milp, lower_bound: float | None = None) -> None:
     objective = -DELIVERY_BONUS * bonus + resolution * travel + already
     if lower_bound is not None and lower_bound > -1e9:
         milp.model.addCons(objective >= lower_bound - 1e-6, name="objective_lower_bound")
+    milp.objective = objective
     milp.model.setObjective(objective, sense="minimize")

@@ -51,6 +51,7 @@ class Milp:
     gsp: dict[str, list] = field(default_factory=dict)
     delta: dict[str, list] = field(default_factory=dict)
     pushed: dict[str, list] = field(default_factory=dict)
+    objective: Any = None  # Eq. 1 as a linear expression (set by motion.set_objective)
     regions: list = field(default_factory=list)  # Eq. 18: (move k, planes, binaries or None when hard)
     _pushed_dir: dict[tuple[str, str], list] = field(default_factory=dict)
     _arm: list[list] = field(default_factory=list)

@@ -33,13 +33,18 @@ def test_decoupled_plan_is_valid(family, count):
 
 
 def test_short_time_limit_returns_the_decoupled_plan_or_better():
-    """Five objects at a 1 s limit: SCIP rarely finishes, but the answer is a valid plan with its provenance."""
+    """Five objects at a 1 s limit: a valid plan with its provenance, the decoupled plan or better.
+
+    Better: fewer phases (Eq. 1 is not comparable across phase counts), or as many and Eq. 1 no higher.
+    """
     scenario = bench_cases.multi(5, np.random.default_rng(2024))
     result = plan(scenario, time_limit=1.0)
     assert result.status in ("feasible", "optimal"), result.stats
     assert validate_plan(scenario, result) == []
     assert result.stats["decoupled_phases"] >= result.stats["lower_bound"]
-    assert result.objective <= result.stats["decoupled_objective"] + 1e-6
+    assert len(result.phases) <= result.stats["decoupled_phases"]
+    if len(result.phases) == result.stats["decoupled_phases"]:
+        assert result.objective <= result.stats["decoupled_objective"] + 1e-6
 
 
 def test_decoupled_plan_warm_starts_a_model_with_as_many_phases():

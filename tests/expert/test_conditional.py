@@ -1,0 +1,109 @@
+"""Eq. 1's bounds given an action's pose box and phase (``expert.milp.conditional``) are lower bounds.
+
+Checked against optimal plans found without them: every action of the optimum is done at
+a pose box and phase whose bound is at most the optimum's Eq. 1, the least bound is
+``min_objective``, and the planner with the cuts and fixings finds the same optimum.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from expert import bench_cases
+from expert.decoupled import steps_of
+from expert.milp.bounds import Connectivity, PairCosts, cheapest_schedule, min_objective, skeleton
+from expert.milp.conditional import conditional_bounds, exit_box_of
+from expert.milp.problem import prepare
+from expert.planner import plan
+from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
+
+
+def _cases():
+    rng = np.random.default_rng(11)
+    cases = [bench_cases.basic("II", rng), bench_cases.push("E", rng), bench_cases.corridor(rng)]
+    cases += [bench_cases.multi(2, rng), bench_cases.multi(3, rng), bench_cases.multi(3, rng)]
+    cases += [bench_cases.covered(2, rng), bench_cases.covered(2, rng)]
+    return cases
+
+
+CASES = _cases()
+
+
+@pytest.mark.parametrize("scenario", CASES, ids=[f"{k}-{s.name}" for k, s in enumerate(CASES)])
+def test_the_optimum_respects_every_conditional_bound(scenario):
+    without = plan(scenario, time_limit=60, conditional=False)
+    assert without.status == "optimal"
+    lattice = Lattice.over(scenario.area, 0.05)
+    problem = prepare(scenario, lattice)
+    pairs = PairCosts(problem, Connectivity(problem))
+    n_phases = len(without.phases)
+    last_at_end = without.stats["solves"][-1]["fewest_cuts"]
+    conditional = conditional_bounds(problem, n_phases, pairs, last_at_end=last_at_end)
+    least = min(float(np.min(row)) for row in conditional.bound.values())
+    assert least == pytest.approx(min_objective(problem, n_phases, pairs, last_at_end=last_at_end))
+    steps = steps_of(problem, without.phases)
+    assert steps is not None
+    actions = 0
+    for k, step in enumerate(steps, start=1):
+        if step.option is None:
+            continue
+        actions += 1
+        value = conditional.at((step.option.kind, step.option.target), exit_box_of(step.option), k)
+        assert math.isfinite(value)
+        assert value <= without.objective + 1e-6, (k, step.option.kind, step.option.target)
+    assert actions == 2 * len(scenario.objects) + len(problem.pushes.pushable)
+    with_cuts = plan(scenario, time_limit=60)
+    assert with_cuts.status == "optimal"
+    assert len(with_cuts.phases) == n_phases
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts) == []
+
+
+def test_an_action_at_a_phase_too_early_for_it_has_no_bound():
+    scenario = bench_cases.multi(3, np.random.default_rng(11))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem, Connectivity(problem))
+    conditional = conditional_bounds(problem, 12, pairs)
+    places = {(key, box): row for (key, box), row in conditional.bound.items() if key[0] == "place"}
+    assert places and all(math.isinf(row[1]) for row in places.values())  # a place needs a pick before it
+    for object_id in problem.deliver:  # but every object can be placed at some later phase
+        assert any(math.isfinite(float(np.min(row))) for (key, _), row in places.items() if key[1] == object_id)
+
+
+@pytest.mark.parametrize("extra", [1, 2])
+def test_extra_phases_keep_their_optimum(extra):
+    """The ``N + k`` model (idle phases allowed, no fewest-phases cuts) gets the cuts too: same answer as without."""
+    scenario = bench_cases.multi(2, np.random.default_rng(3))
+    with_cuts = plan(scenario, time_limit=60, extra_phases=extra)
+    without = plan(scenario, time_limit=60, extra_phases=extra, conditional=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts) == []
+
+
+def test_an_object_in_the_hand_keeps_its_optimum():
+    scenario = bench_cases.multi(3, np.random.default_rng(4))
+    held = scenario.objects[0].id
+    with_cuts = plan(scenario, time_limit=60, holding=held)
+    without = plan(scenario, time_limit=60, holding=held, conditional=False)
+    assert with_cuts.status == without.status == "optimal"
+    assert len(with_cuts.phases) == len(without.phases)
+    assert with_cuts.objective == pytest.approx(without.objective, abs=1e-6)
+    assert validate_plan(scenario, with_cuts, holding=held) == []
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_order_of_picks_is_the_cheapest_schedules(seed):
+    """The decoupled plan's order, read off the bounds, is the one ``cheapest_schedule`` finds."""
+    scenario = bench_cases.multi(4, np.random.default_rng(seed))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem, Connectivity(problem))
+    n_phases = skeleton(problem, pairs.free).phases + 1
+    _, schedule = cheapest_schedule(problem, n_phases, pairs)
+    picks = [key[1] for key, _ in schedule if key[0] == "pick"]
+    assert conditional_bounds(problem, n_phases, pairs).order("pick") == picks
