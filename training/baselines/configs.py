@@ -68,8 +68,10 @@ class DaggerOptions:
     time_limit: float = 10.0  # seconds per planning call of the expert
     epochs: int = 40  # epochs of each retraining
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
+    learner_families: tuple[str, ...] = ()  # learner episode k draws from the k-th (cycled); () = the run's family
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "learner_families", tuple(self.learner_families))  # a list from config.json too
         if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
             raise ValueError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
         if self.time_limit <= 0:

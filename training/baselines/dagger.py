@@ -10,7 +10,11 @@ the allowed candidate that stands for it (an expert action no candidate expresse
 the expert's idle fallback, gives no label, unless ``nearest_moves``: then an expert move
 no candidate expresses is labelled with the allowed move nearest it,
 :func:`training.learning.expert_phases.nearest_move`; a state visited again in the same episode,
-as by a learner going round in circles, is labelled once). The labelled states join the aggregate
+as by a learner going round in circles, is labelled once). ``learner_families`` aims the
+learner episodes at chosen families (episode ``k`` of an iteration draws from the
+``k``-th, cycled; for example ``push`` and ``multi-2``, the ``training`` family's sources
+where the learners fail most), while iteration 0 and the held-out measurement stay on
+``family``. The labelled states join the aggregate
 and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), as in
 Ross et al. (2011) with beta = 0 after the first iteration.
 
@@ -32,6 +36,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
@@ -50,6 +55,11 @@ class LabelTask:
     time_limit: float
     network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
+    families: tuple[str, ...] = ()  # episode k draws from families[k % len(families)]; () = family
+
+    def family_of(self, index: int) -> str:
+        """The family episode ``index`` draws from."""
+        return self.families[index % len(self.families)] if self.families else self.family
 
 
 @dataclass
@@ -73,7 +83,7 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     from training.learning.expert_phases import nearest_move
 
     torch.set_num_threads(1)
-    env = gym.make(runs.ENV_ID, family=task.family)
+    env = gym.make(runs.ENV_ID, family=task.family_of(index))
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit)
         learner = _learner(task.network) if task.network is not None else None
@@ -161,6 +171,8 @@ def train_dagger(
     from training.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
+    for name in options.learner_families:
+        get_family(name)  # ValueError for an unknown name, before any work
     probe = gym.make(runs.ENV_ID, family=family)
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space["observation"].shape[0])
@@ -193,7 +205,7 @@ def train_dagger(
                 base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
                 task = LabelTask(family, base, options.time_limit,
                                  _network_task(network, config, capacity, candidates, features),
-                                 options.nearest_moves)  # fmt: skip
+                                 options.nearest_moves, options.learner_families)  # fmt: skip
                 count = options.episodes_per_iteration
             labelled: dict[int, LabelledEpisode] = {}
             for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
