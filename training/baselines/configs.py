@@ -25,6 +25,7 @@ class BCConfig:
     relative: bool = True  # append positions relative to the base (mlp: and clutter relative to goals; set: per token)
     push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
+    avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):
