@@ -265,6 +265,8 @@ def test_learner_families_aim_the_learner_episodes_and_leave_iteration_0(tmp_pat
     assert first_aimed == first and before == 0  # iteration 0: the run's own family, the same labels
     assert after > 0  # the learner's episodes were drawn from push (clutter on the goal)
     assert runs.read_config(tmp_path / "push")["options"]["learner_families"] == ["push"]
+    resumed = train_dagger("basic", aimed, TINY_NET, tmp_path / "push", resume=True, progress=False)
+    assert int(resumed[0]["expert_labels"]) == first_aimed  # the complete run, loaded: the same options
 
 
 def test_learner_families_on_the_command_line(capsys, tmp_path: Path) -> None:

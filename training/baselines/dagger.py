@@ -178,6 +178,7 @@ def train_dagger(
     features = int(probe.observation_space["observation"].shape[0])
     probe.close()
     run_options = {"family": family, **asdict(options), **asdict(config)}
+    run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
     config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
