@@ -168,6 +168,26 @@ def test_avoid_returns_knows_ends_per_world_and_needs_the_phase_layout():
         )
 
 
+@pytest.mark.parametrize("rule", [False, True])
+def test_push_after_approach_leaves_out_a_second_approach_in_a_row(rule: bool):
+    layout = PhaseLayout.for_postures(capacity=Capacity())
+    first, second = layout.index("approach", 0, 0, 0, 0, 0), layout.index("approach", 1, 2, 1, 3, 1)
+    push = layout.index("push", 0, 0, 0, 0)
+    config = BCConfig(avoid_repeats=False, push_after_approach=rule)
+    policy = BCPolicy(_Ranked(layout.size, [first, second, push]), config, Capacity())
+    mask = np.zeros(layout.size, bool)
+    mask[[first, second, push]] = True
+    assert int(policy.predict(_at(0, 0), action_masks=mask)[0]) == first
+    after = mask.copy()
+    after[first] = False  # where the base now stands
+    assert int(policy.predict(_at(1, 0), action_masks=after)[0]) == (push if rule else second)
+    only_approaches = after.copy()
+    only_approaches[push] = False
+    policy.reset()
+    policy.predict(_at(0, 0), action_masks=mask)
+    assert int(policy.predict(_at(1, 0), action_masks=only_approaches)[0]) == second  # nothing else is allowed
+
+
 def _one_goal_one_clutter() -> np.ndarray:
     """An observation vector with one object (goal at 1, 1, radius 0.035) and one 0.2 m piece of clutter on it."""
     capacity = Capacity()

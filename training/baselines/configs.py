@@ -26,6 +26,7 @@ class BCConfig:
     push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
     avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
+    push_after_approach: bool = False  # acting: no approach right after an approach (the expert's data never has one)
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):
