@@ -276,6 +276,22 @@ def test_learner_families_on_the_command_line(capsys, tmp_path: Path) -> None:
     assert not (tmp_path / "r").exists()
 
 
+def test_dagger_can_start_from_a_phases_dataset(phases_dataset: str, tmp_path: Path) -> None:
+    from fetchcarry_env.errors import UsageError
+
+    options = DaggerOptions(**{**TINY_DAGGER.__dict__, "dataset": phases_dataset, "demonstrations": 3})
+    rows = train_dagger("basic", options, TINY_NET, tmp_path / "run", progress=False)
+    demonstrations, _ = demonstrations_from_dataset(phases_dataset, 3)
+    assert rows[0]["expert_labels"] == len(demonstrations)  # iteration 0: the dataset's labels, no new episode
+    assert rows[1]["expert_labels"] > rows[0]["expert_labels"]  # then the learner's states, labelled as before
+    saved = runs.load_checkpoint(tmp_path / "run")
+    np.testing.assert_array_equal(saved["labels"].numpy()[: len(demonstrations)], demonstrations.labels)
+    with pytest.raises(UsageError, match="not the first 99"):
+        train_dagger("basic", DaggerOptions(**{**options.__dict__, "demonstrations": 99}), TINY_NET,
+                     tmp_path / "too-many", progress=False)  # fmt: skip
+    assert not (tmp_path / "too-many").exists()
+
+
 def test_an_episode_without_a_label_gives_empty_arrays(monkeypatch: pytest.MonkeyPatch) -> None:
     # A learner episode whose every state has an expert action no candidate expresses (seen on the
     # training family at DAgger's default budget) labels nothing; the aggregate must still take it.

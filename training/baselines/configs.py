@@ -71,6 +71,7 @@ class DaggerOptions:
     epochs: int = 40  # epochs of each retraining
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
     learner_families: tuple[str, ...] = ()  # learner episode k draws from the k-th (cycled); () = the run's family
+    dataset: str | None = None  # iteration 0: the first `demonstrations` episodes of this phases dataset, not new ones
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "learner_families", tuple(self.learner_families))  # a list from config.json too

@@ -2,7 +2,9 @@
 
 Iteration 0 is behaviour cloning on ``demonstrations`` expert episodes (seeds ``0 ..
 demonstrations-1`` of the family: the seeds ``fetchcarry generate`` uses by default,
-so BC on such a dataset and DAgger start from the same scenarios). Each later
+so BC on such a dataset and DAgger start from the same scenarios), or, with ``dataset``,
+on the first ``demonstrations`` episodes of that phases dataset (the labels BC trains
+on, with the projected moves; no expert episode is run again). Each later
 iteration runs the current learner (deterministic, masked) for
 ``episodes_per_iteration`` episodes on new seeds (from :data:`LEARNER_SEED_BASE`); at
 every state it visits, :class:`expert.ExpertPolicy` says what it would do, mapped to
@@ -130,6 +132,18 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     )
 
 
+def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int) -> LabelledEpisode:
+    """The labelled states of the first ``episodes`` of the phases dataset ``dataset``, as one block."""
+    from training.baselines.imitation import demonstrations_from_dataset
+
+    demonstrations, _ = demonstrations_from_dataset(dataset, episodes)
+    if demonstrations.masks.shape[1] != candidates or demonstrations.observations.shape[1] != features:
+        raise ValueError(f"dataset {dataset!r} was recorded with another capacity than the family's env")
+    stats = demonstrations.stats
+    return LabelledEpisode(demonstrations.observations, demonstrations.masks, demonstrations.labels,
+                           int(stats["steps"]), False, int(stats["dropped"]))  # fmt: skip
+
+
 def _learner(network: dict[str, Any]) -> BCPolicy:
     config = BCConfig(**network["config"])
     capacity = Capacity(**network["capacity"])
@@ -177,6 +191,9 @@ def train_dagger(
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space["observation"].shape[0])
     probe.close()
+    from_dataset = None  # read before the run folder is made: a bad dataset leaves nothing behind
+    if options.dataset is not None:
+        from_dataset = _dataset_episodes(options.dataset, options.demonstrations, candidates, features)
     run_options = {"family": family, **asdict(options), **asdict(config)}
     run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
     config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
@@ -209,11 +226,16 @@ def train_dagger(
                                  options.nearest_moves, options.learner_families)  # fmt: skip
                 count = options.episodes_per_iteration
             labelled: dict[int, LabelledEpisode] = {}
-            for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
-                                               episode=label_episode):  # fmt: skip
-                labelled[index] = episode
-                bar.update(1)
-            ordered = [labelled[k] for k in range(count)]
+            if iteration == 0 and options.dataset is not None:
+                labelled[0] = from_dataset
+                bar.update(count)
+                ordered = [labelled[0]]
+            else:
+                for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
+                                                   episode=label_episode):  # fmt: skip
+                    labelled[index] = episode
+                    bar.update(1)
+                ordered = [labelled[k] for k in range(count)]
             aggregate = Demonstrations(
                 np.concatenate([aggregate.observations, *(e.observations for e in ordered)]),
                 np.concatenate([aggregate.masks, *(e.masks for e in ordered)]),

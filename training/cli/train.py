@@ -118,6 +118,12 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="families the learner episodes draw from, in turn (for example push,multi-2: where learners fail "
         "most); iteration 0 and the held-out success stay on --family (default: --family)",
     )
+    dagger.add_argument(
+        "--dataset",
+        metavar="ID",
+        help="iteration 0 trains on the first --demonstrations episodes of this phases dataset instead of running "
+        "the expert again (default: new expert episodes)",
+    )
     dagger.add_argument("--workers", type=positive_int, default=1, metavar="W", help="labelling workers (default 1)")
     dagger.add_argument(
         "--backend", choices=("process", "ray"), default="process", help="a local process pool (default) or Ray"
@@ -354,6 +360,7 @@ def run_train_dagger(args: argparse.Namespace) -> int:
         epochs=args.epochs,
         nearest_moves=args.nearest_moves,
         learner_families=args.learner_families,
+        dataset=args.dataset,
     )
 
     def train() -> str:
