@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -135,3 +136,31 @@ def test_an_internal_error_is_exit_3_not_bad_input(capsys, tmp_path: Path, monke
     monkeypatch.setattr(pipeline, "_stage_datasets", broken)
     status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", "--budget", "smoke", "--no-progress")
     assert status == 3 and "yerr" in err
+
+
+def test_a_folder_made_before_a_budget_field_existed_is_still_the_same_budget(tmp_path: Path) -> None:
+    from training.reproduce.budgets import SMOKE
+    from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings
+
+    out = tmp_path / "table"
+    check_settings(out, 1, SMOKE)
+    saved = json.loads((out / SETTINGS_FILE).read_text())
+    for name in ("dagger_learner_families", "dagger_from_dataset"):
+        del saved["budget"][name]  # written before these fields existed
+    (out / SETTINGS_FILE).write_text(json.dumps(saved))
+    check_settings(out, 1, SMOKE)  # the fields' defaults: the budget it was made with
+    aimed = replace(SMOKE, dagger_learner_families=("push",))
+    (out / SETTINGS_FILE).write_text(json.dumps(saved))
+    with pytest.raises(ReproduceError, match="another budget"):
+        check_settings(out, 1, aimed)
+
+
+def test_the_budget_can_aim_dagger_and_start_it_from_the_dataset() -> None:
+    from training.reproduce.budgets import SMOKE
+
+    assert SMOKE.dagger_options("some/dataset-v0").dataset is None  # off unless the budget says so
+    aimed = replace(SMOKE, dagger_learner_families=("push", "multi-2"), dagger_from_dataset=True)
+    options = aimed.dagger_options("some/dataset-v0")
+    assert options.dataset == "some/dataset-v0" and options.learner_families == ("push", "multi-2")
+    with pytest.raises(ValueError, match="more episodes than the dataset"):
+        replace(aimed, dagger_demonstrations=SMOKE.demonstrations + 1)

@@ -35,11 +35,15 @@ class Budget:
     ppo_batch: int  # PPO minibatch size
     episodes: int  # benchmark episodes per split (every policy on the same scenarios)
     time_limit: float = 10.0  # seconds per planning call of the expert (datasets and DAgger's labels)
+    dagger_learner_families: tuple[str, ...] = ()  # DAgger's learner episodes draw from these in turn; () = training
+    dagger_from_dataset: bool = False  # DAgger's iteration 0 on the table's dataset (its first dagger_demonstrations)
 
     def __post_init__(self) -> None:
         counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
         if min(counts) < 1 or any(n < 1 or n > self.demonstrations for n in self.curve):
             raise ValueError("a budget's counts must be positive and its curve within its demonstrations")
+        if self.dagger_from_dataset and self.dagger_demonstrations > self.demonstrations:
+            raise ValueError("DAgger cannot start from more episodes than the dataset holds")
         self.dagger_options()  # their own checks
         self.ppo_options(0)
 
@@ -48,7 +52,8 @@ class Budget:
         epochs = self.set_epochs if encoder == "set" else self.bc_epochs
         return BCConfig(encoder=encoder, epochs=epochs, seed=seed)
 
-    def dagger_options(self) -> DaggerOptions:
+    def dagger_options(self, dataset: str | None = None) -> DaggerOptions:
+        """DAgger's options; ``dataset`` (the table's expert dataset) starts it when ``dagger_from_dataset``."""
         return DaggerOptions(
             demonstrations=self.dagger_demonstrations,
             iterations=self.dagger_iterations,
@@ -56,6 +61,8 @@ class Budget:
             eval_episodes=self.dagger_eval,
             time_limit=self.time_limit,
             epochs=self.dagger_epochs,
+            learner_families=self.dagger_learner_families,
+            dataset=dataset if self.dagger_from_dataset else None,
         )
 
     def ppo_options(self, seed: int, init: str | None = None) -> PPOOptions:

@@ -31,7 +31,7 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, replace
+from dataclasses import MISSING, asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -84,7 +84,7 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
     for seed in range(seeds):
         name = run_name("dagger", seed)
         jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
-                             family=TRAINING_FAMILY, dagger=budget.dagger_options()))  # fmt: skip
+                             family=TRAINING_FAMILY, dagger=budget.dagger_options(DATASET_ID)))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
     for seed in range(seeds):
         jobs += [_bc(runs, curve_label(n), seed, budget, "mlp", n) for n in budget.curve]
@@ -139,6 +139,9 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ReproduceError(f"{file} is not valid JSON: {error}") from None
         saved_budget = saved.get("budget") if isinstance(saved, dict) else None
+        if isinstance(saved_budget, dict):  # a field added since the folder was made: as it was, its default
+            defaults = {f.name: f.default for f in fields(Budget) if f.default is not MISSING}
+            saved_budget = {**json.loads(json.dumps(defaults)), **saved_budget}
         if json.loads(json.dumps(settings["budget"])) != saved_budget:
             name = saved_budget.get("name") if isinstance(saved_budget, dict) else "?"
             raise ReproduceError(f"{out} holds a reproduction with another budget ({name}): use another folder")
