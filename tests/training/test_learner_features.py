@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import torch
 
-from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
+from fetchcarry_env.observation import FIELDS, Capacity, observation_layout, observation_size
 from fetchcarry_env.phases import PhaseLayout
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.baselines.encoders import (
@@ -108,6 +108,84 @@ def test_avoid_repeats_tries_another_candidate_in_a_state_met_again():
     assert int(policy.predict(state, action_masks=mask)[0]) == 0
     batch = policy.predict(np.stack([state, state]), action_masks=np.stack([mask, mask]))[0]
     assert batch.tolist() == [0, 0]  # batched calls have no memory
+
+
+class _Ranked(torch.nn.Module):
+    """Scores that rank three candidates first: ``ranked[0]`` above ``ranked[1]`` above ``ranked[2]``."""
+
+    def __init__(self, size: int, ranked: list[int]) -> None:
+        super().__init__()
+        self.scores = torch.full((size,), -10.0)
+        self.scores[ranked] = torch.tensor([3.0, 2.0, 1.0])
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        return self.scores.expand(len(flat), -1)
+
+
+def _at(x: float, y: float) -> np.ndarray:
+    flat = np.zeros(observation_size(Capacity()), np.float32)
+    flat[observation_layout(Capacity())["robot"]] = [x, y, 0.3, 1, 0, 0, 0]
+    return flat
+
+
+@pytest.mark.parametrize("returns", [False, True])
+def test_avoid_returns_cuts_a_round_of_moves_one_step_early(returns: bool):
+    layout = PhaseLayout.for_postures(capacity=Capacity())
+    a, b = layout.index("approach", 0, 0, 0, 0, 0), layout.index("waypoint", 0, 0, 0, 0)
+    c = layout.index("pick", 0, 0, 0, 0)
+    config = BCConfig(avoid_repeats=True, avoid_returns=returns)
+    policy = BCPolicy(_Ranked(layout.size, [a, b, c]), config, Capacity())
+
+    def allowed(*candidates: int) -> np.ndarray:
+        mask = np.zeros(layout.size, bool)
+        mask[list(candidates)] = True
+        return mask
+
+    start, at_a, at_b = _at(0, 0), _at(1, 0), _at(2, 0)  # the same world, the base elsewhere
+    assert int(policy.predict(start, action_masks=allowed(a, b, c))[0]) == a  # the move to A
+    assert int(policy.predict(at_a, action_masks=allowed(b, c))[0]) == b  # (a move to A from A goes nowhere)
+    # At B, a leads back to A: with the memory of where a went, it is left out before the round closes.
+    assert int(policy.predict(at_b, action_masks=allowed(a, c))[0]) == (c if returns else a)
+    policy.reset()
+    assert int(policy.predict(at_b, action_masks=allowed(a, c))[0]) == a  # a new episode knows no ends
+
+
+def test_avoid_returns_knows_ends_per_world_and_needs_the_phase_layout():
+    layout = PhaseLayout.for_postures(capacity=Capacity())
+    a, b = layout.index("approach", 0, 0, 0, 0, 0), layout.index("waypoint", 0, 0, 0, 0)
+    push = layout.index("push", 0, 0, 0, 0)
+    policy = BCPolicy(_Ranked(layout.size, [a, b, push]), BCConfig(avoid_returns=True), Capacity())
+    both = np.zeros(layout.size, bool)
+    both[[a, b, push]] = True
+    start, at_a = _at(0, 0), _at(1, 0)
+    assert int(policy.predict(start, action_masks=both)[0]) == a
+    moved = at_a.copy()
+    moved[observation_layout(Capacity())["clutter_0"]] = [1, 3, 3, 3.2, 3.2, 0.1]  # another world: a piece appeared
+    assert int(policy.predict(moved, action_masks=both)[0]) == a  # a's end in this world is unknown
+    with pytest.raises(ValueError, match="phase layout"):
+        BCPolicy(_Ranked(10, [0, 1, 2]), BCConfig(avoid_returns=True), Capacity()).predict(
+            start, action_masks=np.ones(10, bool)
+        )
+
+
+@pytest.mark.parametrize("rule", [False, True])
+def test_push_after_approach_leaves_out_a_second_approach_in_a_row(rule: bool):
+    layout = PhaseLayout.for_postures(capacity=Capacity())
+    first, second = layout.index("approach", 0, 0, 0, 0, 0), layout.index("approach", 1, 2, 1, 3, 1)
+    push = layout.index("push", 0, 0, 0, 0)
+    config = BCConfig(avoid_repeats=False, push_after_approach=rule)
+    policy = BCPolicy(_Ranked(layout.size, [first, second, push]), config, Capacity())
+    mask = np.zeros(layout.size, bool)
+    mask[[first, second, push]] = True
+    assert int(policy.predict(_at(0, 0), action_masks=mask)[0]) == first
+    after = mask.copy()
+    after[first] = False  # where the base now stands
+    assert int(policy.predict(_at(1, 0), action_masks=after)[0]) == (push if rule else second)
+    only_approaches = after.copy()
+    only_approaches[push] = False
+    policy.reset()
+    policy.predict(_at(0, 0), action_masks=mask)
+    assert int(policy.predict(_at(1, 0), action_masks=only_approaches)[0]) == second  # nothing else is allowed
 
 
 def _one_goal_one_clutter() -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -14,7 +15,7 @@ from training.reproduce import SMOKE
 from training.reproduce.pipeline import REFERENCES, baselines, training_jobs
 
 SPLITS = ("iid-v0", "more-objects-v0", "layouts-v0", "push-required-v0")
-MAIN = ("bc-mlp", "bc-set", "dagger", "ppo-scratch", "ppo-bc")
+MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 
 
 @pytest.fixture(scope="module")
@@ -135,3 +136,37 @@ def test_an_internal_error_is_exit_3_not_bad_input(capsys, tmp_path: Path, monke
     monkeypatch.setattr(pipeline, "_stage_datasets", broken)
     status, _, err = run(capsys, "reproduce", "--out", tmp_path / "t", "--budget", "smoke", "--no-progress")
     assert status == 3 and "yerr" in err
+
+
+def test_a_folder_made_before_a_budget_field_existed_is_still_the_same_budget(tmp_path: Path) -> None:
+    from training.reproduce.budgets import SMOKE
+    from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings
+
+    out = tmp_path / "table"
+    check_settings(out, 1, SMOKE)
+    saved = json.loads((out / SETTINGS_FILE).read_text())
+    for name in ("aimed_iterations", "aimed_families"):
+        del saved["budget"][name]  # written before these fields existed
+    (out / SETTINGS_FILE).write_text(json.dumps(saved))
+    made_before = replace(SMOKE, aimed_iterations=0)  # what such a folder was made with: the fields' defaults
+    check_settings(out, 1, made_before)
+    aimed = replace(made_before, aimed_iterations=1)
+    (out / SETTINGS_FILE).write_text(json.dumps(saved))
+    with pytest.raises(ReproduceError, match="another budget"):
+        check_settings(out, 1, aimed)
+
+
+def test_the_budget_aims_a_second_dagger_from_the_dataset(tmp_path: Path) -> None:
+    from training.reproduce.budgets import FULL
+
+    options = FULL.aimed_options("some/dataset-v0")
+    assert options.dataset == "some/dataset-v0" and options.demonstrations == FULL.demonstrations
+    assert options.learner_families == ("push", "multi-2") and options.epochs == FULL.bc_epochs
+    assert FULL.dagger_options().dataset is None and FULL.dagger_options().learner_families == ()
+    names = [job.name for job in training_jobs(tmp_path, 2, FULL)]
+    assert "dagger-aimed-s0" in names and "dagger-aimed-s1" in names
+    none = replace(FULL, aimed_iterations=0)
+    assert not any(job.name.startswith("dagger-aimed") for job in training_jobs(tmp_path, 2, none))
+    assert "dagger-aimed" not in [b.label for b in baselines(2, none)]
+    with pytest.raises(ValueError, match="aimed_iterations"):
+        replace(FULL, aimed_iterations=-1)

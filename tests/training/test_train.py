@@ -239,6 +239,59 @@ def test_dagger_options_are_checked_and_nearest_moves_only_add_labels(tmp_path: 
     assert rows[1]["expert_labels"] >= plain[1]["expert_labels"]
 
 
+def test_learner_families_aim_the_learner_episodes_and_leave_iteration_0(tmp_path: Path) -> None:
+    from fetchcarry_env.observation import Capacity, observation_layout
+    from training.baselines.dagger import LabelTask
+
+    task = LabelTask("basic", 0, 10.0, families=("push", "multi-2"))
+    assert [task.family_of(k) for k in range(3)] == ["push", "multi-2", "push"]
+    assert LabelTask("basic", 0, 10.0).family_of(5) == "basic"
+    with pytest.raises(ValueError, match="unknown scenario family"):
+        train_dagger("basic", DaggerOptions(learner_families=("nope",)), TINY_NET, tmp_path / "bad", progress=False)
+
+    def clutter_rows(options: DaggerOptions, out: Path) -> tuple[int, int, int]:
+        rows = train_dagger("basic", options, TINY_NET, out, progress=False)
+        saved = runs.load_checkpoint(out)
+        observations = saved["observations"].numpy()
+        layout = observation_layout(Capacity(**runs.read_config(out)["capacity"]))
+        present = observations[:, layout["clutter"]].reshape(len(observations), -1, 6)[:, :, 0].any(axis=1)
+        first = int(rows[0]["expert_labels"])
+        return first, int(present[:first].sum()), int(present[first:].sum())
+
+    first, before, after = clutter_rows(TINY_DAGGER, tmp_path / "basic")
+    assert before == after == 0  # basic draws no clutter
+    aimed = DaggerOptions(**{**TINY_DAGGER.__dict__, "learner_families": ("push",)})
+    first_aimed, before, after = clutter_rows(aimed, tmp_path / "push")
+    assert first_aimed == first and before == 0  # iteration 0: the run's own family, the same labels
+    assert after > 0  # the learner's episodes were drawn from push (clutter on the goal)
+    assert runs.read_config(tmp_path / "push")["options"]["learner_families"] == ["push"]
+    resumed = train_dagger("basic", aimed, TINY_NET, tmp_path / "push", resume=True, progress=False)
+    assert int(resumed[0]["expert_labels"]) == first_aimed  # the complete run, loaded: the same options
+
+
+def test_learner_families_on_the_command_line(capsys, tmp_path: Path) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        main(["train", "dagger", "--family", "basic", "--learner-families", "push,nope", "--out", str(tmp_path / "r")])
+    assert exit_info.value.code == 2 and "expected family names" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
+
+
+def test_dagger_can_start_from_a_phases_dataset(phases_dataset: str, tmp_path: Path) -> None:
+    from fetchcarry_env.errors import UsageError
+
+    options = DaggerOptions(**{**TINY_DAGGER.__dict__, "dataset": phases_dataset, "demonstrations": 3})
+    rows = train_dagger("basic", options, TINY_NET, tmp_path / "run", progress=False)
+    demonstrations, _ = demonstrations_from_dataset(phases_dataset, 3)
+    assert rows[0]["expert_labels"] == len(demonstrations)  # iteration 0: the dataset's labels, no new episode
+    assert rows[1]["expert_labels"] > rows[0]["expert_labels"]  # then the learner's states, labelled as before
+    saved = runs.load_checkpoint(tmp_path / "run")
+    np.testing.assert_array_equal(saved["labels"].numpy()[: len(demonstrations)], demonstrations.labels)
+    with pytest.raises(UsageError, match="not the first 99"):
+        train_dagger("basic", DaggerOptions(**{**options.__dict__, "demonstrations": 99}), TINY_NET,
+                     tmp_path / "too-many", progress=False)  # fmt: skip
+    assert not (tmp_path / "too-many").exists()
+
+
 def test_an_episode_without_a_label_gives_empty_arrays(monkeypatch: pytest.MonkeyPatch) -> None:
     # A learner episode whose every state has an expert action no candidate expresses (seen on the
     # training family at DAgger's default budget) labels nothing; the aggregate must still take it.

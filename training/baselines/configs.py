@@ -25,6 +25,8 @@ class BCConfig:
     relative: bool = True  # append positions relative to the base (mlp: and clutter relative to goals; set: per token)
     push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
+    avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
+    push_after_approach: bool = False  # acting: no approach right after an approach (the expert's data never has one)
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):
@@ -68,8 +70,11 @@ class DaggerOptions:
     time_limit: float = 10.0  # seconds per planning call of the expert
     epochs: int = 40  # epochs of each retraining
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
+    learner_families: tuple[str, ...] = ()  # learner episode k draws from the k-th (cycled); () = the run's family
+    dataset: str | None = None  # iteration 0: the first `demonstrations` episodes of this phases dataset, not new ones
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "learner_families", tuple(self.learner_families))  # a list from config.json too
         if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
             raise ValueError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
         if self.time_limit <= 0:

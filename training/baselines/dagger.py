@@ -2,7 +2,9 @@
 
 Iteration 0 is behaviour cloning on ``demonstrations`` expert episodes (seeds ``0 ..
 demonstrations-1`` of the family: the seeds ``fetchcarry generate`` uses by default,
-so BC on such a dataset and DAgger start from the same scenarios). Each later
+so BC on such a dataset and DAgger start from the same scenarios), or, with ``dataset``,
+on the first ``demonstrations`` episodes of that phases dataset (the labels BC trains
+on, with the projected moves; no expert episode is run again). Each later
 iteration runs the current learner (deterministic, masked) for
 ``episodes_per_iteration`` episodes on new seeds (from :data:`LEARNER_SEED_BASE`); at
 every state it visits, :class:`expert.ExpertPolicy` says what it would do, mapped to
@@ -10,7 +12,11 @@ the allowed candidate that stands for it (an expert action no candidate expresse
 the expert's idle fallback, gives no label, unless ``nearest_moves``: then an expert move
 no candidate expresses is labelled with the allowed move nearest it,
 :func:`training.learning.expert_phases.nearest_move`; a state visited again in the same episode,
-as by a learner going round in circles, is labelled once). The labelled states join the aggregate
+as by a learner going round in circles, is labelled once). ``learner_families`` aims the
+learner episodes at chosen families (episode ``k`` of an iteration draws from the
+``k``-th, cycled; for example ``push`` and ``multi-2``, the ``training`` family's sources
+where the learners fail most), while iteration 0 and the held-out measurement stay on
+``family``. The labelled states join the aggregate
 and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), as in
 Ross et al. (2011) with beta = 0 after the first iteration.
 
@@ -32,6 +38,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
 from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
@@ -50,6 +57,11 @@ class LabelTask:
     time_limit: float
     network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
+    families: tuple[str, ...] = ()  # episode k draws from families[k % len(families)]; () = family
+
+    def family_of(self, index: int) -> str:
+        """The family episode ``index`` draws from."""
+        return self.families[index % len(self.families)] if self.families else self.family
 
 
 @dataclass
@@ -73,7 +85,7 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     from training.learning.expert_phases import nearest_move
 
     torch.set_num_threads(1)
-    env = gym.make(runs.ENV_ID, family=task.family)
+    env = gym.make(runs.ENV_ID, family=task.family_of(index))
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit)
         learner = _learner(task.network) if task.network is not None else None
@@ -120,6 +132,18 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     )
 
 
+def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int) -> LabelledEpisode:
+    """The labelled states of the first ``episodes`` of the phases dataset ``dataset``, as one block."""
+    from training.baselines.imitation import demonstrations_from_dataset
+
+    demonstrations, _ = demonstrations_from_dataset(dataset, episodes)
+    if demonstrations.masks.shape[1] != candidates or demonstrations.observations.shape[1] != features:
+        raise ValueError(f"dataset {dataset!r} was recorded with another capacity than the family's env")
+    stats = demonstrations.stats
+    return LabelledEpisode(demonstrations.observations, demonstrations.masks, demonstrations.labels,
+                           int(stats["steps"]), False, int(stats["dropped"]))  # fmt: skip
+
+
 def _learner(network: dict[str, Any]) -> BCPolicy:
     config = BCConfig(**network["config"])
     capacity = Capacity(**network["capacity"])
@@ -161,11 +185,17 @@ def train_dagger(
     from training.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
+    for name in options.learner_families:
+        get_family(name)  # ValueError for an unknown name, before any work
     probe = gym.make(runs.ENV_ID, family=family)
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space["observation"].shape[0])
     probe.close()
+    from_dataset = None  # read before the run folder is made: a bad dataset leaves nothing behind
+    if options.dataset is not None:
+        from_dataset = _dataset_episodes(options.dataset, options.demonstrations, candidates, features)
     run_options = {"family": family, **asdict(options), **asdict(config)}
+    run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
     config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
@@ -193,14 +223,19 @@ def train_dagger(
                 base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
                 task = LabelTask(family, base, options.time_limit,
                                  _network_task(network, config, capacity, candidates, features),
-                                 options.nearest_moves)  # fmt: skip
+                                 options.nearest_moves, options.learner_families)  # fmt: skip
                 count = options.episodes_per_iteration
             labelled: dict[int, LabelledEpisode] = {}
-            for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
-                                               episode=label_episode):  # fmt: skip
-                labelled[index] = episode
-                bar.update(1)
-            ordered = [labelled[k] for k in range(count)]
+            if iteration == 0 and options.dataset is not None:
+                labelled[0] = from_dataset
+                bar.update(count)
+                ordered = [labelled[0]]
+            else:
+                for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
+                                                   episode=label_episode):  # fmt: skip
+                    labelled[index] = episode
+                    bar.update(1)
+                ordered = [labelled[k] for k in range(count)]
             aggregate = Demonstrations(
                 np.concatenate([aggregate.observations, *(e.observations for e in ordered)]),
                 np.concatenate([aggregate.masks, *(e.masks for e in ordered)]),

@@ -92,7 +92,8 @@ def _check_fields(file: Path, key: str, value: Any, cls: type) -> None:
             raise RunFolderError(f"{file}: {key}.{name} must be a {expected.__name__}, got {item!r}")
 
 
-LEGACY_CONFIG: dict[str, Any] = {"relative": False, "push_scores": False, "avoid_repeats": False}
+LEGACY_CONFIG: dict[str, Any] = {"relative": False, "push_scores": False, "avoid_repeats": False,
+                                 "avoid_returns": False, "push_after_approach": False}  # fmt: skip
 """BCConfig fields added after run folders were first written: a config without them meant these values."""
 
 

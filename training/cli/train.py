@@ -110,6 +110,20 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         action="store_true",
         help="label an expert move no candidate expresses with the allowed move nearest it (default: no label)",
     )
+    dagger.add_argument(
+        "--learner-families",
+        type=_family_list,
+        default=(),
+        metavar="NAME[,NAME...]",
+        help="families the learner episodes draw from, in turn (for example push,multi-2: where learners fail "
+        "most); iteration 0 and the held-out success stay on --family (default: --family)",
+    )
+    dagger.add_argument(
+        "--dataset",
+        metavar="ID",
+        help="iteration 0 trains on the first --demonstrations episodes of this phases dataset instead of running "
+        "the expert again (default: new expert episodes)",
+    )
     dagger.add_argument("--workers", type=positive_int, default=1, metavar="W", help="labelling workers (default 1)")
     dagger.add_argument(
         "--backend", choices=("process", "ray"), default="process", help="a local process pool (default) or Ray"
@@ -318,6 +332,19 @@ def run_train_bc(args: argparse.Namespace) -> int:
     return _guarded(train, args)
 
 
+def _family_list(text: str) -> tuple[str, ...]:
+    """``push,multi-2`` -> ``("push", "multi-2")``, each a known family (argparse's type)."""
+    from fetchcarry_env.families import FAMILY_NAMES
+
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in FAMILY_NAMES]
+    if not names or unknown:
+        raise argparse.ArgumentTypeError(
+            f"expected family names separated by commas ({', '.join(FAMILY_NAMES)}), got {text!r}"
+        )
+    return names
+
+
 def run_train_dagger(args: argparse.Namespace) -> int:
     from training.baselines.dagger import DaggerOptions, train_dagger
     from training.sources import EpisodeSource
@@ -332,6 +359,8 @@ def run_train_dagger(args: argparse.Namespace) -> int:
         time_limit=args.time_limit,
         epochs=args.epochs,
         nearest_moves=args.nearest_moves,
+        learner_families=args.learner_families,
+        dataset=args.dataset,
     )
 
     def train() -> str:

@@ -35,12 +35,18 @@ class Budget:
     ppo_batch: int  # PPO minibatch size
     episodes: int  # benchmark episodes per split (every policy on the same scenarios)
     time_limit: float = 10.0  # seconds per planning call of the expert (datasets and DAgger's labels)
+    aimed_iterations: int = 0  # dagger-aimed: BC on the whole dataset, then this many DAgger iterations; 0: none
+    aimed_families: tuple[str, ...] = ("push", "multi-2")  # dagger-aimed's learner episodes draw from these in turn
 
     def __post_init__(self) -> None:
         counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
         if min(counts) < 1 or any(n < 1 or n > self.demonstrations for n in self.curve):
             raise ValueError("a budget's counts must be positive and its curve within its demonstrations")
+        if self.aimed_iterations < 0:
+            raise ValueError(f"aimed_iterations must be >= 0, got {self.aimed_iterations}")
         self.dagger_options()  # their own checks
+        if self.aimed_iterations:
+            self.aimed_options("dataset")
         self.ppo_options(0)
 
     def bc_config(self, encoder: str, seed: int) -> BCConfig:
@@ -56,6 +62,20 @@ class Budget:
             eval_episodes=self.dagger_eval,
             time_limit=self.time_limit,
             epochs=self.dagger_epochs,
+        )
+
+    def aimed_options(self, dataset: str) -> DaggerOptions:
+        """dagger-aimed: iteration 0 is BC on all of ``dataset`` (the flat MLP's epochs: the same network as
+        ``bc-mlp`` of the seed), then ``aimed_iterations`` iterations of learner episodes from ``aimed_families``."""
+        return DaggerOptions(
+            demonstrations=self.demonstrations,
+            iterations=self.aimed_iterations,
+            episodes_per_iteration=self.dagger_episodes,
+            eval_episodes=self.dagger_eval,
+            time_limit=self.time_limit,
+            epochs=self.bc_epochs,
+            learner_families=self.aimed_families,
+            dataset=dataset,
         )
 
     def ppo_options(self, seed: int, init: str | None = None) -> PPOOptions:
@@ -84,6 +104,7 @@ FULL = Budget(
     ppo_rollout=256,
     ppo_batch=64,
     episodes=100,
+    aimed_iterations=3,
 )
 SMOKE = Budget(
     name="smoke",
@@ -100,5 +121,6 @@ SMOKE = Budget(
     ppo_rollout=32,
     ppo_batch=32,
     episodes=2,
+    aimed_iterations=1,
 )
 BUDGETS = {budget.name: budget for budget in (FULL, SMOKE)}

@@ -7,7 +7,9 @@
    ``iid`` split's families), as the Minari dataset ``fetchcarry/training-phases-v0``
    under ``DIR/datasets`` (``fetchcarry generate``'s resumable generation, on ``workers``);
 2. **training**: per training seed, BC with the flat MLP and with the set encoder,
-   DAgger (the expert labels the learner's states), MaskablePPO from scratch and started
+   DAgger (the expert labels the learner's states), DAgger aimed at the failures
+   (``dagger-aimed``, when the budget has ``aimed_iterations``: BC on the whole dataset,
+   then iterations whose learner episodes are ``push`` and ``multi-2`` draws), MaskablePPO from scratch and started
    from the BC (flat MLP) weights, and BC on the first 10, 30, ... episodes (the
    demonstrations curve), each a run folder ``DIR/runs/NAME-sSEED``, up to ``workers``
    at a time (:mod:`training.reproduce.jobs`);
@@ -31,7 +33,7 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, replace
+from dataclasses import MISSING, asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +87,10 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
         name = run_name("dagger", seed)
         jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
                              family=TRAINING_FAMILY, dagger=budget.dagger_options()))  # fmt: skip
+        if budget.aimed_iterations:
+            name = run_name("dagger-aimed", seed)
+            jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
+                                 family=TRAINING_FAMILY, dagger=budget.aimed_options(DATASET_ID)))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
     for seed in range(seeds):
         jobs += [_bc(runs, curve_label(n), seed, budget, "mlp", n) for n in budget.curve]
@@ -103,6 +109,7 @@ def baselines(seeds: int, budget: Budget) -> list[Baseline]:
         Baseline("bc-mlp", _names("bc-mlp", seeds), budget.demonstrations),
         Baseline("bc-set", _names("bc-set", seeds), budget.demonstrations),
         Baseline("dagger", _names("dagger", seeds)),
+        *([Baseline("dagger-aimed", _names("dagger-aimed", seeds))] if budget.aimed_iterations else []),
         Baseline("ppo-scratch", _names("ppo-scratch", seeds)),
         Baseline("ppo-bc", _names("ppo-bc", seeds)),
     ]
@@ -139,6 +146,9 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
         except (json.JSONDecodeError, UnicodeDecodeError) as error:
             raise ReproduceError(f"{file} is not valid JSON: {error}") from None
         saved_budget = saved.get("budget") if isinstance(saved, dict) else None
+        if isinstance(saved_budget, dict):  # a field added since the folder was made: as it was, its default
+            defaults = {f.name: f.default for f in fields(Budget) if f.default is not MISSING}
+            saved_budget = {**json.loads(json.dumps(defaults)), **saved_budget}
         if json.loads(json.dumps(settings["budget"])) != saved_budget:
             name = saved_budget.get("name") if isinstance(saved_budget, dict) else "?"
             raise ReproduceError(f"{out} holds a reproduction with another budget ({name}): use another folder")
