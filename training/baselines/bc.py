@@ -194,12 +194,7 @@ class BCPolicy:
 
     def _approach_indices(self, candidates: int) -> np.ndarray:
         if self._approaches is None:
-            from fetchcarry_env.phases import PhaseLayout
-
-            layout = PhaseLayout.for_postures(capacity=self.capacity)
-            if layout.size != candidates:
-                raise ValueError(f"the network scores {candidates} candidates, the phase layout has {layout.size}")
-            self._approaches = np.arange(candidates)[layout.kind_slice("approach")]
+            self._approaches = np.flatnonzero(candidates_of_kinds(self.capacity, candidates, ("approach",)))
         return self._approaches
 
 
@@ -244,7 +239,7 @@ class ReturnMemory:
         self._last = None
         self._world_now = world
         if self._moves is None or len(self._moves) != candidates:
-            self._moves = _move_kinds(self._capacity, candidates)
+            self._moves = candidates_of_kinds(self._capacity, candidates, ("approach", "waypoint"))
         return [move for move, end in self.ends.get(world, {}).items() if end in self.visited]
 
     def leave(self, candidate: int) -> None:
@@ -260,17 +255,17 @@ class ReturnMemory:
         return world.tobytes()
 
 
-def _move_kinds(capacity: Capacity, candidates: int) -> np.ndarray:
-    """(K,) bool: the candidates whose move ends where the world alone says (approach, waypoint)."""
+def candidates_of_kinds(capacity: Capacity, candidates: int, kinds: tuple[str, ...]) -> np.ndarray:
+    """(K,) bool: the candidates of the phase layout's ``kinds`` (``"approach"``, ``"waypoint"``, ...)."""
     from fetchcarry_env.phases import PhaseLayout
 
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the network scores {candidates} candidates, the phase layout has {layout.size}")
-    moves = np.zeros(candidates, dtype=bool)
-    for kind in ("approach", "waypoint"):
-        moves[layout.kind_slice(kind)] = True
-    return moves
+    chosen = np.zeros(candidates, dtype=bool)
+    for kind in kinds:
+        chosen[layout.kind_slice(kind)] = True
+    return chosen
 
 
 def flush_subnormal(network: nn.Module) -> nn.Module:
