@@ -28,6 +28,7 @@ The MILP uses it twice (:func:`add_conditional_cuts`, :func:`fix_above`), both e
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -187,24 +188,29 @@ def exit_box_of(option) -> IndexBox:
     return option.box.shifted(*option.push.cells) if option.push is not None else option.box
 
 
+def _bounded_options(milp, conditional: Conditional) -> Iterator[tuple[Key, float, object]]:
+    """``(action, bound, z)`` for every option binary ``z[k][o]`` of the model: its action and its bound at ``k``."""
+    for k, chosen in enumerate(milp.z):
+        for o, z in chosen.items():
+            option = milp.problem.options[o]
+            key = (option.kind, option.target)
+            yield key, conditional.at(key, exit_box_of(option), k), z
+
+
 def add_conditional_cuts(milp, conditional: Conditional) -> int:
     """The cuts of the module docstring; options with no bound (no plan does them at that phase) are fixed to 0.
 
     Returns how many were fixed.
     """
-    model, problem = milp.model, milp.problem
+    model = milp.model
     groups: dict[Key, list] = {}
     fixed = 0
-    for k, chosen in enumerate(milp.z):
-        for o, z in chosen.items():
-            option = problem.options[o]
-            key = (option.kind, option.target)
-            value = conditional.at(key, exit_box_of(option), k)
-            if not math.isfinite(value):
-                model.chgVarUb(z, 0.0)
-                fixed += 1
-                continue
-            groups.setdefault(key, []).append((value, z))
+    for key, value, z in _bounded_options(milp, conditional):
+        if not math.isfinite(value):
+            model.chgVarUb(z, 0.0)
+            fixed += 1
+            continue
+        groups.setdefault(key, []).append((value, z))
     for key, terms in groups.items():
         floor = min(value for value, _ in terms)
         if all(value <= floor + 1e-9 for value, _ in terms):
@@ -220,11 +226,8 @@ def fix_above(milp, conditional: Conditional, incumbent: float) -> int:
     No plan through them beats the one at hand, so the optimum stays in the model. Returns how many.
     """
     fixed = 0
-    for k, chosen in enumerate(milp.z):
-        for o, z in chosen.items():
-            option = milp.problem.options[o]
-            value = conditional.at((option.kind, option.target), exit_box_of(option), k)
-            if math.isfinite(value) and value > incumbent + 1e-6:
-                milp.model.chgVarUb(z, 0.0)
-                fixed += 1
+    for _, value, z in _bounded_options(milp, conditional):
+        if math.isfinite(value) and value > incumbent + 1e-6:
+            milp.model.chgVarUb(z, 0.0)
+            fixed += 1
     return fixed

@@ -225,12 +225,11 @@ def train_dagger(
                                  _network_task(network, config, capacity, candidates, features),
                                  options.nearest_moves, options.learner_families)  # fmt: skip
                 count = options.episodes_per_iteration
-            labelled: dict[int, LabelledEpisode] = {}
-            if iteration == 0 and options.dataset is not None:
-                labelled[0] = from_dataset
+            if iteration == 0 and from_dataset is not None:
                 bar.update(count)
-                ordered = [labelled[0]]
+                ordered = [from_dataset]
             else:
+                labelled: dict[int, LabelledEpisode] = {}
                 for index, episode in run_episodes(task, list(range(count)), workers=workers, backend=backend,
                                                    episode=label_episode):  # fmt: skip
                     labelled[index] = episode

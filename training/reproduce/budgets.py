@@ -9,7 +9,7 @@ saved in ``DIR/reproduce.json``, so a folder is never continued with another bud
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from training.baselines.configs import BCConfig, DaggerOptions, PPOOptions
 
@@ -67,12 +67,10 @@ class Budget:
     def aimed_options(self, dataset: str) -> DaggerOptions:
         """dagger-aimed: iteration 0 is BC on all of ``dataset`` (the flat MLP's epochs: the same network as
         ``bc-mlp`` of the seed), then ``aimed_iterations`` iterations of learner episodes from ``aimed_families``."""
-        return DaggerOptions(
+        return replace(
+            self.dagger_options(),
             demonstrations=self.demonstrations,
             iterations=self.aimed_iterations,
-            episodes_per_iteration=self.dagger_episodes,
-            eval_episodes=self.dagger_eval,
-            time_limit=self.time_limit,
             epochs=self.bc_epochs,
             learner_families=self.aimed_families,
             dataset=dataset,
