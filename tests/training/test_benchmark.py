@@ -75,6 +75,9 @@ def test_expert_and_random_end_to_end(tiny: Path):
     assert [r["expert_cost"] for r in random] == [r["cost"] for r in expert]
     summary = (tiny / "summary.md").read_text()
     assert "| expert | iid-v0 | 2 | 100.0% [" in summary and "| random | iid-v0 | 2 |" in summary
+    assert "Per scenario source (iid-v0)" in summary and "| policy | basic | push |" in summary
+    assert "| expert | 100% [21%, 100%] (1.00) | 100% [21%, 100%] (1.00) |" in summary  # one episode each
+    assert "| random | 0% [0%, 79%] (-) | 0% [0%, 79%] (-) |" in summary
     assert (tiny / "splits.png").read_bytes()[:4] == b"\x89PNG"
 
 

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from training.benchmark.metrics import Z_95, Row, wilson
+from training.benchmark.metrics import Z_95, Row, summarise, wilson
 
 COLUMNS = (
     ("policy", "policy", "{}"),
@@ -74,6 +74,37 @@ def summary_markdown(rows: Sequence[Row], title: str = "Benchmark") -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def source_table(
+    records: Sequence[dict[str, Any]],
+    split: str,
+    caption: str,
+    policies: Sequence[str] | None = None,
+    first: str = "policy",
+) -> list[str]:
+    """Per scenario source of ``split`` (a family, or a push pattern): each policy's success and cost ratio.
+
+    Markdown lines: ``caption``, then one row per policy (``policies``, or every one in the
+    records' order; ``first`` heads the column) and one column per source, each cell the
+    success with its 95 % Wilson interval and the cost ratio in brackets; no lines when
+    ``split`` has one source.
+    """
+    chosen = [{**r, "split": r.get("source", split)} for r in records if r["split"] == split]
+    sources = list(dict.fromkeys(r["split"] for r in chosen))
+    if len(sources) < 2:
+        return []
+    rows = {(row.policy, row.split): row for row in summarise(chosen)}
+    lines = [caption, "", f"| {first} | " + " | ".join(sources) + " |", "| --- |" + " --- |" * len(sources)]
+    for name in policies if policies is not None else dict.fromkeys(r["policy"] for r in chosen):
+        cells = [rows.get((name, source)) for source in sources]
+        lines.append(f"| {name} | " + " | ".join(_success_and_ratio(c) if c else "-" for c in cells) + " |")
+    return [*lines, ""]
+
+
+def _success_and_ratio(row: Row) -> str:
+    ratio = "-" if math.isnan(row.cost_ratio) else f"{row.cost_ratio:.2f}"
+    return f"{row.success:.0%} [{row.success_low:.0%}, {row.success_high:.0%}] ({ratio})"
 
 
 def _pyplot():

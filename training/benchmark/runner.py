@@ -32,7 +32,7 @@ from training.benchmark.episodes import close_all, run_task
 from training.benchmark.errors import BenchmarkError
 from training.benchmark.metrics import Row, fill_expert_costs, summarise
 from training.benchmark.policies import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
-from training.benchmark.report import plot_splits, summary_markdown
+from training.benchmark.report import plot_splits, source_table, summary_markdown
 from training.benchmark.splits import EvalScenario, folder_scenarios, split_scenarios
 from training.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
 
@@ -115,7 +115,7 @@ def run_benchmark(
         records = write_results(out, records, order)
         rows = summarise(records) if records else []
         if rows:
-            write_report(out, rows, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
+            write_report(out, rows, records, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
     return BenchmarkReport(out, records, rows, resumed)
 
 
@@ -181,9 +181,15 @@ def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[st
     return public
 
 
-def write_report(out: Path, rows: list[Row], title: str) -> None:
-    """``summary.md`` and ``splits.png`` of ``rows`` in ``out``."""
-    (out / SUMMARY).write_text(summary_markdown(rows, title))
+def write_report(out: Path, rows: list[Row], records: list[dict[str, Any]], title: str) -> None:
+    """``summary.md`` (the table of ``rows``, then per scenario source of each split) and ``splits.png`` in ``out``."""
+    tables = [summary_markdown(rows, title)]
+    for split in dict.fromkeys(row.split for row in rows):
+        lines = source_table(
+            records, split, f"Per scenario source ({split}): success [95 % CI], cost ratio in brackets."
+        )
+        tables += ["\n".join(lines)] if lines else []
+    (out / SUMMARY).write_text("\n".join(tables))
     plot_splits(rows, out / PLOT)
 
 

@@ -32,7 +32,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "success (SPL), phases and pushes, invalid actions, contacts, time per decision, and the normalised "
         "score 100 x (R - R_random) / (R_expert - R_random). The expert and random policies always run as "
         "references. Writes OUT_DIR/results.json (one record per policy and episode, rewritten as episodes "
-        "finish), OUT_DIR/summary.md (the table) and OUT_DIR/splits.png. "
+        "finish), OUT_DIR/summary.md (the table, then success and cost ratio per scenario source) and "
+        "OUT_DIR/splits.png. "
         f"Splits: {splits}. Evaluation seeds start at 10^9, so they never meet training seeds.",
         epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
         "scenario file), 130 interrupted (the finished episodes are kept in results.json).",

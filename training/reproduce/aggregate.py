@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from training.benchmark.metrics import Row, summarise
-from training.benchmark.report import _pyplot, plot_demonstrations, plot_splits
+from training.benchmark.report import _pyplot, plot_demonstrations, plot_splits, source_table
 from training.benchmark.runner import RESULTS
 from training.reproduce.budgets import Budget
 from training.reproduce.pipeline import CURVE_SPLIT, SPLIT_NAMES, Baseline
@@ -74,7 +74,9 @@ def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, se
     ]
     for split in dict.fromkeys(r["split"] for r in records):
         lines += [f"## {split}", "", *_table(split, references, main, per_run, pooled, labels), ""]
-        lines += _source_table(split, records, references + [b.label for b in main])
+        caption = f"Per scenario source ({split}): success pooled over the seeds [95 % CI], cost ratio in brackets."
+        by_baseline = [{**r, "policy": r["baseline"]} for r in records]
+        lines += source_table(by_baseline, split, caption, references + [b.label for b in main], first="baseline")
     curve = [b for b in baselines if b.demonstrations is not None and b.label.startswith("bc-mlp")]
     curve_split = next((s for s in dict.fromkeys(r["split"] for r in records) if s.startswith(CURVE_SPLIT)), None)
     if curve_split is not None:
@@ -157,31 +159,6 @@ def _spread(values: list[float], fmt: str) -> str:
     if len(finite) == 1:
         return mean
     return f"{mean} ({fmt.format(min(finite))}-{fmt.format(max(finite))})"
-
-
-def _source_table(split: str, records: list[dict[str, Any]], names: list[str]) -> list[str]:
-    """Per scenario source of ``split`` (family or push pattern): each baseline's pooled success and cost ratio."""
-    chosen = [{**r, "policy": r["baseline"], "split": r["source"]} for r in records if r["split"] == split]
-    sources = list(dict.fromkeys(r["split"] for r in chosen))
-    if len(sources) < 2:
-        return []
-    rows = {(row.policy, row.split): row for row in summarise(chosen)}
-    lines = [
-        f"Per scenario source ({split}): success pooled over the seeds, cost ratio in brackets.",
-        "",
-        "| baseline | " + " | ".join(sources) + " |",
-        "| --- |" + " --- |" * len(sources),
-    ]
-    for name in names:
-        cells = [rows.get((name, source)) for source in sources]
-        text = [_success_and_ratio(c) if c is not None else "-" for c in cells]
-        lines.append(f"| {name} | " + " | ".join(text) + " |")
-    return [*lines, ""]
-
-
-def _success_and_ratio(row: Row) -> str:
-    ratio = "-" if math.isnan(row.cost_ratio) else f"{row.cost_ratio:.2f}"
-    return f"{row.success:.0%} ({ratio})"
 
 
 def _curve_table(split: str, curve: Sequence[Baseline], dagger: Sequence[Baseline], per_run: dict, pooled: dict,
