@@ -297,9 +297,31 @@ def fit(
     ``checkpoint`` (what ``save`` was last given) resumes training after its epoch;
     ``save`` is called with the training state after every epoch. Deterministic on CPU
     for one ``config.seed``, interrupted or not.
+
+    The CPU flushes subnormal floats to zero while it trains (``torch.set_flush_denormal``,
+    off again afterwards): weight decay drives the weights of candidates that never win
+    into float32's subnormal range, where arithmetic is many times slower. The published
+    dataset's flat MLP trains its 60 epochs in 36 s instead of 107 s, with the same
+    loss and accuracy at every epoch; its weights differ by less than 4e-30.
     """
     if len(demonstrations) == 0:
         raise ValueError("no labelled demonstrations to learn from")
+    flushing = torch.set_flush_denormal(True)  # False where the CPU cannot: then nothing changed
+    try:
+        return _fit(demonstrations, config, capacity, checkpoint, save, on_epoch)
+    finally:
+        if flushing:
+            torch.set_flush_denormal(False)
+
+
+def _fit(
+    demonstrations: Demonstrations,
+    config: BCConfig,
+    capacity: Capacity,
+    checkpoint: dict[str, Any] | None,
+    save: Callable[[dict[str, Any]], None] | None,
+    on_epoch: Callable[[dict[str, Any]], None] | None,
+) -> tuple[nn.Module, list[dict[str, Any]]]:
     torch.set_num_threads(1)  # faster here than two threads, and the same sums every run
     torch.manual_seed(config.seed)
     observations = torch.as_tensor(demonstrations.observations)
