@@ -167,6 +167,20 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     assert all(r["expert_cost"] is not None for r in records)
 
 
+def test_resume_keeps_the_records_of_other_policies_and_splits(tiny: Path, tmp_path: Path):
+    shutil.copy(tiny / "results.json", tmp_path / "results.json")
+    before = json.loads((tmp_path / "results.json").read_text())
+    benchmark.run_benchmark(["random"], split="layouts", episodes=1, out=tmp_path, resume=True)
+    records = json.loads((tmp_path / "results.json").read_text())
+    assert [(r["policy"], r["split"]) for r in records[: -len(before)]] == [
+        ("expert", "layouts-v0"),
+        ("random", "layouts-v0"),
+    ]
+    assert records[-len(before) :] == before
+    summary = (tmp_path / "summary.md").read_text()
+    assert "Benchmark: layouts-v0, iid-v0" in summary  # this run's split first, then the file's others
+
+
 # ------------------------------------------------------------------ bad input
 def _broken_run(tmp_path: Path) -> Path:
     run = tmp_path / "broken"

@@ -11,9 +11,10 @@ their parent.
 :data:`WRITE_EVERY_S` seconds) and once more at the end, so an interrupted run keeps
 its finished episodes; ``summary.md`` and ``splits.png`` are written at the end and on
 an interrupt. With ``resume``, the episodes already in ``results.json`` are kept and
-only the others run (an interrupted benchmark continues where it stopped). Records are
-kept in a fixed order (policy, then episode), so the same command gives the same file,
-timings aside.
+only the others run (an interrupted benchmark continues where it stopped); the records
+of other policies or splits in the file stay after this run's, and in the summary, so
+one folder can grow a policy at a time. Records are kept in a fixed order (policy, then
+episode), so the same command gives the same file, timings aside.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import json
 import multiprocessing
 import os
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
@@ -70,7 +71,8 @@ def run_benchmark(
 
     ``split`` is a split's name or a list of names (the first ``episodes`` of each).
     ``resume`` keeps the records of ``out/results.json`` that belong to this run's
-    episodes (same policy, split and seed) and runs only the others.
+    episodes (same policy, split and seed) and runs only the others; the file's other
+    records (other policies or splits) are written back after this run's.
 
     Raises :class:`BenchmarkError` for bad input before any episode runs; a
     ``KeyboardInterrupt`` propagates after the finished episodes are written.
@@ -96,7 +98,7 @@ def run_benchmark(
     out.mkdir(parents=True, exist_ok=True)
     tasks = [(spec, item) for spec in specs for item in items]
     order = {(spec.name, item.split, item.index): k for k, (spec, item) in enumerate(tasks)}
-    records = finished_records(out, tasks) if resume else []
+    records, others = finished_records(out, tasks) if resume else ([], [])
     done = {(r["policy"], r["split"], r["index"]) for r in records}
     tasks = [(spec, item) for spec, item in tasks if (spec.name, item.split, item.index) not in done]
     resumed = len(records)
@@ -107,35 +109,39 @@ def run_benchmark(
             records.append(record)
             bar.update(1)
             if time.monotonic() - last_write > WRITE_EVERY_S:
-                write_results(out, records, order)
+                write_results(out, records, order, others)
                 last_write = time.monotonic()
     finally:
         bar.close()
         close_all()
-        records = write_results(out, records, order)
+        records = write_results(out, records, order, others)
         rows = summarise(records) if records else []
         if rows:
-            write_report(out, rows, records, title=f"Benchmark: {', '.join(dict.fromkeys(i.split for i in items))}")
+            splits = dict.fromkeys(row.split for row in rows)
+            write_report(out, rows, records, title=f"Benchmark: {', '.join(splits)}")
     return BenchmarkReport(out, records, rows, resumed)
 
 
-def finished_records(out: Path, tasks: list[Task]) -> list[dict[str, Any]]:
-    """The records of ``out/results.json`` that are episodes of ``tasks`` (with their ``index``); [] if none."""
+def finished_records(out: Path, tasks: list[Task]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """``(finished, others)``: the records of ``out/results.json`` that are episodes of ``tasks`` (with their
+    ``index``), and its other well-formed records as they are; both [] without the file."""
     try:
         saved = json.loads((out / RESULTS).read_text())
     except FileNotFoundError:
-        return []
+        return [], []
     except (json.JSONDecodeError, UnicodeDecodeError) as error:
         raise BenchmarkError(f"{out / RESULTS} cannot be resumed: it is not valid JSON ({error})") from None
     index = {(spec.name, item.split, item.seed): item.index for spec, item in tasks}
-    kept = {}
+    kept, others = {}, {}
     for record in saved if isinstance(saved, list) else []:
         if not (isinstance(record, dict) and all(isinstance(record.get(k), t) for k, t in RECORD_KEYS)):
             continue
         key = (record["policy"], record["split"], record["seed"])
         if key in index:
             kept[key] = {**record, "index": index[key]}
-    return list(kept.values())
+        else:
+            others[key] = record
+    return list(kept.values()), list(others.values())
 
 
 def with_references(policies: list[str]) -> list[PolicySpec]:
@@ -170,11 +176,16 @@ def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
         raise BenchmarkError("\n".join(problems[:10]))
 
 
-def write_results(out: Path, records: list[dict[str, Any]], order: dict[tuple[str, str, int], int]) -> list[dict]:
-    """Fill in the expert's costs, sort ``records`` into task order and write ``results.json`` atomically."""
+def write_results(
+    out: Path,
+    records: list[dict[str, Any]],
+    order: dict[tuple[str, str, int], int],
+    others: Sequence[dict[str, Any]] = (),
+) -> list[dict]:
+    """Fill in the expert's costs, sort ``records`` into task order and write them, then ``others``, atomically."""
     fill_expert_costs(records)
     ordered = sorted(records, key=lambda r: order[(r["policy"], r["split"], r["index"])])
-    public = [{k: v for k, v in r.items() if k != "index"} for r in ordered]
+    public = [{k: v for k, v in r.items() if k != "index"} for r in ordered] + list(others)
     temporary = out / f".{RESULTS}.tmp"
     temporary.write_text(json.dumps(public, indent=1) + "\n")
     os.replace(temporary, out / RESULTS)

@@ -64,7 +64,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(
-        "--resume", action="store_true", help="keep the episodes already in OUT_DIR/results.json and run the others"
+        "--resume",
+        action="store_true",
+        help="keep the episodes already in OUT_DIR/results.json and run the others; its records of other "
+        "policies and splits stay (one folder can grow a policy at a time)",
     )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     parser.set_defaults(handler=run_benchmark_command)
