@@ -170,3 +170,16 @@ def test_the_budget_aims_a_second_dagger_from_the_dataset(tmp_path: Path) -> Non
     assert "dagger-aimed" not in [b.label for b in baselines(2, none)]
     with pytest.raises(ValueError, match="aimed_iterations"):
         replace(FULL, aimed_iterations=-1)
+
+
+def test_with_two_seeds_or_more_the_aimed_runs_make_an_ensemble(tmp_path: Path) -> None:
+    from training.reproduce.budgets import FULL
+
+    jobs = {job.name: job for job in training_jobs(tmp_path, 3, FULL)}
+    ensemble = jobs["dagger-aimed-ensemble"]
+    assert ensemble.kind == "ensemble" and ensemble.needs == ("dagger-aimed-s0", "dagger-aimed-s1", "dagger-aimed-s2")
+    assert ensemble.members == tuple(jobs[name].out for name in ensemble.needs)
+    (row,) = [b for b in baselines(3, FULL) if b.label == "dagger-aimed-ensemble"]
+    assert row.runs == ("dagger-aimed-ensemble",) and not row.per_seed
+    assert "dagger-aimed-ensemble" not in {job.name for job in training_jobs(tmp_path, 1, FULL)}
+    assert "dagger-aimed-ensemble" not in [b.label for b in baselines(1, FULL)]

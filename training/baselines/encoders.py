@@ -270,3 +270,22 @@ class SetScorer(nn.Module):
             scores[name] = (first.reshape(batch, -1), second.reshape(batch, -1))
         # The layout's order: pick, place, push, approach, waypoint, edge.
         return torch.cat([*scores["object"], *scores["clutter"], *scores["blocker"]], dim=1)
+
+
+class Ensemble(nn.Module):
+    """Several networks scoring the same candidates, as one: the mean of their log-probabilities.
+
+    The mean of the members' log-softmax scores is the log of the product of their
+    distributions over the candidates (up to a constant), which the policy renormalises
+    over the allowed ones: a candidate ranks first when the members agree on it, and one
+    that any member finds very unlikely is pulled down.
+    """
+
+    def __init__(self, members: list[nn.Module]) -> None:
+        super().__init__()
+        if len(members) < 2:
+            raise ValueError(f"an ensemble needs at least two networks, got {len(members)}")
+        self.members = nn.ModuleList(members)
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        return torch.stack([torch.log_softmax(member(flat), dim=1) for member in self.members]).mean(dim=0)

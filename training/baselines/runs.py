@@ -1,8 +1,8 @@
-"""Run folders of trained policies (``bc``, ``dagger``, ``ppo``): what they hold, and loading them safely.
+"""Run folders of trained policies (``bc``, ``dagger``, ``ppo``, ``ensemble``): what they hold, and loading them.
 
 A run folder holds
 
-- ``config.json``: ``kind`` (``bc``, ``dagger`` or ``ppo``), ``interface`` (``phases``:
+- ``config.json``: ``kind`` (``bc``, ``dagger``, ``ppo`` or ``ensemble``), ``interface`` (``phases``:
   the policy acts in ``FetchCarryPushPhases-v0``'s candidate phases), ``env_id``,
   ``options`` (every option of the run, as given), ``config`` (the network:
   :class:`~training.baselines.bc.BCConfig`), ``capacity`` (the observation's slots),
@@ -14,7 +14,9 @@ A run folder holds
 
 Every kind acts through the same network (a PPO run's actor is a BC network, so a BC
 run of the same encoder initialises it), so :func:`load_policy` builds one
-:class:`~training.baselines.bc.BCPolicy` for all three. Loading reads JSON and
+:class:`~training.baselines.bc.BCPolicy` for all of them; an ``ensemble``
+(:mod:`training.baselines.ensemble`) holds several such networks, each member's settings
+in ``options.members``, and acts on the mean of their log-probabilities. Loading reads JSON and
 ``torch.load(..., weights_only=True)`` tensors only: nothing in a run folder runs code.
 A ``config.json`` with an unknown key, a missing key, a bad kind or a value of the
 wrong type is a ``ValueError``.
@@ -36,7 +38,7 @@ import torch
 from fetchcarry_env.observation import Capacity
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
-KINDS = ("bc", "dagger", "ppo")
+KINDS = ("bc", "dagger", "ppo", "ensemble")
 INTERFACE = "phases"
 ENV_ID = "FetchCarryPushPhases-v0"
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
@@ -71,6 +73,12 @@ def read_config(path: str | Path) -> dict[str, Any]:
     if saved.get("interface", INTERFACE) != INTERFACE:
         raise RunFolderError(f"{file}: interface must be {INTERFACE!r}, got {saved['interface']!r}")
     _check_fields(file, "config", saved["config"], BCConfig)
+    if saved["kind"] == "ensemble":
+        members = (saved.get("options") or {}).get("members")
+        if not isinstance(members, list) or len(members) < 2 or not all(isinstance(m, dict) for m in members):
+            raise RunFolderError(f"{file}: options.members must list at least two members (JSON objects)")
+        for k, member in enumerate(members):
+            _check_fields(file, f"options.members[{k}].config", member.get("config"), BCConfig)
     _check_fields(file, "capacity", saved["capacity"], Capacity)
     for key in ("candidates", "features"):
         if not isinstance(saved[key], int) or isinstance(saved[key], bool) or saved[key] < 1:
@@ -115,13 +123,17 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
     none are given. Raises ``ValueError`` for anything that is not a loadable run folder.
     """
     from training.baselines.bc import BCPolicy
-    from training.baselines.encoders import build_network
+    from training.baselines.encoders import Ensemble, build_network
 
     path = Path(path)
     saved = read_config(path)
     config = network_config(saved)
     capacity = Capacity(**saved["capacity"])
-    network = build_network(config, capacity, saved["candidates"], torch.zeros(1, saved["features"]))
+    networks = [config]  # an ensemble: its members' settings
+    if saved["kind"] == "ensemble":
+        networks = [network_config({"config": member["config"]}) for member in saved["options"]["members"]]
+    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in networks]
+    network = Ensemble(built) if saved["kind"] == "ensemble" else built[0]
     weights = path / WEIGHTS_FILE
     if not weights.is_file():
         raise RunFolderError(f"{path} has no {WEIGHTS_FILE} (an unfinished run: resume it first)")

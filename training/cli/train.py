@@ -28,13 +28,13 @@ RUN_EPILOG = (
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``train`` (``bc``, ``dagger``, ``ppo``) to the ``fetchcarry`` parser."""
+    """Add ``train`` (``bc``, ``dagger``, ``ppo``, ``ensemble``) to the ``fetchcarry`` parser."""
     from training.baselines.configs import BCConfig
 
     defaults = BCConfig()
     parser = commands.add_parser(
         "train",
-        help="train a learned baseline (bc, dagger, ppo) into a run folder",
+        help="train a learned baseline (bc, dagger, ppo; or an ensemble of runs) into a run folder",
         description="Train a learned policy on the candidate-phase interface (FetchCarryPushPhases-v0) into a "
         "run folder. Deterministic on CPU for one --seed.",
     )
@@ -191,6 +191,26 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(ppo)
     ppo.set_defaults(handler=run_train_ppo)
 
+    ensemble = kinds.add_parser(
+        "ensemble",
+        help="combine trained run folders into one policy (no further training)",
+        description="Combine two or more finished run folders (bc, dagger or ppo, the same observation capacity) "
+        "into one run folder whose policy acts on the mean of their log-probabilities: a candidate ranks first "
+        "when the members agree on it. The members' weights are copied, so the folder stands alone. For example "
+        "the three training seeds of dagger-aimed of a reproduction.",
+        epilog="Exit status: 0 written, 2 bad input (a member that is not a finished run folder, members that "
+        "score other candidates, an OUT that holds a run).",
+    )
+    ensemble.add_argument("--members", nargs="+", required=True, metavar="RUN_DIR", help="finished run folders")
+    ensemble.add_argument(
+        "--no-avoid-returns",
+        dest="avoid_returns",
+        action="store_false",
+        help="act without the episode memory that skips moves known to lead back to a state met before",
+    )
+    ensemble.add_argument("--out", required=True, metavar="RUN_DIR", help="the run folder to write")
+    ensemble.set_defaults(handler=run_train_ensemble)
+
     from training.baselines.configs import HELDOUT_SEED_BASE
 
     learned = bench.add_parser(
@@ -330,6 +350,17 @@ def run_train_bc(args: argparse.Namespace) -> int:
                 f"accuracy {last['accuracy']:.1%}\nrun folder {args.out}")  # fmt: skip
 
     return _guarded(train, args)
+
+
+def run_train_ensemble(args: argparse.Namespace) -> int:
+    from training.baselines.ensemble import make_ensemble
+
+    try:
+        make_ensemble(args.members, args.out, avoid_returns=args.avoid_returns)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    echo(f"ensemble of {len(args.members)} runs\nrun folder {args.out}")
+    return 0
 
 
 def _family_list(text: str) -> tuple[str, ...]:

@@ -7,7 +7,7 @@ the seeds (every episode of every seed) with a 95 % Wilson interval; the referen
 (expert, random, random-phases, greedy) have one evaluation each. ``results.json``
 holds every episode record of every split, with two keys added to the benchmark's:
 ``baseline`` (the label without the seed) and ``training_seed`` (``null`` for the
-references). Plots: ``splits.png`` (success and cost ratio per split, pooled over the
+references and for ``dagger-aimed-ensemble``, which is made of every seed's runs). Plots: ``splits.png`` (success and cost ratio per split, pooled over the
 seeds, with 95 % intervals), ``ppo_curves.png`` (MaskablePPO's training success and
 return against env steps and wall-clock seconds, one line per run) and
 ``demonstrations.png`` (BC's success on ``iid`` against its expert episodes).
@@ -36,7 +36,7 @@ PPO_BASELINES = ("ppo-scratch", "ppo-bc")
 
 def collect(out: Path, baselines: Sequence[Baseline]) -> list[dict[str, Any]]:
     """Every benchmark record of the reproduction in ``out``, with ``baseline`` and ``training_seed``."""
-    owner = {name: (b.label, seed) for b in baselines for seed, name in enumerate(b.runs)}
+    owner = {name: (b.label, seed if b.per_seed else None) for b in baselines for seed, name in enumerate(b.runs)}
     records = []
     for split in SPLIT_NAMES:
         for record in json.loads((out / "benchmark" / split / RESULTS).read_text()):
@@ -62,7 +62,8 @@ def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, se
     pooled = {(row.policy, row.split): row for row in summarise([{**r, "policy": r["baseline"]} for r in records])}
     labels = {name: expert_labels(out / "runs" / name) for b in baselines for name in b.runs}
     main = [b for b in baselines if not b.label.startswith("bc-mlp-n")]
-    references = list(dict.fromkeys(r["baseline"] for r in records if r["training_seed"] is None))
+    learned = {b.label for b in baselines}
+    references = list(dict.fromkeys(r["baseline"] for r in records if r["baseline"] not in learned))
     lines = [
         "# The published table",
         "",

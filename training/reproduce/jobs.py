@@ -1,6 +1,6 @@
 """Training jobs of a reproduction, up to ``workers`` at a time, each a resumable run folder.
 
-A :class:`TrainJob` is one ``fetchcarry train`` run (bc, dagger or ppo) described by
+A :class:`TrainJob` is one ``fetchcarry train`` run (bc, dagger, ppo or ensemble) described by
 plain, picklable fields; :func:`run_job` trains it through the library functions the
 commands use, with ``resume=True`` (a complete run folder is left as it is; an
 interrupted one continues from its checkpoint) and torch on one thread. :func:`run_jobs`
@@ -27,7 +27,7 @@ class TrainJob:
     """One run folder to train: ``kind`` with its settings, after the jobs named in ``needs``."""
 
     name: str  # the run folder's name (unique: the benchmark labels policies by it)
-    kind: str  # "bc", "dagger" or "ppo"
+    kind: str  # "bc", "dagger", "ppo" or "ensemble"
     out: str  # the run folder
     seed: int  # the training seed
     config: BCConfig | None = None  # bc and dagger: the network
@@ -37,6 +37,7 @@ class TrainJob:
     dagger: DaggerOptions | None = None
     ppo: PPOOptions | None = None
     needs: tuple[str, ...] = field(default=())  # names of jobs that must finish first
+    members: tuple[str, ...] = field(default=())  # ensemble: the run folders it combines
 
 
 def is_complete(job: TrainJob) -> bool:
@@ -65,6 +66,10 @@ def run_job(job: TrainJob) -> tuple[float, float]:
         from training.baselines.ppo import train_ppo
 
         train_ppo(job.family, job.ppo, job.out, resume=True, progress=False)
+    elif job.kind == "ensemble":
+        from training.baselines.ensemble import make_ensemble
+
+        make_ensemble(job.members, job.out)
     else:
         raise ValueError(f"unknown kind of training job {job.kind!r}")
     return time.perf_counter() - started, time.process_time() - cpu

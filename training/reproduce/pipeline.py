@@ -12,7 +12,8 @@
    then iterations whose learner episodes are ``push`` and ``multi-2`` draws), MaskablePPO from scratch and started
    from the BC (flat MLP) weights, and BC on the first 10, 30, ... episodes (the
    demonstrations curve), each a run folder ``DIR/runs/NAME-sSEED``, up to ``workers``
-   at a time (:mod:`training.reproduce.jobs`);
+   at a time (:mod:`training.reproduce.jobs`); then, with two seeds or more, the
+   ensemble of the seeds' ``dagger-aimed`` runs, ``DIR/runs/dagger-aimed-ensemble``;
 3. **benchmark**: the references (expert, random, random-phases, greedy) and every run
    folder on every split, ``DIR/benchmark/SPLIT`` (``fetchcarry benchmark``'s outputs;
    the demonstrations curve's runs on ``iid`` only);
@@ -47,6 +48,7 @@ REFERENCES = ("expert", "random", "random-phases", "greedy")
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
 WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
 MINARI_ENV = "MINARI_DATASETS_PATH"
+ENSEMBLE = "dagger-aimed-ensemble"  # the run combining every seed's dagger-aimed network
 
 
 class ReproduceError(ValueError):
@@ -60,6 +62,7 @@ class Baseline:
     label: str  # e.g. "bc-mlp"
     runs: tuple[str, ...]  # run folder names, one per training seed
     demonstrations: int | None = None  # expert episodes it was trained on (the demonstrations curve), if fixed
+    per_seed: bool = True  # False: one run made of every seed's runs (an ensemble), not of one seed
 
 
 def run_name(label: str, seed: int) -> str:
@@ -92,6 +95,10 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
             jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
                                  family=TRAINING_FAMILY, dagger=budget.aimed_options(DATASET_ID)))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
+    if budget.aimed_iterations and seeds > 1:
+        members = _names("dagger-aimed", seeds)
+        jobs.append(TrainJob(ENSEMBLE, "ensemble", str(runs / ENSEMBLE), 0, needs=members,
+                             members=tuple(str(runs / name) for name in members)))  # fmt: skip
     for seed in range(seeds):
         jobs += [_bc(runs, curve_label(n), seed, budget, "mlp", n) for n in budget.curve]
     return jobs
@@ -110,6 +117,7 @@ def baselines(seeds: int, budget: Budget) -> list[Baseline]:
         Baseline("bc-set", _names("bc-set", seeds), budget.demonstrations),
         Baseline("dagger", _names("dagger", seeds)),
         *([Baseline("dagger-aimed", _names("dagger-aimed", seeds))] if budget.aimed_iterations else []),
+        *([Baseline(ENSEMBLE, (ENSEMBLE,), per_seed=False)] if budget.aimed_iterations and seeds > 1 else []),
         Baseline("ppo-scratch", _names("ppo-scratch", seeds)),
         Baseline("ppo-bc", _names("ppo-bc", seeds)),
     ]
