@@ -27,8 +27,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="the published table: expert data, every learned baseline per training seed, every split",
         description="Make the published table in one folder: (1) the MILP expert's episodes on the training "
         "family (basic, push, corridor or multi-2) as a candidate-phase Minari dataset under DIR/datasets; "
-        "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, MaskablePPO from scratch and "
-        "from the BC weights, and BC on fewer demonstrations, each a run folder in DIR/runs; (3) the benchmark "
+        "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, DAgger aimed at push and "
+        "multi-2 from the whole dataset (dagger-aimed), MaskablePPO from scratch and from the BC weights, and BC "
+        "on fewer demonstrations, each a run folder in DIR/runs, then the ensemble of the seeds' dagger-aimed "
+        "runs; (3) the benchmark "
         "of expert, random, random-phases, greedy and every run on the splits iid, more-objects, layouts and "
         "push-required (DIR/benchmark/SPLIT); (4) DIR/summary.md (per split, each baseline's mean over the "
         "seeds with its range, success pooled over seeds with a 95 % Wilson interval), DIR/results.json and "
