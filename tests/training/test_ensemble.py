@@ -59,6 +59,11 @@ def test_bad_members_are_refused(members: list[Path], tmp_path: Path):
         make_ensemble([tmp_path / "pair", members[0]], tmp_path / "nested")
     with pytest.raises(ValueError, match="already holds a run"):
         make_ensemble(members, tmp_path / "pair")
+    broken = json.loads((tmp_path / "pair" / "config.json").read_text())
+    broken["options"]["members"] = broken["options"]["members"][:1]
+    (tmp_path / "pair" / "config.json").write_text(json.dumps(broken))
+    with pytest.raises(ValueError, match="options.members"):
+        load_policy(tmp_path / "pair")
     other = tmp_path / "other"
     shutil.copytree(members[1], other)
     config = json.loads((other / "config.json").read_text())
