@@ -62,7 +62,7 @@ def test_bad_members_are_refused(members: list[Path], tmp_path: Path):
     broken = json.loads((tmp_path / "pair" / "config.json").read_text())
     broken["options"]["members"] = broken["options"]["members"][:1]
     (tmp_path / "pair" / "config.json").write_text(json.dumps(broken))
-    with pytest.raises(ValueError, match="options.members"):
+    with pytest.raises(ValueError, match=r"options\.members"):
         load_policy(tmp_path / "pair")
     other = tmp_path / "other"
     shutil.copytree(members[1], other)

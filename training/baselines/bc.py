@@ -187,10 +187,12 @@ class BCPolicy:
         The CPU flushes subnormal floats to zero during the call (``torch.set_flush_denormal``,
         off again afterwards: the env's physics runs in the same thread). Weight decay
         leaves the weights of candidates that never win tiny, and their products fall into
-        float32's subnormal range, where arithmetic is many times slower: the flat MLP's
-        last layer took 1.28 ms a decision with them and a fraction of it without; a
-        decision of an ensemble of three DAgger networks 3.2 ms against 1.0 ms. Their share
-        of a score is below 1e-35: the benchmark episodes of published runs took the same
+        float32's subnormal range, where arithmetic is many times slower: on one state
+        asked again and again (warm caches), the flat MLP's last layer took 1.28 ms with
+        them and an ensemble of three flat MLPs 3.2 against 1.0 ms. Through the benchmark,
+        where the env steps between decisions, a decision also waits for its weights from
+        memory, and the gain is small (a flat MLP 1.0-2.2 ms either way). Their share of a
+        score is below 1e-35: the benchmark episodes of published runs took the same
         decisions with and without (two runs, 600 episodes).
         """
         traced = self.traced.get(len(observations))

@@ -7,7 +7,8 @@ the seeds (every episode of every seed) with a 95 % Wilson interval; the referen
 (expert, random, random-phases, greedy) have one evaluation each. ``results.json``
 holds every episode record of every split, with two keys added to the benchmark's:
 ``baseline`` (the label without the seed) and ``training_seed`` (``null`` for the
-references and for ``dagger-aimed-ensemble``, which is made of every seed's runs). Plots: ``splits.png`` (success and cost ratio per split, pooled over the
+references and for ``dagger-aimed-ensemble``, which is made of every seed's runs).
+Plots: ``splits.png`` (success and cost ratio per split, pooled over the
 seeds, with 95 % intervals), ``ppo_curves.png`` (MaskablePPO's training success and
 return against env steps and wall-clock seconds, one line per run) and
 ``demonstrations.png`` (BC's success on ``iid`` against its expert episodes).
