@@ -15,7 +15,7 @@ from training.cli.arguments import positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 
-FULL_ESTIMATE = "about 80 minutes for three seeds"  # measured: docs/benchmarks/learning.md, "The published table"
+FULL_ESTIMATE = "about 115 minutes for three seeds"  # measured: docs/benchmarks/learning.md, "The published table"
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:

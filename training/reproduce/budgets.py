@@ -1,6 +1,6 @@
 """The budgets of the published table: how much ``fetchcarry reproduce`` records, trains and evaluates.
 
-Two budgets: ``full`` (the published table; about 80 minutes for three training seeds on
+Two budgets: ``full`` (the published table; about 115 minutes for three training seeds on
 a quiet 2-core machine with two workers, estimated from the CPU seconds of smaller runs in
 docs/benchmarks/learning.md, "The published table") and ``smoke``
 (every stage at a toy size, in about a minute: what the tests run). Every field is
