@@ -64,6 +64,10 @@ def test_bad_members_are_refused(members: list[Path], tmp_path: Path):
     (tmp_path / "pair" / "config.json").write_text(json.dumps(broken))
     with pytest.raises(ValueError, match=r"options\.members"):
         load_policy(tmp_path / "pair")
+    broken["options"] = ["not", "an", "object"]
+    (tmp_path / "pair" / "config.json").write_text(json.dumps(broken))
+    with pytest.raises(ValueError, match=r"options\.members"):
+        load_policy(tmp_path / "pair")
     other = tmp_path / "other"
     shutil.copytree(members[1], other)
     config = json.loads((other / "config.json").read_text())

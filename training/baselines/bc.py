@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -201,12 +202,8 @@ class BCPolicy:
                 warnings.simplefilter("ignore", torch.jit.TracerWarning)  # batch size baked in: one trace per size
                 traced = torch.jit.trace(self.network, observations, check_trace=False)
             self.traced[len(observations)] = traced
-        flushing = torch.set_flush_denormal(True)  # False where the CPU cannot: then nothing changed
-        try:
+        with subnormals_flushed():
             return traced(observations)
-        finally:
-            if flushing:
-                torch.set_flush_denormal(False)
 
     def _approach_indices(self, candidates: int) -> np.ndarray:
         if self._approaches is None:
@@ -284,6 +281,20 @@ def candidates_of_kinds(capacity: Capacity, candidates: int, kinds: tuple[str, .
     return chosen
 
 
+@contextmanager
+def subnormals_flushed() -> Iterator[None]:
+    """While the block runs, this thread's CPU treats subnormal floats as zero (off again afterwards).
+
+    Where the CPU cannot (``torch.set_flush_denormal`` returns False), nothing changes.
+    """
+    flushing = torch.set_flush_denormal(True)
+    try:
+        yield
+    finally:
+        if flushing:
+            torch.set_flush_denormal(False)
+
+
 def flush_subnormal(network: nn.Module) -> nn.Module:
     """Set the network's subnormal weights (below float32's smallest normal, ~1.2e-38) to zero, in place.
 
@@ -322,12 +333,8 @@ def fit(
     """
     if len(demonstrations) == 0:
         raise ValueError("no labelled demonstrations to learn from")
-    flushing = torch.set_flush_denormal(True)  # False where the CPU cannot: then nothing changed
-    try:
+    with subnormals_flushed():
         return _fit(demonstrations, config, capacity, checkpoint, save, on_epoch)
-    finally:
-        if flushing:
-            torch.set_flush_denormal(False)
 
 
 def _fit(

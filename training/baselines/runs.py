@@ -74,7 +74,8 @@ def read_config(path: str | Path) -> dict[str, Any]:
         raise RunFolderError(f"{file}: interface must be {INTERFACE!r}, got {saved['interface']!r}")
     _check_fields(file, "config", saved["config"], BCConfig)
     if saved["kind"] == "ensemble":
-        members = (saved.get("options") or {}).get("members")
+        options = saved.get("options")
+        members = options.get("members") if isinstance(options, dict) else None
         if not isinstance(members, list) or len(members) < 2 or not all(isinstance(m, dict) for m in members):
             raise RunFolderError(f"{file}: options.members must list at least two members (JSON objects)")
         for k, member in enumerate(members):
@@ -129,11 +130,10 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
     saved = read_config(path)
     config = network_config(saved)
     capacity = Capacity(**saved["capacity"])
-    networks = [config]  # an ensemble: its members' settings
-    if saved["kind"] == "ensemble":
-        networks = [network_config({"config": member["config"]}) for member in saved["options"]["members"]]
-    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in networks]
-    network = Ensemble(built) if saved["kind"] == "ensemble" else built[0]
+    ensemble = saved["kind"] == "ensemble"
+    configs = [network_config(member) for member in saved["options"]["members"]] if ensemble else [config]
+    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
+    network = Ensemble(built) if ensemble else built[0]
     weights = path / WEIGHTS_FILE
     if not weights.is_file():
         raise RunFolderError(f"{path} has no {WEIGHTS_FILE} (an unfinished run: resume it first)")
