@@ -78,11 +78,29 @@ def test_set_encoder_learns_and_faces_more_slots(basic_demos):
     with torch.inference_mode():  # decisions run a frozen trace of the network: the same numbers, bit for bit
         for batch in (rows, rows[:1]):
             torch.testing.assert_close(policy.scores(batch), policy.network(batch), rtol=0, atol=0)
+    _one_decision_scores_only_the_allowed_candidates(policy, small)
     bigger = Capacity(objects=6, clutter=10)
     from fetchcarry_env.phases import PhaseLayout
 
     network = SetScorer(bigger, PhaseLayout.for_postures(capacity=bigger), width=32, relative=policy.config.relative)
     network.load_state_dict(policy.network.state_dict())  # the weights do not depend on the slot counts
+
+
+def test_flat_mlp_decisions_score_only_the_allowed_candidates(basic_demos):
+    small = Demonstrations(basic_demos.observations[:64], basic_demos.masks[:64], basic_demos.labels[:64])
+    _one_decision_scores_only_the_allowed_candidates(train_bc(small, BCConfig(epochs=5, hidden=32), Capacity()), small)
+
+
+def _one_decision_scores_only_the_allowed_candidates(policy, states: Demonstrations) -> None:
+    """One row's decision (scores of its allowed candidates only) is the batch's (every score, then masked)."""
+    batched = policy.predict(states.observations, action_masks=states.masks)[0]
+    for row, (flat, mask) in enumerate(zip(states.observations, states.masks, strict=True)):
+        policy.reset()
+        assert policy.predict(flat, action_masks=mask)[0] == batched[row]
+        allowed = torch.as_tensor(np.flatnonzero(mask))
+        with torch.inference_mode():
+            some = policy.candidate_scores(torch.as_tensor(flat[None]), allowed)
+            torch.testing.assert_close(some, policy.network(torch.as_tensor(flat[None]))[:, allowed])
 
 
 def test_random_phase_policy_draws_allowed_candidates_reproducibly():

@@ -40,6 +40,9 @@ def test_the_ensemble_ranks_by_the_mean_of_its_members_log_probabilities(members
     actions = loaded.predict(states.observations, action_masks=states.masks)[0]
     best = expected.masked_fill(~torch.as_tensor(states.masks), -torch.inf).argmax(dim=1).numpy()
     np.testing.assert_array_equal(actions, best)
+    for flat, mask, action in zip(states.observations, states.masks, best, strict=True):  # one row: allowed scores only
+        loaded.reset()
+        assert loaded.predict(flat, action_masks=mask)[0] == action
     assert states.masks[np.arange(len(actions)), actions].all()
     config = json.loads((tmp_path / "ensemble" / "config.json").read_text())
     assert config["kind"] == "ensemble" and config["complete"] and config["config"]["avoid_returns"]

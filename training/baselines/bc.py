@@ -31,7 +31,7 @@ from torch import nn
 from fetchcarry_env.observation import Capacity
 from training.baselines import runs
 from training.baselines.configs import BCConfig
-from training.baselines.encoders import build_network
+from training.baselines.encoders import CandidateScorer, build_network
 
 
 @dataclass
@@ -107,6 +107,9 @@ class BCPolicy:
 
     The memory is per episode: it is cleared by :meth:`reset` and by ``episode_start``
     true; batched calls (one row per env) do not use it.
+
+    One observation's decision computes the scores of the candidates it chooses from only
+    (:meth:`candidate_scores`); a batch's, every score (:meth:`scores`).
     """
 
     def __init__(self, network: nn.Module, config: BCConfig, capacity: Capacity, env: Any = None) -> None:
@@ -117,12 +120,13 @@ class BCPolicy:
         self.rng = torch.Generator().manual_seed(config.seed)
         self.chosen: dict[bytes, set[int]] = {}  # this episode: state (observation bytes) -> candidates chosen there
         self.traced: dict[int, torch.jit.ScriptModule] = {}  # batch size -> the network as a TorchScript trace
+        self._candidate_trace: torch.jit.ScriptModule | None = None  # candidate_scores of one row, traced
         self.returns = ReturnMemory(capacity, config.avoid_returns)
         self.last: int | None = None  # this episode: the candidate chosen at the previous decision
         self._approaches: np.ndarray | None = None  # the approach candidates' indices (push_after_approach)
 
     def __getstate__(self) -> dict[str, Any]:
-        return {**self.__dict__, "traced": {}}  # traces do not pickle; they are made again on first use
+        return {**self.__dict__, "traced": {}, "_candidate_trace": None}  # traces do not pickle: made again on use
 
     def reset(self) -> None:
         """Forget the episode's states (a new episode starts)."""
@@ -144,41 +148,80 @@ class BCPolicy:
             if self.env is None:
                 raise ValueError("give action_masks= or build the policy with an env")
             action_masks = self.env.get_wrapper_attr("action_masks")()
-        masks = torch.as_tensor(np.asarray(action_masks, dtype=bool).reshape(len(flat) if batched else 1, -1))
-        memory = self.config.avoid_repeats or self.config.avoid_returns or self.config.push_after_approach
-        remember = memory and not batched
-        if remember:
-            if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
-                self.reset()
-            key = flat.tobytes()
-            chosen = self.chosen.setdefault(key, set())
-            left_out = list(chosen) if self.config.avoid_repeats else []
-            if self.config.avoid_returns:
-                left_out += self.returns.arrive(flat, masks.shape[1])
-            if self.config.push_after_approach and self.last is not None:
-                approaches = self._approach_indices(masks.shape[1])
-                if self.last in approaches:
-                    left_out += approaches.tolist()
-            fresh = masks.clone()
-            fresh[0, left_out] = False
-            if fresh.any():
-                masks = fresh
+        masks = np.asarray(action_masks, dtype=bool).reshape(len(flat) if batched else 1, -1)
+        if batched:
+            return self._predict_rows(flat, masks, deterministic), state
+        if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
+            self.reset()
+        allowed = self._allowed(flat, masks[0])
         with torch.inference_mode():
-            logits = self.scores(torch.as_tensor(flat.reshape(masks.shape[0], -1)))
-            logits = logits.masked_fill(~masks, -torch.inf)
+            scores = self.candidate_scores(torch.as_tensor(flat[None]), torch.as_tensor(allowed))[0]
+            if deterministic:
+                pick = int(scores.argmax())
+            else:
+                pick = int(torch.multinomial(torch.softmax(scores, dim=0), 1, generator=self.rng)[0])
+        action = int(allowed[pick])
+        if self.config.avoid_repeats or self.config.avoid_returns or self.config.push_after_approach:
+            self.chosen.setdefault(flat.tobytes(), set()).add(action)
+            self.returns.leave(action)
+            self.last = action
+        return np.int64(action), state
+
+    def _allowed(self, flat: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """The indices of the candidates to choose from in the state ``flat``: the allowed ones, less the memory's.
+
+        The memory (``avoid_repeats``, ``avoid_returns``, ``push_after_approach``) leaves
+        candidates out only as long as another one is allowed. With none allowed at all,
+        every candidate (the env refuses whichever is chosen).
+        """
+        left_out: list[int] = []
+        if self.config.avoid_repeats:
+            left_out += self.chosen.get(flat.tobytes(), ())
+        if self.config.avoid_returns:
+            left_out += self.returns.arrive(flat, len(mask))
+        if self.config.push_after_approach and self.last is not None:
+            approaches = self._approach_indices(len(mask))
+            if self.last in approaches:
+                left_out += approaches.tolist()
+        allowed = np.flatnonzero(mask)
+        fresh = np.setdiff1d(allowed, left_out, assume_unique=True) if left_out else allowed
+        if len(fresh):
+            return fresh
+        return allowed if len(allowed) else np.arange(len(mask))
+
+    def _predict_rows(self, flat: np.ndarray, masks: np.ndarray, deterministic: bool) -> np.ndarray:
+        """One action per row of a batch (one row per env), without the per-episode memory."""
+        with torch.inference_mode():
+            logits = self.scores(torch.as_tensor(flat)).masked_fill(~torch.as_tensor(masks), -torch.inf)
             if deterministic:
                 actions = logits.argmax(dim=1)
             else:
                 actions = torch.multinomial(torch.softmax(logits, dim=1), 1, generator=self.rng)[:, 0]
-        actions = actions.numpy().astype(np.int64)
-        if remember:
-            chosen.add(int(actions[0]))
-            self.returns.leave(int(actions[0]))
-            self.last = int(actions[0])
-        return (actions if batched else actions[0]), state
+        return actions.numpy().astype(np.int64)
+
+    def candidate_scores(self, flat: torch.Tensor, candidates: torch.Tensor) -> torch.Tensor:
+        """The network's scores of ``candidates`` (indices) for one observation vector (a row).
+
+        Only those candidates' scores are computed (``candidate_scores`` of
+        :mod:`training.baselines.encoders`: the flat MLP reads only their rows of its last
+        layer, the set encoder mixes only the slots present): the same order as
+        :meth:`scores` gives them, up to a constant for an ensemble. A decision needs the
+        allowed candidates only (some 30 of 4,080); through the benchmark (25 ``iid``
+        episodes, one worker, a quiet machine) this took a flat MLP from 1.59 to 0.73 ms
+        a decision, the set encoder from 2.14 to 1.41 ms and an ensemble of three flat
+        MLPs from 2.56 to 1.08 ms. Through a TorchScript trace, like :meth:`scores`, with
+        subnormals flushed.
+        """
+        if self._candidate_trace is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", torch.jit.TracerWarning)
+                example = (flat, candidates if len(candidates) else torch.zeros(1, dtype=torch.long))
+                self._candidate_trace = torch.jit.trace(CandidateScorer(self.network), example, check_trace=False)
+        with subnormals_flushed():
+            return self._candidate_trace(flat, candidates)
 
     def scores(self, observations: torch.Tensor) -> torch.Tensor:
-        """The network's candidate scores for a batch of observation vectors (rows).
+        """The network's scores of every candidate for a batch of observation vectors (rows).
 
         Runs a TorchScript trace of the network, made on the first call with each batch
         size (some 10-50 ms): the same operations on the same parameters, without the

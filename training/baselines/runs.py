@@ -144,7 +144,8 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
         raise RunFolderError(f"{weights} does not fit the network its config.json describes: {error}") from None
     policy = BCPolicy(network, config, capacity, env)
     with torch.inference_mode():
-        policy.scores(torch.zeros(1, saved["features"]))  # trace it now, so that the first decision is not slower
+        # Trace it now, so that the first decision is not slower.
+        policy.candidate_scores(torch.zeros(1, saved["features"]), torch.arange(saved["candidates"]))
     return policy
 
 
