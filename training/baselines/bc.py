@@ -184,7 +184,7 @@ class BCPolicy:
             if self.last in approaches:
                 left_out += approaches.tolist()
         allowed = np.flatnonzero(mask)
-        fresh = np.setdiff1d(allowed, left_out, assume_unique=True) if left_out else allowed
+        fresh = np.setdiff1d(allowed, left_out) if left_out else allowed
         if len(fresh):
             return fresh
         return allowed if len(allowed) else np.arange(len(mask))

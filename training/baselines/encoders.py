@@ -276,6 +276,8 @@ class SetScorer(nn.Module):
         its head, so its candidates' scores differ from :meth:`forward`'s, but a mask
         never allows them.
         """
+        if len(flat) != 1:
+            raise ValueError(f"candidate_scores takes one observation (a row), got {len(flat)}")
         tokens, present = self._all_tokens(flat)
         kept = present[0].nonzero()[:, 0]
         mixed = torch.zeros_like(tokens).index_copy(1, kept, self.mixer(tokens.index_select(1, kept)))
