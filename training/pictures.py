@@ -192,13 +192,19 @@ class Step:
 
 
 def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[Step]:
-    """One :class:`Step` per action, from the states around it (``len(states) == len(actions) + 1``)."""
+    """One :class:`Step` per action, from the states around it (``len(states) == len(actions) + 1``).
+
+    An action is an env action vector (``FetchCarryPush-v0``) or a candidate's index
+    (``FetchCarryPushPhases-v0``, e.g. a learned policy's episode); an index does not say
+    its mode without the state's candidates, so the step's mode is read from what
+    changed: a pick, a place, a push, or a move.
+    """
     if len(states) != len(actions) + 1:
         raise ValueError(f"{len(states)} states for {len(actions)} actions: the record has no states?")
     steps = []
-    for k, vector in enumerate(actions):
+    for k, action in enumerate(actions):
         before, after = states[k], states[k + 1]
-        mode = Action.from_array(vector).mode
+        mode = Action.from_array(action).mode if np.ndim(action) else _mode_from_states(before, after)
         target, pushed = None, 0.0
         if mode == Mode.PICK and after.holding is not None and before.holding is None:
             target = after.holding
@@ -211,6 +217,17 @@ def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[Ste
                 pushed = moved[target]
         steps.append(Step(k + 1, mode, before, after, target, pushed))
     return steps
+
+
+def _mode_from_states(before: WorldState, after: WorldState) -> Mode:
+    """What a step did, from the states around it: the hand took or let go of an object, clutter moved, or neither."""
+    if before.holding is None and after.holding is not None:
+        return Mode.PICK
+    if before.holding is not None and after.holding is None:
+        return Mode.PLACE
+    if any(math.dist(before.clutter[c], after.clutter[c]) > 1e-3 for c in before.clutter if c in after.clutter):
+        return Mode.PUSH
+    return Mode.MOVE
 
 
 def key_states(steps: Sequence[Step], most: int = MAX_RENDERS) -> list[int]:

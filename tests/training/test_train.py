@@ -173,6 +173,10 @@ def test_rollout_takes_a_run_folder(phases_dataset: str, tmp_path: Path, capsys:
     status = main(["rollout", "--family", "basic", "--seed", "100000", "--policy", str(tmp_path / "run"), "--json"])
     figures = json.loads(capsys.readouterr().out)
     assert status == (0 if figures["success"] else 1) and figures["steps"] >= 1
+    picture = tmp_path / "learned.png"  # a picture of the learned episode: its actions are candidate indices
+    assert main(["rollout", "--family", "basic", "--seed", "100000", "--policy", str(tmp_path / "run"),
+                 "--render", str(picture)]) == status  # fmt: skip
+    assert picture.stat().st_size > 10_000
     assert main(["rollout", "--family", "basic", "--policy", str(tmp_path / "missing")]) == 2
 
 
