@@ -213,10 +213,7 @@ class BCPolicy:
         subnormals flushed.
         """
         if self._candidate_trace is None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", torch.jit.TracerWarning)
-                example = (flat, candidates if len(candidates) else torch.zeros(1, dtype=torch.long))
-                self._candidate_trace = torch.jit.trace(CandidateScorer(self.network), example, check_trace=False)
+            self._candidate_trace = _trace(CandidateScorer(self.network), (flat, candidates))
         with subnormals_flushed():
             return self._candidate_trace(flat, candidates)
 
@@ -241,10 +238,7 @@ class BCPolicy:
         """
         traced = self.traced.get(len(observations))
         if traced is None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", torch.jit.TracerWarning)  # batch size baked in: one trace per size
-                traced = torch.jit.trace(self.network, observations, check_trace=False)
-            self.traced[len(observations)] = traced
+            traced = self.traced[len(observations)] = _trace(self.network, observations)  # one per batch size
         with subnormals_flushed():
             return traced(observations)
 
@@ -322,6 +316,13 @@ def candidates_of_kinds(capacity: Capacity, candidates: int, kinds: tuple[str, .
     for kind in kinds:
         chosen[layout.kind_slice(kind)] = True
     return chosen
+
+
+def _trace(module: nn.Module, example: Any) -> torch.jit.ScriptModule:
+    """``module`` as a TorchScript trace on ``example`` inputs (the batch size is baked in: no warning about it)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", torch.jit.TracerWarning)
+        return torch.jit.trace(module, example, check_trace=False)
 
 
 @contextmanager

@@ -95,7 +95,7 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
             jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
                                  family=TRAINING_FAMILY, dagger=budget.aimed_options(DATASET_ID)))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
-    if budget.aimed_iterations and seeds > 1:
+    if _has_ensemble(seeds, budget):
         members = _names("dagger-aimed", seeds)
         jobs.append(TrainJob(ENSEMBLE, "ensemble", str(runs / ENSEMBLE), 0, needs=members,
                              members=tuple(str(runs / name) for name in members)))  # fmt: skip
@@ -117,7 +117,7 @@ def baselines(seeds: int, budget: Budget) -> list[Baseline]:
         Baseline("bc-set", _names("bc-set", seeds), budget.demonstrations),
         Baseline("dagger", _names("dagger", seeds)),
         *([Baseline("dagger-aimed", _names("dagger-aimed", seeds))] if budget.aimed_iterations else []),
-        *([Baseline(ENSEMBLE, (ENSEMBLE,), per_seed=False)] if budget.aimed_iterations and seeds > 1 else []),
+        *([Baseline(ENSEMBLE, (ENSEMBLE,), per_seed=False)] if _has_ensemble(seeds, budget) else []),
         Baseline("ppo-scratch", _names("ppo-scratch", seeds)),
         Baseline("ppo-bc", _names("ppo-bc", seeds)),
     ]
@@ -126,6 +126,11 @@ def baselines(seeds: int, budget: Budget) -> list[Baseline]:
 
 def _names(label: str, seeds: int) -> tuple[str, ...]:
     return tuple(run_name(label, seed) for seed in range(seeds))
+
+
+def _has_ensemble(seeds: int, budget: Budget) -> bool:
+    """Whether the table has ``dagger-aimed-ensemble``: with ``dagger-aimed`` runs of two seeds or more."""
+    return bool(budget.aimed_iterations) and seeds > 1
 
 
 @contextmanager
