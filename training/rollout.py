@@ -27,7 +27,7 @@ import numpy as np
 from expert.policy import Decision
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
-from training.phase_recording import MASK_INFO, PROJECTED_INFO, UNEXPRESSIBLE
+from training.policies.phase_expert import MASK_INFO, PROJECTED_INFO, UNEXPRESSIBLE
 
 # The per-step infos recorded for every episode (Minari needs the same keys at every step):
 # seconds in the planner before the step, whether the policy planned / replanned / repaired its

@@ -10,11 +10,11 @@ import pytest
 import torch
 
 from fetchcarry_env.observation import Capacity
-from training.baselines import load_policy
-from training.baselines.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
-from training.baselines.encoders import SetScorer
-from training.baselines.random_phases import RandomPhasePolicy
-from training.learning.evaluate import evaluate, expert_costs, make_env, summarise
+from training import load_policy
+from training.learners.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
+from training.learners.encoders import SetScorer
+from training.learners.heldout import evaluate, expert_costs, make_env, summarise
+from training.policies.random_phases import RandomPhasePolicy
 
 HELD_OUT = range(100_000, 100_015)
 
@@ -123,7 +123,7 @@ def test_bad_bc_config_raises(options):
 def test_greedy_delivers_through_the_env_actions(family, seeds):
     import gymnasium as gym
 
-    from training.baselines.greedy import GreedyPolicy
+    from training.policies.greedy import GreedyPolicy
 
     env = gym.make("FetchCarryPush-v0", family=family)
     policy = GreedyPolicy(env)
@@ -139,7 +139,7 @@ def test_greedy_delivers_through_the_env_actions(family, seeds):
 
 
 def test_nearest_move_labels_an_expert_move_no_candidate_expresses():
-    from training.learning.expert_phases import nearest_move
+    from training.evaluation.projection import nearest_move
 
     env = make_env("basic")
     env.reset(seed=0)

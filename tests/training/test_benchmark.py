@@ -14,9 +14,9 @@ import pytest
 from fetchcarry_env.families import EXTENT, FAMILIES, HELD_OUT_FAMILIES, turn_quarter
 from fetchcarry_env.scenario import Scenario
 from training import benchmark
-from training.benchmark import runner
-from training.benchmark.splits import SPLIT_BLOCK, TRAINING_FAMILIES
 from training.cli import main
+from training.evaluation import runner
+from training.evaluation.splits import SPLIT_BLOCK, TRAINING_FAMILIES
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
 KEYS = {
@@ -121,7 +121,7 @@ def test_scenario_folder(tmp_path: Path):
 
 
 def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
-    bc = pytest.importorskip("training.baselines.bc")
+    bc = pytest.importorskip("training.learners.bc")
     from fetchcarry_env.observation import Capacity
 
     demonstrations = bc.record_demonstrations("basic", range(3))

@@ -13,10 +13,10 @@ import pytest
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario
-from training.datasets import dataset_exists, dataset_path, episode_metadata, info, replay
-from training.generate import EpisodeSource, GenerationConfig, generate, run_indexed_episode
+from training.data.datasets import dataset_exists, dataset_path, episode_metadata, info, replay
+from training.data.generate import EpisodeSource, GenerationConfig, generate, run_indexed_episode
+from training.data.staging import Staging
 from training.rollout import INFO_KEYS
-from training.staging import Staging
 
 DATASET_ID = "fetchcarry/push-test-v0"
 EPISODES = 3

@@ -12,9 +12,9 @@ import torch
 
 from fetchcarry_env.observation import Capacity
 from tests.cli_run import run
-from training.baselines import load_policy
-from training.baselines.bc import BCConfig, record_demonstrations, train_bc
-from training.baselines.ensemble import make_ensemble
+from training import load_policy
+from training.learners.bc import BCConfig, record_demonstrations, train_bc
+from training.learners.ensemble import make_ensemble
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from expert import ExpertPolicy
 from fetchcarry_env.actions import Action, Mode
 from fetchcarry_env.scenario import Scenario
-from training.policies import RandomMaskedPolicy
+from training.policies.random import RandomMaskedPolicy
 from training.rollout import run_episode
 
 SCENARIOS = Path(__file__).resolve().parent / "scenarios"

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from cli_run import run
 
-from training.datasets import dataset_path
-from training.staging import DatasetLock, Staging
+from training.data.datasets import dataset_path
+from training.data.staging import DatasetLock, Staging
 
 DATASET_ID = "fetchcarry/hard-v0"
 
@@ -241,7 +241,7 @@ def test_a_second_run_on_a_locked_dataset_id_exits_2_naming_the_holder(capsys) -
 
 def test_a_lock_held_by_another_process_refuses_a_run(capsys, tmp_path: Path, minari_root: Path) -> None:
     holder = subprocess.Popen(
-        [sys.executable, "-c", "import sys, time; from training.staging import DatasetLock\n"
+        [sys.executable, "-c", "import sys, time; from training.data.staging import DatasetLock\n"
          f"with DatasetLock({DATASET_ID!r}):\n    print('held', flush=True); time.sleep(60)"],
         env={**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)},
         stdout=subprocess.PIPE, text=True,
@@ -262,7 +262,7 @@ def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
     # Stage two episodes of another dataset, then spoil one, as an interrupted run with a bad disk would leave it.
     other = "fetchcarry/hard-v1"
     staging = Staging(other)
-    from training.generate import EpisodeSource, GenerationConfig, run_indexed_episode
+    from training.data.generate import EpisodeSource, GenerationConfig, run_indexed_episode
 
     config = GenerationConfig(other, 3, EpisodeSource(family="basic", policy="random"))
     staging.start(config.manifest())
@@ -277,7 +277,7 @@ def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
 
 
 def test_a_staged_episode_that_cannot_be_read_names_its_file() -> None:
-    from training.staging import StagingError
+    from training.data.staging import StagingError
 
     staging = Staging(DATASET_ID)
     staging.start({})
@@ -298,7 +298,7 @@ def test_a_corrupt_manifest_names_the_file(capsys) -> None:
 
 
 def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monkeypatch, dataset: str) -> None:
-    import training.generate
+    import training.data.generate
 
     before = json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text())
 
@@ -306,7 +306,7 @@ def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monk
         raise KeyboardInterrupt  # the run is stopped after the new dataset was written, before the swap
 
     with monkeypatch.context() as patch:
-        patch.setattr(training.generate, "publish", killed)
+        patch.setattr(training.data.generate, "publish", killed)
         status, _, _ = generate_random(capsys, dataset, 3, "--overwrite")
     assert status == 130
     assert json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text()) == before
@@ -317,7 +317,7 @@ def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monk
 
 def test_an_interrupted_two_step_replacement_is_repaired(dataset: str) -> None:
     """Where folders cannot be exchanged atomically: a kill between the two renames loses nothing."""
-    from training.datasets import recover_replaced
+    from training.data.datasets import recover_replaced
 
     aside = Staging(dataset).path / "replaced"
     aside.parent.mkdir(parents=True)
@@ -329,11 +329,11 @@ def test_an_interrupted_two_step_replacement_is_repaired(dataset: str) -> None:
 def test_no_space_to_assemble_exits_2_and_keeps_the_staged_episodes(capsys, monkeypatch) -> None:
     import shutil as shutil_module
 
-    import training.datasets
+    import training.data.datasets
 
     usage = shutil_module.disk_usage(".")
     with monkeypatch.context() as patch:
-        patch.setattr(training.datasets.shutil, "disk_usage", lambda path: usage._replace(free=1000))
+        patch.setattr(training.data.datasets.shutil, "disk_usage", lambda path: usage._replace(free=1000))
         status, _, err = generate_random(capsys)
     assert status == 2 and "not enough free space to assemble 'fetchcarry/hard-v0'" in err
     assert Staging(DATASET_ID).staged() == {0, 1}
@@ -367,12 +367,12 @@ def test_a_bad_dataset_id_is_exit_2(capsys, dataset_id: str) -> None:
 
 
 def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) -> None:
-    import training.staging
+    import training.data.staging
 
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(training.staging.np, "savez", full)
+    monkeypatch.setattr(training.data.staging.np, "savez", full)
     status, _, err = generate_random(capsys)
     assert status == 2 and "No space left on device" in err
     assert str(Staging(DATASET_ID).episode_path(0)) in err
@@ -394,7 +394,7 @@ def test_a_plan_whose_solve_was_interrupted_is_not_written(capsys, monkeypatch, 
 def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None:
     from gymnasium.envs.registration import EnvSpec
 
-    from training.datasets import UnknownEnvError, trusted_env_spec
+    from training.data.datasets import UnknownEnvError, trusted_env_spec
 
     phases = EnvSpec(
         "FetchCarryPushPhases-v0",
@@ -410,9 +410,9 @@ def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None
 
 
 def test_ctrl_c_during_evaluate_expert_keeps_what_finished(capsys, monkeypatch, tmp_path: Path) -> None:
-    import training.evaluate_expert
+    import training.evaluation.expert
 
-    real = training.evaluate_expert.run_episodes
+    real = training.evaluation.expert.run_episodes
 
     def two_then_interrupt(*args, **kwargs):
         for count, item in enumerate(real(*args, **kwargs)):
@@ -420,7 +420,7 @@ def test_ctrl_c_during_evaluate_expert_keeps_what_finished(capsys, monkeypatch, 
                 raise KeyboardInterrupt
             yield item
 
-    monkeypatch.setattr(training.evaluate_expert, "run_episodes", two_then_interrupt)
+    monkeypatch.setattr(training.evaluation.expert, "run_episodes", two_then_interrupt)
     failures = tmp_path / "failures"
     status, out, err = run(
         capsys, "evaluate-expert", "--families", "basic", "--episodes", "5", "--time-limit", "0.0001",

@@ -8,8 +8,8 @@ import torch
 
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout, observation_size
 from fetchcarry_env.phases import PhaseLayout
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.baselines.encoders import (
+from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.learners.encoders import (
     RELATIVE_COLUMNS,
     FlatMLP,
     PushScores,
@@ -17,7 +17,7 @@ from training.baselines.encoders import (
     SetScorer,
     build_network,
 )
-from training.learning.evaluate import make_env
+from training.learners.heldout import make_env
 
 
 @pytest.fixture(scope="module")
@@ -232,8 +232,8 @@ def test_push_scores_add_to_the_push_and_approach_candidates_only():
 def test_a_run_folder_from_before_the_new_fields_loads_as_it_was(push_state, tmp_path):
     import json
 
-    from training.baselines import load_policy
-    from training.baselines.bc import train_bc
+    from training import load_policy
+    from training.learners.bc import train_bc
 
     flat, mask = push_state
     demos = Demonstrations(flat[None], mask[None], np.flatnonzero(mask)[:1])
@@ -249,7 +249,7 @@ def test_a_run_folder_from_before_the_new_fields_loads_as_it_was(push_state, tmp
 
 
 def test_the_policy_sets_subnormal_weights_to_zero():
-    from training.baselines.bc import flush_subnormal
+    from training.learners.bc import flush_subnormal
 
     network = torch.nn.Linear(3, 2)
     with torch.no_grad():

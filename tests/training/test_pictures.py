@@ -13,7 +13,7 @@ import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from expert import ExpertPolicy
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim.camera import PERSPECTIVE_TARGET_HEIGHT, view_and_projection
-from training.pictures import MAX_RENDERS, crop, episode_steps, key_states, project, save_episode_picture
+from training.pictures.episode import MAX_RENDERS, crop, episode_steps, key_states, project, save_episode_picture
 from training.rollout import run_episode
 
 
@@ -102,7 +102,7 @@ def test_labels_are_moved_apart() -> None:
 def test_the_gif_is_large_and_captions_every_state(record, tmp_path: Path) -> None:
     from PIL import Image
 
-    from training.pictures import CAPTION_PX, GIF_HEIGHT, gif_captions
+    from training.pictures.episode import CAPTION_PX, GIF_HEIGHT, gif_captions
 
     path = save_episode_picture(record, tmp_path / "episode.gif")
     captions = gif_captions(record)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
-from training.policies import RandomMaskedPolicy
+from training.policies.random import RandomMaskedPolicy
 
 NVEC = np.array([5, 4, 4, 2, 4])
 

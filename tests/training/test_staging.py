@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from training.data.staging import Staging
 from training.rollout import INFO_KEYS, EpisodeFigures, EpisodeRecord
-from training.staging import Staging
 
 
 def _record(seed: int, steps: int) -> EpisodeRecord:

@@ -14,16 +14,16 @@ import torch
 
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 import training
-from training.baselines import runs
-from training.baselines.bc import BCConfig
-from training.baselines.dagger import DaggerOptions, train_dagger
-from training.baselines.imitation import demonstrations_from_dataset
-from training.baselines.ppo import PPOOptions, train_ppo
 from training.cli import main
-from training.datasets import info, replay
-from training.generate import EpisodeSource, GenerationConfig, generate
-from training.phase_recording import MASK_INFO, PROJECTED_INFO
-from training.staging import Staging
+from training.data.datasets import info, replay
+from training.data.generate import EpisodeSource, GenerationConfig, generate
+from training.data.staging import Staging
+from training.learners import runs
+from training.learners.bc import BCConfig
+from training.learners.dagger import DaggerOptions, train_dagger
+from training.learners.imitation import demonstrations_from_dataset
+from training.learners.ppo import PPOOptions, train_ppo
+from training.policies.phase_expert import MASK_INFO, PROJECTED_INFO
 
 PHASES_ID = "fetchcarry/basic-phases-test-v0"
 SOURCE = EpisodeSource(family="basic", seed=0, interface="phases")
@@ -245,7 +245,7 @@ def test_dagger_options_are_checked_and_nearest_moves_only_add_labels(tmp_path: 
 
 def test_learner_families_aim_the_learner_episodes_and_leave_iteration_0(tmp_path: Path) -> None:
     from fetchcarry_env.observation import Capacity, observation_layout
-    from training.baselines.dagger import LabelTask
+    from training.learners.dagger import LabelTask
 
     task = LabelTask("basic", 0, 10.0, families=("push", "multi-2"))
     assert [task.family_of(k) for k in range(3)] == ["push", "multi-2", "push"]
@@ -300,7 +300,7 @@ def test_an_episode_without_a_label_gives_empty_arrays(monkeypatch: pytest.Monke
     # A learner episode whose every state has an expert action no candidate expresses (seen on the
     # training family at DAgger's default budget) labels nothing; the aggregate must still take it.
     from fetchcarry_env.phase_env import PhaseActions
-    from training.baselines.dagger import LabelTask, label_episode
+    from training.learners.dagger import LabelTask, label_episode
 
     monkeypatch.setattr(PhaseActions, "index_of", lambda self, action: None)
     episode = label_episode(LabelTask("basic", 0, 10.0), 0)

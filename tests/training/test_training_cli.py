@@ -16,7 +16,7 @@ from PIL import Image
 
 from fetchcarry_env.scenario import Scenario
 from training.cli import main
-from training.datasets import dataset_path
+from training.data.datasets import dataset_path
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
 DATASET_ID = "fetchcarry/cli-v0"

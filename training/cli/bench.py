@@ -1,8 +1,8 @@
 """``fetchcarry bench env|planner|anytime|generate|phases``: the benchmarks' options and printed tables.
 
 The measurements live next to what they measure (``fetchcarry_env.bench``,
-``expert.bench``, ``training.generate.bench_generation``,
-``training.learning.phase_bench``); this module parses the
+``expert.bench``, ``training.data.generate.bench_generation``,
+``training.speed.phases``); this module parses the
 options, runs them and prints the figures for people (or as JSON with ``--json``).
 """
 
@@ -348,7 +348,7 @@ def run_bench_anytime(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- bench generate
 def _register_generate(bench: argparse._SubParsersAction) -> None:
-    from training.evaluate_expert import DEFAULT_FAMILIES
+    from training.evaluation.expert import DEFAULT_FAMILIES
 
     parser = bench.add_parser(
         "generate",
@@ -380,7 +380,7 @@ def _register_generate(bench: argparse._SubParsersAction) -> None:
 
 
 def run_bench_generate(args: argparse.Namespace) -> int:
-    from training.generate import EpisodeSource, bench_generation
+    from training.data.generate import EpisodeSource, bench_generation
 
     rows = []
     for family in families(args.families):
@@ -434,7 +434,7 @@ def _register_phases(bench: argparse._SubParsersAction) -> None:
 
 def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Print the expressibility table, then the speed table, of the candidate-phase interface."""
-    from training.learning.phase_bench import expressibility, speed
+    from training.speed.phases import expressibility, speed
 
     out = out if out is not None else sys.stdout
     names = families(args.families)
@@ -470,7 +470,7 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
 
 # ---------------------------------------------------------------------------- bench projection
 def _register_projection(bench: argparse._SubParsersAction) -> None:
-    from training.learning.expert_phases import NEAREST_RULES
+    from training.evaluation.projection import NEAREST_RULES
 
     parser = bench.add_parser(
         "projection",
@@ -494,7 +494,7 @@ def _register_projection(bench: argparse._SubParsersAction) -> None:
 
 def run_bench_projection(args: argparse.Namespace) -> int:
     """Print the projection's figures as one JSON object."""
-    from training.learning.expert_phases import check_projection, summarise_projection
+    from training.evaluation.projection import check_projection, summarise_projection
 
     families(args.family)  # an unknown family is bad input
     seeds = range(args.seed, args.seed + args.episodes)

@@ -21,7 +21,7 @@ from training.cli.text import echo
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``benchmark`` to the ``fetchcarry`` parser."""
-    from training.benchmark.splits import SPLITS
+    from training.evaluation.splits import SPLITS
 
     splits = ", ".join(f"{s.base_name} ({s.description})" for s in SPLITS.values())
     parser = commands.add_parser(
@@ -75,7 +75,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 def run_benchmark_command(args: argparse.Namespace) -> int:
     from training.benchmark import BenchmarkError, run_benchmark
-    from training.benchmark.runner import RESULTS, SUMMARY
+    from training.evaluation.runner import RESULTS, SUMMARY
 
     try:
         report = run_benchmark(

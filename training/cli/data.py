@@ -59,9 +59,9 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
 
 
 def run_generate(args: argparse.Namespace) -> int:
-    from training.datasets import dataset_path
-    from training.generate import DatasetExistsError, GenerationConfig, StagingMismatchError, generate
-    from training.staging import Staging, StagingError
+    from training.data.datasets import dataset_path
+    from training.data.generate import DatasetExistsError, GenerationConfig, StagingMismatchError, generate
+    from training.data.staging import Staging, StagingError
 
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
     try:
@@ -153,7 +153,7 @@ def _register_dataset(commands: argparse._SubParsersAction) -> None:
 
 
 def run_dataset_info(args: argparse.Namespace) -> int:
-    from training.datasets import info
+    from training.data.datasets import info
 
     summary = info(args.dataset_id)
     if args.json:
@@ -188,7 +188,7 @@ def run_dataset_info(args: argparse.Namespace) -> int:
 
 
 def run_dataset_replay(args: argparse.Namespace) -> int:
-    from training.datasets import replay
+    from training.data.datasets import replay
 
     report = replay(args.dataset_id, args.episode)
     if args.json:

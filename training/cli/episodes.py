@@ -17,7 +17,7 @@ from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
 from training.cli.text import echo
-from training.sources import EpisodeSource
+from training.data.sources import EpisodeSource
 
 DEFAULT_DEMO_PICTURE = "episode.png"
 DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
@@ -142,7 +142,7 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
 
 def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
-    from training.generate import make_env, make_policy
+    from training.data.generate import make_env, make_policy
     from training.rollout import run_episode
 
     if run is not None:
@@ -153,7 +153,7 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     if picture is None:
         env = make_env(source)
     else:
-        from training.pictures import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
+        from training.pictures.episode import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
 
         size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
         env = make_env(source, render_mode="rgb_array", width=size[0], height=size[1])
@@ -163,7 +163,7 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     finally:
         env.close()
     if picture is not None:
-        from training.pictures import save_episode_picture
+        from training.pictures.episode import save_episode_picture
 
         save_episode_picture(record, picture)
     return record
@@ -271,7 +271,7 @@ def run_demo(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- evaluate-expert
 def _register_evaluate(commands: argparse._SubParsersAction) -> None:
-    from training.evaluate_expert import DEFAULT_FAMILIES
+    from training.evaluation.expert import DEFAULT_FAMILIES
 
     parser = commands.add_parser(
         "evaluate-expert",
@@ -313,7 +313,7 @@ def families(text: str) -> tuple[str, ...]:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
-    from training.evaluate_expert import SUCCESS_GOAL, EvaluationInterrupted, evaluate_expert
+    from training.evaluation.expert import SUCCESS_GOAL, EvaluationInterrupted, evaluate_expert
 
     try:
         results = evaluate_expert(
@@ -337,7 +337,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 
 def _print_evaluation(results: list[Any], as_json: bool) -> None:
-    from training.evaluate_expert import results_table
+    from training.evaluation.expert import results_table
 
     if as_json:
         print(json.dumps([r.to_dict() for r in results], indent=2))

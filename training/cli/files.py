@@ -71,7 +71,7 @@ def check_picture(path: str | None) -> Path | None:
     """The episode picture's path (a .png or .gif in an existing folder), or ``None`` when none is asked for."""
     if path is None:
         return None
-    from training.pictures import check_picture_path
+    from training.pictures.episode import check_picture_path
 
     try:
         picture = check_picture_path(path)

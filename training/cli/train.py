@@ -1,7 +1,7 @@
 """The training commands: ``fetchcarry train bc|dagger|ppo``, ``fetchcarry bench learned|learning-checks``.
 
 Each writes a run folder (``config.json``, ``metrics.csv``, ``checkpoint.pt``,
-``model.pt``; see :mod:`training.baselines.runs`) that ``fetchcarry benchmark`` and
+``model.pt``; see :mod:`training.learners.runs`) that ``fetchcarry benchmark`` and
 ``fetchcarry rollout --policy RUN_DIR`` take, and ``training.load_policy(path)`` loads.
 
 Exit statuses: 0 trained (also when the run folder already held the complete run);
@@ -29,7 +29,7 @@ RUN_EPILOG = (
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``train`` (``bc``, ``dagger``, ``ppo``, ``ensemble``) to the ``fetchcarry`` parser."""
-    from training.baselines.configs import BCConfig
+    from training.learners.options import BCConfig
 
     defaults = BCConfig()
     parser = commands.add_parser(
@@ -56,7 +56,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(bc)
     bc.set_defaults(handler=run_train_bc)
 
-    from training.baselines.configs import DaggerOptions
+    from training.learners.options import DaggerOptions
 
     dagger_defaults = DaggerOptions()
     dagger = kinds.add_parser(
@@ -132,7 +132,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _run_arguments(dagger)
     dagger.set_defaults(handler=run_train_dagger)
 
-    from training.baselines.configs import PPOOptions
+    from training.learners.options import PPOOptions
 
     ppo_defaults = PPOOptions()
     ppo = kinds.add_parser(
@@ -211,7 +211,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     ensemble.add_argument("--out", required=True, metavar="RUN_DIR", help="the run folder to write")
     ensemble.set_defaults(handler=run_train_ensemble)
 
-    from training.baselines.configs import HELDOUT_SEED_BASE
+    from training.learners.options import HELDOUT_SEED_BASE
 
     learned = bench.add_parser(
         "learned",
@@ -313,7 +313,7 @@ def _run_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _network_config(args: argparse.Namespace) -> Any:
-    from training.baselines.configs import BCConfig
+    from training.learners.options import BCConfig
 
     try:
         return BCConfig(encoder=args.encoder, hidden=args.hidden, epochs=args.epochs, batch_size=args.batch_size,
@@ -337,8 +337,8 @@ def _guarded(train: Any, args: argparse.Namespace) -> int:
 
 
 def run_train_bc(args: argparse.Namespace) -> int:
-    from training.baselines.imitation import train_bc_run
-    from training.baselines.runs import read_metrics
+    from training.learners.imitation import train_bc_run
+    from training.learners.runs import read_metrics
 
     config = _network_config(args)
 
@@ -353,7 +353,7 @@ def run_train_bc(args: argparse.Namespace) -> int:
 
 
 def run_train_ensemble(args: argparse.Namespace) -> int:
-    from training.baselines.ensemble import make_ensemble
+    from training.learners.ensemble import make_ensemble
 
     try:
         make_ensemble(args.members, args.out, avoid_returns=args.avoid_returns)
@@ -377,8 +377,8 @@ def _family_list(text: str) -> tuple[str, ...]:
 
 
 def run_train_dagger(args: argparse.Namespace) -> int:
-    from training.baselines.dagger import DaggerOptions, train_dagger
-    from training.sources import EpisodeSource
+    from training.data.sources import EpisodeSource
+    from training.learners.dagger import DaggerOptions, train_dagger
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
     config = _network_config(args)
@@ -406,8 +406,8 @@ def run_train_dagger(args: argparse.Namespace) -> int:
 
 
 def run_train_ppo(args: argparse.Namespace) -> int:
-    from training.baselines.ppo import PPOOptions, train_ppo
-    from training.sources import EpisodeSource
+    from training.data.sources import EpisodeSource
+    from training.learners.ppo import PPOOptions, train_ppo
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
     options = PPOOptions(
@@ -434,8 +434,8 @@ def run_bench_learned(args: argparse.Namespace) -> int:
     import torch
 
     from training import load_policy
-    from training.learning.evaluate import evaluate, expert_costs, summarise
-    from training.sources import EpisodeSource
+    from training.data.sources import EpisodeSource
+    from training.learners.heldout import evaluate, expert_costs, summarise
 
     EpisodeSource(family=args.family)  # checks the family's name (UsageError)
     torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
@@ -452,7 +452,7 @@ def run_bench_learned(args: argparse.Namespace) -> int:
 
 
 def _check_families(*names: str) -> None:
-    from training.sources import EpisodeSource
+    from training.data.sources import EpisodeSource
 
     for name in names:
         EpisodeSource(family=name)  # checks the family's name (UsageError)
@@ -461,7 +461,7 @@ def _check_families(*names: str) -> None:
 def run_check_bc(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from training.learning.checks import check_bc
+    from training.evaluation.checks import check_bc
 
     _check_families(args.family, *args.also)
     out = Path(args.out) if args.out else None
@@ -475,7 +475,7 @@ def run_check_bc(args: argparse.Namespace) -> int:
 def run_check_ppo(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from training.learning.checks import check_ppo
+    from training.evaluation.checks import check_ppo
 
     _check_families(args.family)
     check_ppo(args.family, args.steps, args.eval_episodes, args.seed, Path(args.out) if args.out else None, echo)

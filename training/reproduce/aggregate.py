@@ -24,9 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from training.benchmark.metrics import Row, summarise
-from training.benchmark.report import _pyplot, plot_demonstrations, plot_splits, source_table
-from training.benchmark.runner import RESULTS
+from training.evaluation.metrics import Row, summarise
+from training.evaluation.report import _pyplot, plot_demonstrations, plot_splits, source_table
+from training.evaluation.runner import RESULTS
 from training.reproduce.budgets import Budget
 from training.reproduce.pipeline import CURVE_SPLIT, SPLIT_NAMES, Baseline
 
@@ -188,7 +188,7 @@ def _curve_table(split: str, curve: Sequence[Baseline], dagger: Sequence[Baselin
 
 def plot_ppo_curves(runs: Path, ppo: Sequence[Baseline], path: Path) -> Path:
     """Training success and return of every PPO run against env steps and wall-clock seconds, as one PNG."""
-    from training.baselines.runs import read_metrics
+    from training.learners.runs import read_metrics
 
     plt = _pyplot()
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)

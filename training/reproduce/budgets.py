@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from training.baselines.configs import BCConfig, DaggerOptions, PPOOptions
+from training.learners.options import BCConfig, DaggerOptions, PPOOptions
 
 TRAINING_FAMILY = "training"  # basic, push, corridor or multi-2, uniformly: the iid split's families
 

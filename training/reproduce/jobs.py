@@ -19,7 +19,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from training.baselines.configs import BCConfig, DaggerOptions, PPOOptions
+from training.learners.options import BCConfig, DaggerOptions, PPOOptions
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class TrainJob:
 
 def is_complete(job: TrainJob) -> bool:
     """Whether ``job``'s run folder holds a finished run."""
-    from training.baselines.runs import CONFIG_FILE, read_config
+    from training.learners.runs import CONFIG_FILE, read_config
 
     folder = Path(job.out)
     return (folder / CONFIG_FILE).is_file() and bool(read_config(folder).get("complete"))
@@ -55,19 +55,19 @@ def run_job(job: TrainJob) -> tuple[float, float]:
     torch.set_num_threads(1)
     started, cpu = time.perf_counter(), time.process_time()
     if job.kind == "bc":
-        from training.baselines.imitation import train_bc_run
+        from training.learners.imitation import train_bc_run
 
         train_bc_run(job.dataset, job.config, job.out, resume=True, progress=False, episodes=job.episodes)
     elif job.kind == "dagger":
-        from training.baselines.dagger import train_dagger
+        from training.learners.dagger import train_dagger
 
         train_dagger(job.family, job.dagger, job.config, job.out, workers=1, resume=True, progress=False)
     elif job.kind == "ppo":
-        from training.baselines.ppo import train_ppo
+        from training.learners.ppo import train_ppo
 
         train_ppo(job.family, job.ppo, job.out, resume=True, progress=False)
     elif job.kind == "ensemble":
-        from training.baselines.ensemble import make_ensemble
+        from training.learners.ensemble import make_ensemble
 
         make_ensemble(job.members, job.out)
     else:
@@ -92,7 +92,7 @@ def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob,
 
 
 def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
-    from training.generate import _terminate_workers, worker_setup
+    from training.data.generate import _terminate_workers, worker_setup
 
     pool = ProcessPoolExecutor(
         max_workers=workers,

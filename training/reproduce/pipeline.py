@@ -245,8 +245,8 @@ def reproduce(
 
 
 def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable) -> None:
-    from training.generate import generate
-    from training.sources import EpisodeSource, GenerationConfig
+    from training.data.generate import generate
+    from training.data.sources import EpisodeSource, GenerationConfig
 
     source = EpisodeSource(family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit)
     config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
@@ -305,7 +305,7 @@ def forget_retrained(folder: Path, runs: list[Path]) -> None:
     a run folder trained again (deleted and retrained with other weights) is benchmarked
     again rather than kept with the episodes of its former weights.
     """
-    from training.benchmark.runner import RESULTS
+    from training.evaluation.runner import RESULTS
 
     file = folder / WEIGHTS_DIGESTS
     try:

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from training.benchmark.metrics import Z_95, Row, summarise, wilson
+from training.evaluation.metrics import Z_95, Row, summarise, wilson
 
 COLUMNS = (
     ("policy", "policy", "{}"),

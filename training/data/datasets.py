@@ -42,10 +42,10 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
-from training.phase_recording import PROJECTED_INFO
+from training.data.sources import GenerationConfig, make_env
+from training.data.staging import Staging, datasets_root
+from training.policies.phase_expert import PROJECTED_INFO
 from training.rollout import EpisodeRecord
-from training.sources import GenerationConfig, make_env
-from training.staging import Staging, datasets_root
 
 AUTHOR = "fetchcarry"
 CODE_URL = "https://github.com/fetchcarry/fetchcarry"

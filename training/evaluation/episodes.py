@@ -42,8 +42,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from training.benchmark.policies import PolicySpec, build, start_episode
-from training.benchmark.splits import EvalScenario
+from training.evaluation.splits import EvalScenario
+from training.resolve import PolicySpec, build, start_episode
 
 # One env and policy per policy spec in each process, reused episode after episode (an
 # env's reset rebuilds only what changed). A worker process runs one task at a time.

@@ -1,7 +1,7 @@
 """Which policies the benchmark knows: a registry of named factories, and run folders.
 
 A policy is named by a registry key (``expert``, ``random``, ``greedy``) or by the
-path of a run folder (anything :func:`training.baselines.load_policy` loads). Each
+path of a run folder (anything :func:`training.load_policy` loads). Each
 acts in one *interface*: ``env`` (``FetchCarryPush-v0``'s ``MultiDiscrete`` phase
 actions) or ``phases`` (``FetchCarryPushPhases-v0``'s ``Discrete`` candidate phases);
 the benchmark builds the env that interface needs and hands the policy its masks as
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from training.benchmark.errors import BenchmarkError
+from training.evaluation.errors import BenchmarkError
 
 INTERFACES = {"env": "FetchCarryPush-v0", "phases": "FetchCarryPushPhases-v0"}  # interface -> env id
 EXPERT, RANDOM = "expert", "random"  # the reference policies every benchmark runs
@@ -45,9 +45,9 @@ class Factory:
 
 FACTORIES: dict[str, Factory] = {
     EXPERT: Factory("expert.policy", "ExpertPolicy", "env", {"time_limit": EXPERT_TIME_LIMIT}),
-    RANDOM: Factory("training.policies", "RandomMaskedPolicy", "env", seeded=True),
-    "random-phases": Factory("training.baselines.random_phases", "RandomPhasePolicy", "phases", seeded=True),
-    "greedy": Factory("training.baselines.greedy", "GreedyPolicy", "env"),
+    RANDOM: Factory("training.policies.random", "RandomMaskedPolicy", "env", seeded=True),
+    "random-phases": Factory("training.policies.random_phases", "RandomPhasePolicy", "phases", seeded=True),
+    "greedy": Factory("training.policies.greedy", "GreedyPolicy", "env"),
 }
 """Named policies: one line each."""
 
@@ -113,7 +113,7 @@ def _run_spec(path: Path) -> PolicySpec:
     options = {"capacity": config["capacity"]} if isinstance(config.get("capacity"), dict) else {}
     # Check that it loads here, so that a broken run folder is bad input, not a crash in a worker.
     try:
-        from training.baselines import load_policy
+        from training.learners.runs import load_policy
 
         load_policy(path)
     except (ValueError, OSError, KeyError, TypeError, RuntimeError) as error:
@@ -134,7 +134,7 @@ def resolve_all(names: list[str]) -> list[PolicySpec]:
 def build(spec: PolicySpec, env: Any) -> Any:
     """The policy ``spec`` names, built for ``env`` (speaks stable-baselines3's ``predict`` protocol)."""
     if spec.run is not None:
-        from training.baselines import load_policy
+        from training.learners.runs import load_policy
 
         return load_policy(spec.run, env)
     factory = FACTORIES[spec.factory]

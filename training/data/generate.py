@@ -4,8 +4,8 @@ Episode ``k`` of a dataset uses the seed ``seed + k``: the env draws its scenari
 ``reset(seed=seed + k)`` (a family) or uses the fixed scenario, so any episode replays
 exactly from its seed. Each episode runs in a fresh env (so that an episode does not
 depend on the ones before it in the same worker) and comes back to this process,
-which stages it at once (:mod:`training.staging`); when all are staged the dataset is
-assembled (:mod:`training.datasets`) and the staging is removed.
+which stages it at once (:mod:`training.data.staging`); when all are staged the dataset is
+assembled (:mod:`training.data.datasets`) and the staging is removed.
 
 Backends: ``process`` (default) runs episodes on a local process pool (``workers``
 processes; one worker runs in this process); ``ray`` runs the same episode function
@@ -29,7 +29,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from fetchcarry_env.errors import UsageError
-from training.datasets import (
+from training.data.datasets import (
     REPLACED_FOLDER,
     assemble,
     check_free_space,
@@ -39,8 +39,7 @@ from training.datasets import (
     recover_replaced,
     validate_dataset_id,
 )
-from training.rollout import EpisodeRecord, run_episode
-from training.sources import (
+from training.data.sources import (
     DEFAULT_TIME_LIMIT,
     ENV_ID,
     POLICIES,
@@ -49,7 +48,8 @@ from training.sources import (
     make_env,
     make_policy,
 )
-from training.staging import DatasetLock, Staging, StagingError
+from training.data.staging import DatasetLock, Staging, StagingError
+from training.rollout import EpisodeRecord, run_episode
 
 __all__ = [
     "DEFAULT_TIME_LIMIT",

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from training.benchmark.policies import EXPERT, RANDOM
+from training.resolve import EXPERT, RANDOM
 
 Z_95 = 1.96  # the normal quantile of a two-sided 95 % interval
 

@@ -23,7 +23,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from training.generate import DEFAULT_TIME_LIMIT, EpisodeSource, progress_bar, run_episodes
+from training.data.generate import DEFAULT_TIME_LIMIT, EpisodeSource, progress_bar, run_episodes
 from training.rollout import EpisodeRecord
 
 DEFAULT_FAMILIES = ("basic", "push", "corridor", "multi-2")

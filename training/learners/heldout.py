@@ -18,8 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 from expert import ExpertPolicy
-from training.benchmark.metrics import wilson
-from training.learning.expert_phases import expert_episode
+from training.evaluation.metrics import wilson
+from training.evaluation.projection import expert_episode
 
 
 @dataclass(frozen=True)
@@ -116,7 +116,7 @@ def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
 
 
 def summarise(results: list[EpisodeResult], expert: dict[int, float]) -> Summary:
-    """Success (with its 95 % Wilson interval: :func:`training.benchmark.metrics.wilson`), cost ratio, phases."""
+    """Success (with its 95 % Wilson interval: :func:`training.evaluation.metrics.wilson`), cost ratio, phases."""
     n = len(results)
     wins = sum(r.success for r in results)
     low, high = wilson(wins, n)

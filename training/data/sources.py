@@ -1,6 +1,6 @@
 """Where a dataset's episodes come from: the env (a family or one scenario), the policy and the seeds.
 
-Shared by generation (:mod:`training.generate`), assembly (:mod:`training.datasets`)
+Shared by generation (:mod:`training.data.generate`), assembly (:mod:`training.data.datasets`)
 and the commands that run single episodes.
 """
 
@@ -26,7 +26,7 @@ class EpisodeSource:
     Episode ``k`` uses the seed ``seed + k``; the env draws its scenario from that seed.
     ``interface`` is the action interface episodes are recorded in: ``env`` (the env's
     own ``MultiDiscrete`` actions, ``env_id``) or ``phases`` (``FetchCarryPushPhases-v0``'s
-    candidate indices, with each state's candidate mask; see :mod:`training.phase_recording`).
+    candidate indices, with each state's candidate mask; see :mod:`training.policies.phase_expert`).
     """
 
     family: str | None = None  # a scenario family name, or
@@ -104,13 +104,13 @@ def make_env(source: EpisodeSource, render_mode: str | None = None, **render_opt
 def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
     """The policy named by ``source.policy`` for ``env`` (acting in ``source.interface``)."""
     if source.interface == "phases":
-        from training.phase_recording import make_phase_policy
+        from training.policies.phase_expert import make_phase_policy
 
         return make_phase_policy(source.policy, env, seed, time_limit=source.time_limit)
     if source.policy == "expert":
         from expert.policy import ExpertPolicy
 
         return ExpertPolicy(env, time_limit=source.time_limit)
-    from training.policies import RandomMaskedPolicy
+    from training.policies.random import RandomMaskedPolicy
 
     return RandomMaskedPolicy(env, seed=seed)

@@ -1,7 +1,7 @@
 """Ensembles: several trained run folders combined into one policy, itself a run folder (``kind`` ``ensemble``).
 
 The members' networks score the same candidates; the ensemble acts on the mean of their
-log-probabilities (:class:`training.baselines.encoders.Ensemble`), with its own episode
+log-probabilities (:class:`training.learners.encoders.Ensemble`), with its own episode
 memory (``avoid_repeats``, ``avoid_returns``). Nothing is trained: :func:`make_ensemble`
 copies the members' weights into the new folder's ``model.pt`` and each member's network
 settings into its ``config.json`` (``options.members``), so the folder loads on its
@@ -19,9 +19,9 @@ from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
-from training.baselines import runs
-from training.baselines.bc import BCPolicy
-from training.baselines.encoders import Ensemble
+from training.learners import runs
+from training.learners.bc import BCPolicy
+from training.learners.encoders import Ensemble
 
 SHARED_KEYS = ("capacity", "candidates", "features")  # what every member must have alike
 

@@ -4,7 +4,7 @@
 planner: every cost ratio is to its cost on the same scenario) and ``random`` (the
 normalised score's zero), next to the policies asked for. Episodes run in this process
 (``workers=1``), on a process pool or on Ray, with the worker set-up of
-``fetchcarry generate`` (:mod:`training.generate`): workers ignore Ctrl-C and die with
+``fetchcarry generate`` (:mod:`training.data.generate`): workers ignore Ctrl-C and die with
 their parent.
 
 ``OUT_DIR/results.json`` is rewritten as episodes finish (at most every
@@ -29,13 +29,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from training.benchmark.episodes import close_all, run_task
-from training.benchmark.errors import BenchmarkError
-from training.benchmark.metrics import Row, fill_expert_costs, summarise
-from training.benchmark.policies import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
-from training.benchmark.report import plot_splits, source_table, summary_markdown
-from training.benchmark.splits import EvalScenario, folder_scenarios, split_scenarios
-from training.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
+from training.data.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
+from training.evaluation.episodes import close_all, run_task
+from training.evaluation.errors import BenchmarkError
+from training.evaluation.metrics import Row, fill_expert_costs, summarise
+from training.evaluation.report import plot_splits, source_table, summary_markdown
+from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
+from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
 
 RESULTS, SUMMARY, PLOT = "results.json", "summary.md", "splits.png"
 RECORD_KEYS = (("policy", str), ("split", str), ("seed", int))  # what identifies a record's episode (resume)

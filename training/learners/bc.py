@@ -4,12 +4,12 @@ The expert's actions, labelled as candidates of ``FetchCarryPushPhases-v0``
 (:func:`record_demonstrations`), train a network that scores every candidate from
 the observation; the scores of masked candidates are set to minus infinity, in the
 loss and when acting, so the policy always picks an allowed candidate (never a phase
-the env would refuse). Two encoders (:mod:`training.baselines.encoders`): ``mlp``, a
+the env would refuse). Two encoders (:mod:`training.learners.encoders`): ``mlp``, a
 flat MLP over the observation vector, and ``set``, an object-centric set encoder.
 
 :func:`fit` is the training loop (with a checkpoint after every epoch if asked), which
 ``fetchcarry train bc`` and DAgger use too; :func:`train_bc` trains on demonstrations
-in memory and can write a run folder (:mod:`training.baselines.runs`), which
+in memory and can write a run folder (:mod:`training.learners.runs`), which
 :func:`training.load_policy` reads back as a :class:`BCPolicy` (stable-baselines3's
 ``predict`` protocol).
 """
@@ -29,9 +29,9 @@ import torch
 from torch import nn
 
 from fetchcarry_env.observation import Capacity
-from training.baselines import runs
-from training.baselines.configs import BCConfig
-from training.baselines.encoders import CandidateScorer, build_network
+from training.learners import runs
+from training.learners.encoders import CandidateScorer, build_network
+from training.learners.options import BCConfig
 
 
 @dataclass
@@ -50,8 +50,8 @@ class Demonstrations:
 def record_demonstrations(family: str, seeds: range | list[int], **env_options: Any) -> Demonstrations:
     """The expert's episodes on ``seeds`` of ``family``, its expressible actions as labels."""
     from expert import ExpertPolicy
-    from training.learning.evaluate import make_env
-    from training.learning.expert_phases import NOT_EXPRESSIBLE, expert_episode
+    from training.evaluation.projection import NOT_EXPRESSIBLE, expert_episode
+    from training.learners.heldout import make_env
 
     env = make_env(family, **env_options)
     expert = ExpertPolicy(env)
@@ -203,7 +203,7 @@ class BCPolicy:
         """The network's scores of ``candidates`` (indices) for one observation vector (a row).
 
         Only those candidates' scores are computed (``candidate_scores`` of
-        :mod:`training.baselines.encoders`: the flat MLP reads only their rows of its last
+        :mod:`training.learners.encoders`: the flat MLP reads only their rows of its last
         layer, the set encoder mixes only the slots present): the same order as
         :meth:`scores` gives them, up to a constant for an ensemble. A decision needs the
         allowed candidates only (some 30 of 4,080); through the benchmark (25 ``iid``
@@ -442,7 +442,7 @@ def train_bc(
     """Train on ``demonstrations`` with :func:`fit`; write a ``bc`` run folder to ``out`` (a new folder).
 
     Deterministic on CPU for one ``config.seed``. ``progress``, if given, is called
-    with each epoch's metrics (a dict). The run folder (:mod:`training.baselines.runs`)
+    with each epoch's metrics (a dict). The run folder (:mod:`training.learners.runs`)
     loads with :func:`training.load_policy`; ``ValueError`` if ``out`` holds a run already.
     """
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]

@@ -5,17 +5,17 @@ A run folder holds
 - ``config.json``: ``kind`` (``bc``, ``dagger``, ``ppo`` or ``ensemble``), ``interface`` (``phases``:
   the policy acts in ``FetchCarryPushPhases-v0``'s candidate phases), ``env_id``,
   ``options`` (every option of the run, as given), ``config`` (the network:
-  :class:`~training.baselines.bc.BCConfig`), ``capacity`` (the observation's slots),
+  :class:`~training.learners.bc.BCConfig`), ``capacity`` (the observation's slots),
   ``candidates`` (K) and ``features`` (the observation vector's length), ``data``
   (what it was trained on) and ``complete`` (whether the run finished);
 - ``metrics.csv``: one row per epoch (bc), iteration (dagger) or rollout (ppo);
 - ``checkpoint.pt``: the training state to resume from (weights, optimiser, counters);
-- ``model.pt``: the policy's weights (a scorer of candidates, :mod:`training.baselines.encoders`).
+- ``model.pt``: the policy's weights (a scorer of candidates, :mod:`training.learners.encoders`).
 
 Every kind acts through the same network (a PPO run's actor is a BC network, so a BC
 run of the same encoder initialises it), so :func:`load_policy` builds one
-:class:`~training.baselines.bc.BCPolicy` for all of them; an ``ensemble``
-(:mod:`training.baselines.ensemble`) holds several such networks, each member's settings
+:class:`~training.learners.bc.BCPolicy` for all of them; an ``ensemble``
+(:mod:`training.learners.ensemble`) holds several such networks, each member's settings
 in ``options.members``, and acts on the mean of their log-probabilities. Loading reads JSON and
 ``torch.load(..., weights_only=True)`` tensors only: nothing in a run folder runs code.
 A ``config.json`` with an unknown key, a missing key, a bad kind or a value of the
@@ -51,7 +51,7 @@ class RunFolderError(ValueError):
 
 def read_config(path: str | Path) -> dict[str, Any]:
     """The checked ``config.json`` of run folder ``path``; :class:`RunFolderError` (a ``ValueError``) otherwise."""
-    from training.baselines.bc import BCConfig
+    from training.learners.bc import BCConfig
 
     file = Path(path) / CONFIG_FILE
     try:
@@ -112,7 +112,7 @@ def network_config(saved: dict[str, Any]) -> Any:
     A field missing from an older run folder takes the value it had before the field
     existed (:data:`LEGACY_CONFIG`), so old runs load and act as they did.
     """
-    from training.baselines.bc import BCConfig
+    from training.learners.bc import BCConfig
 
     return BCConfig(**{**LEGACY_CONFIG, **saved["config"]})
 
@@ -123,8 +123,8 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
     ``env`` (a ``FetchCarryPushPhases-v0`` env) lets ``predict`` ask it for the masks when
     none are given. Raises ``ValueError`` for anything that is not a loadable run folder.
     """
-    from training.baselines.bc import BCPolicy
-    from training.baselines.encoders import Ensemble, build_network
+    from training.learners.bc import BCPolicy
+    from training.learners.encoders import Ensemble, build_network
 
     path = Path(path)
     saved = read_config(path)

@@ -6,9 +6,9 @@ held-out seeds next to the masked random policy, the greedy baseline and the exp
 :func:`check_ppo` (``fetchcarry bench learning-checks ppo``) trains sb3-contrib's
 MaskablePPO (``MultiInputPolicy``) through the interface with the learning reward and
 evaluates it the same way. Held-out seeds start at
-:data:`~training.baselines.configs.HELDOUT_SEED_BASE` (100,000), far from the training
+:data:`~training.learners.options.HELDOUT_SEED_BASE` (100,000), far from the training
 seeds (0 onwards). Each figure goes to ``report`` (a line of text) as it is measured.
-DAgger is ``fetchcarry train dagger`` (:mod:`training.baselines.dagger`).
+DAgger is ``fetchcarry train dagger`` (:mod:`training.learners.dagger`).
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ from typing import Any
 import numpy as np
 import torch
 
-from training.baselines.bc import BCConfig, record_demonstrations, train_bc
-from training.baselines.configs import HELDOUT_SEED_BASE
-from training.baselines.greedy import GreedyPolicy
-from training.baselines.random_phases import RandomPhasePolicy
-from training.learning.evaluate import evaluate, evaluate_env_actions, expert_costs, make_env, summarise
+from training.learners.bc import BCConfig, record_demonstrations, train_bc
+from training.learners.heldout import evaluate, evaluate_env_actions, expert_costs, make_env, summarise
+from training.learners.options import HELDOUT_SEED_BASE
+from training.policies.greedy import GreedyPolicy
+from training.policies.random_phases import RandomPhasePolicy
 
 
 def check_bc(

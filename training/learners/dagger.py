@@ -11,7 +11,7 @@ every state it visits, :class:`expert.ExpertPolicy` says what it would do, mappe
 the allowed candidate that stands for it (an expert action no candidate expresses, or
 the expert's idle fallback, gives no label, unless ``nearest_moves``: then an expert move
 no candidate expresses is labelled with the allowed move nearest it,
-:func:`training.learning.expert_phases.nearest_move`; a state visited again in the same episode,
+:func:`training.evaluation.projection.nearest_move`; a state visited again in the same episode,
 as by a learner going round in circles, is labelled once). ``learner_families`` aims the
 learner episodes at chosen families (episode ``k`` of an iteration draws from the
 ``k``-th, cycled; for example ``push`` and ``multi-2``, the ``training`` family's sources
@@ -21,7 +21,7 @@ and the network is trained afresh on all of it (``epochs`` epochs, seed fixed), 
 Ross et al. (2011) with beta = 0 after the first iteration.
 
 Labelling episodes run on the worker pool (or Ray) of ``fetchcarry generate``
-(:func:`training.generate.run_episodes`): the learner's weights travel with the task.
+(:func:`training.data.generate.run_episodes`): the learner's weights travel with the task.
 After each iteration the learner is measured on held-out seeds (from
 :data:`HELDOUT_SEED_BASE`, never trained on) and ``metrics.csv`` gains a row: the
 expert labels so far and the held-out success. A checkpoint after every iteration
@@ -40,10 +40,10 @@ import torch
 
 from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import Capacity
-from training.baselines import runs
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.baselines.configs import HELDOUT_SEED_BASE, DaggerOptions
-from training.baselines.encoders import build_network
+from training.learners import runs
+from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.learners.encoders import build_network
+from training.learners.options import HELDOUT_SEED_BASE, DaggerOptions
 
 LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
 
@@ -82,7 +82,7 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
 
     import fetchcarry_env  # noqa: F401  (registers the env ids)
     from expert.policy import ExpertPolicy
-    from training.learning.expert_phases import nearest_move
+    from training.evaluation.projection import nearest_move
 
     torch.set_num_threads(1)
     env = gym.make(runs.ENV_ID, family=task.family_of(index))
@@ -134,7 +134,7 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
 
 def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int) -> LabelledEpisode:
     """The labelled states of the first ``episodes`` of the phases dataset ``dataset``, as one block."""
-    from training.baselines.imitation import demonstrations_from_dataset
+    from training.learners.imitation import demonstrations_from_dataset
 
     demonstrations, _ = demonstrations_from_dataset(dataset, episodes)
     if demonstrations.masks.shape[1] != candidates or demonstrations.observations.shape[1] != features:
@@ -160,7 +160,7 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
 
 def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
     """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
-    from training.learning.evaluate import evaluate
+    from training.learners.heldout import evaluate
 
     results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
     return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
@@ -182,7 +182,7 @@ def train_dagger(
     from tqdm import tqdm
 
     import fetchcarry_env  # noqa: F401
-    from training.generate import run_episodes
+    from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
     for name in options.learner_families:

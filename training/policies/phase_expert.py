@@ -9,7 +9,7 @@ candidate that stands for it (:meth:`PhaseActions.index_of`). Picks, places and 
 always have one; an expert *move* may not (its waypoints lie anywhere along a line, the
 candidates at fixed points). Such a move is *projected*: the allowed move candidate whose
 end lies nearest the expert's is executed and recorded instead
-(:func:`training.learning.expert_phases.nearest_move`), the base ends off the expert's
+(:func:`training.evaluation.projection.nearest_move`), the base ends off the expert's
 plan, and the expert plans again from there (it replans when the state departs from its
 plan). Every recorded action is then an allowed candidate and the episode runs to its
 end; the per-step info ``projected`` (:data:`PROJECTED_INFO`) marks the projected steps.
@@ -73,7 +73,7 @@ class PhaseExpert:
         An action other than a move that no candidate stands for gets a masked candidate
         (the env refuses it) and a decision whose ``failure`` ends the episode.
         """
-        from training.learning.expert_phases import nearest_move
+        from training.evaluation.projection import nearest_move
 
         action, _ = self.expert.predict(observation, episode_start=episode_start, deterministic=True)
         decision = self.expert.last_decision
@@ -112,6 +112,6 @@ def make_phase_policy(name: str, env: Any, seed: int | None, *, time_limit: floa
     """The recording policy ``name`` (``expert`` or ``random``) for a phase env."""
     if name == "expert":
         return PhaseExpert(env, time_limit=time_limit)
-    from training.baselines.random_phases import RandomPhasePolicy
+    from training.policies.random_phases import RandomPhasePolicy
 
     return RandomPhasePolicy(env, seed=seed)

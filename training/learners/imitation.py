@@ -7,10 +7,10 @@ the dataset is needed. Steps whose action the mask does not allow (the refused s
 that ends an episode at an expert action no candidate expresses, which only a non-move
 action can be now: moves are projected to the nearest allowed one) are dropped.
 
-:func:`train_bc_run` trains on them with BC's loop (:func:`training.baselines.bc.fit`,
+:func:`train_bc_run` trains on them with BC's loop (:func:`training.learners.bc.fit`,
 a checkpoint after every epoch, so that an interrupted run resumes where it stopped and
 ends with the same weights as an uninterrupted one) into a run folder
-(:mod:`training.baselines.runs`).
+(:mod:`training.learners.runs`).
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.observation import Capacity
-from training.baselines import runs
-from training.baselines.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.phase_recording import MASK_INFO
+from training.learners import runs
+from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.policies.phase_expert import MASK_INFO
 
 
 def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) -> tuple[Demonstrations, Capacity]:
@@ -34,7 +34,7 @@ def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) ->
     recorded in the candidate-phase interface.
     """
     from fetchcarry_env.errors import UsageError
-    from training.datasets import load, make_recorded_env
+    from training.data.datasets import load, make_recorded_env
 
     dataset = load(dataset_id)
     if episodes is not None and not 1 <= episodes <= dataset.total_episodes:

@@ -7,7 +7,7 @@ candidate stands for it), and it executes the expert's own env action, so that t
 episode is the expert's whether or not each action is expressible.
 
 :func:`nearest_move` is the stand-in for an expert move no candidate expresses (phase
-datasets record it, :mod:`training.phase_recording`); :func:`check_projection` runs the
+datasets record it, :mod:`training.policies.phase_expert`); :func:`check_projection` runs the
 expert through that projection and on its own on the same seeds, and
 ``fetchcarry bench projection --family F --episodes N`` prints the figures
 (success, projected moves per episode, extra travel cost).
@@ -131,7 +131,7 @@ def check_projection(
     family: str, seeds: range | list[int], *, time_limit: float = 10.0, rule: str = "end"
 ) -> list[ProjectionCheck]:
     """Run the expert through the projection and on its own (env actions) on each seed of ``family``."""
-    from training.phase_recording import PhaseExpert
+    from training.policies.phase_expert import PhaseExpert
 
     env = gym.make("FetchCarryPushPhases-v0", family=family)
     limit = env.spec.max_episode_steps if env.spec is not None and env.spec.max_episode_steps else 50

@@ -4,7 +4,7 @@ The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shape
 progress; refusals cost more than moving), one env, its flat observation vector
 (``observation["observation"]``) as the policy's input. The policy,
 :class:`CandidateActorCritic`, is sb3-contrib's ``MaskableActorCriticPolicy`` whose
-action head is the BC network of the chosen encoder (:mod:`training.baselines.encoders`):
+action head is the BC network of the chosen encoder (:mod:`training.learners.encoders`):
 the observation goes straight to it (no shared layers), and a separate two-layer MLP
 gives the value. So a BC or DAgger run of the same encoder initialises the actor
 (``init``), and a finished PPO run's actor loads as any other run's network.
@@ -30,9 +30,9 @@ import numpy as np
 import torch
 
 from fetchcarry_env.observation import Capacity
-from training.baselines import runs
-from training.baselines.configs import BCConfig, PPOOptions
-from training.baselines.encoders import build_network
+from training.learners import runs
+from training.learners.encoders import build_network
+from training.learners.options import BCConfig, PPOOptions
 
 SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
 VALUE_LAYERS = (256, 256)  # units of the value MLP

@@ -1,1 +1,0 @@
-"""Learning on the candidate-phase interface: the expert through it, masked baselines, learning checks."""

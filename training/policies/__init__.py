@@ -1,0 +1,1 @@
+"""Policies that need no training: the ``Policy`` protocol, masked random, greedy, and the expert in phases."""

@@ -1,0 +1,1 @@
+"""Speed benchmarks (``fetchcarry bench``): commands that print figures, never tests."""
