@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
@@ -32,7 +33,7 @@ PHASE_ACTIONS: tuple[str, ...] = ("start", "move", "pick", "place", "push")
 MAX_FILE_BYTES = 64 * 2**20  # bytes: a plan file is refused unread beyond this
 
 
-class PlanFormatError(ValueError):
+class PlanFormatError(InputError):
     """A plan file does not follow ``fetchcarry-plan/1``; the message names the field."""
 
 

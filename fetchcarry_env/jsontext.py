@@ -18,10 +18,12 @@ import reprlib
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.errors import InputError
+
 MAX_INT_DIGITS = 300  # digits: a longer integer literal is read as a float (inf beyond about 1e308)
 
 
-class JsonInputError(ValueError):
+class JsonInputError(InputError):
     """A file is not readable as the JSON text it should be; the message says why."""
 
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, rect_under
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 
@@ -32,7 +33,7 @@ MAX_ID_LENGTH = 200  # characters of a name or an id
 MAX_SHOWN = 50  # violations spelled out in the message of a ScenarioError (all are in .violations)
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """A scenario breaks one or more rules of ``docs/scenario-format.md``.
 
     ``violations`` lists one message per broken rule and id; ``str(error)`` shows them all.

@@ -1,8 +1,9 @@
 """How a command ends: exceptions become a short message on stderr and an exit status.
 
-- 2, bad input: ``UsageError``, ``ScenarioError``, ``PlanFormatError``, broken JSON,
-  and an ``OSError`` on a file (named in the message: a missing or read-only file, a
-  full disk).
+- 2, bad input: :class:`fetchcarry_env.errors.InputError` (the one base class of the
+  user's bad input: scenarios, plans, run folders, datasets, names and values), broken
+  JSON, and an ``OSError`` on a file (named in the message: a missing or read-only
+  file, a full disk). Nothing else: a ``ValueError`` that is not an ``InputError`` is a bug.
 - 130, Ctrl-C: ``KeyboardInterrupt`` wherever it arrives.
 - 3, an unexpected internal error: one line naming the error and the path of a full
   report (the traceback) written under the temporary folder.
@@ -23,9 +24,7 @@ import traceback
 from collections.abc import Callable
 from pathlib import Path
 
-from expert.plans import PlanFormatError
-from fetchcarry_env.errors import UsageError
-from fetchcarry_env.scenario import ScenarioError
+from fetchcarry_env.errors import InputError
 from training.cli.text import printable
 
 BAD_INPUT = 2
@@ -49,7 +48,7 @@ def run_command(handler: Callable[[argparse.Namespace], int | None], args: argpa
         return INTERRUPTED
     except BrokenPipeError:
         return quiet_broken_pipe()
-    except (ScenarioError, PlanFormatError, UsageError) as error:
+    except InputError as error:  # the user's bad input, whatever raised it
         say(str(error))
     except json.JSONDecodeError as error:
         say(f"not valid JSON: {error}")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fetchcarry_env.errors import InputError
 
-class BenchmarkError(ValueError):
+
+class BenchmarkError(InputError):
     """What the benchmark was asked cannot be done as asked; the message says why."""

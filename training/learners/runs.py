@@ -35,6 +35,7 @@ from typing import Any
 
 import torch
 
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
@@ -45,7 +46,7 @@ REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
 OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete")
 
 
-class RunFolderError(ValueError):
+class RunFolderError(InputError):
     """A folder that is not a loadable run folder (bad or missing ``config.json``, weights that do not fit)."""
 
 

@@ -38,6 +38,7 @@ from dataclasses import MISSING, asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.errors import InputError
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
 
@@ -51,7 +52,7 @@ MINARI_ENV = "MINARI_DATASETS_PATH"
 ENSEMBLE = "dagger-aimed-ensemble"  # the run combining every seed's dagger-aimed network
 
 
-class ReproduceError(ValueError):
+class ReproduceError(InputError):
     """A reproduction cannot start or continue with what it was given (its folder, seeds, workers)."""
 
 
