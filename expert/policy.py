@@ -165,13 +165,15 @@ class ExpertPolicy:
         state: Any = None,
         episode_start: np.ndarray | bool | None = None,
         deterministic: bool = True,
+        action_masks: np.ndarray | None = None,
     ) -> tuple[np.ndarray, Any]:
         """The expert's action for each observation: ``(action, state)`` as stable-baselines3 returns them.
 
         ``observation`` is one observation dict (arrays of the env's shapes) or a batch
         (the same keys, arrays with a leading dimension, as a ``VecEnv`` gives them).
         ``episode_start`` (one bool per env) makes the expert drop its plan for that env.
-        The expert is deterministic; ``deterministic`` is accepted for the protocol.
+        The expert is deterministic; ``deterministic`` and ``action_masks`` are accepted for
+        the protocol (the planner checks its actions with the env's own rules).
         ``state`` is returned unchanged.
         """
         flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation)
