@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from expert import planner
 from expert.escape import corner_gap, escape_move
 from expert.plans import Plan
 from expert.tracking import Step, Track, departure, solved
@@ -236,11 +237,9 @@ class ExpertPolicy:
 
     def _plan(self, track: Track, scenario: Scenario, world: WorldState) -> _Planned:
         """Plan from ``world`` and make the result the track's plan (an empty one if none was found)."""
-        from expert.planner import plan  # imported on first use: importing the solver takes time
-
         replanned = track.started
         started = time.perf_counter()
-        result = plan(
+        result = planner.plan(
             scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, **self.planner_options
         )
         seconds = time.perf_counter() - started
