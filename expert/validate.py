@@ -55,7 +55,7 @@ Units are metres.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from expert.plans import Phase, Plan, plan_objective
@@ -140,15 +140,20 @@ def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None)
     return [
         *_check_structure(context, plan),
         *_rule1_base(context),
-        *_rule2_holding(context),
-        *_rule3_objects_stay(context),
-        *_rule4_pick_place(context),
-        *_rule5_push(context),
+        *_each_step(context, _rule2_holding),
+        *_each_step(context, _rule3_objects_stay),
+        *_each_step(context, _rule4_pick_place),
+        *_each_step(context, _rule5_push),
         *_rule6_goal(context),
         *_rule7_held_object(context),
         *_rule8_objective(scenario, plan),
-        *_rule9_hand_room(context),
+        *_each_step(context, _rule9_hand_room),
     ]
+
+
+def _each_step(context: _Context, check: Callable[[_Context, int, Phase, Phase], list[str]]) -> list[str]:
+    """The messages of ``check(context, k, phase k-1, phase k)`` for every phase after the start, in order."""
+    return [message for k, before, after in context.steps() for message in check(context, k, before, after)]
 
 
 # ---------------------------------------------------------------------- structure
@@ -268,62 +273,58 @@ def _far_from_segment(p: Point, q: Point, rect: Rect, radius: float) -> bool:
 
 
 # ---------------------------------------------------------------------- rule 2
-def _rule2_holding(context: _Context) -> list[str]:
+def _rule2_holding(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
+    was, now, target = before.holding, after.holding, after.target
     out = []
-    for k, before, after in context.steps():
-        was, now, target = before.holding, after.holding, after.target
-        if after.action == "pick":
-            if was is not None:
-                out.append(f"rule 2 (holding): phase {k} pick {target!r} while already holding {was!r}")
-            if now != target:
-                out.append(f"rule 2 (holding): phase {k} pick {target!r} ends holding {now!r}, not {target!r}")
-        elif after.action == "place":
-            if was != target:
-                out.append(f"rule 2 (holding): phase {k} place {target!r} while holding {was!r}, not {target!r}")
-            if now is not None:
-                out.append(f"rule 2 (holding): phase {k} place {target!r} ends holding {now!r}, not nothing")
-        elif now != was:
-            out.append(
-                f"rule 2 (holding): phase {k} {after.action} changes holding from {was!r} to {now!r}; "
-                "only a pick or a place may"
-            )
+    if after.action == "pick":
+        if was is not None:
+            out.append(f"rule 2 (holding): phase {k} pick {target!r} while already holding {was!r}")
+        if now != target:
+            out.append(f"rule 2 (holding): phase {k} pick {target!r} ends holding {now!r}, not {target!r}")
+    elif after.action == "place":
+        if was != target:
+            out.append(f"rule 2 (holding): phase {k} place {target!r} while holding {was!r}, not {target!r}")
+        if now is not None:
+            out.append(f"rule 2 (holding): phase {k} place {target!r} ends holding {now!r}, not nothing")
+    elif now != was:
+        out.append(
+            f"rule 2 (holding): phase {k} {after.action} changes holding from {was!r} to {now!r}; "
+            "only a pick or a place may"
+        )
     return out
 
 
 # ---------------------------------------------------------------------- rule 3
-def _rule3_objects_stay(context: _Context) -> list[str]:
+def _rule3_objects_stay(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
     out = []
-    for k, before, after in context.steps():
-        for object_id in sorted(context.object_ids):
-            if before.holding == object_id:
-                continue  # carried, or placed (rule 4 checks where)
-            was, now = before.objects.get(object_id), after.objects.get(object_id)
-            if was is not None and now is not None and not _same(was, now):
-                out.append(
-                    f"rule 3 (objects stay): phase {k} object {object_id!r} moves from {_pt(was)} to {_pt(now)} "
-                    "although it is not held"
-                )
+    for object_id in sorted(context.object_ids):
+        if before.holding == object_id:
+            continue  # carried, or placed (rule 4 checks where)
+        was, now = before.objects.get(object_id), after.objects.get(object_id)
+        if was is not None and now is not None and not _same(was, now):
+            out.append(
+                f"rule 3 (objects stay): phase {k} object {object_id!r} moves from {_pt(was)} to {_pt(now)} "
+                "although it is not held"
+            )
     return out
 
 
 # ---------------------------------------------------------------------- rule 4
-def _rule4_pick_place(context: _Context) -> list[str]:
-    out = []
-    for k, before, after in context.steps():
-        if after.action not in ("pick", "place") or after.target not in context.object_ids:
-            continue
-        posture = context.postures.get(after.posture or "")
-        # A pick grasps the object where it stood; a place puts it where this phase has it.
-        where = (before if after.action == "pick" else after).objects.get(after.target)
-        if posture is None or where is None:
-            continue
-        what = f"phase {k} {after.action} {after.target!r}"
-        out.extend(_reach(f"rule 4 (reach): {what}", posture, after.base, after.heading, where))
-        blockers = {f"obstacle {o.id!r}": o.rect for o in context.scenario.obstacles}
-        blockers.update({f"clutter {cid!r}": rect for cid, rect in context.clutter_rects(after).items()})
-        out.extend(_arm_line(f"rule 4 (arm line): {what}", after.base, where, blockers))
-        if after.action == "place":
-            out.extend(_placement(context, k, after, where))
+def _rule4_pick_place(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
+    if after.action not in ("pick", "place") or after.target not in context.object_ids:
+        return []
+    posture = context.postures.get(after.posture or "")
+    # A pick grasps the object where it stood; a place puts it where this phase has it.
+    where = (before if after.action == "pick" else after).objects.get(after.target)
+    if posture is None or where is None:
+        return []
+    what = f"phase {k} {after.action} {after.target!r}"
+    out = _reach(f"rule 4 (reach): {what}", posture, after.base, after.heading, where)
+    blockers = {f"obstacle {o.id!r}": o.rect for o in context.scenario.obstacles}
+    blockers.update({f"clutter {cid!r}": rect for cid, rect in context.clutter_rects(after).items()})
+    out.extend(_arm_line(f"rule 4 (arm line): {what}", after.base, where, blockers))
+    if after.action == "place":
+        out.extend(_placement(context, k, after, where))
     return out
 
 
@@ -347,18 +348,17 @@ def _placement(context: _Context, k: int, phase: Phase, where: Point) -> list[st
 
 
 # ---------------------------------------------------------------------- rule 5
-def _rule5_push(context: _Context) -> list[str]:
+def _rule5_push(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
     out = []
-    for k, before, after in context.steps():
-        for cid in context.clutter:
-            was, now = before.clutter.get(cid), after.clutter.get(cid)
-            pushed = after.action == "push" and after.target == cid
-            if was is not None and now is not None and not pushed and not _same(was, now):
-                out.append(
-                    f"rule 5 (push): phase {k} clutter {cid!r} moves from {_pt(was)} to {_pt(now)} outside a push of it"
-                )
-        if after.action == "push" and after.target in context.clutter:
-            out.extend(_push(context, k, before, after))
+    for cid in context.clutter:
+        was, now = before.clutter.get(cid), after.clutter.get(cid)
+        pushed = after.action == "push" and after.target == cid
+        if was is not None and now is not None and not pushed and not _same(was, now):
+            out.append(
+                f"rule 5 (push): phase {k} clutter {cid!r} moves from {_pt(was)} to {_pt(now)} outside a push of it"
+            )
+    if after.action == "push" and after.target in context.clutter:
+        out.extend(_push(context, k, before, after))
     return out
 
 
@@ -506,32 +506,29 @@ def _rule8_objective(scenario: Scenario, plan: Plan) -> list[str]:
 
 
 # ---------------------------------------------------------------------- rule 9
-def _rule9_hand_room(context: _Context) -> list[str]:
-    out = []
-    for k, before, after in context.steps():
-        if after.action != "push" or after.target not in context.clutter:
-            continue
-        start_rect = context.clutter_rect(after.target, before)
-        end_rect = context.clutter_rect(after.target, after)
-        direction = heading_of(_snap_small((after.base[0] - before.base[0], after.base[1] - before.base[1])))
-        if start_rect is None or end_rect is None or direction is None:
-            continue  # rule 5 names these
-        what = f"rule 9 (hand room): phase {k} push {after.target!r}"
-        contact = push_contact(start_rect, direction)
-        posture = context.postures.get(after.posture or "")
-        if posture is not None:
-            out.extend(_reach(f"{what}: the push contact", posture, before.base, after.heading, contact))
-        # The rule the env applies (rules._check_push): everything else where it stands when the stroke starts.
-        others = context.clutter_rects(before, excluding=after.target)
-        objects = [
-            (obj.id, before.objects[obj.id], obj.radius)
-            for obj in context.scenario.objects
-            if obj.id in before.objects and obj.id != before.holding
-        ]
-        blocker = hand_blocker(contact, others.items(), objects)
-        if blocker is not None:
-            kind = "clutter" if blocker in others else "object"
-            out.append(f"{what}: no room for the hand at the push contact {_pt(contact)}: {kind} {blocker!r} is there")
+def _rule9_hand_room(context: _Context, k: int, before: Phase, after: Phase) -> list[str]:
+    if after.action != "push" or after.target not in context.clutter:
+        return []
+    start_rect = context.clutter_rect(after.target, before)
+    end_rect = context.clutter_rect(after.target, after)
+    direction = heading_of(_snap_small((after.base[0] - before.base[0], after.base[1] - before.base[1])))
+    if start_rect is None or end_rect is None or direction is None:
+        return []  # rule 5 names these
+    what = f"rule 9 (hand room): phase {k} push {after.target!r}"
+    contact = push_contact(start_rect, direction)
+    posture = context.postures.get(after.posture or "")
+    out = [] if posture is None else _reach(f"{what}: the push contact", posture, before.base, after.heading, contact)
+    # The rule the env applies (rules._check_push): everything else where it stands when the stroke starts.
+    others = context.clutter_rects(before, excluding=after.target)
+    objects = [
+        (obj.id, before.objects[obj.id], obj.radius)
+        for obj in context.scenario.objects
+        if obj.id in before.objects and obj.id != before.holding
+    ]
+    blocker = hand_blocker(contact, others.items(), objects)
+    if blocker is not None:
+        kind = "clutter" if blocker in others else "object"
+        out.append(f"{what}: no room for the hand at the push contact {_pt(contact)}: {kind} {blocker!r} is there")
     return out
 
 

@@ -31,7 +31,7 @@ from fetchcarry_env.kinematics import (
     travel_cost,
 )
 from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
-from fetchcarry_env.rules import Phase, action_mask, check_action, move_stop
+from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action, move_stop
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
 from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
 from fetchcarry_env.sim.client import check_display, display_available
@@ -389,7 +389,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return copy.deepcopy(self)
 
     # ------------------------------------------------------------------ internals
-    def _move_and_act(self, phase: Phase) -> str | None:
+    def _move_and_act(self, phase: ResolvedPhase) -> str | None:
         """Execute a move, pick or place phase; return what the base touched, if anything."""
         state = self._state
         end, contact = move_stop(self._scenario, state.base, phase.base)
@@ -408,7 +408,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._state = self._with_poses(replace(state, holding=None), poses)
         return None
 
-    def _push(self, phase: Phase) -> tuple[str | None, dict[str, Any]]:
+    def _push(self, phase: ResolvedPhase) -> tuple[str | None, dict[str, Any]]:
         """Execute a push phase; return what the base touched (if anything) and a report of the stroke."""
         state = self._state
         end, contact = move_stop(self._scenario, state.base, phase.base)

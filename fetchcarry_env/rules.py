@@ -1,7 +1,7 @@
 """Which phases are possible from a state: the environment's action checks, as pure geometry.
 
 The environment asks :func:`check_action` before it moves anything: the answer is
-either a :class:`Phase` (what to execute: where the base goes, what the arm takes,
+either a :class:`ResolvedPhase` (what to execute: where the base goes, what the arm takes,
 where the hand goes) or a short reason why the action is impossible, which the
 environment reports in ``info["invalid_action"]``. :func:`action_mask` is the part of
 these checks that can be said per action component (MaskablePPO's convention).
@@ -15,6 +15,7 @@ MILP expert models the same rules. Units are metres.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,8 +33,8 @@ AREA_EDGE = "area edge"  # what a move that stops at the edge of the area report
 
 
 @dataclass(frozen=True)
-class Phase:
-    """A possible phase, resolved: what the environment executes.
+class ResolvedPhase:
+    """A possible phase, resolved: what the environment executes (not a plan's :class:`expert.plans.Phase`).
 
     ``base`` is where the base is sent (for a push, where the stroke ends); ``target``
     the object picked or placed or the clutter pushed; ``hand`` where the hand goes
@@ -49,6 +50,9 @@ class Phase:
     hand: Point | None = None
     direction: Heading | None = None
     stroke: float = 0.0
+
+
+Phase = ResolvedPhase  # the name it had first
 
 
 def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_postures: int) -> np.ndarray:
@@ -78,7 +82,7 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
     return np.concatenate(parts)
 
 
-def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action: Action) -> Phase | str:
+def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action: Action) -> ResolvedPhase | str:
     """The phase ``action`` asks for, or a short reason why it is impossible from ``state``."""
     target = lattice.point(*action.cell)
     if not scenario.area.contains_disc(target, scenario.robot.radius, tol=1e-9):
@@ -87,7 +91,7 @@ def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action
         return f"no posture {action.posture}"
     posture = scenario.robot.postures[action.posture]
     if action.mode == Mode.MOVE:
-        return Phase(Mode.MOVE, target, action.heading)
+        return ResolvedPhase(Mode.MOVE, target, action.heading)
     if action.mode == Mode.PICK:
         return _check_pick(scenario, state, target, action.heading, posture)
     if action.mode == Mode.PLACE:
@@ -156,27 +160,41 @@ def _arm_blocker(scenario: Scenario, state: WorldState, base: Point, hand: Point
     return None
 
 
-def _check_pick(scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture) -> Phase | str:
-    if state.holding is not None:
-        return "pick with a full hand"
+def _nearest_in_reach(
+    points: Iterable[tuple[str, Point]], base: Point, heading: Heading, posture: Posture
+) -> str | None:
+    """The id of the point nearest ``posture``'s centre among those within its ranges from ``base``, or None.
+
+    The hand's offset is measured in the robot frame of ``(base, heading)``; of a tie, the first point wins.
+    """
     best, best_distance = None, math.inf
-    for obj in scenario.objects:
-        position = state.objects[obj.id][:2]
-        offset = hand_offset(base, heading, position)
+    for item_id, point in points:
+        offset = hand_offset(base, heading, point)
         if posture.reaches(*offset):
             distance = math.dist(offset, posture.center)
             if distance < best_distance:
-                best, best_distance = obj.id, distance
+                best, best_distance = item_id, distance
+    return best
+
+
+def _check_pick(
+    scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
+) -> ResolvedPhase | str:
+    if state.holding is not None:
+        return "pick with a full hand"
+    best = _nearest_in_reach(((obj.id, state.objects[obj.id][:2]) for obj in scenario.objects), base, heading, posture)
     if best is None:
         return "nothing to pick within reach"
     hand = state.objects[best][:2]
     blocker = _arm_blocker(scenario, state, base, hand, ignore=None)
     if blocker is not None:
         return f"arm line crosses {blocker!r}"
-    return Phase(Mode.PICK, base, heading, posture, best, hand)
+    return ResolvedPhase(Mode.PICK, base, heading, posture, best, hand)
 
 
-def _check_place(scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture) -> Phase | str:
+def _check_place(
+    scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
+) -> ResolvedPhase | str:
     if state.holding is None:
         return "place with an empty hand"
     obj = scenario.object(state.holding)
@@ -191,10 +209,12 @@ def _check_place(scenario: Scenario, state: WorldState, base: Point, heading: He
     blocker = _arm_blocker(scenario, state, base, obj.goal, ignore=None)
     if blocker is not None:
         return f"arm line crosses {blocker!r}"
-    return Phase(Mode.PLACE, base, heading, posture, obj.id, obj.goal)
+    return ResolvedPhase(Mode.PLACE, base, heading, posture, obj.id, obj.goal)
 
 
-def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Heading, posture: Posture) -> Phase | str:
+def _check_push(
+    scenario: Scenario, state: WorldState, end: Point, heading: Heading, posture: Posture
+) -> ResolvedPhase | str:
     # The hand may be empty or hold an object (the paper's push while carrying): the held
     # object goes with the hand and touches nothing, so it neither blocks the hand nor is pushed.
     start = state.base
@@ -210,14 +230,8 @@ def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Head
         return "push stroke not axis-aligned"
     if heading not in push_headings(direction):
         return f"heading {heading} cannot push along {direction}"
-    best, best_distance = None, math.inf
-    for item in scenario.clutter:
-        contact = push_contact(clutter_rect(scenario, state, item.id), direction)
-        offset = hand_offset(start, heading, contact)
-        if posture.reaches(*offset):
-            distance = math.dist(offset, posture.center)
-            if distance < best_distance:
-                best, best_distance = item.id, distance
+    contacts = ((item.id, push_contact(clutter_rect(scenario, state, item.id), direction)) for item in scenario.clutter)
+    best = _nearest_in_reach(contacts, start, heading, posture)
     if best is None:
         return "no clutter to push within reach"
     rect = clutter_rect(scenario, state, best)
@@ -240,4 +254,4 @@ def _check_push(scenario: Scenario, state: WorldState, end: Point, heading: Head
     if blocker is not None:
         return f"arm line crosses {blocker!r}"
     stroke_end = (start[0] + ux * length, start[1] + uy * length)
-    return Phase(Mode.PUSH, stroke_end, heading, posture, best, contact, direction, length)
+    return ResolvedPhase(Mode.PUSH, stroke_end, heading, posture, best, contact, direction, length)

@@ -14,20 +14,28 @@ import sys
 
 import numpy as np
 
-from expert import bench_cases
+from fetchcarry_env.families import (
+    PAPER_AREAS,
+    PUSH_PATTERNS,
+    draw_paper_basic,
+    draw_paper_corridor,
+    draw_paper_covered,
+    draw_paper_multi,
+    draw_paper_push,
+)
 from fetchcarry_env.scenario import Scenario
 
 
 def recorded_cases() -> list[Scenario]:
     """V-B (one per area), V-C (two per pattern), L (two), 2-4 objects, covered goals; each with a unique name."""
     rng = np.random.default_rng(11)
-    cases = [bench_cases.basic(area, rng) for area in bench_cases.AREAS]
-    cases += [bench_cases.push(pattern, rng) for pattern in bench_cases.PATTERNS for _ in range(2)]
-    cases += [bench_cases.corridor(rng) for _ in range(2)]
-    cases += [bench_cases.multi(2, rng) for _ in range(4)]
-    cases += [bench_cases.multi(3, rng) for _ in range(3)]
-    cases += [bench_cases.covered(2, rng) for _ in range(2)]
-    cases += [bench_cases.multi(4, rng) for _ in range(2)]
+    cases = [draw_paper_basic(rng, area) for area in PAPER_AREAS]
+    cases += [draw_paper_push(rng, pattern) for pattern in PUSH_PATTERNS for _ in range(2)]
+    cases += [draw_paper_corridor(rng) for _ in range(2)]
+    cases += [draw_paper_multi(rng, 2) for _ in range(4)]
+    cases += [draw_paper_multi(rng, 3) for _ in range(3)]
+    cases += [draw_paper_covered(rng, 2) for _ in range(2)]
+    cases += [draw_paper_multi(rng, 4) for _ in range(2)]
     return [dataclasses.replace(s, name=f"{s.name}-{k}") for k, s in enumerate(cases)]
 
 

@@ -111,10 +111,10 @@ def many_obstacles(count: int, seed: int = 0) -> Scenario:
     """The V-B layout with ``count`` small (0.1 m) obstacles scattered off the tables and the start."""
     import numpy as np
 
-    from expert import bench_cases
+    from fetchcarry_env.families import draw_paper_basic
 
     rng = np.random.default_rng(seed)
-    base = bench_cases.basic("V", rng)
+    base = draw_paper_basic(rng, "V")
     obstacles: list[Obstacle] = []
     while len(obstacles) < count:
         x, y = (float(v) for v in rng.uniform(-0.9, 5.9, 2))

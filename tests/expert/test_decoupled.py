@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from expert import bench_cases
 from expert.decoupled import decoupled_plan, steps_of
 from expert.milp.deadline import Deadline
 from expert.milp.decode import plan_objective
@@ -15,11 +14,12 @@ from expert.planner import plan
 from expert.plans import Plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
 
 
 @pytest.mark.parametrize(("family", "count"), [("multi", 3), ("multi", 5), ("covered", 2)])
 def test_decoupled_plan_is_valid(family, count):
-    scenario = getattr(bench_cases, family)(count, np.random.default_rng(7))
+    scenario = {"multi": draw_paper_multi, "covered": draw_paper_covered}[family](np.random.default_rng(7), count)
     lattice = Lattice.over(scenario.area, 0.05)
     order = [o.id for o in scenario.objects]
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan)
@@ -37,7 +37,7 @@ def test_short_time_limit_returns_the_decoupled_plan_or_better():
 
     Better: fewer phases (Eq. 1 is not comparable across phase counts), or as many and Eq. 1 no higher.
     """
-    scenario = bench_cases.multi(5, np.random.default_rng(2024))
+    scenario = draw_paper_multi(np.random.default_rng(2024), 5)
     result = plan(scenario, time_limit=1.0)
     assert result.status in ("feasible", "optimal"), result.stats
     assert validate_plan(scenario, result) == []
@@ -48,7 +48,7 @@ def test_short_time_limit_returns_the_decoupled_plan_or_better():
 
 
 def test_decoupled_plan_warm_starts_a_model_with_as_many_phases():
-    scenario = bench_cases.multi(4, np.random.default_rng(2024))
+    scenario = draw_paper_multi(np.random.default_rng(2024), 4)
     result = plan(scenario, time_limit=30.0)
     assert result.status == "optimal"
     solve = result.stats["solves"][-1]
@@ -60,7 +60,7 @@ def test_decoupled_plan_warm_starts_a_model_with_as_many_phases():
 def test_warm_start_values_refuse_a_plan_longer_than_the_model():
     from expert.milp.build import build
 
-    scenario = bench_cases.multi(3, np.random.default_rng(1))
+    scenario = draw_paper_multi(np.random.default_rng(1), 3)
     lattice = Lattice.over(scenario.area, 0.05)
     phases = decoupled_plan(scenario, [o.id for o in scenario.objects], lattice, Deadline.after(60.0), plan)
     problem = prepare(scenario, lattice)
@@ -71,7 +71,7 @@ def test_warm_start_values_refuse_a_plan_longer_than_the_model():
 
 def test_lookahead_keeps_phases_through_the_first_place_and_stays_valid():
     """Two objects at a time: each step keeps the sub-plan up to its first place; the whole plan is valid."""
-    scenario = bench_cases.multi(4, np.random.default_rng(3))
+    scenario = draw_paper_multi(np.random.default_rng(3), 4)
     lattice = Lattice.over(scenario.area, 0.05)
     order = [o.id for o in scenario.objects]
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), plan, lookahead=2)
@@ -85,7 +85,7 @@ def test_nearest_first_plan_with_first_solutions_is_valid(family, count):
     """The planner's first plan: nearest object first, each sub-plan SCIP's first solution at the fewest phases."""
     from expert.planner import _first_solution_planner
 
-    scenario = getattr(bench_cases, family)(count, np.random.default_rng(2024))
+    scenario = {"multi": draw_paper_multi, "covered": draw_paper_covered}[family](np.random.default_rng(2024), count)
     lattice = Lattice.over(scenario.area, 0.05)
     order = [o.id for o in scenario.objects]
     phases = decoupled_plan(scenario, order, lattice, Deadline.after(60.0), _first_solution_planner, nearest=True)
@@ -108,7 +108,7 @@ def test_first_plan_comes_before_the_bounds(monkeypatch):
 
     monkeypatch.setattr(planner, "Connectivity", out_of_time)
     monkeypatch.setattr(planner, "FIRST_PLAN_BELOW_S", float("inf"))  # the first plan also with a long limit
-    scenario = bench_cases.covered(3, np.random.default_rng(2024))
+    scenario = draw_paper_covered(np.random.default_rng(2024), 3)
     result = plan(scenario, time_limit=30.0)
     assert result.status == "feasible"
     assert result.stats["timed_out"] and result.stats["gap"] is None

@@ -20,7 +20,6 @@ import pytest
 from planner_cases import BLOCK, bar, push_scene
 
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
-from expert import bench_cases
 from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.plans import Phase
@@ -29,7 +28,7 @@ from expert.to_actions import plan_to_actions
 from expert.tracking import departure
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.families import get_family
+from fetchcarry_env.families import draw_paper_push, get_family
 from fetchcarry_env.observation import LIFT_HEIGHT, WorldState, standing_center
 from fetchcarry_env.rules import check_action
 from fetchcarry_env.scenario import DeliveryObject, Scenario
@@ -49,7 +48,7 @@ CASES = {
     "corridor": lambda: family_scenario("corridor", 3),
     "multi": lambda: family_scenario("multi", 4),
     "multi, 3 objects": lambda: family_scenario("multi", 7),
-    "pattern E": lambda: bench_cases.push("E", np.random.default_rng(1)),
+    "pattern E": lambda: draw_paper_push(np.random.default_rng(1), "E"),
 }
 
 

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from planner_cases import BLOCK, bar, one_table, push_scene
 
-from expert import bench_cases
 from expert.milp.bounds import counting_bound, min_travel, skeleton
 from expert.milp.build import build
 from expert.milp.collision import Infeasible
@@ -18,6 +17,7 @@ from expert.milp.problem import prepare
 from expert.milp.reach import reachable_mask, unreachable_reason
 from expert.planner import plan
 from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import draw_paper_basic, draw_paper_corridor, draw_paper_multi, draw_paper_push
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.kinematics import arm_line_clear, push_contact, reaches, travel_cost
 from fetchcarry_env.scenario import DeliveryObject
@@ -32,12 +32,12 @@ def problem_of(scenario, resolution=0.05):
 def sample_scenarios():
     rng = np.random.default_rng(5)
     return [
-        bench_cases.basic("I", rng),
-        bench_cases.basic("III", rng),
-        bench_cases.push("C", rng),
-        bench_cases.push("E", rng),
-        bench_cases.corridor(rng),
-        bench_cases.multi(2, rng),
+        draw_paper_basic(rng, "I"),
+        draw_paper_basic(rng, "III"),
+        draw_paper_push(rng, "C"),
+        draw_paper_push(rng, "E"),
+        draw_paper_corridor(rng),
+        draw_paper_multi(rng, 2),
     ]
 
 
@@ -111,7 +111,7 @@ def test_every_point_of_every_option_is_a_valid_pose(scenario):
 
 def test_options_cover_every_reaching_pose_when_nothing_is_in_the_way():
     """Completeness: without obstacles or clutter, a lattice point is in a pick box iff it reaches and is clear."""
-    scenario = bench_cases.basic("V", np.random.default_rng(0))
+    scenario = draw_paper_basic(np.random.default_rng(0), "V")
     scenario = dataclasses.replace(scenario, obstacles=())
     problem = problem_of(scenario)
     obj = scenario.objects[0]
@@ -211,7 +211,7 @@ def test_lower_bound_is_valid(scenario):
 
 def test_skeleton_proves_three_phases_too_few_for_the_paper_layout():
     """Measured on SCIP: with tables at (2, 2) and (4, 4), 3 phases are infeasible."""
-    scenario = dataclasses.replace(bench_cases.basic("V", np.random.default_rng(0)), obstacles=())
+    scenario = dataclasses.replace(draw_paper_basic(np.random.default_rng(0), "V"), obstacles=())
     assert skeleton(problem_of(scenario)).phases == 4
 
 
@@ -226,7 +226,7 @@ def test_travel_bound_is_below_the_optimal_plans_travel(scenario):
 
 
 def test_reachable_points_follow_the_corridor():
-    scenario = bench_cases.corridor(np.random.default_rng(0))
+    scenario = draw_paper_corridor(np.random.default_rng(0))
     problem = problem_of(scenario)
     mask = reachable_mask(problem)
     domain = problem.grid.domain
@@ -240,7 +240,7 @@ def test_reachable_points_follow_the_corridor():
 
 
 @pytest.mark.parametrize(
-    "scenario", [*sample_scenarios(), bench_cases.multi(3, np.random.default_rng(8))], ids=lambda s: s.name
+    "scenario", [*sample_scenarios(), draw_paper_multi(np.random.default_rng(8), 3)], ids=lambda s: s.name
 )
 def test_bounds_and_cuts_keep_the_optimum(scenario):
     """The skeleton's N, the timing, travel and objective cuts and the phase windows cut off no optimum."""
@@ -254,7 +254,7 @@ def test_bounds_and_cuts_keep_the_optimum(scenario):
 # ---------------------------------------------------------------------- model and decoding
 def test_milp_objective_is_the_plans_objective():
     """With integer bases the MILP's optimum is Eq. 1 of the decoded plan exactly (no snapping)."""
-    scenario = bench_cases.multi(2, np.random.default_rng(6))
+    scenario = draw_paper_multi(np.random.default_rng(6), 2)
     result = plan(scenario)
     assert result.objective == pytest.approx(result.stats["milp_objective"])
 

@@ -12,10 +12,16 @@ import numpy as np
 import pytest
 from planner_cases import BLOCK, bar, check_plan, one_table, push_scene, two_tables
 
-from expert import bench_cases
 from expert.milp.problem import prepare
 from expert.planner import plan
 from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import (
+    PAPER_CORRIDOR_WIDTH,
+    draw_paper_basic,
+    draw_paper_corridor,
+    draw_paper_multi,
+    draw_paper_push,
+)
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject
 
@@ -111,13 +117,13 @@ def test_object_standing_on_another_goal_is_moved_first():
 
 def test_l_corridor():
     """IV-F: the free floor is an L; the base turns the corner between the pick and the place."""
-    scenario = bench_cases.corridor(np.random.default_rng(0))
+    scenario = draw_paper_corridor(np.random.default_rng(0))
     result = plan(scenario)
     check_plan(scenario, result)
     assert result.status == "optimal"
     pick = next(p for p in result.phases if p.action == "pick")
     place = next(p for p in result.phases if p.action == "place")
-    corner = 6.0 - bench_cases.CORRIDOR_WIDTH  # the wall's east face: x = 5 (the lower leg is y < 1)
+    corner = 6.0 - PAPER_CORRIDOR_WIDTH  # the wall's east face: x = 5 (the lower leg is y < 1)
     assert pick.base[1] < 1.0 and place.base[0] > corner
     between = result.phases[result.phases.index(pick) + 1 : result.phases.index(place)]
     assert any(p.base[0] > corner and p.base[1] < 1.0 for p in between), "no stop in the corner"
@@ -247,7 +253,7 @@ def test_max_phases_below_need_is_infeasible():
 
 
 def test_time_limit_without_a_plan():
-    scenario = bench_cases.multi(3, np.random.default_rng(1))
+    scenario = draw_paper_multi(np.random.default_rng(1), 3)
     result = plan(scenario, time_limit=1e-4)
     assert result.status == "time_limit" and result.phases == ()
     assert result.stats["total_s"] < 1.0
@@ -280,7 +286,7 @@ def test_env_lattice_is_used():
     (The fixed posture of the one-table cases needs lattice points exactly 0.5 m from the
     cup, which this lattice has not: those cases are infeasible on it, as they should be.)
     """
-    scenario = bench_cases.basic("I", np.random.default_rng(0))
+    scenario = draw_paper_basic(np.random.default_rng(0), "I")
     lattice = Lattice.over(Rect(-1.52, -1.51, 7.0, 7.0), 0.04)
     result = plan(scenario, lattice=lattice)
     check_plan(scenario, result, lattice=lattice)
@@ -298,7 +304,7 @@ def test_continuous_and_integer_bases_agree(integral):
 
 
 def test_same_input_same_plan():
-    scenario = bench_cases.multi(2, np.random.default_rng(4))
+    scenario = draw_paper_multi(np.random.default_rng(4), 2)
     first, second = plan(scenario), plan(scenario)
     assert first.phases == second.phases and first.objective == second.objective
 
@@ -322,10 +328,10 @@ def test_bench_cases_are_optimal_and_valid():
     """One scenario of each benchmark case (V-B, V-C, L corridor, two objects)."""
     rng = np.random.default_rng(2)
     for scenario in (
-        bench_cases.basic("II", rng),
-        bench_cases.push("E", rng),
-        bench_cases.corridor(rng),
-        bench_cases.multi(2, rng),
+        draw_paper_basic(rng, "II"),
+        draw_paper_push(rng, "E"),
+        draw_paper_corridor(rng),
+        draw_paper_multi(rng, 2),
     ):
         result = plan(scenario, time_limit=30.0)
         check_plan(scenario, result)
@@ -343,7 +349,7 @@ def test_replanning_from_a_decoded_observation(k):
     """
     from fetchcarry_env.observation import Capacity, WorldState, decode, encode, standing_center
 
-    scenario = bench_cases.push("A", np.random.default_rng(3))
+    scenario = draw_paper_push(np.random.default_rng(3), "A")
     first = plan(scenario)
     phase = first.phases[k]
     objects = {}
@@ -381,7 +387,7 @@ def test_extra_phases_never_worse_over_the_longer_horizon(extra):
     """
     from fetchcarry_env.kinematics import DELIVERY_BONUS
 
-    scenario = bench_cases.multi(2, np.random.default_rng(4))
+    scenario = draw_paper_multi(np.random.default_rng(4), 2)
     fewest = plan(scenario)
     longer = plan(scenario, extra_phases=extra)
     check_plan(scenario, longer)

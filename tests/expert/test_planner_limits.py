@@ -21,9 +21,9 @@ from planner_cases import largest_scenario, many_obstacles
 from pyscipopt import SCIP_EVENTTYPE, Eventhdlr
 
 import expert.planner as planner
-from expert import bench_cases
 from expert.planner import plan
 from expert.validate import validate_plan
+from fetchcarry_env.families import draw_paper_multi
 from fetchcarry_env.scenario import check_rules
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -49,7 +49,7 @@ def test_scip_user_interrupt_raises_keyboard_interrupt(monkeypatch):
 
     monkeypatch.setattr(planner, "build", build_with_interrupt)
     with pytest.raises(KeyboardInterrupt):
-        plan(bench_cases.multi(4, np.random.default_rng(0)))
+        plan(draw_paper_multi(np.random.default_rng(0), 4))
 
 
 SIGINT_SCRIPT = textwrap.dedent(
@@ -58,7 +58,7 @@ SIGINT_SCRIPT = textwrap.dedent(
     import numpy as np
     from pyscipopt import SCIP_EVENTTYPE, Eventhdlr
     import expert.planner as planner
-    from expert import bench_cases
+    from fetchcarry_env.families import draw_paper_multi
 
     class Slow(Eventhdlr):
         def eventinit(self):
@@ -74,7 +74,7 @@ SIGINT_SCRIPT = textwrap.dedent(
         return milp
 
     planner.build = build
-    result = planner.plan(bench_cases.multi(4, np.random.default_rng(0)), time_limit=60.0)
+    result = planner.plan(draw_paper_multi(np.random.default_rng(0), 4), time_limit=60.0)
     print("PLAN", result.status, flush=True)
     """
 )
@@ -110,7 +110,7 @@ def test_every_part_of_plan_counts_against_the_time_limit(name, limit):
     """Before: 10 objects took 9 s and 12 objects 53 s at a 0.5 s limit (the lower-bound search ran
     outside it), 1,000 obstacles raised RecursionError, the largest scenario spent 5 s preprocessing."""
     if name.startswith("multi"):
-        scenario = bench_cases.multi(int(name.split("-")[1]), np.random.default_rng(0))
+        scenario = draw_paper_multi(np.random.default_rng(0), int(name.split("-")[1]))
     elif name.startswith("obstacles"):
         scenario = many_obstacles(int(name.split("-")[1]))
     else:

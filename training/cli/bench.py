@@ -1,9 +1,9 @@
-"""``fetchcarry bench env|planner|anytime|generate|phases``: the benchmarks' options and printed tables.
+"""``fetchcarry bench env|planner|anytime|push|generate|phases|projection``: the benchmarks' options and tables.
 
-The measurements live next to what they measure (``fetchcarry_env.bench``,
-``expert.bench``, ``training.data.generate.bench_generation``,
-``training.speed.phases``); this module parses the
-options, runs them and prints the figures for people (or as JSON with ``--json``).
+The measurements live in :mod:`training.speed` (``env``, ``planner``, ``anytime``,
+``push``, ``generate``, ``phases``; ``projection`` is
+:func:`training.evaluation.projection.check_projection`) and return figures; this module
+parses the options, runs them and prints the figures for people (or as JSON with ``--json``).
 """
 
 from __future__ import annotations
@@ -21,6 +21,12 @@ from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.episodes import families
 from training.cli.files import check_readable, check_writable
 from training.cli.text import echo
+from training.data.sources import EpisodeSource
+from training.speed import anytime as anytime_speed
+from training.speed import env as env_speed
+from training.speed import generate as generate_speed
+from training.speed import planner as planner_speed
+from training.speed import push as push_speed
 
 ENV_DESCRIPTION = (
     "Run, in this process, the example scenario of the scenario format and the MILP expert's optimal plan for it "
@@ -41,10 +47,11 @@ PLANNER_DESCRIPTION = (
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add ``env``, ``planner``, ``anytime``, ``generate``, ``phases`` and ``projection`` to ``fetchcarry bench``."""
+    """Add the ``env``, ``planner``, ``anytime``, ``push``, ``generate``, ``phases``, ``projection`` benchmarks."""
     _register_env(bench)
     _register_planner(bench)
     _register_anytime(bench)
+    _register_push(bench)
     _register_generate(bench)
     _register_phases(bench)
     _register_projection(bench)
@@ -52,8 +59,6 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 # ---------------------------------------------------------------------------- bench env
 def _register_env(bench: argparse._SubParsersAction) -> None:
-    from fetchcarry_env import bench as env_bench
-
     parser = bench.add_parser(
         "env",
         help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
@@ -61,9 +66,9 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
         epilog="Exit status: 0, or 1 with --strict when a goal is missed.",
     )
     counts = (
-        ("--episodes", env_bench.DEFAULT_EPISODES, "episodes of the plan"),
-        ("--resets", env_bench.DEFAULT_RESETS, "resets of the same layout"),
-        ("--random-steps", env_bench.DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
+        ("--episodes", env_speed.DEFAULT_EPISODES, "episodes of the plan"),
+        ("--resets", env_speed.DEFAULT_RESETS, "resets of the same layout"),
+        ("--random-steps", env_speed.DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
     )
     for flag, default, meaning in counts:
         parser.add_argument(
@@ -72,9 +77,9 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--seed",
         type=whole_number,
-        default=env_bench.DEFAULT_SEED,
+        default=env_speed.DEFAULT_SEED,
         metavar="S",
-        help=f"seed of the resets and the policy (default {env_bench.DEFAULT_SEED})",
+        help=f"seed of the resets and the policy (default {env_speed.DEFAULT_SEED})",
     )
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
@@ -84,12 +89,8 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
 
 def run_env(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Run the env benchmark and print it on ``out`` (stdout); exit 1 only with ``--strict`` and a missed goal."""
-    from fetchcarry_env import bench as env_bench
-
     out = out if out is not None else sys.stdout
-    report = env_bench.run_benchmark(
-        args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress
-    )
+    report = env_speed.measure(args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress)
     print(json.dumps(report, indent=2) if args.json else format_env_report(report), file=out)
     missed = [f["name"] for f in report["figures"] if f["met"] is False]
     return 1 if args.strict and missed else 0
@@ -121,8 +122,6 @@ def format_env_report(report: dict[str, Any]) -> str:
 
 # ---------------------------------------------------------------------------- bench planner
 def _register_planner(bench: argparse._SubParsersAction) -> None:
-    from expert import bench as planner_bench
-
     parser = bench.add_parser(
         "planner",
         help="the paper's Section V timings: V-B, V-C, L corridor, 2-6 objects, covered goals",
@@ -132,9 +131,9 @@ def _register_planner(bench: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--seed",
         type=whole_number,
-        default=planner_bench.DEFAULT_SEED,
+        default=planner_speed.DEFAULT_SEED,
         metavar="S",
-        help=f"seed of every case's generator (default {planner_bench.DEFAULT_SEED})",
+        help=f"seed of every case's generator (default {planner_speed.DEFAULT_SEED})",
     )
     parser.add_argument(
         "--scale",
@@ -149,15 +148,15 @@ def _register_planner(bench: argparse._SubParsersAction) -> None:
         nargs="+",
         metavar="GROUP",
         help="run only these groups ("
-        + " ".join(dict.fromkeys(g if " " not in g else f"'{g}'" for g in (c.group for c in planner_bench.cases())))
+        + " ".join(g if " " not in g else f"'{g}'" for g in planner_speed.groups(planner_speed.cases()))
         + ")",
     )
     parser.add_argument(
         "--time-limit",
         type=positive_float,
-        default=planner_bench.DEFAULT_TIME_LIMIT,
+        default=planner_speed.DEFAULT_TIME_LIMIT,
         metavar="S",
-        help=f"seconds per planning call (default {planner_bench.DEFAULT_TIME_LIMIT:g})",
+        help=f"seconds per planning call (default {planner_speed.DEFAULT_TIME_LIMIT:g})",
     )
     parser.add_argument(
         "--baseline",
@@ -168,43 +167,34 @@ def _register_planner(bench: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run_planner)
 
 
-def run_planner(args: argparse.Namespace, out: TextIO | None = None) -> int:
-    """Run the planner benchmark; exit status 0 when every plan is optimal and valid, 1 otherwise."""
-    import numpy as np
-
-    from expert import bench as planner_bench
-    from expert import bench_cases
-
-    out = out if out is not None else sys.stdout
-    rows = planner_bench.cases(args.scale)
+def _planner_rows(args: argparse.Namespace) -> list[planner_speed.Case]:
+    """The cases ``--scale`` and ``--only`` choose; :class:`UsageError` for an unknown group."""
+    rows = planner_speed.cases(args.scale)
     if args.only:
         known = {c.group for c in rows}
         unknown = [g for g in args.only if g not in known]
         if unknown:
             raise UsageError(f"unknown benchmark group(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
         rows = [c for c in rows if c.group in args.only]
-    from expert.planner import plan, solver_name  # here, so that the CLI starts without the solver
+    return rows
 
-    plan(bench_cases.basic("I", np.random.default_rng(0)))  # warm-up: imports, first SCIP model
-    options = planner_bench.BASELINE_OPTIONS if args.baseline else None
+
+def run_planner(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Run the planner benchmark; exit status 0 when every plan is optimal and valid, 1 otherwise."""
+    from expert.planner import solver_name  # here, so that the CLI starts without the solver
+
+    out = out if out is not None else sys.stdout
+    rows = _planner_rows(args)
+    planner_speed.warm_up()
+    options = planner_speed.BASELINE_OPTIONS if args.baseline else None
     started = time.perf_counter()
-    runs: list[Any] = []
+    runs: list[planner_speed.Run] = []
     for case in rows:
-        runs.extend(planner_bench.run_case(case, args.seed, args.time_limit, options))
+        runs.extend(planner_speed.run_case(case, args.seed, args.time_limit, options))
     wall = time.perf_counter() - started
     ok = all(r.status == "optimal" and r.valid for r in runs)
     if args.json:
-        data = {
-            "solver": solver_name(),
-            "seed": args.seed,
-            "baseline": bool(args.baseline),
-            "wall_s": wall,
-            "cases": {
-                c.name: {**planner_bench.summary([r for r in runs if r.case == c.name]), "paper": c.paper} for c in rows
-            },
-            "runs": [asdict(r) for r in runs],
-        }
-        print(json.dumps(data, indent=2), file=out)
+        print(json.dumps(_planner_json(args, rows, runs, wall, solver_name()), indent=2), file=out)
         return 0 if ok else 1
     settings = "baseline: SCIP defaults, N from 3" if args.baseline else "tuned settings"
     print(
@@ -222,23 +212,44 @@ def run_planner(args: argparse.Namespace, out: TextIO | None = None) -> int:
     return 0 if ok else 1
 
 
+def _planner_json(
+    args: argparse.Namespace, rows: list[planner_speed.Case], runs: list[planner_speed.Run], wall: float, solver: str
+) -> dict[str, Any]:
+    return {
+        "solver": solver,
+        "seed": args.seed,
+        "baseline": bool(args.baseline),
+        "wall_s": wall,
+        "cases": {
+            c.name: {**planner_speed.summary([r for r in runs if r.case == c.name]), "paper": c.paper} for c in rows
+        },
+        "runs": [asdict(r) for r in runs],
+    }
+
+
 def _ms(seconds: float) -> str:
     return f"{seconds * 1000:.0f}" if seconds >= 0.0095 else f"{seconds * 1000:.1f}"
 
 
-def _goal(case_or_group: Any) -> str:
-    if case_or_group.goal_median_s is None:
+def _goal(case: planner_speed.Case) -> str:
+    if case.goal_median_s is None:
         return "-"
-    text = f"median {_ms(case_or_group.goal_median_s)}"
-    if case_or_group.goal_p95_s is not None:
-        text += f", p95 {_ms(case_or_group.goal_p95_s)}"
+    text = f"median {_ms(case.goal_median_s)}"
+    if case.goal_p95_s is not None:
+        text += f", p95 {_ms(case.goal_p95_s)}"
     return text
 
 
-def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
+def print_tables(rows: list[planner_speed.Case], runs: list[planner_speed.Run], out: TextIO) -> None:
     """The results table, the per-goal table and the time breakdown, in milliseconds."""
-    from expert import bench as planner_bench
+    _print_case_table(rows, runs, out)
+    print(file=out)
+    _print_goal_table(rows, runs, out)
+    print(file=out)
+    _print_time_shares(rows, runs, out)
 
+
+def _print_case_table(rows: list[planner_speed.Case], runs: list[planner_speed.Run], out: TextIO) -> None:
     head = (
         f"{'case':<16} {'n':>3} {'median':>7} {'p95':>7} {'mean (SD)':>14} {'max':>7}  "
         f"{'statuses':<14} {'phases':<8} {'paper s mean (SD)':<18}"
@@ -246,7 +257,7 @@ def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
     print(head, file=out)
     print("-" * len(head), file=out)
     for case in rows:
-        s = planner_bench.summary([r for r in runs if r.case == case.name])
+        s = planner_speed.summary([r for r in runs if r.case == case.name])
         statuses = " ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))
         phases = ",".join(str(p) for p in s["phases"])
         mean_sd = f"{_ms(s['mean_s'])} ({_ms(s['sd_s'])})"
@@ -256,41 +267,56 @@ def print_tables(rows: list[Any], runs: list[Any], out: TextIO) -> None:
             file=out,
         )
     print("(times in ms; paper in s)", file=out)
-    print(file=out)
+
+
+def _print_goal_table(rows: list[planner_speed.Case], runs: list[planner_speed.Run], out: TextIO) -> None:
     print(f"{'group':<8} {'n':>3} {'median':>7} {'p95':>7}  {'goal (ms)':<20} {'met':<4} {'optimal':>8}", file=out)
-    for group in dict.fromkeys(c.group for c in rows):
+    for group in planner_speed.groups(rows):
         first = next(c for c in rows if c.group == group)
-        s = planner_bench.summary([r for r in runs if r.group == group])
-        met = "-"
-        if first.goal_median_s is not None:
-            ok = s["median_s"] <= first.goal_median_s
-            if first.goal_p95_s is not None:
-                ok = ok and s["p95_s"] <= first.goal_p95_s
-            met = "yes" if ok else "no"
+        s = planner_speed.summary([r for r in runs if r.group == group])
+        met = {None: "-", True: "yes", False: "no"}[planner_speed.goal_met(first, s)]
         optimal = f"{s['statuses'].get('optimal', 0)}/{s['count']}"
         print(
             f"{group:<8} {s['count']:>3} {_ms(s['median_s']):>7} {_ms(s['p95_s']):>7}  {_goal(first):<20} {met:<4} "
             f"{optimal:>8}",
             file=out,
         )
-    print(file=out)
+
+
+def _print_time_shares(rows: list[planner_speed.Case], runs: list[planner_speed.Run], out: TextIO) -> None:
     print("where the time goes (share of the summed total_s):", file=out)
     print(
         f"{'group':<8} {'prepare+bound':>13} {'build':>7} {'prove N<N*':>10} {'solve N*':>9} {'other':>6} "
         f"{'extra N tried':>13}",
         file=out,
     )
-    for group in dict.fromkeys(c.group for c in rows):
-        selected = [r for r in runs if r.group == group]
-        total = sum(r.total_s for r in selected)
-        parts = [
-            sum(getattr(r, name) for r in selected)
-            for name in ("prepare_s", "build_s", "infeasible_solve_s", "final_solve_s")
-        ]
-        other = total - sum(parts)
-        extra = sum(len(r.phases_tried) - 1 for r in selected) / len(selected)
-        shares = " ".join(f"{100 * p / total:>{w}.0f}%" for p, w in zip([*parts, other], (12, 6, 9, 8, 5), strict=True))
-        print(f"{group:<8} {shares} {extra:>13.2f}", file=out)
+    names = ("prepare_s", "build_s", "infeasible_solve_s", "final_solve_s", "other")
+    for group in planner_speed.groups(rows):
+        shares = planner_speed.time_shares([r for r in runs if r.group == group])
+        text = " ".join(f"{100 * shares[n]:>{w}.0f}%" for n, w in zip(names, (12, 6, 9, 8, 5), strict=True))
+        print(f"{group:<8} {text} {shares['extra_n_tried']:>13.2f}", file=out)
+
+
+# ---------------------------------------------------------------------------- records of bench anytime and push
+def _records(path: Path, command: str, keys: tuple[str, ...]) -> list[dict[str, Any]]:
+    """The records of an earlier ``bench COMMAND --out``; :class:`UsageError` names what is wrong."""
+    check_readable(path, "records file")
+    try:
+        records = json.loads(path.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise UsageError(f"{path}: not JSON written by bench {command} --out ({error})") from None
+    if not isinstance(records, list) or not all(isinstance(r, dict) and set(keys) <= r.keys() for r in records):
+        raise UsageError(f"{path}: not a list of bench {command} records (each with {', '.join(keys)})")
+    return records
+
+
+def _add_records_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", metavar="JSON", help="also write one record per planning call to this file")
+    parser.add_argument(
+        "--compare",
+        metavar="JSON",
+        help="records another checkout wrote with --out: summarised too, against this run's reference plans",
+    )
 
 
 # ---------------------------------------------------------------------------- bench anytime
@@ -304,45 +330,60 @@ def _register_anytime(bench: argparse._SubParsersAction) -> None:
         "phases, how many lie within 5 %% of a proven optimum, how far each one's Eq. 1 lies above the "
         "reference and the gaps the planner proved. Takes several minutes.",
     )
-    parser.add_argument("--out", metavar="JSON", help="also write one record per planning call to this file")
-    parser.add_argument(
-        "--compare",
-        metavar="JSON",
-        help="records another checkout wrote with --out: summarised too, against this run's reference plans",
-    )
+    _add_records_options(parser)
     parser.set_defaults(handler=run_bench_anytime)
 
 
-def _anytime_records(path: Path) -> list[dict[str, Any]]:
-    """The records of an earlier ``bench anytime --out``; :class:`UsageError` names what is wrong."""
-    from expert.bench_anytime import RECORD_KEYS
-
-    check_readable(path, "records file")
-    try:
-        records = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise UsageError(f"{path}: not JSON written by bench anytime --out ({error})") from None
-    if not isinstance(records, list) or not all(isinstance(r, dict) and set(RECORD_KEYS) <= r.keys() for r in records):
-        raise UsageError(f"{path}: not a list of bench anytime records (each with {', '.join(RECORD_KEYS)})")
-    return records
+def _echo_anytime_record(r: dict[str, Any]) -> None:
+    echo(f"{r['group']} #{r['index']} limit {r['limit']:g} s: {r['status']}, {r['seconds']:.3f} s", file=sys.stderr)
 
 
 def run_bench_anytime(args: argparse.Namespace) -> int:
-    from expert.bench_anytime import measure, summary
-
     out = Path(args.out) if args.out else None
     if out is not None:
         check_writable(out, "records file")
-    other = _anytime_records(Path(args.compare)) if args.compare else None
-    records = measure(report=lambda r: echo(f"{r['group']} #{r['index']} limit {r['limit']:g} s: {r['status']}, "
-                                             f"{r['seconds']:.3f} s", file=sys.stderr))  # fmt: skip
+    other = _records(Path(args.compare), "anytime", anytime_speed.RECORD_KEYS) if args.compare else None
+    records = anytime_speed.measure(report=_echo_anytime_record)
     if out is not None:
         out.write_text(json.dumps(records, indent=1), encoding="utf-8")
     print("this run:")
-    print("\n".join(summary(records, records)))
+    print("\n".join(anytime_speed.summary(records, records)))
     if other is not None:
         print(f"\n{args.compare} (against this run's reference plans):")
-        print("\n".join(summary(other, records)))
+        print("\n".join(anytime_speed.summary(other, records)))
+    return 0
+
+
+# ---------------------------------------------------------------------------- bench push
+def _register_push(bench: argparse._SubParsersAction) -> None:
+    parser = bench.add_parser(
+        "push",
+        help="push-aside while carrying: phases and travel of the plans on the push family and patterns A-E",
+        description="Plan the push family (seeds 0-39) and the paper's Table I patterns A-E (the paper-push "
+        "families, seeds 0-7 each) and print per group the plans' mean phases and travel (Eq. 1's distance "
+        "term, metres), how many plans push while holding the object and the median planning time; with "
+        "--compare, the records of another checkout scenario by scenario: travel and phases before and after.",
+    )
+    parser.add_argument("--out", metavar="JSON", help="also write one record per scenario to this file")
+    parser.add_argument(
+        "--compare", metavar="JSON", help="records another checkout wrote with --out: compared scenario by scenario"
+    )
+    parser.set_defaults(handler=run_bench_push)
+
+
+def run_bench_push(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Print the push table, and with ``--compare`` the comparison with the other records."""
+    out = out if out is not None else sys.stdout
+    path = Path(args.out) if args.out else None
+    if path is not None:
+        check_writable(path, "records file")
+    before = _records(Path(args.compare), "push", push_speed.RECORD_KEYS) if args.compare else None
+    records = push_speed.measure()
+    if path is not None:
+        path.write_text(json.dumps(records, indent=1), encoding="utf-8")
+    print("\n".join(push_speed.summary(records)), file=out)
+    if before is not None:
+        print("\n" + "\n".join(push_speed.compare(records, before)), file=out)
     return 0
 
 
@@ -380,12 +421,10 @@ def _register_generate(bench: argparse._SubParsersAction) -> None:
 
 
 def run_bench_generate(args: argparse.Namespace) -> int:
-    from training.data.generate import EpisodeSource, bench_generation
-
     rows = []
     for family in families(args.families):
         source = EpisodeSource(family=family, seed=args.seed, policy=args.policy, time_limit=args.time_limit)
-        rows += bench_generation(source, args.episodes, args.workers)
+        rows += generate_speed.generation(source, args.episodes, args.workers)
     if args.json:
         print(json.dumps({"policy": args.policy, "episodes": args.episodes, "runs": rows}, indent=2))
         return 0
@@ -434,7 +473,7 @@ def _register_phases(bench: argparse._SubParsersAction) -> None:
 
 def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Print the expressibility table, then the speed table, of the candidate-phase interface."""
-    from training.speed.phases import expressibility, speed
+    from training.speed import phases as phases_speed  # here: it loads the planner, which the CLI starts without
 
     out = out if out is not None else sys.stdout
     names = families(args.families)
@@ -444,7 +483,7 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
         file=out,
     )
     for family in names:
-        r = expressibility(family, args.episodes)
+        r = phases_speed.expressibility(family, args.episodes)
         modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
         print(
             f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
@@ -458,7 +497,7 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
         file=out,
     )
     for family in names:
-        r = speed(family, args.steps)
+        r = phases_speed.speed(family, args.steps)
         ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
         print(
             f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} "

@@ -1,18 +1,17 @@
-"""The environment benchmark: how fast FetchCarryPush-v0 resets and steps, next to what PyBullet itself costs.
+"""How fast FetchCarryPush-v0 resets and steps, next to what PyBullet itself costs.
 
-``fetchcarry bench env`` (its options and table are in :mod:`training.cli.bench`) runs, in this process,
-the format's example scenario (``docs/scenario-format.md``) and the MILP expert's optimal plan
-for it (two moves, a push, a move, a pick, a move, a place), episode after episode, and
-times every reset and step. It prints, with the project's goal for each: reset of an
-unchanged layout, move, pick and place steps per second, a push step as a multiple
-of the physics steps it simulates, and a random masked policy's steps per second
-(``gym.make("FetchCarryPush-v0")``: random scenarios of the default family, resets
-included), plus the peak memory. Next to each figure it prints the cost of the
-PyBullet calls that step cannot avoid (posing the bodies it moves, the physics steps
-it simulates), measured on the same world.
+:func:`measure` runs, in this process, the format's example scenario
+(``docs/scenario-format.md``) and the MILP expert's optimal plan for it (two moves, a
+push, a move, a pick, a move, a place), episode after episode, and times every reset and
+step. It returns, with the project's goal for each: reset of an unchanged layout, move,
+pick and place steps per second, a push step as a multiple of the physics steps it
+simulates, and a random masked policy's steps per second (``gym.make("FetchCarryPush-v0")``:
+random scenarios of the default family, resets included), plus the peak memory. Next to
+each figure it gives the cost of the PyBullet calls that step cannot avoid (posing the
+bodies it moves, the physics steps it simulates), measured on the same world.
 
-Per-step figures use the median of their samples (the machines are shared and
-noisy); the policy's figure is its whole run's steps divided by its wall time.
+Per-step figures use the median of their samples (the machines are shared and noisy);
+the policy's figure is its whole run's steps divided by its wall time.
 """
 
 from __future__ import annotations
@@ -23,19 +22,27 @@ import statistics
 import sys
 import time
 from collections import defaultdict
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from importlib import metadata
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
+from tqdm import tqdm
+
+import fetchcarry_env  # noqa: F401  (registers the env)
+from fetchcarry_env.actions import Action, Mode
+from fetchcarry_env.families import DEFAULT_FAMILY
+from fetchcarry_env.scenario import Scenario
 
 ENV_ID = "FetchCarryPush-v0"
 DEFAULT_EPISODES = 200  # episodes of the expert's plan
 DEFAULT_RESETS = 500  # resets per reset figure (the rebuilding ones use a tenth)
 DEFAULT_RANDOM_STEPS = 3000  # steps of the random masked policy
 DEFAULT_SEED = 0
+FLOOR_REPEATS = 1000  # calls per PyBullet floor of a step
 
 SCENARIO: dict[str, Any] = {  # docs/scenario-format.md's example
     "format": "fetchcarry-scenario/1",
@@ -52,7 +59,7 @@ SCENARIO: dict[str, Any] = {  # docs/scenario-format.md's example
 }
 PLAN: tuple[
     tuple[str, tuple[float, float], str, int], ...
-] = (  # the expert's optimal plan: mode, base, heading, posture
+] = (  # the expert's optimal plan: mode, base (metres), heading, posture
     ("move", (3.45, 1.45), "+x", 0),
     ("move", (3.95, 3.2), "+x", 0),
     ("push", (3.95, 3.35), "+y", 0),  # a 0.15 m stroke
@@ -75,11 +82,16 @@ class Figure:
     floor: str | None = None  # the unavoidable PyBullet calls: what they cost on this world
 
 
+@dataclass
+class StepTimes:
+    """Seconds of every step of the plan by mode, the seconds of its physics steps and their count."""
+
+    step_s: dict[str, list[float]] = field(default_factory=lambda: defaultdict(list))
+    physics_s: dict[str, list[float]] = field(default_factory=lambda: defaultdict(list))
+    physics_steps: dict[str, int] = field(default_factory=dict)
+
+
 # ---------------------------------------------------------------------- timing helpers
-def _median_s(samples: Sequence[float]) -> float:
-    return statistics.median(samples)
-
-
 def _time_calls(call: Callable[[], Any], repeats: int) -> float:
     """Median seconds of ``call()`` over ``repeats`` calls."""
     samples = []
@@ -87,7 +99,7 @@ def _time_calls(call: Callable[[], Any], repeats: int) -> float:
         started = time.perf_counter()
         call()
         samples.append(time.perf_counter() - started)
-    return _median_s(samples)
+    return statistics.median(samples)
 
 
 @contextmanager
@@ -114,39 +126,29 @@ def physics_timer(simulation: Any) -> Iterator[dict[str, float]]:
         client.stepSimulation = step
 
 
-def _progress(total: int, description: str, enabled: bool):
-    from tqdm import tqdm
-
+def _progress(total: int, description: str, enabled: bool) -> tqdm:
     return tqdm(total=total, desc=description, disable=None if enabled else True, leave=False, file=sys.stderr)
 
 
-# ---------------------------------------------------------------------- the workloads
+def _median_reset_s(reset: Callable[[int], Any], count: int, bar: tqdm | None = None) -> float:
+    """Median seconds of ``reset(k)`` for ``k = 0 .. count - 1``."""
+    samples = []
+    for k in range(count):
+        started = time.perf_counter()
+        reset(k)
+        samples.append(time.perf_counter() - started)
+        if bar is not None:
+            bar.update()
+    return statistics.median(samples)
+
+
+# ---------------------------------------------------------------------- resets
 def bench_resets(env: Any, resets: int, progress: bool) -> list[Figure]:
     """Reset of the unchanged layout (goal under 2 ms), of a new layout (rebuild), and of a family."""
-    import gymnasium as gym
-
-    from fetchcarry_env.scenario import Scenario
-
     unwrapped = env.unwrapped
     with _progress(resets, "resets", progress) as bar:
-        samples = []
-        for _ in range(resets):
-            started = time.perf_counter()
-            unwrapped.reset()
-            samples.append(time.perf_counter() - started)
-            bar.update()
-    same = _median_s(samples)
-    sim = unwrapped._sim
-    client = sim.client
-    bodies = [sim.body_id("robot"), *(sim.body_id(o["id"]) for o in SCENARIO["objects"])]
-    bodies += [sim.body_id(c["id"]) for c in SCENARIO["clutter"]]
-    poses = [client.getBasePositionAndOrientation(b) for b in bodies]
-
-    def pose_every_body() -> None:
-        for body, (position, orientation) in zip(bodies, poses, strict=True):
-            client.resetBasePositionAndOrientation(body, position, orientation)
-
-    floor = _time_calls(pose_every_body, resets)
+        same = _median_reset_s(lambda _k: unwrapped.reset(), resets, bar)
+    floor = _pose_floor_s(unwrapped, resets)
     figures = [
         Figure(
             "reset, same layout",
@@ -157,48 +159,53 @@ def bench_resets(env: Any, resets: int, progress: bool) -> list[Figure]:
             f"{floor * 1e3:.3f} ms to pose the robot, the object and the clutter",
         )
     ]
-
     tables = [{**SCENARIO["tables"][0], "height": 0.71}, SCENARIO["tables"][1]]  # another layout
     moved = Scenario.from_dict({**SCENARIO, "tables": tables})
     original = unwrapped.scenario
     rebuilds = max(resets // 10, 2)
-    samples = []
-    for k in range(rebuilds):
-        started = time.perf_counter()
-        unwrapped.reset(options={"scenario": moved if k % 2 == 0 else original})
-        samples.append(time.perf_counter() - started)
-    figures.append(Figure("reset, new layout (bodies rebuilt)", _median_s(samples) * 1e3, "ms"))
-
-    from fetchcarry_env.families import DEFAULT_FAMILY
-
+    rebuilt = _median_reset_s(
+        lambda k: unwrapped.reset(options={"scenario": moved if k % 2 == 0 else original}), rebuilds
+    )
+    figures.append(Figure("reset, new layout (bodies rebuilt)", rebuilt * 1e3, "ms"))
     family_env = gym.make(ENV_ID)
     family_env.reset(seed=0)
-    samples = []
-    for k in range(rebuilds):
-        started = time.perf_counter()
-        family_env.reset(seed=k)
-        samples.append(time.perf_counter() - started)
+    drawn = _median_reset_s(lambda k: family_env.reset(seed=k), rebuilds)
     family_env.close()
-    figures.append(
-        Figure(f"reset, a new '{DEFAULT_FAMILY}' scenario (draw, check, build)", _median_s(samples) * 1e3, "ms")
-    )
+    figures.append(Figure(f"reset, a new '{DEFAULT_FAMILY}' scenario (draw, check, build)", drawn * 1e3, "ms"))
     unwrapped.reset(options={"scenario": original})
     return figures
 
 
-def bench_plan_steps(env: Any, episodes: int, progress: bool) -> list[Figure]:
-    """Move, pick, place and push steps of the expert's plan, each next to its PyBullet floor."""
-    from fetchcarry_env.actions import Action, Mode
+def _pose_floor_s(unwrapped: Any, repeats: int) -> float:
+    """Median seconds to pose the robot, the object and the clutter where they stand (a reset's floor)."""
+    sim = unwrapped._sim
+    client = sim.client
+    bodies = [sim.body_id("robot"), *(sim.body_id(o["id"]) for o in SCENARIO["objects"])]
+    bodies += [sim.body_id(c["id"]) for c in SCENARIO["clutter"]]
+    poses = [client.getBasePositionAndOrientation(b) for b in bodies]
 
-    unwrapped = env.unwrapped
+    def pose_every_body() -> None:
+        for body, (position, orientation) in zip(bodies, poses, strict=True):
+            client.resetBasePositionAndOrientation(body, position, orientation)
+
+    return _time_calls(pose_every_body, repeats)
+
+
+# ---------------------------------------------------------------------- the plan's steps
+def _plan_actions(unwrapped: Any) -> list[tuple[str, np.ndarray]]:
+    """The plan's steps as ``(mode, action vector)`` on the env's lattice."""
     lattice = unwrapped.lattice
-    actions = [
+    return [
         (mode, Action(lattice.index(base), heading, posture, Mode[mode.upper()]).to_array())
         for mode, base, heading, posture in PLAN
     ]
-    step_s: dict[str, list[float]] = defaultdict(list)
-    physics_s: dict[str, list[float]] = defaultdict(list)
-    physics_steps: dict[str, int] = {}
+
+
+def time_plan_steps(env: Any, episodes: int, progress: bool) -> StepTimes:
+    """Run the plan ``episodes`` times; ``RuntimeError`` if a step is refused or the object is not delivered."""
+    unwrapped = env.unwrapped
+    actions = _plan_actions(unwrapped)
+    times = StepTimes()
     sim = unwrapped._sim
     with _progress(episodes, "episodes", progress) as bar:
         for _ in range(episodes):
@@ -207,15 +214,20 @@ def bench_plan_steps(env: Any, episodes: int, progress: bool) -> list[Figure]:
                 with physics_timer(sim) as physics:
                     started = time.perf_counter()
                     _, _, _, _, info = unwrapped.step(vector)
-                    step_s[mode].append(time.perf_counter() - started)
+                    times.step_s[mode].append(time.perf_counter() - started)
                 if info["invalid_action"] is not None:
                     raise RuntimeError(f"the benchmark's plan was refused at {mode}: {info['invalid_action']}")
-                physics_s[mode].append(physics["seconds"])
-                physics_steps[mode] = physics["steps"]
+                times.physics_s[mode].append(physics["seconds"])
+                times.physics_steps[mode] = physics["steps"]
             if not info["is_success"]:
                 raise RuntimeError("the benchmark's plan did not deliver the object")
             bar.update()
+    return times
 
+
+def _step_floors_s(unwrapped: Any) -> dict[str, float]:
+    """Median seconds of the PyBullet calls of a move step (pose the robot), a pick step (the arm, the object too)."""
+    sim = unwrapped._sim
     client = sim.client
     robot = sim.robot
     base, _ = client.getBasePositionAndOrientation(robot.body)
@@ -231,52 +243,43 @@ def bench_plan_steps(env: Any, episodes: int, progress: bool) -> list[Figure]:
             client.resetJointState(robot.body, joint, 0.3)
         client.resetBasePositionAndOrientation(bottle, *bottle_pose)
 
-    floors = {"move": _time_calls(move_calls, 1000), "pick": _time_calls(pick_calls, 1000)}
+    return {"move": _time_calls(move_calls, FLOOR_REPEATS), "pick": _time_calls(pick_calls, FLOOR_REPEATS)}
+
+
+def bench_plan_steps(env: Any, episodes: int, progress: bool) -> list[Figure]:
+    """Move, pick, place and push steps of the expert's plan, each next to its PyBullet floor."""
+    times = time_plan_steps(env, episodes, progress)
+    floors = _step_floors_s(env.unwrapped)
     figures = []
     for mode, goal_rate in (("move", 2000), ("pick", 2000)):
-        median = _median_s(step_s[mode])
-        figures.append(
-            Figure(
-                f"{mode} step",
-                1.0 / median,
-                "per s",
-                f"{goal_rate:,} or more",
-                1.0 / median >= goal_rate,
-                f"{floors[mode] * 1e6:.0f} us to pose the robot"
-                + (", the arm and the object" if mode == "pick" else ""),
-            )
-        )
-    median = _median_s(step_s["place"])
-    figures.append(
-        Figure(
-            "place step",
-            1.0 / median,
-            "per s",
-            "500 or more",
-            1.0 / median >= 500,
-            f"{_median_s(physics_s['place']) * 1e3:.2f} ms in {physics_steps['place']} physics steps (settling)",
-        )
-    )
-    ratios = [s / p for s, p in zip(step_s["push"], physics_s["push"], strict=True)]
-    ratio = _median_s(ratios)
-    figures.append(
-        Figure(
-            "push step (0.15 m stroke), time / its physics steps' time",
-            ratio,
-            "x",
-            "1.5 or less",
-            ratio <= 1.5,
-            f"{_median_s(physics_s['push']) * 1e3:.1f} ms in {physics_steps['push']} physics steps; "
-            f"the step takes {_median_s(step_s['push']) * 1e3:.1f} ms",
-        )
-    )
-    return figures
+        rate = 1.0 / statistics.median(times.step_s[mode])
+        what = ", the arm and the object" if mode == "pick" else ""
+        floor = f"{floors[mode] * 1e6:.0f} us to pose the robot{what}"
+        figures.append(Figure(f"{mode} step", rate, "per s", f"{goal_rate:,} or more", rate >= goal_rate, floor))
+    return [*figures, _place_figure(times), _push_figure(times)]
 
 
+def _place_figure(times: StepTimes) -> Figure:
+    rate = 1.0 / statistics.median(times.step_s["place"])
+    physics_ms = statistics.median(times.physics_s["place"]) * 1e3
+    floor = f"{physics_ms:.2f} ms in {times.physics_steps['place']} physics steps (settling)"
+    return Figure("place step", rate, "per s", "500 or more", rate >= 500, floor)
+
+
+def _push_figure(times: StepTimes) -> Figure:
+    ratio = statistics.median([s / p for s, p in zip(times.step_s["push"], times.physics_s["push"], strict=True)])
+    floor = (
+        f"{statistics.median(times.physics_s['push']) * 1e3:.1f} ms in {times.physics_steps['push']} physics steps; "
+        f"the step takes {statistics.median(times.step_s['push']) * 1e3:.1f} ms"
+    )
+    return Figure(
+        "push step (0.15 m stroke), time / its physics steps' time", ratio, "x", "1.5 or less", ratio <= 1.5, floor
+    )
+
+
+# ---------------------------------------------------------------------- a random policy
 def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, dict[str, int]]:
     """A random masked policy on ``gym.make("FetchCarryPush-v0")``: steps per second, resets included."""
-    import gymnasium as gym
-
     env = gym.make(ENV_ID)
     unwrapped = env.unwrapped
     rng = np.random.default_rng(seed)
@@ -301,18 +304,14 @@ def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, 
     return Figure("random masked policy", rate, "steps per s", "500 or more", rate >= 500), counts
 
 
-def run_benchmark(
+def measure(
     episodes: int = DEFAULT_EPISODES,
     resets: int = DEFAULT_RESETS,
     random_steps: int = DEFAULT_RANDOM_STEPS,
     seed: int = DEFAULT_SEED,
     progress: bool = True,
 ) -> dict[str, Any]:
-    """Every figure of the benchmark, with the settings and the machine (a JSON-ready mapping)."""
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers the env)
-
+    """Every figure of the benchmark, with the settings and the machine (a JSON-ready mapping; seconds, MB)."""
     env = gym.make(ENV_ID, scenario=SCENARIO)
     env.reset(seed=seed)
     started = time.perf_counter()

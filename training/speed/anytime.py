@@ -1,30 +1,34 @@
 """The planner under short time limits: first plans, their quality and their proven gaps.
 
-Plans the scale families of the planner benchmark (``bench_cases.multi`` with 4, 5 and
-6 objects, ``bench_cases.covered`` with 3; seed 2024, the first ``COUNTS`` scenarios of
-each) at every time limit of ``LIMITS`` and at ``REFERENCE_S`` (the reference: usually
-proven optimal), checks every plan with the validator, and prints per group and limit
-how many calls returned a valid plan, how many are optimal, how many have the
-reference's phases and how far their Eq. 1 is above it, and the proven gaps
-(``fetchcarry bench anytime``). Only the public planner is used, so records written by
-an older checkout can be summarised against this run's reference plans. Times are
-wall-clock seconds of one in-process call each (one untimed warm-up first).
+:func:`measure` plans the scale cases of the planner benchmark (the families
+``paper-multi-4``, ``-5``, ``-6`` and ``paper-covered-3``; seed 2024, the first
+``COUNTS`` scenarios of each) at every time limit of ``LIMITS`` and at ``REFERENCE_S``
+(the reference: usually proven optimal), checks every plan with the validator and returns
+one record per call; :func:`summary` gives, per group and limit, how many calls returned
+a valid plan, how many are optimal, how many have the reference's phases and how far
+their Eq. 1 is above it, and the proven gaps. Only the public planner is used, so records
+written by an older checkout can be summarised against this run's reference plans. Times
+are wall-clock seconds of one in-process call each (one untimed warm-up first).
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-from expert import bench_cases, plan
+import expert  # the planner (and its solver) load at the first expert.plan call
 from expert.validate import validate_plan
+from fetchcarry_env.families import get_family
+from training.speed.planner import warm_up
 
 LIMITS = (0.1, 1.0)  # seconds
 REFERENCE_S = 30.0  # seconds: the reference call's limit
 SEED = 2024
 COUNTS = {"4 obj": 5, "5 obj": 5, "6 obj": 3, "cov 3": 5}
+FAMILIES = {"4 obj": "paper-multi-4", "5 obj": "paper-multi-5", "6 obj": "paper-multi-6", "cov 3": "paper-covered-3"}
 RECORD_KEYS = (  # the keys of every record measure() writes
     "group",
     "index",
@@ -40,28 +44,25 @@ RECORD_KEYS = (  # the keys of every record measure() writes
 WITHIN = 0.05  # the issue's goal: at a 1 s limit within 5 % of the optimum
 
 
-def _draw(group: str, rng: np.random.Generator):
-    if group == "cov 3":
-        return bench_cases.covered(3, rng)
-    return bench_cases.multi(int(group[0]), rng)
-
-
 def measure(
-    limits: tuple[float, ...] = LIMITS, reference_s: float = REFERENCE_S, report: Callable[[dict], None] | None = None
-) -> list[dict]:
+    limits: tuple[float, ...] = LIMITS,
+    reference_s: float = REFERENCE_S,
+    report: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
     """One record per call: group, index, limit (s), status, phases, Eq. 1, gap, seconds, valid.
 
     ``report``, if given, is called with each record as soon as it is measured.
     """
-    plan(bench_cases.basic("I", np.random.default_rng(0)))  # warm-up: imports and SCIP's first model
+    warm_up()
     records = []
     for group, count in COUNTS.items():
+        family = get_family(FAMILIES[group])
         rng = np.random.default_rng(SEED)
         for index in range(count):
-            scenario = _draw(group, rng)
+            scenario = family.sample(rng)
             for limit in (*limits, reference_s):
                 t0 = time.perf_counter()
-                result = plan(scenario, time_limit=limit)
+                result = expert.plan(scenario, time_limit=limit)
                 seconds = time.perf_counter() - t0
                 records.append(
                     {
@@ -82,7 +83,7 @@ def measure(
     return records
 
 
-def summary(records: list[dict], reference: list[dict]) -> list[str]:
+def summary(records: list[dict[str, Any]], reference: list[dict[str, Any]]) -> list[str]:
     """Lines of the table: per group and limit, against the reference records."""
     best = {(r["group"], r["index"]): r for r in reference if r["reference"]}
     lines = [
@@ -92,19 +93,23 @@ def summary(records: list[dict], reference: list[dict]) -> list[str]:
     for group in COUNTS:
         for limit in sorted({r["limit"] for r in records if not r["reference"]}):
             rows = [r for r in records if r["group"] == group and r["limit"] == limit and not r["reference"]]
-            above, gaps, within = [], [], 0
-            for r in rows:
-                ref = best.get((group, r["index"]))
-                if r["valid"] and ref is not None and r["phases"] == ref["phases"]:
-                    excess = (r["objective"] - ref["objective"]) / abs(ref["objective"])
-                    above.append(f"{100 * excess:.2f}")
-                    within += ref["status"] == "optimal" and excess <= WITHIN
-                if r["gap"] is not None:
-                    gaps.append(f"{100 * r['gap']:.2f}")
-            valid = sum(r["valid"] for r in rows)
-            optimal = sum(r["status"] == "optimal" for r in rows)
-            lines.append(
-                f"{group:6} {limit:7.2f} {valid:3}/{len(rows):<3} {optimal:7} {len(above):10} {within:9}  "
-                f"{', '.join(above) or '-'} / {', '.join(gaps) or '-'}"
-            )
+            lines.append(_summary_line(group, limit, rows, best))
     return lines
+
+
+def _summary_line(group: str, limit: float, rows: list[dict[str, Any]], best: dict[tuple, dict[str, Any]]) -> str:
+    above, gaps, within = [], [], 0
+    for r in rows:
+        ref = best.get((group, r["index"]))
+        if r["valid"] and ref is not None and r["phases"] == ref["phases"]:
+            excess = (r["objective"] - ref["objective"]) / abs(ref["objective"])
+            above.append(f"{100 * excess:.2f}")
+            within += ref["status"] == "optimal" and excess <= WITHIN
+        if r["gap"] is not None:
+            gaps.append(f"{100 * r['gap']:.2f}")
+    valid = sum(r["valid"] for r in rows)
+    optimal = sum(r["status"] == "optimal" for r in rows)
+    return (
+        f"{group:6} {limit:7.2f} {valid:3}/{len(rows):<3} {optimal:7} {len(above):10} {within:9}  "
+        f"{', '.join(above) or '-'} / {', '.join(gaps) or '-'}"
+    )

@@ -1,0 +1,175 @@
+"""How long the MILP planner takes on the paper's Section V cases, next to the paper's figures.
+
+:func:`run_case` plans seeded scenarios of one case (a family of
+:data:`fetchcarry_env.families.PAPER_FAMILIES`) in this process, one call of
+:func:`expert.plan` each (model building included; :func:`warm_up` pays for the imports
+first), and returns one :class:`Run` per call: ``total_s``, the status (every
+benchmark plan should be ``optimal``), the phases, and where the time went
+(preprocessing, the lower bound and the reachability check, model building, SCIP proving
+smaller N infeasible, SCIP solving the final N). Every plan is also checked by the
+validator. :func:`summary` gives the median, 95th percentile, mean (SD) and maximum.
+
+Units: seconds.
+"""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+import expert  # the planner (and its solver) load at the first expert.plan call
+from expert.plans import Plan
+from expert.validate import validate_plan
+from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, get_family
+
+DEFAULT_SEED = 2024
+DEFAULT_TIME_LIMIT = 60.0  # seconds per planning call: generous, so that statuses are about optimality
+BASELINE_OPTIONS: dict[str, Any] = {
+    "separating": "default",
+    "heuristics": "default",
+    "lower_bound": False,
+    "params": {"presolving/maxrestarts": -1, "branching/relpscost/maxlookahead": 9},
+}
+"""SCIP's default settings and the paper's deepening from N = 3, without our bounds and cuts."""
+WARM_UP_FAMILY = "paper-basic-I"
+PAPER_VB = {"I": "0.05 (0.02)", "II": "0.13 (0.09)", "III": "0.22 (0.20)", "IV": "0.19 (0.23)", "V": "0.36 (0.23)"}
+PAPER_VC = {"A": "0.29 (0.18)", "B": "0.53 (0.08)", "C": "0.46 (0.15)", "D": "0.64 (0.19)", "E": "0.55 (0.23)"}
+"""The paper's mean (SD) per V-B area and V-C pattern, seconds, as printed in Section V."""
+
+
+@dataclass(frozen=True)
+class Case:
+    """One row of the benchmark: a scenario family, the paper's figure and our goal (seconds)."""
+
+    name: str
+    group: str  # rows of a group share a goal (the goal is on the group's pooled times)
+    family: str  # a family of fetchcarry_env.families
+    repeats: int
+    paper: str  # the paper's mean (SD), seconds, as printed in Section V
+    goal_median_s: float | None = None
+    goal_p95_s: float | None = None
+
+
+def cases(scale: float = 1.0) -> list[Case]:
+    """The benchmark's rows; ``scale`` multiplies the number of scenarios per row (at least 1)."""
+
+    def n(count: int) -> int:
+        return max(1, round(count * scale))
+
+    out = [Case(f"V-B area {a}", "V-B", f"paper-basic-{a}", n(20), PAPER_VB[a], 0.020, 0.050) for a in PAPER_AREAS]
+    out += [Case(f"V-C pattern {p}", "V-C", f"paper-push-{p}", n(5), PAPER_VC[p], 0.060) for p in PUSH_PATTERNS]
+    out.append(Case("IV-F L corridor", "L", "paper-corridor", n(5), "0.2", 0.030))
+    out.append(Case("2 objects", "2 obj", "paper-multi-2", n(10), "under 1", 0.3))
+    out.append(Case("3 objects", "3 obj", "paper-multi-3", n(10), "-", 1.0))
+    out.append(Case("4 objects", "4 obj", "paper-multi-4", n(5), "-", 0.3, 1.0))
+    out.append(Case("5 objects", "5 obj", "paper-multi-5", n(5), "-", 1.0, 5.0))
+    out.append(Case("6 objects", "6 obj", "paper-multi-6", n(3), "-", 5.0))
+    out.append(Case("covered 2 obj", "cov 2", "paper-covered-2", n(5), "-"))
+    out.append(Case("covered 3 obj", "cov 3", "paper-covered-3", n(5), "-", 1.0))
+    return out
+
+
+def groups(rows: Sequence[Case]) -> list[str]:
+    """The groups of ``rows`` in their order, each once."""
+    return list(dict.fromkeys(c.group for c in rows))
+
+
+@dataclass
+class Run:
+    """One planning call's figures (seconds)."""
+
+    case: str
+    group: str
+    scenario: str
+    status: str
+    phases: int
+    total_s: float
+    prepare_s: float  # preprocessing and the lower bound
+    build_s: float
+    infeasible_solve_s: float  # SCIP proving smaller N infeasible
+    final_solve_s: float  # SCIP on the N of the answer
+    phases_tried: list[int] = field(default_factory=list)
+    valid: bool = True
+
+
+def warm_up() -> None:
+    """One untimed planning call: the imports and SCIP's first model."""
+    expert.plan(get_family(WARM_UP_FAMILY).sample(np.random.default_rng(0)))
+
+
+def run_case(case: Case, seed: int, time_limit: float, options: dict[str, Any] | None = None) -> list[Run]:
+    """Plan ``case.repeats`` scenarios of ``case.family`` drawn from one generator seeded with ``seed``.
+
+    ``time_limit`` is in seconds per call; ``options`` go to :func:`expert.plan`.
+    """
+    family = get_family(case.family)
+    rng = np.random.default_rng(seed)
+    runs = []
+    for _ in range(case.repeats):
+        scenario = family.sample(rng)
+        result = expert.plan(scenario, time_limit=time_limit, **(options or {}))
+        runs.append(_run(case, scenario.name, result, not result.found or validate_plan(scenario, result) == []))
+    return runs
+
+
+def _run(case: Case, scenario: str, result: Plan, valid: bool) -> Run:
+    stats = result.stats
+    solves = stats.get("solves", [])
+    final = solves[-1]["solve_s"] if solves and result.found else 0.0
+    return Run(
+        case=case.name,
+        group=case.group,
+        scenario=scenario,
+        status=result.status,
+        phases=len(result.phases),
+        total_s=stats["total_s"],
+        prepare_s=stats.get("prepare_s", 0.0) + stats.get("lower_bound_s", 0.0) + stats.get("reach_s", 0.0),
+        build_s=stats["build_s"],
+        infeasible_solve_s=stats["solve_s"] - final,
+        final_solve_s=final,
+        phases_tried=list(stats["phases_tried"]),
+        valid=valid,
+    )
+
+
+def summary(runs: Sequence[Run]) -> dict[str, Any]:
+    """Median, p95, mean, SD and max of ``total_s`` (seconds), statuses, phases and invalid plans."""
+    times = [r.total_s for r in runs]
+    statuses: dict[str, int] = {}
+    for r in runs:
+        statuses[r.status] = statuses.get(r.status, 0) + 1
+    return {
+        "count": len(runs),
+        "median_s": statistics.median(times),
+        "p95_s": float(np.percentile(times, 95)),
+        "mean_s": statistics.fmean(times),
+        "sd_s": statistics.stdev(times) if len(times) > 1 else 0.0,
+        "max_s": max(times),
+        "statuses": statuses,
+        "phases": sorted({r.phases for r in runs}),
+        "invalid": sum(not r.valid for r in runs),
+    }
+
+
+def goal_met(case: Case, group_summary: dict[str, Any]) -> bool | None:
+    """Whether a group's pooled times meet its first case's goal; ``None`` without a goal."""
+    if case.goal_median_s is None:
+        return None
+    met = group_summary["median_s"] <= case.goal_median_s
+    if case.goal_p95_s is not None:
+        met = met and group_summary["p95_s"] <= case.goal_p95_s
+    return met
+
+
+def time_shares(runs: Sequence[Run]) -> dict[str, float]:
+    """Shares of the summed ``total_s`` (fractions) and the mean number of extra N tried per plan."""
+    total = sum(r.total_s for r in runs)
+    names = ("prepare_s", "build_s", "infeasible_solve_s", "final_solve_s")
+    shares = {name: sum(getattr(r, name) for r in runs) / total for name in names}
+    shares["other"] = 1.0 - sum(shares.values())
+    shares["extra_n_tried"] = sum(len(r.phases_tried) - 1 for r in runs) / len(runs)
+    return shares
