@@ -2,6 +2,8 @@
 
 from gymnasium.envs.registration import register, registry
 
+ENV_ID = "FetchCarryPush-v0"  # the env's own MultiDiscrete phase actions
+PHASES_ENV_ID = "FetchCarryPushPhases-v0"  # the same env with Discrete(K) candidate phases and exact masks
 MAX_EPISODE_STEPS = 50  # phases; the expert needs at most about 4 per object plus detours
 
 
@@ -14,15 +16,15 @@ def register_envs() -> None:
     :class:`fetchcarry_env.phases.PhaseLayout`), ``reward`` (``"paper"``, the env's, or
     ``"learning"``: :class:`fetchcarry_env.shaping.LearningReward`) and ``gamma``.
     """
-    if "FetchCarryPush-v0" not in registry:
+    if ENV_ID not in registry:
         register(
-            id="FetchCarryPush-v0",
+            id=ENV_ID,
             entry_point="fetchcarry_env.env:FetchCarryPushEnv",
             max_episode_steps=MAX_EPISODE_STEPS,
         )
-    if "FetchCarryPushPhases-v0" not in registry:
+    if PHASES_ENV_ID not in registry:
         register(
-            id="FetchCarryPushPhases-v0",
+            id=PHASES_ENV_ID,
             entry_point="fetchcarry_env.phase_env:make_phase_env",
             max_episode_steps=MAX_EPISODE_STEPS,
         )

@@ -1,20 +1,24 @@
-"""Which policies the benchmark knows: a registry of named factories, and run folders.
+"""The one resolver: a policy's name, a run folder or a user's factory -> a policy for an env.
 
-A policy is named by a registry key (``expert``, ``random``, ``greedy``) or by the
-path of a run folder (anything :func:`training.load_policy` loads). Each
-acts in one *interface*: ``env`` (``FetchCarryPush-v0``'s ``MultiDiscrete`` phase
-actions) or ``phases`` (``FetchCarryPushPhases-v0``'s ``Discrete`` candidate phases);
-the benchmark builds the env that interface needs and hands the policy its masks as
-``action_masks=`` (stable-baselines3's ``predict`` protocol, as MaskablePPO takes them).
+A policy is named by
 
-A run folder's ``config.json`` says its interface (``"interface": "env"`` or
-``"phases"``); a run without the key that stores ``candidates`` (the size of the
-candidate list, as BC runs do) acts in ``phases``. Its ``capacity`` (observation
-slots), if stored, is the env's.
+- a registry key of :data:`FACTORIES` (``expert``, ``random``, ``random-phases``,
+  ``greedy``, ``expert-phases``): the module and class to build it from, called with the env;
+- the path of a run folder (anything :func:`training.load_policy` loads); its
+  ``config.json`` says its interface (``"interface": "env"`` or ``"phases"``; a run
+  without the key that stores ``candidates``, as BC runs do, acts in ``phases``) and its
+  ``capacity`` (observation slots), if stored, is the env's;
+- ``package.module:factory``, a user's function (or class) called with the env that
+  returns a :class:`~training.policies.protocol.Policy`; it acts in ``phases`` unless
+  the factory has an attribute ``interface = "env"``.
 
-Adding a named policy is one line in :data:`FACTORIES`: the module and class to build
-it from (the class is called with the env), and its interface. A factory whose module
-is not installed is refused with a message when asked for, and is not listed.
+Each acts in one *interface* (:mod:`training.envs`): ``env`` (``FetchCarryPush-v0``'s
+``MultiDiscrete`` phase actions) or ``phases`` (``FetchCarryPushPhases-v0``'s
+``Discrete`` candidate phases). :func:`resolve` turns a name into a :class:`PolicySpec`
+(plain data that crosses process boundaries) and :func:`build` a spec into the policy,
+in the process that runs it. Adding a named policy is one line in :data:`FACTORIES`;
+a factory whose module is not installed is refused with a message when asked for, and
+is not listed.
 """
 
 from __future__ import annotations
@@ -25,11 +29,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from training.evaluation.errors import BenchmarkError
+from training.envs import INTERFACES
+from training.errors import BenchmarkError
+from training.policies.protocol import Policy
 
-INTERFACES = {"env": "FetchCarryPush-v0", "phases": "FetchCarryPushPhases-v0"}  # interface -> env id
 EXPERT, RANDOM = "expert", "random"  # the reference policies every benchmark runs
 EXPERT_TIME_LIMIT = 10.0  # seconds per planning call of the expert
+PLANNING = {"time_limit": EXPERT_TIME_LIMIT}  # the options of a planning policy
 
 
 @dataclass(frozen=True)
@@ -40,26 +46,31 @@ class Factory:
     attribute: str
     interface: str
     options: dict[str, Any] = field(default_factory=dict)
-    seeded: bool = False  # reset(seed) before each episode (the episode's seed)
 
 
 FACTORIES: dict[str, Factory] = {
-    EXPERT: Factory("expert.policy", "ExpertPolicy", "env", {"time_limit": EXPERT_TIME_LIMIT}),
-    RANDOM: Factory("training.policies.random", "RandomMaskedPolicy", "env", seeded=True),
-    "random-phases": Factory("training.policies.random_phases", "RandomPhasePolicy", "phases", seeded=True),
+    EXPERT: Factory("expert.policy", "ExpertPolicy", "env", PLANNING),
+    RANDOM: Factory("training.policies.random", "RandomMaskedPolicy", "env"),
+    "random-phases": Factory("training.policies.random_phases", "RandomPhasePolicy", "phases"),
     "greedy": Factory("training.policies.greedy", "GreedyPolicy", "env"),
+    "expert-phases": Factory("training.policies.phase_expert", "PhaseExpert", "phases", PLANNING),
 }
-"""Named policies: one line each."""
+"""Named policies: one line each (the module is imported when the policy is asked for)."""
+
+RECORDING = {("env", "expert"): EXPERT, ("env", "random"): RANDOM,
+             ("phases", "expert"): "expert-phases", ("phases", "random"): "random-phases"}  # fmt: skip
+"""What ``fetchcarry generate --policy P --interface I`` records with: (interface, P) -> a key of FACTORIES."""
 
 
 @dataclass(frozen=True)
 class PolicySpec:
-    """A policy to benchmark, as plain data (it crosses process boundaries to the workers)."""
+    """A policy to run, as plain data (it crosses process boundaries to the workers)."""
 
-    name: str  # the label in results: a registry key or the run folder's name
+    name: str  # the label in results: a registry key, the run folder's name, or module:factory
     interface: str  # "env" or "phases"
     factory: str | None = None  # a key of FACTORIES, or
-    run: str | None = None  # the path of a run folder
+    run: str | None = None  # the path of a run folder, or
+    user: str | None = None  # package.module:factory
     env_options: dict[str, Any] = field(default_factory=dict)  # extra gym.make options (capacity)
 
     @property
@@ -80,7 +91,7 @@ def available() -> list[str]:
 
 
 def resolve(name: str) -> PolicySpec:
-    """The :class:`PolicySpec` of a registry key or a run folder's path; :class:`BenchmarkError` otherwise."""
+    """The :class:`PolicySpec` of a registry key, a run folder's path or ``module:factory``; else ``BenchmarkError``."""
     if name in FACTORIES:
         factory = FACTORIES[name]
         try:
@@ -90,11 +101,39 @@ def resolve(name: str) -> PolicySpec:
         return PolicySpec(name, factory.interface, factory=name)
     path = Path(name)
     if not path.exists():
+        if _is_factory_name(name):
+            return PolicySpec(name, _user_interface(name), user=name)
         if "/" in name or "\\" in name:
             raise BenchmarkError(f"no run folder at {name}")
         known = ", ".join(available())
-        raise BenchmarkError(f"unknown policy {name!r}: give one of {known} or a run folder")
+        raise BenchmarkError(f"unknown policy {name!r}: give one of {known}, a run folder or package.module:factory")
     return _run_spec(path)
+
+
+def _is_factory_name(name: str) -> bool:
+    module, colon, attribute = name.partition(":")
+    return bool(colon) and all(part.isidentifier() for part in [*module.split("."), *attribute.split(".")])
+
+
+def _user_factory(name: str) -> Any:
+    """The callable ``package.module:factory`` names; ``BenchmarkError`` if it cannot be imported."""
+    module_name, _, attribute = name.partition(":")
+    try:
+        target: Any = importlib.import_module(module_name)
+    except ImportError as error:
+        raise BenchmarkError(f"policy {name!r}: cannot import {module_name} ({error})") from None
+    for part in attribute.split("."):
+        target = getattr(target, part, None)
+    if not callable(target):
+        raise BenchmarkError(f"policy {name!r}: {module_name} has no callable {attribute}")
+    return target
+
+
+def _user_interface(name: str) -> str:
+    interface = getattr(_user_factory(name), "interface", "phases")
+    if interface not in INTERFACES:
+        raise BenchmarkError(f"policy {name!r}: interface must be one of {', '.join(INTERFACES)}, got {interface!r}")
+    return interface
 
 
 def _run_spec(path: Path) -> PolicySpec:
@@ -131,23 +170,21 @@ def resolve_all(names: list[str]) -> list[PolicySpec]:
     return specs
 
 
-def build(spec: PolicySpec, env: Any) -> Any:
-    """The policy ``spec`` names, built for ``env`` (speaks stable-baselines3's ``predict`` protocol)."""
+def build(spec: PolicySpec, env: Any, *, time_limit: float | None = None) -> Policy:
+    """The policy ``spec`` names, built for ``env``; ``time_limit`` (seconds per plan) overrides a planner's."""
     if spec.run is not None:
-        from training.learners.runs import load_policy
+        from training.learners.runs import load_policy  # torch: imported only when a run folder is used
 
         return load_policy(spec.run, env)
+    if spec.user is not None:
+        return _user_factory(spec.user)(env)
     factory = FACTORIES[spec.factory]
-    cls = getattr(importlib.import_module(factory.module), factory.attribute)
-    return cls(env, **factory.options)
+    options = dict(factory.options)
+    if time_limit is not None and "time_limit" in options:
+        options["time_limit"] = time_limit
+    return getattr(importlib.import_module(factory.module), factory.attribute)(env, **options)
 
 
-def start_episode(spec: PolicySpec, policy: Any, seed: int) -> None:
-    """Prepare ``policy`` for a new episode: forget the last one; a seeded policy draws from ``seed``."""
-    reset = getattr(policy, "reset", None)
-    if reset is None:
-        return
-    if spec.factory is not None and FACTORIES[spec.factory].seeded:
-        reset(seed=seed)
-    else:
-        reset()
+def recording_policy(name: str, interface: str, env: Any, *, time_limit: float) -> Policy:
+    """The policy ``fetchcarry generate --policy name --interface interface`` records with (:data:`RECORDING`)."""
+    return build(resolve(RECORDING[interface, name]), env, time_limit=time_limit)

@@ -13,7 +13,8 @@ from fetchcarry_env.observation import Capacity
 from training import load_policy
 from training.learners.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
 from training.learners.encoders import SetScorer
-from training.learners.heldout import evaluate, expert_costs, make_env, summarise
+from training.envs import make_env
+from training.learners.heldout import evaluate, expert_costs, summarise
 from training.policies.random_phases import RandomPhasePolicy
 
 HELD_OUT = range(100_000, 100_015)
@@ -40,8 +41,9 @@ def test_bc_on_basic_clearly_beats_random_on_held_out_seeds(basic_demos):
     random = summarise(evaluate(RandomPhasePolicy(seed=0), "basic", HELD_OUT), expert)
     # Random candidates deliver in basic (the masks leave only real picks and places), but wander;
     # BC delivers nearly as often at about the expert's cost (a failure wanders to the step limit, so
-    # mean phases say little here).
-    assert random.cost_ratio > 2.0 and random.phases > 8
+    # mean phases say little here). The expert needs 4 phases on basic; random, re-seeded from each
+    # episode's seed, about 7.
+    assert random.cost_ratio > 2.0 and random.phases > 6
     assert bc.success >= 0.8
     assert bc.cost_ratio < 1.3
 
@@ -104,7 +106,7 @@ def _one_decision_scores_only_the_allowed_candidates(policy, states: Demonstrati
 
 
 def test_random_phase_policy_draws_allowed_candidates_reproducibly():
-    env = make_env("push")
+    env = make_env("phases", family="push")
     env.reset(seed=0)
     mask = env.get_wrapper_attr("action_masks")()
     draws = [RandomPhasePolicy(env, seed=3).predict(None)[0] for _ in range(2)]
@@ -141,7 +143,7 @@ def test_greedy_delivers_through_the_env_actions(family, seeds):
 def test_nearest_move_labels_an_expert_move_no_candidate_expresses():
     from training.evaluation.projection import nearest_move
 
-    env = make_env("basic")
+    env = make_env("phases", family="basic")
     env.reset(seed=0)
     table = env.get_wrapper_attr("table")
     moves = np.flatnonzero(table.mask & (table.actions[:, 4] == 0))

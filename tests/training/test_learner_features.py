@@ -17,12 +17,12 @@ from training.learners.encoders import (
     SetScorer,
     build_network,
 )
-from training.learners.heldout import make_env
+from training.envs import make_env
 
 
 @pytest.fixture(scope="module")
 def push_state() -> tuple[np.ndarray, np.ndarray]:
-    env = make_env("push")
+    env = make_env("phases", family="push")
     observation, _ = env.reset(seed=3)
     mask = env.get_wrapper_attr("action_masks")()
     env.close()

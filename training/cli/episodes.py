@@ -142,7 +142,6 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
 
 def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
-    from training.data.generate import make_env, make_policy
     from training.rollout import run_episode
 
     if run is not None:
@@ -151,14 +150,14 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
         source = replace(source, interface="phases")
 
     if picture is None:
-        env = make_env(source)
+        env = source.build_env()
     else:
         from training.pictures.episode import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
 
         size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
-        env = make_env(source, render_mode="rgb_array", width=size[0], height=size[1])
+        env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1])
     try:
-        policy = make_policy(source, env, source.seed) if run is None else _load_run(run, env)
+        policy = source.build_policy(env) if run is None else _load_run(run, env)
         record = run_episode(env, policy, source.seed, render=picture is not None)
     finally:
         env.close()

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
-from training.data.sources import GenerationConfig, make_env
+from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.policies.phase_expert import PROJECTED_INFO
 from training.rollout import EpisodeRecord
@@ -127,7 +127,7 @@ def _write_dataset(config: GenerationConfig, staging: Staging, building: Path) -
     import minari
     from minari.dataset.minari_storage import MinariStorage
 
-    env = make_env(config.source)
+    env = config.source.build_env()
     try:
         storage = MinariStorage.new(
             building / "data",

@@ -45,8 +45,6 @@ from training.data.sources import (
     POLICIES,
     EpisodeSource,
     GenerationConfig,
-    make_env,
-    make_policy,
 )
 from training.data.staging import DatasetLock, Staging, StagingError
 from training.rollout import EpisodeRecord, run_episode
@@ -59,8 +57,6 @@ __all__ = [
     "GenerationConfig",
     "GenerationReport",
     "generate",
-    "make_env",
-    "make_policy",
     "run_episodes",
     "run_indexed_episode",
 ]
@@ -98,9 +94,9 @@ class StagingMismatchError(UsageError):
 def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
     """Run episode ``index`` of ``source`` in a fresh env (the function every backend runs)."""
     seed = source.episode_seed(index)
-    env = make_env(source)
+    env = source.build_env()
     try:
-        return run_episode(env, make_policy(source, env, seed), seed, record_masks=source.interface == "phases")
+        return run_episode(env, source.build_policy(env), seed, record_masks=source.interface == "phases")
     finally:
         env.close()
 

@@ -9,11 +9,17 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from fetchcarry_env.errors import UsageError
+import gymnasium as gym
 
-ENV_ID = "FetchCarryPush-v0"
-PHASES_ENV_ID = "FetchCarryPushPhases-v0"
-INTERFACES = ("env", "phases")  # the env's own MultiDiscrete actions, or the Discrete candidate phases
+from fetchcarry_env.errors import UsageError
+from fetchcarry_env.families import FAMILY_NAMES
+from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
+from training.envs import INTERFACES as ENV_IDS
+from training.envs import make_env
+from training.policies.protocol import Policy
+from training.resolve import recording_policy
+
+INTERFACES = tuple(ENV_IDS)  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
 PROJECTION = "nearest move candidate"  # what a phases dataset records for an expert move no candidate expresses
@@ -42,11 +48,8 @@ class EpisodeSource:
             raise UsageError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
         if (self.family is None) == (self.scenario is None):
             raise UsageError("give exactly one of a scenario family and a fixed scenario")
-        if self.family is not None:
-            from fetchcarry_env.families import FAMILY_NAMES
-
-            if self.family not in FAMILY_NAMES:
-                raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
+        if self.family is not None and self.family not in FAMILY_NAMES:
+            raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
         if self.policy not in POLICIES:
             raise UsageError(f"unknown policy {self.policy!r}: choose one of {', '.join(POLICIES)}")
         if self.time_limit <= 0:
@@ -69,6 +72,14 @@ class EpisodeSource:
     def episode_seed(self, index: int) -> int:
         return self.seed + index
 
+    def build_env(self, render_mode: str | None = None, **render_options: Any) -> gym.Env:
+        """A fresh env for this source (``render_options``: the env's ``camera``, ``width``, ``height``)."""
+        return make_env(env_id=self.gym_id, render_mode=render_mode, **self.env_kwargs, **render_options)
+
+    def build_policy(self, env: gym.Env) -> Policy:
+        """The policy named by ``policy`` for ``env``, acting in ``interface`` (``resolve.recording_policy``)."""
+        return recording_policy(self.policy, self.interface, env, time_limit=self.time_limit)
+
 
 @dataclass(frozen=True)
 class GenerationConfig:
@@ -90,27 +101,3 @@ class GenerationConfig:
         else:  # phases: how an expert move no candidate expresses is recorded (truncated datasets did not say)
             manifest["inexpressible_moves"] = PROJECTION
         return manifest
-
-
-def make_env(source: EpisodeSource, render_mode: str | None = None, **render_options: Any):
-    """A fresh env for ``source`` (``render_options``: the env's ``camera``, ``width``, ``height``)."""
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-
-    return gym.make(source.gym_id, render_mode=render_mode, **source.env_kwargs, **render_options)
-
-
-def make_policy(source: EpisodeSource, env: Any, seed: int | None) -> Any:
-    """The policy named by ``source.policy`` for ``env`` (acting in ``source.interface``)."""
-    if source.interface == "phases":
-        from training.policies.phase_expert import make_phase_policy
-
-        return make_phase_policy(source.policy, env, seed, time_limit=source.time_limit)
-    if source.policy == "expert":
-        from expert.policy import ExpertPolicy
-
-        return ExpertPolicy(env, time_limit=source.time_limit)
-    from training.policies.random import RandomMaskedPolicy
-
-    return RandomMaskedPolicy(env, seed=seed)

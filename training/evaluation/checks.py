@@ -22,7 +22,8 @@ import numpy as np
 import torch
 
 from training.learners.bc import BCConfig, record_demonstrations, train_bc
-from training.learners.heldout import evaluate, evaluate_env_actions, expert_costs, make_env, summarise
+from training.envs import make_env
+from training.learners.heldout import evaluate, evaluate_env_actions, expert_costs, summarise
 from training.learners.options import HELDOUT_SEED_BASE
 from training.policies.greedy import GreedyPolicy
 from training.policies.random_phases import RandomPhasePolicy
@@ -53,14 +54,14 @@ def check_bc(
         start = time.perf_counter()
         config = BCConfig(encoder=encoder, epochs=epochs)
         policies[f"bc-{encoder}"] = train_bc(
-            data, config, make_env(family).unwrapped.capacity, out / f"bc-{encoder}" if out else None
+            data, config, make_env("phases", family=family).unwrapped.capacity, out / f"bc-{encoder}" if out else None
         )
         report(f"bc-{encoder} trained in {time.perf_counter() - start:.0f} s")
     for evaluated in [family, *(also or [])]:
         expert = expert_costs(evaluated, seeds)
         report(f"\n{evaluated}: the expert solved {len(expert)}/{eval_episodes} held-out seeds")
         report(summarise(evaluate(RandomPhasePolicy(seed=0), evaluated, seeds), expert).line("random"))
-        greedy = evaluate_env_actions(GreedyPolicy(make_env(evaluated)), evaluated, seeds)
+        greedy = evaluate_env_actions(GreedyPolicy(make_env("phases", family=evaluated)), evaluated, seeds)
         report(summarise(greedy, expert).line("greedy"))
         for name, policy in policies.items():
             report(summarise(evaluate(policy, evaluated, seeds), expert).line(name))
@@ -78,7 +79,7 @@ def check_ppo(
     from stable_baselines3.common.logger import Logger
 
     torch.set_num_threads(1)
-    env = make_vec_env(lambda: make_env(family, reward="learning"), n_envs=1, seed=seed)
+    env = make_vec_env(lambda: make_env("phases", family=family, reward="learning"), n_envs=1, seed=seed)
     model = MaskablePPO("MultiInputPolicy", env, n_steps=512, batch_size=128, gamma=0.99, seed=seed, verbose=0)
     model.set_logger(Logger(folder=None, output_formats=[]))  # no empty SB3-* folder in /tmp
     start = time.perf_counter()

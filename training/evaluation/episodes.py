@@ -34,78 +34,47 @@ mask_ms        mean wall time per decision of the env's ``action_masks()`` hande
 
 from __future__ import annotations
 
-import inspect
 import sys
-import time
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
+from training import envs, rollout
 from training.evaluation.splits import EvalScenario
-from training.resolve import PolicySpec, build, start_episode
+from training.resolve import PolicySpec, build
 
 # One env and policy per policy spec in each process, reused episode after episode (an
 # env's reset rebuilds only what changed). A worker process runs one task at a time.
-_BUILT: dict[str, tuple[gym.Env, Any, bool]] = {}
+_BUILT: dict[str, tuple[gym.Env, Any]] = {}
 _MAX_BUILT = 4
 _TORCH_THREADS: list[int] = []  # torch's thread count before the benchmark set it to one (restored by close_all)
 
 
 def make_env(spec: PolicySpec) -> gym.Env:
     """The env ``spec``'s interface needs, over the families' extent (``family="basic"`` sets the lattice)."""
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-    from fetchcarry_env.observation import Capacity
-
-    options = dict(spec.env_options)
-    if isinstance(options.get("capacity"), dict):
-        options["capacity"] = Capacity(**options["capacity"])
-    return gym.make(spec.env_id, family="basic", **options)
+    return envs.make_env(spec.interface, family="basic", **spec.env_options)
 
 
-def _built(spec: PolicySpec) -> tuple[gym.Env, Any, bool]:
-    """The env, the policy, and whether its ``predict`` takes ``action_masks=`` (the expert reads the env's)."""
+def _built(spec: PolicySpec) -> tuple[gym.Env, Any]:
+    """The env and the policy of ``spec`` in this process (built once, reused episode after episode)."""
     key = repr(spec)
     if key not in _BUILT:
         if len(_BUILT) >= _MAX_BUILT:
-            env, _, _ = _BUILT.pop(next(iter(_BUILT)))
+            env, _ = _BUILT.pop(next(iter(_BUILT)))
             env.close()
         env = make_env(spec)
         policy = build(spec, env)
         _one_torch_thread()
-        parameters = inspect.signature(policy.predict).parameters
-        takes_masks = "action_masks" in parameters or any(p.kind is p.VAR_KEYWORD for p in parameters.values())
-        _BUILT[key] = (env, policy, takes_masks)
+        _BUILT[key] = (env, policy)
     return _BUILT[key]
 
 
 def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True) -> dict[str, Any]:
     """One episode of ``spec`` on ``item``'s scenario; its record (see the module docstring)."""
-    env, policy, takes_masks = _built(spec)
-    masks = env.get_wrapper_attr("action_masks")
-    observation, info = env.reset(seed=item.seed, options={"scenario": item.scenario})
-    start_episode(spec, policy, item.seed)
-    phases = pushes = invalid = 0
-    total_return = 0.0
-    decision_s = mask_s = 0.0
-    while True:
-        started = time.perf_counter()
-        given = {"action_masks": masks()} if takes_masks else {}
-        asked = time.perf_counter()
-        mask_s += asked - started
-        action, _ = policy.predict(
-            observation, episode_start=np.array([phases == 0]), deterministic=deterministic, **given
-        )
-        decision_s += time.perf_counter() - asked
-        if spec.interface == "phases":
-            action = int(np.asarray(action).reshape(-1)[0])
-        observation, reward, terminated, truncated, info = env.step(action)
-        phases += 1
-        total_return += float(reward)
-        pushes += info.get("push") is not None
-        invalid += info["invalid_action"] is not None
-        if terminated or truncated:
-            break
+    env, policy = _built(spec)
+    episode = rollout.run_episode(env, policy, item.seed, options={"scenario": item.scenario},
+                                  deterministic=deterministic, stop_on_failure=False)  # fmt: skip
+    figures, info = episode.figures, episode.info
     return {
         "policy": spec.name,
         "scenario": item.scenario.name,
@@ -117,13 +86,13 @@ def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True
         "objects": len(item.scenario.objects),
         "cost": float(info["travel_cost"]),
         "expert_cost": None,
-        "return": total_return,
-        "phases": phases,
-        "pushes": pushes,
-        "invalid_actions": invalid,
+        "return": figures.episode_return,
+        "phases": figures.steps,
+        "pushes": figures.pushes,
+        "invalid_actions": figures.invalid_actions,
         "contacts": int(info["collisions"]),
-        "decision_ms": 1000.0 * decision_s / phases,
-        "mask_ms": 1000.0 * mask_s / phases,
+        "decision_ms": 1000.0 * figures.policy_s / figures.steps,
+        "mask_ms": 1000.0 * figures.mask_s / figures.steps,
     }
 
 
@@ -147,7 +116,7 @@ def _one_torch_thread() -> None:
 def close_all() -> None:
     """Close the envs this process built and give torch back its threads (safe to call twice)."""
     while _BUILT:
-        _, (env, _, _) = _BUILT.popitem()
+        _, (env, _) = _BUILT.popitem()
         env.close()
     torch = sys.modules.get("torch")
     if torch is not None and _TORCH_THREADS:

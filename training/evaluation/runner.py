@@ -31,7 +31,7 @@ from typing import Any
 
 from training.data.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
 from training.evaluation.episodes import close_all, run_task
-from training.evaluation.errors import BenchmarkError
+from training.errors import BenchmarkError
 from training.evaluation.metrics import Row, fill_expert_costs, summarise
 from training.evaluation.report import plot_splits, source_table, summary_markdown
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios

@@ -39,7 +39,7 @@ import numpy as np
 
 from fetchcarry_env.families import EXTENT, HELD_OUT_FAMILIES, Family, draw_push, get_family
 from fetchcarry_env.scenario import Scenario, ScenarioError
-from training.evaluation.errors import BenchmarkError
+from training.errors import BenchmarkError
 
 EVAL_SEED_BASE = 1_000_000_000  # first evaluation seed; training and dataset seeds stay below it
 SPLIT_BLOCK = 1_000_000  # seeds reserved per split (episode k of a split uses base + offset + k)

@@ -20,7 +20,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -29,51 +29,10 @@ import torch
 from torch import nn
 
 from fetchcarry_env.observation import Capacity
+from training.data.expert_labels import Demonstrations, record_demonstrations  # noqa: F401  (re-exported)
 from training.learners import runs
 from training.learners.encoders import CandidateScorer, build_network
 from training.learners.options import BCConfig
-
-
-@dataclass
-class Demonstrations:
-    """Labelled states: flat observation vectors, candidate masks and the expert's candidate."""
-
-    observations: np.ndarray  # (N, D) float32, the env's observation["observation"]
-    masks: np.ndarray  # (N, K) bool
-    labels: np.ndarray  # (N,) int64 candidate indices
-    stats: dict[str, Any] = field(default_factory=dict)  # episodes, steps, labelled steps, expert successes
-
-    def __len__(self) -> int:
-        return len(self.labels)
-
-
-def record_demonstrations(family: str, seeds: range | list[int], **env_options: Any) -> Demonstrations:
-    """The expert's episodes on ``seeds`` of ``family``, its expressible actions as labels."""
-    from expert import ExpertPolicy
-    from training.evaluation.projection import NOT_EXPRESSIBLE, expert_episode
-    from training.learners.heldout import make_env
-
-    env = make_env(family, **env_options)
-    expert = ExpertPolicy(env)
-    observations, masks, labels = [], [], []
-    steps = successes = 0
-    for seed in seeds:
-        record = expert_episode(env, expert, seed)
-        successes += record.success
-        steps += record.steps
-        for observation, mask, label in zip(record.observations, record.masks, record.labels, strict=True):
-            if label != NOT_EXPRESSIBLE:
-                observations.append(observation["observation"])
-                masks.append(mask)
-                labels.append(label)
-    env.close()
-    size = env.action_space.n
-    return Demonstrations(
-        np.asarray(observations, dtype=np.float32).reshape(len(labels), -1),
-        np.asarray(masks, dtype=bool).reshape(len(labels), size),
-        np.asarray(labels, dtype=np.int64),
-        {"episodes": len(seeds), "steps": steps, "labelled": len(labels), "expert_successes": successes},
-    )
 
 
 class BCPolicy:

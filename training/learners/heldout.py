@@ -1,4 +1,4 @@
-"""Evaluate policies on the candidate-phase interface against the MILP expert, seed by seed.
+"""Held-out evaluation of a learner: success and travel cost seed by seed, against the MILP expert.
 
 :func:`evaluate` runs a policy (stable-baselines3's ``predict`` protocol, given the
 masks as ``action_masks=``) for one episode per seed on ``FetchCarryPushPhases-v0``
@@ -9,7 +9,6 @@ runs the expert on the same seeds so that costs compare scenario by scenario.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -18,8 +17,10 @@ import gymnasium as gym
 import numpy as np
 
 from expert import ExpertPolicy
-from training.evaluation.metrics import wilson
-from training.evaluation.projection import expert_episode
+from training import envs, rollout
+from training.data.expert_labels import expert_episode
+from training.rollout import EpisodeRecord
+from training.stats import wilson
 
 
 @dataclass(frozen=True)
@@ -55,63 +56,45 @@ class Summary:
         )
 
 
-def make_env(family: str, **options: Any) -> gym.Env:
-    return gym.make("FetchCarryPushPhases-v0", family=family, **options)
-
-
 def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
     """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
-    return _episodes(policy, make_env(family), seeds, deterministic, masked=True)
+    return _episodes(policy, envs.make_env("phases", family=family), seeds, deterministic)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
     """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
-    return _episodes(policy, gym.make("FetchCarryPush-v0", family=family), seeds, True, masked=False)
+    return _episodes(policy, envs.make_env("env", family=family), seeds, True)
 
 
-def _episodes(
-    policy: Any, env: gym.Env, seeds: Iterable[int], deterministic: bool, masked: bool
-) -> list[EpisodeResult]:
-    """Run ``policy`` one episode per seed in ``env`` (closed at the end); ``masked``: a candidate index per step."""
-    masks = env.get_wrapper_attr("action_masks") if masked else None
-    results = []
-    for seed in seeds:
-        if hasattr(policy, "reset"):
-            policy.reset()
-        observation, info = env.reset(seed=seed)
-        refused, steps, start, decision = 0, 0, True, 0.0
-        while True:
-            given = {"action_masks": masks()} if masks is not None else {}
-            clock = time.perf_counter()
-            action, _ = policy.predict(
-                observation, episode_start=np.array([start]), deterministic=deterministic, **given
-            )
-            decision += time.perf_counter() - clock
-            start = False
-            if masked:
-                action = int(np.asarray(action).reshape(-1)[0])
-            observation, _reward, terminated, truncated, info = env.step(action)
-            steps += 1
-            refused += info["invalid_action"] is not None
-            if terminated or truncated:
-                break
-        results.append(
-            EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), steps, refused, decision)
-        )
-    env.close()
-    return results
+def _episodes(policy: Any, env: gym.Env, seeds: Iterable[int], deterministic: bool) -> list[EpisodeResult]:
+    """Run ``policy`` one episode per seed in ``env`` (closed at the end) until the env ends it."""
+    try:
+        return [
+            _result(seed, rollout.run_episode(env, policy, seed, deterministic=deterministic, stop_on_failure=False))
+            for seed in seeds
+        ]
+    finally:
+        env.close()
+
+
+def _result(seed: int, episode: EpisodeRecord) -> EpisodeResult:
+    figures, info = episode.figures, episode.info
+    return EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), figures.steps,
+                         figures.invalid_actions, figures.policy_s)  # fmt: skip
 
 
 def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
     """The expert's travel cost per seed it solves (through the same interface, its own env actions)."""
-    env = make_env(family)
+    env = envs.make_env("phases", family=family)
     expert = ExpertPolicy(env)
     costs = {}
-    for seed in seeds:
-        record = expert_episode(env, expert, seed)
-        if record.success:
-            costs[seed] = record.travel_cost
-    env.close()
+    try:
+        for seed in seeds:
+            record = expert_episode(env, expert, seed)
+            if record.success:
+                costs[seed] = record.travel_cost
+    finally:
+        env.close()
     return costs
 
 

@@ -9,7 +9,7 @@ candidate that stands for it (:meth:`PhaseActions.index_of`). Picks, places and 
 always have one; an expert *move* may not (its waypoints lie anywhere along a line, the
 candidates at fixed points). Such a move is *projected*: the allowed move candidate whose
 end lies nearest the expert's is executed and recorded instead
-(:func:`training.evaluation.projection.nearest_move`), the base ends off the expert's
+(:func:`nearest_move`), the base ends off the expert's
 plan, and the expert plans again from there (it replans when the state departs from its
 plan). Every recorded action is then an allowed candidate and the episode runs to its
 end; the per-step info ``projected`` (:data:`PROJECTED_INFO`) marks the projected steps.
@@ -27,9 +27,12 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
-from expert.policy import Decision
+from expert.policy import Decision, ExpertPolicy
+from fetchcarry_env.actions import Mode
+from fetchcarry_env.kinematics import travel_cost
 
 MASK_INFO = "action_mask"  # per-step info of a phases dataset: the state's candidate mask (bool, K)
 PROJECTED_INFO = "projected"  # per-step info of a phases dataset: the step is a projected expert move (bool)
@@ -40,8 +43,6 @@ class PhaseExpert:
     """:class:`expert.ExpertPolicy` on a phase env, answering with candidate indices (``predict`` protocol)."""
 
     def __init__(self, env: Any, *, time_limit: float, rule: str = "end") -> None:
-        from expert.policy import ExpertPolicy
-
         self.env = env
         self.rule = rule  # how a move no candidate expresses is projected (see nearest_move)
         self.expert = ExpertPolicy(env, time_limit=time_limit)
@@ -73,8 +74,6 @@ class PhaseExpert:
         An action other than a move that no candidate stands for gets a masked candidate
         (the env refuses it) and a decision whose ``failure`` ends the episode.
         """
-        from training.evaluation.projection import nearest_move
-
         action, _ = self.expert.predict(observation, episode_start=episode_start, deterministic=True)
         decision = self.expert.last_decision
         index = self.env.get_wrapper_attr("index_of")(action)
@@ -115,3 +114,36 @@ def make_phase_policy(name: str, env: Any, seed: int | None, *, time_limit: floa
     from training.policies.random_phases import RandomPhasePolicy
 
     return RandomPhasePolicy(env, seed=seed)
+
+
+NEAREST_RULES = ("end", "detour")  # how nearest_move ranks the allowed move candidates
+
+
+def nearest_move(env: gym.Env, action: np.ndarray, rule: str = "end") -> int | None:
+    """The allowed move candidate nearest the env move ``action``, or None (not a move, or no move allowed).
+
+    A stand-in for an expert move that no candidate expresses (the expert's waypoints
+    lie anywhere along a line, the candidates at fixed points). ``rule`` ``end``: the
+    candidate whose end lies nearest the expert's end (lattice cells, Manhattan; ties to
+    the lower index). ``detour``: the candidate that adds the least travel cost on the
+    way from the base to the expert's end (the paper's cost, metres; ties to the nearer end).
+    """
+    if rule not in NEAREST_RULES:
+        raise ValueError(f"unknown rule {rule!r}: choose one of {', '.join(NEAREST_RULES)}")
+    if int(action[4]) != Mode.MOVE:
+        return None
+    table = env.get_wrapper_attr("table")
+    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    if moves.size == 0:
+        return None
+    gaps = np.abs(table.actions[moves, :2] - np.asarray(action[:2])).sum(axis=1)
+    if rule == "end":
+        return int(moves[int(np.argmin(gaps))])
+    unwrapped = env.unwrapped
+    lattice, base = unwrapped.lattice, unwrapped.state.base
+    end = lattice.point(int(action[0]), int(action[1]))
+    detours = []
+    for index, gap in zip(moves, gaps, strict=True):
+        via = lattice.point(int(table.actions[index, 0]), int(table.actions[index, 1]))
+        detours.append((round(travel_cost(base, via) + travel_cost(via, end), 9), int(gap), int(index)))
+    return min(detours)[2]
