@@ -13,14 +13,14 @@ from __future__ import annotations
 import itertools
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point
-from fetchcarry_env.jsontext import JsonInputError, describe, read_json
+from fetchcarry_env.jsontext import describe, read_json_or
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 from fetchcarry_env.scenario import Scenario
 
@@ -151,10 +151,7 @@ class Plan:
         :class:`PlanFormatError` too; ``OSError`` (a missing or unreadable file) passes through.
         """
         path = Path(path)
-        try:
-            data = read_json(path, MAX_FILE_BYTES)
-        except JsonInputError as error:
-            raise PlanFormatError(f"{path}: {error}") from None
+        data = read_json_or(path, MAX_FILE_BYTES, lambda error: PlanFormatError(f"{path}: {error}"))
         try:
             return cls.from_dict(data)
         except PlanFormatError as error:
@@ -204,6 +201,17 @@ def _text(value: Any, where: str, expected: str = "a string") -> str:
     except UnicodeEncodeError:
         raise PlanFormatError(f"{where} {describe(value)} is not valid Unicode text (a lone surrogate)") from None
     return value
+
+
+def phase_rows(plan: Plan, row: Callable[[int, Phase], str], limit: int, more: str) -> list[str]:
+    """``row(k, phase)`` for the first ``limit`` phases of ``plan``, then ``more.format(n)`` when ``n`` are left out.
+
+    The lines of a table of steps (the plot's step list, the command line's summary).
+    """
+    rows = [row(k, phase) for k, phase in enumerate(plan.phases[:limit])]
+    if len(plan.phases) > limit:
+        rows.append(more.format(len(plan.phases) - limit))
+    return rows
 
 
 GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1

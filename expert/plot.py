@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from expert.plans import Phase, Plan
+from expert.plans import Phase, Plan, phase_rows
 from fetchcarry_env import drawing
 from fetchcarry_env.geometry import Point, Rect
 from fetchcarry_env.scenario import Scenario
@@ -196,6 +196,12 @@ def _title(scenario: Scenario, plan: Plan) -> str:
     return f"{scenario.name}: {plan.status}, objective {objective}, {steps} steps{timing}"
 
 
+def _step_row(k: int, phase: Phase) -> str:
+    base = f"{phase.base[0]:5.2f}, {phase.base[1]:5.2f}"
+    target, posture = (phase.target or "-")[:10], (phase.posture or "-")[:10]
+    return f"{k:>2} {phase.action:<6} {target:<10} {posture:<10} {base:<14} {phase.heading}"
+
+
 def _list_steps(axes: Axes, plan: Plan) -> None:
     """The phases as a text table: number, action, target, posture, base and heading."""
     axes.set_axis_off()
@@ -207,12 +213,5 @@ def _list_steps(axes: Axes, plan: Plan) -> None:
         "",
         f"{'k':>2} {'action':<6} {'target':<10} {'posture':<10} {'base [m]':<14} hd",
     ]
-    for k, phase in enumerate(plan.phases[:MAX_LISTED_STEPS]):
-        base = f"{phase.base[0]:5.2f}, {phase.base[1]:5.2f}"
-        rows.append(
-            f"{k:>2} {phase.action:<6} {(phase.target or '-')[:10]:<10} {(phase.posture or '-')[:10]:<10} "
-            f"{base:<14} {phase.heading}"
-        )
-    if len(plan.phases) > MAX_LISTED_STEPS:
-        rows.append(f"   ... and {len(plan.phases) - MAX_LISTED_STEPS} more phases")
+    rows += phase_rows(plan, _step_row, MAX_LISTED_STEPS, "   ... and {} more phases")
     axes.text(0.0, 1.0, "\n".join(rows), va="top", ha="left", family="monospace", fontsize=7, transform=axes.transAxes)

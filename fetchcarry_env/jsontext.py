@@ -1,6 +1,6 @@
 """Reading a JSON file that a person or a stranger wrote, with one kind of error for every way it can be bad.
 
-Scenario and plan files go through :func:`read_json`: a file that is too large, not
+Scenario and plan files go through :func:`read_json` (:func:`read_json_or`): a file that is too large, not
 UTF-8 text (binary, UTF-16), not JSON, nested too deeply or holding a number literal
 too long to convert raises :class:`JsonInputError` (a ``ValueError``) with a short
 message, never ``UnicodeDecodeError``, ``RecursionError`` or ``OverflowError``. The
@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import math
 import reprlib
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +43,14 @@ def read_json(path: str | Path, max_bytes: int) -> Any:
     if len(raw) > max_bytes:  # a special file whose size stat did not report
         raise JsonInputError(f"the file is more than the {max_bytes:,} bytes a file of this kind may have")
     return parse_json(decode_text(raw))
+
+
+def read_json_or(path: Path, max_bytes: int, error: Callable[[JsonInputError], Exception]) -> Any:
+    """:func:`read_json`, raising ``error(problem)`` (a caller's own error) instead of :class:`JsonInputError`."""
+    try:
+        return read_json(path, max_bytes)
+    except JsonInputError as problem:
+        raise error(problem) from None
 
 
 def decode_text(raw: bytes) -> str:

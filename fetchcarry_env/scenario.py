@@ -21,7 +21,7 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, discs_overlap, rect_under
-from fetchcarry_env.jsontext import JsonInputError, describe, read_json
+from fetchcarry_env.jsontext import describe, read_json_or
 
 FORMAT = "fetchcarry-scenario/1"
 
@@ -212,10 +212,7 @@ class Scenario:
         :class:`ScenarioError` too; ``OSError`` (a missing or unreadable file) passes through.
         """
         path = Path(path)
-        try:
-            data = read_json(path, MAX_FILE_BYTES)
-        except JsonInputError as error:
-            raise ScenarioError([f"format: {error}"], str(path)) from None
+        data = read_json_or(path, MAX_FILE_BYTES, lambda error: ScenarioError([f"format: {error}"], str(path)))
         return cls.from_dict(data, source=str(path))
 
     def to_dict(self) -> dict[str, Any]:
