@@ -25,7 +25,7 @@ MOVED: dict[str, str] = {
     "training.baselines.ppo": "training.learners.ppo",
     "training.baselines.runs": "training.learners.runs",
     "training.baselines.greedy": "training.policies.greedy",
-    "training.baselines.random_phases": "training.policies.random_phases",
+    "training.baselines.random_phases": "training.policies.random",
     "training.learning": "training.evaluation",
     "training.learning.checks": "training.evaluation.checks",
     "training.learning.evaluate": "training.learners.heldout",

@@ -38,12 +38,17 @@ from typing import Any
 import numpy as np
 import torch
 
+from expert.policy import ExpertPolicy
 from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import Capacity
+from training.envs import make_env
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.learners.encoders import build_network
+from training.learners.heldout import evaluate
 from training.learners.options import HELDOUT_SEED_BASE, DaggerOptions
+from training.policies.phase_expert import nearest_move
+from training.rollout import run_episode
 
 LEARNER_SEED_BASE = 500_000  # learner episode k of iteration i uses LEARNER_SEED_BASE + (i-1) * per_iteration + k
 
@@ -78,58 +83,65 @@ class LabelledEpisode:
 
 def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-    from expert.policy import ExpertPolicy
-    from training.evaluation.projection import nearest_move
-
     torch.set_num_threads(1)
-    env = gym.make(runs.ENV_ID, family=task.family_of(index))
+    env = make_env("phases", family=task.family_of(index))
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit)
-        learner = _learner(task.network) if task.network is not None else None
-        masks_of = env.get_wrapper_attr("action_masks")
-        index_of = env.get_wrapper_attr("index_of")
-        step_env_action = env.get_wrapper_attr("step_env_action")
-        observation, info = env.reset(seed=task.seed_base + index)
-        observations, masks, labels = [], [], []
-        seen: set[bytes] = set()
-        steps = unexpressible = 0
-        while True:
-            mask = masks_of()
-            action, _ = expert.predict(observation, episode_start=np.array([steps == 0]), deterministic=True)
-            decision = expert.last_decision
-            label = index_of(action) if decision is None or decision.failure is None else None
-            if label is None and task.nearest_moves and (decision is None or decision.failure is None):
-                label = nearest_move(env, action)
-            key = np.asarray(observation["observation"]).tobytes()
-            if label is None:
-                unexpressible += 1
-            elif key not in seen:  # a learner going round in circles labels each state once
-                seen.add(key)
-                observations.append(np.asarray(observation["observation"], np.float32))
-                masks.append(mask)
-                labels.append(int(label))
-            if learner is not None:
-                choice, _ = learner.predict(observation, action_masks=mask, deterministic=True)
-                observation, _, terminated, truncated, info = env.step(int(choice))
-            else:  # the expert's own episode, whether or not a candidate expresses its action
-                observation, _, terminated, truncated, info = step_env_action(action)
-            steps += 1
-            if terminated or truncated:
-                break
+        labeller = _Labeller(env, expert, task.nearest_moves, acting=task.network is None)
+        if task.network is None:  # the expert's own episode, whether or not a candidate expresses its action
+            policy, step = expert, env.get_wrapper_attr("step_env_action")
+        else:
+            policy, step = _learner(task.network), None
+        record = run_episode(env, policy, task.seed_base + index, stop_on_failure=False, step=step, observe=labeller)
         size, features = env.action_space.n, env.observation_space["observation"].shape[0]
     finally:
         env.close()
-    return LabelledEpisode(
-        np.asarray(observations, np.float32).reshape(len(labels), features),  # also an episode with no label
-        np.asarray(masks, bool).reshape(len(labels), size),
-        np.asarray(labels, np.int64),
-        steps,
-        bool(info.get("is_success", False)),
-        unexpressible,
-    )
+    return labeller.episode(size, features, record.figures.steps, bool(record.info.get("is_success", False)))
+
+
+class _Labeller:
+    """The expert's label of every state an episode visits (an observer of :func:`training.rollout.run_episode`).
+
+    ``acting``: the expert is the episode's policy, so its action at the state is the one
+    to label; otherwise it is asked here. An action no allowed candidate expresses (or the
+    expert's idle fallback) gives no label, unless ``nearest_moves`` labels an inexpressible
+    move with the allowed move nearest it. A state visited again in the same episode (a
+    learner going round in circles) is labelled once.
+    """
+
+    def __init__(self, env: Any, expert: ExpertPolicy, nearest_moves: bool, *, acting: bool) -> None:
+        self.env, self.expert, self.nearest_moves, self.acting = env, expert, nearest_moves, acting
+        self.index_of = env.get_wrapper_attr("index_of")
+        self.observations: list[np.ndarray] = []
+        self.masks: list[np.ndarray] = []
+        self.labels: list[int] = []
+        self.seen: set[bytes] = set()
+        self.steps = self.unexpressible = 0  # states the expert was asked about; states without a label
+
+    def __call__(self, observation: dict[str, np.ndarray], action: Any, mask: np.ndarray) -> None:
+        if not self.acting:
+            action, _ = self.expert.predict(observation, episode_start=np.array([self.steps == 0]), deterministic=True)
+            self.steps += 1
+        decision = self.expert.last_decision
+        planned = decision is None or decision.failure is None
+        label = self.index_of(action) if planned else None
+        if label is None and self.nearest_moves and planned:
+            label = nearest_move(self.env, action)
+        key = np.asarray(observation["observation"]).tobytes()
+        if label is None:
+            self.unexpressible += 1
+        elif key not in self.seen:
+            self.seen.add(key)
+            self.observations.append(np.asarray(observation["observation"], np.float32))
+            self.masks.append(mask)
+            self.labels.append(int(label))
+
+    def episode(self, size: int, features: int, steps: int, success: bool) -> LabelledEpisode:
+        """The labelled states (``size`` candidates, ``features`` observation entries: also an episode with none)."""
+        n = len(self.labels)
+        return LabelledEpisode(np.asarray(self.observations, np.float32).reshape(n, features),
+                               np.asarray(self.masks, bool).reshape(n, size), np.asarray(self.labels, np.int64),
+                               steps, success, self.unexpressible)  # fmt: skip
 
 
 def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int) -> LabelledEpisode:
@@ -160,8 +172,6 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
 
 def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
     """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
-    from training.learners.heldout import evaluate
-
     results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
     return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
 

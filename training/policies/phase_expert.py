@@ -107,15 +107,6 @@ class PhaseExpert:
         return np.int64(index), state
 
 
-def make_phase_policy(name: str, env: Any, seed: int | None, *, time_limit: float) -> Any:
-    """The recording policy ``name`` (``expert`` or ``random``) for a phase env."""
-    if name == "expert":
-        return PhaseExpert(env, time_limit=time_limit)
-    from training.policies.random_phases import RandomPhasePolicy
-
-    return RandomPhasePolicy(env, seed=seed)
-
-
 NEAREST_RULES = ("end", "detour")  # how nearest_move ranks the allowed move candidates
 
 

@@ -1,13 +1,16 @@
-"""Simple policies that speak stable-baselines3's ``predict`` protocol.
+"""The masked random policies, one per interface: the lower bounds of every benchmark.
 
-:class:`RandomMaskedPolicy` samples each component of the ``MultiDiscrete`` phase
-action uniformly among the values the env's action mask allows (the same per-component
-masking as sb3-contrib's MaskablePPO). It is the baseline that drives the dataset
-pipeline when no planner is wanted, and a lower bound in benchmarks.
+- :class:`RandomMaskedPolicy` (``FetchCarryPush-v0``) samples each component of the
+  ``MultiDiscrete`` phase action uniformly among the values the env's action mask allows
+  (the same per-component masking as sb3-contrib's MaskablePPO). It drives the dataset
+  pipeline when no planner is wanted.
+- :class:`RandomPhasePolicy` (``FetchCarryPushPhases-v0``) picks one allowed candidate
+  phase uniformly: the masked random baseline of the learnable interface.
 
-Every policy here draws from its own ``numpy`` generator, seeded at construction and
-re-seedable with :meth:`RandomMaskedPolicy.reset`, so the same seed gives the same
-actions bit for bit.
+Each draws from its own ``numpy`` generator, seeded at construction and re-seeded by
+``reset(seed)`` (the episode loop does so with the episode's seed), so the same seed
+gives the same actions bit for bit. Both take the masks as ``action_masks=`` (as
+MaskablePPO's ``predict`` does) or from the env they were given.
 """
 
 from __future__ import annotations
@@ -19,7 +22,19 @@ import numpy as np
 from gymnasium import spaces
 
 
-class RandomMaskedPolicy:
+class _SeededPolicy:
+    """A policy that draws from its own generator, re-seeded by :meth:`reset`."""
+
+    def __init__(self, seed: int | None) -> None:
+        self.rng = np.random.default_rng(seed)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Re-seed the generator (``None`` keeps the current stream)."""
+        if seed is not None:
+            self.rng = np.random.default_rng(seed)
+
+
+class RandomMaskedPolicy(_SeededPolicy):
     """Uniformly random valid-looking actions: each component drawn among its unmasked values.
 
     ``env`` is a Gymnasium env (wrapped or not) or a stable-baselines3 ``VecEnv`` whose
@@ -31,15 +46,10 @@ class RandomMaskedPolicy:
         space = env.action_space
         if not isinstance(space, spaces.MultiDiscrete):
             raise TypeError(f"RandomMaskedPolicy needs a MultiDiscrete action space, got {space}")
+        super().__init__(seed)
         self.env = env
         self.nvec = np.asarray(space.nvec, dtype=np.int64).reshape(-1)
         self._bounds = np.concatenate([[0], np.cumsum(self.nvec)])
-        self.rng = np.random.default_rng(seed)
-
-    def reset(self, seed: int | None = None) -> None:
-        """Re-seed the generator (``None`` keeps the current stream)."""
-        if seed is not None:
-            self.rng = np.random.default_rng(seed)
 
     def predict(
         self,
@@ -77,6 +87,38 @@ class RandomMaskedPolicy:
             # A component with nothing allowed falls back to all values: the env will reject it.
             action[k] = self.rng.choice(allowed) if allowed.size else self.rng.integers(self.nvec[k])
         return action
+
+
+class RandomPhasePolicy(_SeededPolicy):
+    """Each call: one allowed candidate, uniformly at random (per env of a batch)."""
+
+    def __init__(self, env: Any = None, *, seed: int | None = None) -> None:
+        if env is not None and not isinstance(env.action_space, spaces.Discrete):
+            raise TypeError(f"RandomPhasePolicy needs a Discrete action space, got {env.action_space}")
+        super().__init__(seed)
+        self.env = env
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = False,
+        action_masks: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, Any]:
+        """A random allowed candidate for each mask row; ``deterministic`` is accepted for the protocol."""
+        if action_masks is None:
+            if self.env is None:
+                raise ValueError("give action_masks= or build the policy with an env")
+            action_masks = self.env.get_wrapper_attr("action_masks")()
+        masks = np.asarray(action_masks, dtype=bool)
+        rows = masks if masks.ndim == 2 else masks[None, :]
+        actions = np.array([self._draw(row) for row in rows], dtype=np.int64)
+        return (actions if masks.ndim == 2 else actions[0]), state
+
+    def _draw(self, mask: np.ndarray) -> int:
+        allowed = np.flatnonzero(mask)
+        return int(self.rng.choice(allowed)) if allowed.size else int(self.rng.integers(mask.size))
 
 
 def _is_batched(observation: dict[str, np.ndarray] | np.ndarray, env: Any) -> bool:
