@@ -20,8 +20,8 @@ import numpy as np
 
 from expert import ExpertPolicy
 from fetchcarry_env.actions import Mode
-from training import rollout
 from training.envs import make_env
+from training.rollout import run_episode
 
 NOT_EXPRESSIBLE = -1  # the label of an expert action that no allowed candidate stands for
 
@@ -68,7 +68,7 @@ def expert_episode(
         record.labels.append(NOT_EXPRESSIBLE if index is None else int(index))
         record.modes.append(int(action[4]))
 
-    episode = rollout.run_episode(env, expert, seed, options=options, max_steps=limit, stop_on_failure=False,
+    episode = run_episode(env, expert, seed, options=options, max_steps=limit, stop_on_failure=False,
                                   step=env.get_wrapper_attr("step_env_action"), observe=label)  # fmt: skip
     record.success = bool(episode.info["is_success"])
     record.travel_cost = float(episode.info["travel_cost"])

@@ -1,7 +1,8 @@
 """One benchmark episode: a policy acts in one scenario until it succeeds or runs out of phases.
 
-:func:`run_episode` is what the workers run. It returns one record (a plain dict, the
-shape of ``results.json``'s entries) built from the env's ``info``:
+:func:`benchmark_episode` is what the workers run: one pass of the episode loop
+(:func:`training.rollout.run_episode`), whose figures and final ``info`` become one
+record (a plain dict, the shape of ``results.json``'s entries):
 
 ============== =====================================================================
 key            value
@@ -39,20 +40,16 @@ from typing import Any
 
 import gymnasium as gym
 
-from training import envs, rollout
+from training.envs import make_env
 from training.evaluation.splits import EvalScenario
 from training.resolve import PolicySpec, build
+from training.rollout import run_episode
 
 # One env and policy per policy spec in each process, reused episode after episode (an
 # env's reset rebuilds only what changed). A worker process runs one task at a time.
 _BUILT: dict[str, tuple[gym.Env, Any]] = {}
 _MAX_BUILT = 4
 _TORCH_THREADS: list[int] = []  # torch's thread count before the benchmark set it to one (restored by close_all)
-
-
-def make_env(spec: PolicySpec) -> gym.Env:
-    """The env ``spec``'s interface needs, over the families' extent (``family="basic"`` sets the lattice)."""
-    return envs.make_env(spec.interface, family="basic", **spec.env_options)
 
 
 def _built(spec: PolicySpec) -> tuple[gym.Env, Any]:
@@ -62,17 +59,17 @@ def _built(spec: PolicySpec) -> tuple[gym.Env, Any]:
         if len(_BUILT) >= _MAX_BUILT:
             env, _ = _BUILT.pop(next(iter(_BUILT)))
             env.close()
-        env = make_env(spec)
+        env = make_env(spec.interface, family="basic", **spec.env_options)  # the lattice of the families' extent
         policy = build(spec, env)
         _one_torch_thread()
         _BUILT[key] = (env, policy)
     return _BUILT[key]
 
 
-def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True) -> dict[str, Any]:
+def benchmark_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True) -> dict[str, Any]:
     """One episode of ``spec`` on ``item``'s scenario; its record (see the module docstring)."""
     env, policy = _built(spec)
-    episode = rollout.run_episode(env, policy, item.seed, options={"scenario": item.scenario},
+    episode = run_episode(env, policy, item.seed, options={"scenario": item.scenario},
                                   deterministic=deterministic, stop_on_failure=False)  # fmt: skip
     figures, info = episode.figures, episode.info
     return {
@@ -97,8 +94,8 @@ def run_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True
 
 
 def run_task(task: tuple[PolicySpec, EvalScenario]) -> dict[str, Any]:
-    """``run_episode(*task)``: the picklable unit of work the process pool and Ray run."""
-    return run_episode(*task)
+    """``benchmark_episode(*task)``: the picklable unit of work the process pool and Ray run."""
+    return benchmark_episode(*task)
 
 
 def _one_torch_thread() -> None:

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from expert import ExpertPolicy
-from training import envs, rollout
 from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name  # noqa: F401  (speed.phases)
+from training.envs import make_env
 from training.policies.phase_expert import NEAREST_RULES, PhaseExpert, nearest_move  # noqa: F401  (cli.bench, tests)
+from training.rollout import run_episode
 
 
 @dataclass(frozen=True)
@@ -36,13 +37,13 @@ def check_projection(
     family: str, seeds: range | list[int], *, time_limit: float = 10.0, rule: str = "end"
 ) -> list[ProjectionCheck]:
     """Run the expert through the projection and on its own (env actions) on each seed of ``family``."""
-    env = envs.make_env("phases", family=family)
+    env = make_env("phases", family=family)
     rows = []
     try:
         for seed in seeds:
             own = expert_episode(env, ExpertPolicy(env, time_limit=time_limit), seed)
             phase = PhaseExpert(env, time_limit=time_limit, rule=rule)
-            episode = rollout.run_episode(env, phase, seed)
+            episode = run_episode(env, phase, seed)
             rows.append(
                 ProjectionCheck(
                     seed=seed,

@@ -17,9 +17,9 @@ import gymnasium as gym
 import numpy as np
 
 from expert import ExpertPolicy
-from training import envs, rollout
 from training.data.expert_labels import expert_episode
-from training.rollout import EpisodeRecord
+from training.envs import make_env
+from training.rollout import EpisodeRecord, run_episode
 from training.stats import wilson
 
 
@@ -58,19 +58,19 @@ class Summary:
 
 def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
     """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
-    return _episodes(policy, envs.make_env("phases", family=family), seeds, deterministic)
+    return _episodes(policy, make_env("phases", family=family), seeds, deterministic)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
     """One episode per seed of a policy that returns the env's own actions, on ``FetchCarryPush-v0``."""
-    return _episodes(policy, envs.make_env("env", family=family), seeds, True)
+    return _episodes(policy, make_env("env", family=family), seeds, True)
 
 
 def _episodes(policy: Any, env: gym.Env, seeds: Iterable[int], deterministic: bool) -> list[EpisodeResult]:
     """Run ``policy`` one episode per seed in ``env`` (closed at the end) until the env ends it."""
     try:
         return [
-            _result(seed, rollout.run_episode(env, policy, seed, deterministic=deterministic, stop_on_failure=False))
+            _result(seed, run_episode(env, policy, seed, deterministic=deterministic, stop_on_failure=False))
             for seed in seeds
         ]
     finally:
@@ -85,7 +85,7 @@ def _result(seed: int, episode: EpisodeRecord) -> EpisodeResult:
 
 def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
     """The expert's travel cost per seed it solves (through the same interface, its own env actions)."""
-    env = envs.make_env("phases", family=family)
+    env = make_env("phases", family=family)
     expert = ExpertPolicy(env)
     costs = {}
     try:
