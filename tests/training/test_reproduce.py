@@ -12,7 +12,8 @@ import pytest
 
 from tests.cli_run import run
 from training.reproduce import SMOKE
-from training.reproduce.pipeline import REFERENCES, baselines, training_jobs
+from training.reproduce.pipeline import training_jobs
+from training.reproduce.table import REFERENCES, baselines
 
 SPLITS = ("iid-v0", "more-objects-v0", "layouts-v0", "push-required-v0")
 MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")

@@ -28,7 +28,7 @@ from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import _pyplot, plot_demonstrations, plot_splits, source_table
 from training.evaluation.runner import RESULTS
 from training.reproduce.budgets import Budget
-from training.reproduce.pipeline import CURVE_SPLIT, SPLIT_NAMES, Baseline
+from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
 
 SUMMARY, SPLITS_PLOT = "summary.md", "splits.png"
 CURVES_PLOT, DEMONSTRATIONS_PLOT = "ppo_curves.png", "demonstrations.png"

@@ -31,48 +31,43 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import resource
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import MISSING, asdict, dataclass, fields, replace
+from dataclasses import MISSING, asdict, fields, replace
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.errors import InputError
+from training.data.generate import generate
+from training.data.sources import EpisodeSource, GenerationConfig
+from training.evaluation.runner import RESULTS, run_benchmark
+from training.evaluation.splits import get_split
+from training.reproduce.aggregate import write_published
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
+from training.reproduce.table import (
+    CURVE_SPLIT,
+    ENSEMBLE,
+    REFERENCES,
+    SPLIT_NAMES,
+    baselines,
+    curve_label,
+    has_ensemble,
+    run_name,
+    run_names,
+)
+from training.resolve import available
 
 DATASET_ID = "fetchcarry/training-phases-v0"
-SPLIT_NAMES = ("iid", "more-objects", "layouts", "push-required")
-CURVE_SPLIT = "iid"  # where the demonstrations curve is measured
-REFERENCES = ("expert", "random", "random-phases", "greedy")
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
 WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
 MINARI_ENV = "MINARI_DATASETS_PATH"
-ENSEMBLE = "dagger-aimed-ensemble"  # the run combining every seed's dagger-aimed network
 
 
 class ReproduceError(InputError):
     """A reproduction cannot start or continue with what it was given (its folder, seeds, workers)."""
-
-
-@dataclass(frozen=True)
-class Baseline:
-    """A learned baseline of the table: its label, and the run folders of each training seed."""
-
-    label: str  # e.g. "bc-mlp"
-    runs: tuple[str, ...]  # run folder names, one per training seed
-    demonstrations: int | None = None  # expert episodes it was trained on (the demonstrations curve), if fixed
-    per_seed: bool = True  # False: one run made of every seed's runs (an ensemble), not of one seed
-
-
-def run_name(label: str, seed: int) -> str:
-    """The run folder name of baseline ``label`` for training seed ``seed``."""
-    return f"{label}-s{seed}"
-
-
-def curve_label(episodes: int) -> str:
-    return f"bc-mlp-n{episodes}"
 
 
 def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
@@ -96,8 +91,8 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
             jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
                                  family=TRAINING_FAMILY, dagger=budget.aimed_options(DATASET_ID)))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
-    if _has_ensemble(seeds, budget):
-        members = _names("dagger-aimed", seeds)
+    if has_ensemble(seeds, budget):
+        members = run_names("dagger-aimed", seeds)
         jobs.append(TrainJob(ENSEMBLE, "ensemble", str(runs / ENSEMBLE), 0, needs=members,
                              members=tuple(str(runs / name) for name in members)))  # fmt: skip
     for seed in range(seeds):
@@ -109,29 +104,6 @@ def _bc(runs: Path, label: str, seed: int, budget: Budget, encoder: str, episode
     name = run_name(label, seed)
     return TrainJob(name, "bc", str(runs / name), seed, config=budget.bc_config(encoder, seed), dataset=DATASET_ID,
                     episodes=episodes)  # fmt: skip
-
-
-def baselines(seeds: int, budget: Budget) -> list[Baseline]:
-    """The learned baselines of the table (the curve's BC runs last)."""
-    main = [
-        Baseline("bc-mlp", _names("bc-mlp", seeds), budget.demonstrations),
-        Baseline("bc-set", _names("bc-set", seeds), budget.demonstrations),
-        Baseline("dagger", _names("dagger", seeds)),
-        *([Baseline("dagger-aimed", _names("dagger-aimed", seeds))] if budget.aimed_iterations else []),
-        *([Baseline(ENSEMBLE, (ENSEMBLE,), per_seed=False)] if _has_ensemble(seeds, budget) else []),
-        Baseline("ppo-scratch", _names("ppo-scratch", seeds)),
-        Baseline("ppo-bc", _names("ppo-bc", seeds)),
-    ]
-    return main + [Baseline(curve_label(n), _names(curve_label(n), seeds), n) for n in budget.curve]
-
-
-def _names(label: str, seeds: int) -> tuple[str, ...]:
-    return tuple(run_name(label, seed) for seed in range(seeds))
-
-
-def _has_ensemble(seeds: int, budget: Budget) -> bool:
-    """Whether the table has ``dagger-aimed-ensemble``: with ``dagger-aimed`` runs of two seeds or more."""
-    return bool(budget.aimed_iterations) and seeds > 1
 
 
 @contextmanager
@@ -204,8 +176,6 @@ class Timings:
 
 def cpu_seconds() -> float:
     """CPU seconds (user and system) of this process and of its children that have finished."""
-    import resource
-
     own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
@@ -237,8 +207,6 @@ def reproduce(
         _stage_datasets(budget, workers, progress, timings, say)
         _stage_training(out, seeds, budget, workers, timings, say)
         _stage_benchmark(out, seeds, budget, workers, progress, timings, say)
-    from training.reproduce.aggregate import write_published
-
     with timings.stage("report"):
         summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data)
     say(f"[4/4] report: {summary}, {out / 'results.json'} and the plots in {out}")
@@ -246,9 +214,6 @@ def reproduce(
 
 
 def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable) -> None:
-    from training.data.generate import generate
-    from training.data.sources import EpisodeSource, GenerationConfig
-
     source = EpisodeSource(family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit)
     config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
     say(f"[1/4] datasets: {DATASET_ID}, {budget.demonstrations} expert episodes of family {TRAINING_FAMILY}")
@@ -278,8 +243,6 @@ def _stage_training(out: Path, seeds: int, budget: Budget, workers: int, timings
 def _stage_benchmark(
     out: Path, seeds: int, budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable
 ) -> None:
-    from training.benchmark import available, get_split, run_benchmark
-
     references = [name for name in REFERENCES if name in available()]
     runs = out / "runs"
     for split in SPLIT_NAMES:
@@ -306,8 +269,6 @@ def forget_retrained(folder: Path, runs: list[Path]) -> None:
     a run folder trained again (deleted and retrained with other weights) is benchmarked
     again rather than kept with the episodes of its former weights.
     """
-    from training.evaluation.runner import RESULTS
-
     file = folder / WEIGHTS_DIGESTS
     try:
         before = json.loads(file.read_text())
