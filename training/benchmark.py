@@ -15,9 +15,9 @@ normalised score), :mod:`~training.evaluation.report` (``summary.md`` and plots)
 :mod:`~training.evaluation.runner` (workers, incremental ``results.json``).
 """
 
-from training.evaluation.errors import BenchmarkError
+from training.errors import BenchmarkError
 from training.evaluation.metrics import Row, fill_expert_costs, spl, summarise, wilson
-from training.evaluation.report import plot_demonstrations, plot_learning_curve, plot_splits, summary_markdown
+from training.evaluation.report import summary_markdown
 from training.evaluation.runner import BenchmarkReport, run_benchmark
 from training.evaluation.splits import (
     EVAL_SEED_BASE,
@@ -27,6 +27,7 @@ from training.evaluation.splits import (
     get_split,
     split_scenarios,
 )
+from training.pictures.benchmark import plot_demonstrations, plot_learning_curve, plot_splits
 from training.resolve import FACTORIES, Factory, PolicySpec, available, resolve
 
 __all__ = [

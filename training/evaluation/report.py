@@ -1,21 +1,21 @@
-"""What the benchmark writes for people: the ``summary.md`` table and PNG plots.
+"""The text the benchmark writes for people: the ``summary.md`` tables.
 
-:func:`summary_markdown` makes one table row per policy and split; :func:`plot_splits`
-draws success and cost ratio per split with their 95 % intervals;
-:func:`plot_learning_curve` draws a run folder's ``metrics.csv`` (any numeric columns
-against its first); :func:`plot_demonstrations` draws success against the number of
-demonstrations from records that carry a ``demonstrations`` count.
+:func:`summary_markdown` makes one table row per policy and split, with a legend of the
+columns; :func:`source_table` gives each policy's success and cost ratio per scenario
+source of a split. The plots are :mod:`training.pictures.benchmark`'s (``plot_splits``
+is named here too, for the modules that import it from here).
 """
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
-from training.evaluation.metrics import Z_95, Row, summarise, wilson
+from training.evaluation.metrics import Row, summarise
+from training.pictures.benchmark import plot_splits
+
+__all__ = ["COLUMNS", "plot_splits", "source_table", "summary_markdown"]
 
 COLUMNS = (
     ("policy", "policy", "{}"),
@@ -105,119 +105,3 @@ def source_table(
 def _success_and_ratio(row: Row) -> str:
     ratio = "-" if math.isnan(row.cost_ratio) else f"{row.cost_ratio:.2f}"
     return f"{row.success:.0%} [{row.success_low:.0%}, {row.success_high:.0%}] ({ratio})"
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
-    """Success and cost ratio per split and policy, with 95 % intervals, as one PNG."""
-    plt = _pyplot()
-    splits = list(dict.fromkeys(r.split for r in rows))
-    policies = list(dict.fromkeys(r.policy for r in rows))
-    by_key = {(r.policy, r.split): r for r in rows}
-    width = 0.8 / max(1, len(policies))
-    figure, (left, right) = plt.subplots(1, 2, figsize=(max(8.0, 2.5 * len(splits) + 4), 4))
-    for k, policy in enumerate(policies):
-        xs, success, s_err, ratio, r_err, r_xs = [], [], [[], []], [], [[], []], []
-        for j, split in enumerate(splits):
-            row = by_key.get((policy, split))
-            if row is None:
-                continue
-            x = j + (k - (len(policies) - 1) / 2) * width
-            xs.append(x)
-            success.append(row.success)
-            s_err[0].append(row.success - row.success_low)
-            s_err[1].append(row.success_high - row.success)
-            if not math.isnan(row.cost_ratio):
-                r_xs.append(x)
-                ratio.append(row.cost_ratio)
-                low = row.cost_ratio_low if not math.isnan(row.cost_ratio_low) else row.cost_ratio
-                high = row.cost_ratio_high if not math.isnan(row.cost_ratio_high) else row.cost_ratio
-                r_err[0].append(row.cost_ratio - low)
-                r_err[1].append(high - row.cost_ratio)
-        left.bar(xs, success, width, yerr=s_err, capsize=3, label=policy)
-        right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, label=policy)
-    for axis, label in ((left, "success rate (95 % Wilson)"), (right, "cost ratio to the expert (95 % CI)")):
-        axis.set_xticks(range(len(splits)), splits)
-        axis.set_ylabel(label)
-    left.set_ylim(0, 1.05)
-    right.axhline(1.0, color="grey", linewidth=0.8)
-    handles, labels = left.get_legend_handles_labels()
-    figure.legend(handles, labels, loc="upper center", ncol=min(len(policies), 6), fontsize="small", frameon=False)
-    figure.tight_layout(rect=(0, 0, 1, 0.92))
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return Path(path)
-
-
-def plot_learning_curve(
-    run_dir: str | Path, path: str | Path, columns: Sequence[str] | None = None, x: str | None = None
-) -> Path:
-    """A run folder's ``metrics.csv``: each numeric column (or ``columns``) against ``x`` (default: the first column).
-
-    ``x="seconds"`` (or whatever column holds wall-clock time) draws the curves against time.
-    """
-    with (Path(run_dir) / "metrics.csv").open() as handle:
-        rows = list(csv.DictReader(handle))
-    if not rows:
-        raise ValueError(f"{Path(run_dir) / 'metrics.csv'} has no rows")
-    x_key = x if x is not None else next(iter(rows[0]))
-    if x_key not in rows[0]:
-        raise ValueError(f"{Path(run_dir) / 'metrics.csv'} has no column {x_key!r}")
-    keys = list(columns) if columns is not None else [k for k in rows[0] if k != x_key and _numeric(rows, k)]
-    plt = _pyplot()
-    figure, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.2), squeeze=False)
-    xs = [float(r[x_key]) for r in rows]
-    for axis, key in zip(axes[0], keys, strict=True):
-        axis.plot(xs, [float(r[key]) for r in rows])
-        axis.set_xlabel(x_key)
-        axis.set_ylabel(key)
-    figure.suptitle(Path(run_dir).name)
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return Path(path)
-
-
-def _numeric(rows: list[dict[str, str]], key: str) -> bool:
-    try:
-        [float(r[key]) for r in rows]
-    except (TypeError, ValueError):
-        return False
-    return True
-
-
-def plot_demonstrations(records: Sequence[dict[str, Any]], path: str | Path) -> Path:
-    """Success against the number of demonstrations (log scale), one line per policy, 95 % Wilson bands.
-
-    Each record needs ``policy``, ``demonstrations`` (expert episodes the policy was trained on) and ``success``.
-    """
-    groups: dict[str, dict[int, list[bool]]] = {}
-    for record in records:
-        groups.setdefault(record["policy"], {}).setdefault(int(record["demonstrations"]), []).append(
-            bool(record["success"])
-        )
-    plt = _pyplot()
-    figure, axis = plt.subplots(figsize=(5, 3.5))
-    for policy, points in groups.items():
-        counts = sorted(points)
-        rates = [sum(points[n]) / len(points[n]) for n in counts]
-        bands = [wilson(sum(points[n]), len(points[n]), Z_95) for n in counts]
-        axis.plot(counts, rates, marker="o", label=policy)
-        axis.fill_between(counts, [b[0] for b in bands], [b[1] for b in bands], alpha=0.2)
-    axis.set_xscale("log")
-    axis.set_xlabel("expert demonstrations (episodes)")
-    axis.set_ylabel("success rate")
-    axis.set_ylim(0, 1.05)
-    axis.legend(fontsize="small")
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return Path(path)

@@ -11,7 +11,8 @@ references and for ``dagger-aimed-ensemble``, which is made of every seed's runs
 Plots: ``splits.png`` (success and cost ratio per split, pooled over the
 seeds, with 95 % intervals), ``ppo_curves.png`` (MaskablePPO's training success and
 return against env steps and wall-clock seconds, one line per run) and
-``demonstrations.png`` (BC's success on ``iid`` against its expert episodes).
+``demonstrations.png`` (BC's success on ``iid`` against its expert episodes), drawn by
+:mod:`training.pictures.benchmark`.
 """
 
 from __future__ import annotations
@@ -25,8 +26,9 @@ from typing import Any
 import numpy as np
 
 from training.evaluation.metrics import Row, summarise
-from training.evaluation.report import _pyplot, plot_demonstrations, plot_splits, source_table
+from training.evaluation.report import source_table
 from training.evaluation.runner import RESULTS
+from training.pictures.benchmark import plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
 from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
 
@@ -94,7 +96,7 @@ def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, se
     (out / SUMMARY).write_text("\n".join(lines))
     shown = references + [b.label for b in main]
     plot_splits([row for key, row in pooled.items() if key[0] in shown], out / SPLITS_PLOT)
-    plot_ppo_curves(out / "runs", [b for b in baselines if b.label in PPO_BASELINES], out / CURVES_PLOT)
+    plot_ppo_curves(ppo_metrics(out / "runs", [b for b in baselines if b.label in PPO_BASELINES]), out / CURVES_PLOT)
     points = [{**r, "policy": "bc-mlp", "demonstrations": _demonstrations(r, curve)} for r in records
               if curve_split is not None and r["split"] == curve_split and _demonstrations(r, curve)]  # fmt: skip
     plot_demonstrations(points, out / DEMONSTRATIONS_PLOT)
@@ -186,29 +188,11 @@ def _curve_table(split: str, curve: Sequence[Baseline], dagger: Sequence[Baselin
     return lines
 
 
-def plot_ppo_curves(runs: Path, ppo: Sequence[Baseline], path: Path) -> Path:
-    """Training success and return of every PPO run against env steps and wall-clock seconds, as one PNG."""
-    from training.learners.runs import read_metrics
+def ppo_metrics(runs: Path, ppo: Sequence[Baseline]) -> list[tuple[str, list[list[dict[str, float]]]]]:
+    """Per PPO baseline, its label and each run's ``metrics.csv`` rows (an empty list for a run without one)."""
+    from training.learners.runs import read_metrics  # training.learners.runs imports torch
 
-    plt = _pyplot()
-    figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, baseline in enumerate(ppo):
-        for j, name in enumerate(baseline.runs):
-            rows = read_metrics(runs / name) if (runs / name / "metrics.csv").is_file() else []
-            if not rows:
-                continue
-            for r, key in enumerate(("success", "return")):
-                for c, x in enumerate(("steps", "seconds")):
-                    axes[r][c].plot([row[x] for row in rows], [row[key] for row in rows], color=colours[k % 10],
-                                    alpha=0.8, label=baseline.label if j == 0 else None)  # fmt: skip
-    for r, key in enumerate(("training success (episodes of the rollout)", "return (learning reward)")):
-        for c, x in enumerate(("env steps", "wall-clock seconds")):
-            axes[r][c].set_xlabel(x)
-            axes[r][c].set_ylabel(key)
-    axes[0][0].legend(fontsize="small")
-    figure.suptitle("MaskablePPO learning curves (one line per training seed)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
-    return path
+    return [
+        (b.label, [read_metrics(runs / name) if (runs / name / "metrics.csv").is_file() else [] for name in b.runs])
+        for b in ppo
+    ]
