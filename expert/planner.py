@@ -24,6 +24,7 @@ from expert.decoupled import decoupled_plan, steps_of
 from expert.milp.bounds import (
     Connectivity,
     PairCosts,
+    Windows,
     action_windows,
     cheapest_schedule,
     counting_bound,
@@ -38,6 +39,7 @@ from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import Step, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
+from expert.milp.variables import Milp
 from expert.milp.warm import add_warm_start
 from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
@@ -120,22 +122,36 @@ def plan(
     """
     deadline = Deadline.after(time_limit)
     started = time.perf_counter()
-    unknown = set(solver_options) - _PLANNER_OPTIONS - set(SolverSettings.__dataclass_fields__)
-    if unknown:
-        raise TypeError(f"plan() got unknown solver option(s): {', '.join(sorted(unknown))}")
-    if not isinstance(extra_phases, int) or extra_phases < 0:
-        raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
-    integral = bool(solver_options.pop("integral", True))
-    use_bound = bool(solver_options.pop("lower_bound", True))
-    fewest_cuts = bool(solver_options.pop("fewest_cuts", True))
-    conditional = bool(solver_options.pop("conditional", True))
-    settings = SolverSettings(**solver_options)
+    options = _Options.parse(solver_options, extra_phases)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
-    run = _Run(scenario, started, deadline, settings, extra_phases, fewest_cuts, conditional)
+    run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
     try:
-        return run.plan(lattice, holding, integral, use_bound, max_phases)
+        return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
     except TimeUp:
         return run.out_of_time()
+
+
+@dataclasses.dataclass(frozen=True)
+class _Options:
+    """:func:`plan`'s own solver options and the :class:`SolverSettings` of the rest."""
+
+    integral: bool
+    lower_bound: bool
+    fewest_cuts: bool
+    conditional: bool
+    settings: SolverSettings
+
+    @classmethod
+    def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
+        """Check ``solver_options`` and ``extra_phases`` (``TypeError``, ``ValueError``) and split the options."""
+        unknown = set(solver_options) - _PLANNER_OPTIONS - set(SolverSettings.__dataclass_fields__)
+        if unknown:
+            raise TypeError(f"plan() got unknown solver option(s): {', '.join(sorted(unknown))}")
+        if not isinstance(extra_phases, int) or extra_phases < 0:
+            raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
+        options = dict(solver_options)
+        own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
+        return cls(*own, SolverSettings(**options))
 
 
 @dataclasses.dataclass
@@ -208,6 +224,20 @@ class _Run:
         many = holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0)
         if many and deadline.left() < FIRST_PLAN_BELOW_S:
             self.first_plan(problem, lattice)
+        problem, pairs, first, fewer_infeasible = self.lower_bound(problem, use_bound)
+        if many:
+            self.better_first_plan(problem, lattice, pairs, first, fewer_infeasible and self.fewest_cuts)
+        last = max_phases if max_phases is not None else first + EXTRA_PHASES
+        return self.deepen(problem, pairs, first, last, fewer_infeasible, max_phases)
+
+    def lower_bound(self, problem: Problem, use_bound: bool) -> tuple[Problem, PairCosts | None, int, bool]:
+        """The phases to start deepening at (at least 3); with ``use_bound`` the relaxation's bounds too.
+
+        Returns the problem (with the relaxation's ``earliest`` and ``min_travel`` when
+        ``use_bound``), the pair costs (None without ``use_bound``), the first phase count
+        and whether one phase fewer is proven to admit no plan.
+        """
+        deadline = self.deadline
         t_bound = time.perf_counter()
         free = Connectivity(problem, deadline)
         pairs = PairCosts(problem, free, deadline) if use_bound else None
@@ -220,21 +250,28 @@ class _Run:
         else:
             proven = counting_bound(problem)
         first = max(3, proven)
-        stats["lower_bound"] = first
-        stats["lower_bound_s"] += time.perf_counter() - t_bound
-        fewer_infeasible = first == proven  # N - 1 phases proven to admit no plan
-        if many:
-            self.better_first_plan(problem, lattice, pairs, first, fewer_infeasible and self.fewest_cuts)
-        last = max_phases if max_phases is not None else first + EXTRA_PHASES
+        self.stats["lower_bound"] = first
+        self.stats["lower_bound_s"] += time.perf_counter() - t_bound
+        return problem, pairs, first, first == proven  # N - 1 phases proven to admit no plan
+
+    def deepen(
+        self,
+        problem: Problem,
+        pairs: PairCosts | None,
+        first: int,
+        last: int,
+        fewer_infeasible: bool,
+        max_phases: int | None,
+    ) -> Plan:
+        """Solve with ``first``, ``first + 1``, ... ``last`` phases: the first plan found is the answer."""
+        stats = self.stats
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
             outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
             if outcome == "infeasible":
                 fewer_infeasible = True
                 if n_phases == first:
-                    t_reach = time.perf_counter()
-                    reason = unreachable_reason(problem, deadline)
-                    stats["reach_s"] = time.perf_counter() - t_reach
+                    reason = self.unreachable(problem)
                     if reason is not None:
                         stats["reason"] = reason
                         return self.finish("infeasible")
@@ -244,19 +281,30 @@ class _Run:
             status, steps = outcome
             self.best = (status, phases_of(problem, steps))
             if self.extra_phases and status == "optimal":
-                stats["fewest_phases"] = n_phases
-                stats["fewest_phases_objective"] = plan_objective(self.scenario, self.best[1])
-                longer = self.solve(problem, n_phases + self.extra_phases, pairs, warm=steps)
-                if isinstance(longer, tuple):
-                    self.best = (longer[0], phases_of(problem, _without_trailing_idle(longer[1])))
-                else:
-                    self.best = ("feasible", self.best[1])
+                self.solve_longer(problem, pairs, n_phases, steps)
             return self.finish(*self.best)
         if not stats["phases_tried"]:
             stats["reason"] = f"max_phases={max_phases} is below the lower bound {first}"
         else:
             stats["reason"] = f"no plan with {first} to {last} phases (every model was infeasible)"
         return self.finish("infeasible")
+
+    def unreachable(self, problem: Problem) -> str | None:
+        """:func:`expert.milp.reach.unreachable_reason`, timed in ``stats["reach_s"]``."""
+        t_reach = time.perf_counter()
+        reason = unreachable_reason(problem, self.deadline)
+        self.stats["reach_s"] = time.perf_counter() - t_reach
+        return reason
+
+    def solve_longer(self, problem: Problem, pairs: PairCosts | None, n_phases: int, steps: list[Step]) -> None:
+        """Solve again with ``extra_phases`` more phases, warm-started from the optimal ``steps``; keep the best."""
+        self.stats["fewest_phases"] = n_phases
+        self.stats["fewest_phases_objective"] = plan_objective(self.scenario, self.best[1])
+        longer = self.solve(problem, n_phases + self.extra_phases, pairs, warm=steps)
+        if isinstance(longer, tuple):
+            self.best = (longer[0], phases_of(problem, _without_trailing_idle(longer[1])))
+        else:
+            self.best = ("feasible", self.best[1])
 
     def first_plan(self, problem: Problem, lattice: Lattice) -> None:
         """The decoupled plan (:mod:`expert.decoupled`), nearest object first, before any bound: the last resort.
@@ -350,17 +398,7 @@ class _Run:
         stats, deadline = self.stats, self.deadline
         record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
         stats.setdefault("solves", []).append(record)
-        bound = windows = cond = None
-        if pairs is not None:
-            t_bound = time.perf_counter()
-            if self.conditional:  # its least value is min_objective's
-                cond = self.conditional_bounds(problem, n_phases, pairs, fewest)
-                bound = cond.least if math.isfinite(cond.least) else -math.inf  # no path: no cut, as min_objective
-            else:
-                bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
-            windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
-            record["objective_bound"] = bound if math.isfinite(bound) else None
-            stats["lower_bound_s"] += time.perf_counter() - t_bound
+        bound, windows, cond = self.model_bounds(problem, n_phases, pairs, fewest, record)
         t0 = time.perf_counter()
         try:
             milp = build(problem, n_phases, self.settings, bound, windows, deadline, fewest=fewest)
@@ -373,13 +411,7 @@ class _Run:
         stats["build_s"] += t1 - t0
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
-        if cond is not None:
-            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
-        if warm is not None:
-            record["warm_start"] = add_warm_start(milp, warm)
-            known = phases_of(problem, warm)
-            if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
-                record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
+        self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warm, record)
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp
@@ -395,13 +427,55 @@ class _Run:
             return "infeasible"
         if model.getNSols() == 0:
             return "time_limit"
+        return ("optimal" if status == "optimal" else "feasible"), self.read_solution(problem, milp)
+
+    def model_bounds(
+        self, problem: Problem, n_phases: int, pairs: PairCosts | None, fewest: bool, record: dict[str, Any]
+    ) -> tuple[float | None, Windows | None, Conditional | None]:
+        """Eq. 1's lower bound, the action windows and the conditional bounds of the model (None without ``pairs``)."""
+        if pairs is None:
+            return None, None, None
+        deadline = self.deadline
+        cond = None
+        t_bound = time.perf_counter()
+        if self.conditional:  # its least value is min_objective's
+            cond = self.conditional_bounds(problem, n_phases, pairs, fewest)
+            bound = cond.least if math.isfinite(cond.least) else -math.inf  # no path: no cut, as min_objective
+        else:
+            bound = min_objective(problem, n_phases, pairs, deadline, last_at_end=fewest)
+        windows = action_windows(problem, n_phases, pairs, deadline, last_at_end=fewest)
+        record["objective_bound"] = bound if math.isfinite(bound) else None
+        self.stats["lower_bound_s"] += time.perf_counter() - t_bound
+        return bound, windows, cond
+
+    def add_cuts_and_warm_start(
+        self,
+        milp: Milp,
+        problem: Problem,
+        n_phases: int,
+        cond: Conditional | None,
+        warm: list[Step] | None,
+        record: dict[str, Any],
+    ) -> None:
+        """The conditional cuts, the warm start and, when the warm start has ``n_phases``, the options it beats."""
+        if cond is not None:
+            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
+        if warm is not None:
+            record["warm_start"] = add_warm_start(milp, warm)
+            known = phases_of(problem, warm)
+            if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
+                record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
+
+    def read_solution(self, problem: Problem, milp: Milp) -> list[Step]:
+        """The best solution's steps; its objective, dual bound and gap go to the stats."""
+        stats, model = self.stats, milp.model
         steps = read_steps(problem, milp, model.getBestSol())
         stats["milp_objective"] = model.getObjVal()
         dual = model.getDualbound()
         stats["dual_bound"] = dual if abs(dual) < model.infinity() else None
         gap = model.getGap()
         stats["gap"] = gap if stats["dual_bound"] is not None and abs(gap) < model.infinity() else None
-        return ("optimal" if status == "optimal" else "feasible"), steps
+        return steps
 
 
 def _better(scenario: Scenario, phases: tuple, than: tuple) -> bool:

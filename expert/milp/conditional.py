@@ -91,46 +91,126 @@ def conditional_bounds(
     """
     n = n_phases
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
-    step = pair.step
+    graph = _Graph.search(problem, n, pair, deadline)
+    bonus, finished = _arrival_bonus(problem, graph.states, n, last_at_end)
+    total = graph.forward(bonus, deadline) + graph.leave(bonus, finished, deadline) + constant
+    bound: dict = {}
+    for sid in range(1, len(graph.states)):
+        slot = (graph.states[sid][3], graph.states[sid][4])
+        if slot in bound:
+            np.minimum(bound[slot], total[sid], out=bound[slot])
+        else:
+            bound[slot] = total[sid].copy()
+    return Conditional(n, bound)
 
-    # The states (ids in order of discovery), level by level: each action adds one to the actions done,
-    # so every edge goes from one level to the next, and a level's edges are listed by their source.
-    start = (frozenset(), problem.holding, frozenset(), None, None)
-    states, ids = [start], {start: 0}
-    level_starts = [0, 1]  # states of level L: level_starts[L] .. level_starts[L + 1] - 1
-    edge_starts = [0]  # edges out of level L: edge_starts[L] .. edge_starts[L + 1] - 1
-    src: list[int] = []
-    dst: list[int] = []
-    qs: list[int] = []
-    ts: list[float] = []
-    while level_starts[-1] > level_starts[-2]:
-        for sid in range(level_starts[-2], level_starts[-1]):
+
+@dataclass(frozen=True)
+class _Graph:
+    """The skeleton's states with their last action and exit box, level by level, and its edges.
+
+    Each action adds one to the actions done, so every edge goes from one level to the
+    next, and a level's edges are listed by their source. ``src[e] -> dst[e]`` costs at
+    least ``q[e]`` phases and ``t[e]`` metres of travel.
+    """
+
+    n_phases: int
+    states: list[tuple]  # (delivered, held, pushed, last action, its exit box), ids in order of discovery
+    level_starts: list[int]  # states of level L: level_starts[L] .. level_starts[L + 1] - 1
+    edge_starts: list[int]  # edges out of level L: edge_starts[L] .. edge_starts[L + 1] - 1
+    src: np.ndarray
+    dst: np.ndarray
+    q: np.ndarray
+    t: np.ndarray
+
+    @classmethod
+    def search(cls, problem: Problem, n: int, pair: PairCosts, deadline: Deadline) -> _Graph:
+        """Every state reachable from the start with steps of at most ``n - 1`` phases each."""
+        step = pair.step
+        start = (frozenset(), problem.holding, frozenset(), None, None)
+        states, ids = [start], {start: 0}
+        level_starts = [0, 1]
+        edge_starts = [0]
+        src: list[int] = []
+        dst: list[int] = []
+        qs: list[int] = []
+        ts: list[float] = []
+        while level_starts[-1] > level_starts[-2]:
+            for sid in range(level_starts[-2], level_starts[-1]):
+                deadline.check()
+                delivered, held, pushed, _, where = states[sid]
+                for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
+                    for entry, exit_box in pair.actions[key].poses:
+                        q, t = step(where, key[0], entry, exit_box)
+                        if q > n - 1:
+                            continue
+                        succ = (d, h, p, key, exit_box)
+                        j = ids.get(succ)
+                        if j is None:
+                            j = ids[succ] = len(states)
+                            states.append(succ)
+                        src.append(sid)
+                        dst.append(j)
+                        qs.append(q)
+                        ts.append(t)
+            edge_starts.append(len(src))
+            level_starts.append(len(states))
+        return cls(
+            n,
+            states,
+            level_starts,
+            edge_starts,
+            np.asarray(src, dtype=np.intp),
+            np.asarray(dst, dtype=np.intp),
+            np.asarray(qs, dtype=np.intp),
+            np.asarray(ts, dtype=float),
+        )
+
+    def forward(self, bonus: np.ndarray, deadline: Deadline) -> np.ndarray:
+        """The cheapest path to s at phase t, with slack (a prefix minimum over t), bonus included."""
+        n, cols = self.n_phases, np.arange(self.n_phases)
+        src_a, dst_a, q_a, t_a = self.src, self.dst, self.q, self.t
+        forward = np.full((len(self.states), 2 * n), math.inf)  # left half: inf, so that a shift by q reads inf
+        forward[0, n] = 0.0
+        for level in range(len(self.edge_starts) - 1):
+            e0, e1 = self.edge_starts[level], self.edge_starts[level + 1]
+            if e0 == e1:
+                continue
             deadline.check()
-            delivered, held, pushed, _, where = states[sid]
-            for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-                for entry, exit_box in pair.actions[key].poses:
-                    q, t = step(where, key[0], entry, exit_box)
-                    if q > n - 1:
-                        continue
-                    succ = (d, h, p, key, exit_box)
-                    j = ids.get(succ)
-                    if j is None:
-                        j = ids[succ] = len(states)
-                        states.append(succ)
-                    src.append(sid)
-                    dst.append(j)
-                    qs.append(q)
-                    ts.append(t)
-        edge_starts.append(len(src))
-        level_starts.append(len(states))
-    count = len(states)
-    src_a, dst_a = np.asarray(src, dtype=np.intp), np.asarray(dst, dtype=np.intp)
-    q_a, t_a = np.asarray(qs, dtype=np.intp), np.asarray(ts, dtype=float)
-    cols = np.arange(n)
+            order = e0 + np.argsort(dst_a[e0:e1], kind="stable")
+            targets = dst_a[order]
+            values = forward[src_a[order][:, None], (n - q_a[order])[:, None] + cols] + t_a[order][:, None]
+            firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
+            arrive = np.minimum.reduceat(values, firsts, axis=0)
+            reached = targets[firsts]
+            forward[reached, n:] = np.minimum.accumulate(arrive, axis=1) + bonus[reached]
+        return forward[:, n:]
 
-    # Eq. 1's W1 t for arriving at each state at phase t (inf where a last place cannot be).
-    bonus = np.zeros((count, n))
-    finished = np.zeros(count, dtype=bool)
+    def leave(self, bonus: np.ndarray, finished: np.ndarray, deadline: Deadline) -> np.ndarray:
+        """The cheapest way to finish from s at phase t; through = bonus + leave, suffix minimum over t."""
+        n, cols = self.n_phases, np.arange(self.n_phases)
+        src_a, dst_a, q_a, t_a = self.src, self.dst, self.q, self.t
+        level_starts, edge_starts = self.level_starts, self.edge_starts
+        leave = np.full((len(self.states), n), math.inf)
+        leave[finished] = 0.0
+        suffix = np.full((len(self.states), 2 * n), math.inf)  # right half: inf (no phase beyond N - 1)
+        for level in range(len(level_starts) - 2, -1, -1):
+            deadline.check()
+            e0, e1 = edge_starts[level], edge_starts[level + 1] if level + 1 < len(edge_starts) else len(src_a)
+            if e1 > e0:
+                sources = src_a[e0:e1]
+                values = suffix[dst_a[e0:e1][:, None], q_a[e0:e1][:, None] + cols] + t_a[e0:e1][:, None]
+                firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
+                leave[sources[firsts]] = np.minimum.reduceat(values, firsts, axis=0)
+            rows = slice(level_starts[level], level_starts[level + 1])
+            suffix[rows, :n] = np.minimum.accumulate((bonus[rows] + leave[rows])[:, ::-1], axis=1)[:, ::-1]
+        return leave
+
+
+def _arrival_bonus(problem: Problem, states: list[tuple], n: int, last_at_end: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Eq. 1's W1 t for arriving at each state at phase t (inf where a last place cannot be); which states finish."""
+    cols = np.arange(n)
+    bonus = np.zeros((len(states), n))
+    finished = np.zeros(len(states), dtype=bool)
     for sid, (delivered, _, pushed, key, _) in enumerate(states):
         finished[sid] = all_done(problem, delivered, pushed)
         if key is not None and key[0] == "place":
@@ -139,48 +219,7 @@ def conditional_bounds(
                 bonus[sid, n - 1] = DELIVERY_BONUS * (n - 1)
             else:
                 bonus[sid] = DELIVERY_BONUS * cols
-
-    # Forward: the cheapest path to s at phase t, with slack (a prefix minimum over t), bonus included.
-    forward = np.full((count, 2 * n), math.inf)  # left half: inf, so that a shift by q reads inf
-    forward[0, n] = 0.0
-    for level in range(len(edge_starts) - 1):
-        e0, e1 = edge_starts[level], edge_starts[level + 1]
-        if e0 == e1:
-            continue
-        deadline.check()
-        order = e0 + np.argsort(dst_a[e0:e1], kind="stable")
-        targets = dst_a[order]
-        values = forward[src_a[order][:, None], (n - q_a[order])[:, None] + cols] + t_a[order][:, None]
-        firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
-        arrive = np.minimum.reduceat(values, firsts, axis=0)
-        reached = targets[firsts]
-        forward[reached, n:] = np.minimum.accumulate(arrive, axis=1) + bonus[reached]
-    forward = forward[:, n:]
-
-    # Backward: the cheapest way to finish from s at phase t; through = bonus + leave, suffix minimum over t.
-    leave = np.full((count, n), math.inf)
-    leave[finished] = 0.0
-    suffix = np.full((count, 2 * n), math.inf)  # right half: inf (no phase beyond N - 1)
-    for level in range(len(level_starts) - 2, -1, -1):
-        deadline.check()
-        e0, e1 = edge_starts[level], edge_starts[level + 1] if level + 1 < len(edge_starts) else len(src)
-        if e1 > e0:
-            sources = src_a[e0:e1]
-            values = suffix[dst_a[e0:e1][:, None], q_a[e0:e1][:, None] + cols] + t_a[e0:e1][:, None]
-            firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
-            leave[sources[firsts]] = np.minimum.reduceat(values, firsts, axis=0)
-        rows = slice(level_starts[level], level_starts[level + 1])
-        suffix[rows, :n] = np.minimum.accumulate((bonus[rows] + leave[rows])[:, ::-1], axis=1)[:, ::-1]
-
-    total = forward + leave + constant
-    bound: dict = {}
-    for sid in range(1, count):
-        slot = (states[sid][3], states[sid][4])
-        if slot in bound:
-            np.minimum(bound[slot], total[sid], out=bound[slot])
-        else:
-            bound[slot] = total[sid].copy()
-    return Conditional(n, bound)
+    return bonus, finished
 
 
 def exit_box_of(option) -> IndexBox:
