@@ -71,52 +71,7 @@ class RobotBody:
         self.radius = radius
         self.arm_height = arm_height
         wrist_length = max(arm_height - lowest_hand, 2 * HAND_HALF_SIZE)
-        half_base = BASE_HEIGHT / 2
-        mast_length = arm_height - BASE_HEIGHT
-        base_collision = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=BASE_HEIGHT)
-        base_visual = client.createVisualShape(
-            pybullet.GEOM_CYLINDER, radius=radius, length=BASE_HEIGHT, rgbaColor=BASE_COLOR
-        )
-        # The lift link's frame is at the arm's height; its column is drawn down to the base.
-        mast_visual = client.createVisualShape(
-            pybullet.GEOM_BOX,
-            halfExtents=[MAST_HALF_SIZE, MAST_HALF_SIZE, mast_length / 2],
-            visualFramePosition=[0, 0, -mast_length / 2],
-            rgbaColor=LINK_COLOR,
-        )
-        # The forward link's frame is at the wrist; the arm is drawn behind it.
-        arm_visual = client.createVisualShape(
-            pybullet.GEOM_BOX,
-            halfExtents=[ARM_VISUAL_LENGTH / 2, ARM_HALF_WIDTH, ARM_HALF_WIDTH],
-            visualFramePosition=[-ARM_VISUAL_LENGTH / 2, 0, 0],
-            rgbaColor=LINK_COLOR,
-        )
-        # The wrist link's frame is the hand's centre; the wrist rod is drawn above it.
-        hand_collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[HAND_HALF_SIZE] * 3)
-        hand_visual = client.createVisualShapeArray(
-            shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_CYLINDER],
-            halfExtents=[[HAND_HALF_SIZE] * 3, [0, 0, 0]],
-            radii=[0, WRIST_RADIUS],
-            lengths=[0, wrist_length],
-            rgbaColors=[HAND_COLOR, LINK_COLOR],
-            visualFramePositions=[[0, 0, 0], [0, 0, HAND_HALF_SIZE + wrist_length / 2]],
-        )
-        self.body = client.createMultiBody(
-            baseMass=0.0,
-            baseCollisionShapeIndex=base_collision,
-            baseVisualShapeIndex=base_visual,
-            basePosition=[0.0, 0.0, half_base],
-            linkMasses=[0.0] * 4,
-            linkCollisionShapeIndices=[-1, -1, -1, -1],
-            linkVisualShapeIndices=[mast_visual, arm_visual, -1, hand_visual],
-            linkPositions=[[0, 0, half_base], [0, 0, 0], [0, 0, 0], [0, 0, 0]],
-            linkOrientations=[[0, 0, 0, 1]] * 4,
-            linkInertialFramePositions=[[0, 0, 0]] * 4,
-            linkInertialFrameOrientations=[[0, 0, 0, 1]] * 4,
-            linkParentIndices=[0, 1, 2, 3],
-            linkJointTypes=[pybullet.JOINT_PRISMATIC] * 4,
-            linkJointAxis=[[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
-        )
+        self.body, hand_collision = _build_robot(client, radius, arm_height, wrist_length)
         client.setCollisionFilterGroupMask(self.body, -1, GROUP_ROBOT, MASK_NONE)
         # Asleep from the start, the robot costs the physics engine nothing (a third of a step); it is
         # only ever teleported and touches nothing, so it never wakes, in this world or a rebuilt one.
@@ -201,3 +156,60 @@ class RobotBody:
         """World ``(x, y)`` (metres) of the base centre, as PyBullet has it."""
         position, _ = self._client.getBasePositionAndOrientation(self.body)
         return (position[0], position[1])
+
+
+def _build_robot(client: QuietClient, radius: float, arm_height: float, wrist_length: float) -> tuple[int, int]:
+    """The robot's multibody (base, lift, forward and lateral links, wrist) and the hand's collision shape."""
+    half_base = BASE_HEIGHT / 2
+    mast_length = arm_height - BASE_HEIGHT
+    base_collision = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=BASE_HEIGHT)
+    base_visual = client.createVisualShape(
+        pybullet.GEOM_CYLINDER, radius=radius, length=BASE_HEIGHT, rgbaColor=BASE_COLOR
+    )
+    mast_visual, arm_visual, hand_collision, hand_visual = _link_shapes(client, mast_length, wrist_length)
+    body = client.createMultiBody(
+        baseMass=0.0,
+        baseCollisionShapeIndex=base_collision,
+        baseVisualShapeIndex=base_visual,
+        basePosition=[0.0, 0.0, half_base],
+        linkMasses=[0.0] * 4,
+        linkCollisionShapeIndices=[-1, -1, -1, -1],
+        linkVisualShapeIndices=[mast_visual, arm_visual, -1, hand_visual],
+        linkPositions=[[0, 0, half_base], [0, 0, 0], [0, 0, 0], [0, 0, 0]],
+        linkOrientations=[[0, 0, 0, 1]] * 4,
+        linkInertialFramePositions=[[0, 0, 0]] * 4,
+        linkInertialFrameOrientations=[[0, 0, 0, 1]] * 4,
+        linkParentIndices=[0, 1, 2, 3],
+        linkJointTypes=[pybullet.JOINT_PRISMATIC] * 4,
+        linkJointAxis=[[0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    )
+    return body, hand_collision
+
+
+def _link_shapes(client: QuietClient, mast_length: float, wrist_length: float) -> tuple[int, int, int, int]:
+    """The visual shapes of the mast, the arm and the hand with its wrist rod, and the hand's collision box."""
+    # The lift link's frame is at the arm's height; its column is drawn down to the base.
+    mast_visual = client.createVisualShape(
+        pybullet.GEOM_BOX,
+        halfExtents=[MAST_HALF_SIZE, MAST_HALF_SIZE, mast_length / 2],
+        visualFramePosition=[0, 0, -mast_length / 2],
+        rgbaColor=LINK_COLOR,
+    )
+    # The forward link's frame is at the wrist; the arm is drawn behind it.
+    arm_visual = client.createVisualShape(
+        pybullet.GEOM_BOX,
+        halfExtents=[ARM_VISUAL_LENGTH / 2, ARM_HALF_WIDTH, ARM_HALF_WIDTH],
+        visualFramePosition=[-ARM_VISUAL_LENGTH / 2, 0, 0],
+        rgbaColor=LINK_COLOR,
+    )
+    # The wrist link's frame is the hand's centre; the wrist rod is drawn above it.
+    hand_collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=[HAND_HALF_SIZE] * 3)
+    hand_visual = client.createVisualShapeArray(
+        shapeTypes=[pybullet.GEOM_BOX, pybullet.GEOM_CYLINDER],
+        halfExtents=[[HAND_HALF_SIZE] * 3, [0, 0, 0]],
+        radii=[0, WRIST_RADIUS],
+        lengths=[0, wrist_length],
+        rgbaColors=[HAND_COLOR, LINK_COLOR],
+        visualFramePositions=[[0, 0, 0], [0, 0, HAND_HALF_SIZE + wrist_length / 2]],
+    )
+    return mast_visual, arm_visual, hand_collision, hand_visual

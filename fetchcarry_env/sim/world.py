@@ -248,14 +248,37 @@ class Simulation:
         robot = self._robot_body
         carry = robot.hand if self._held is not None else None
         ux, uy = heading_vector(direction)
-        (_, _, center_z), _ = self._poses[clutter_id]
-        item_height = self._scenario.clutter_item(clutter_id).height
-        hand_z = center_z - item_height / 2 + max(item_height / 2, HAND_HALF_SIZE + HAND_LIFT)
+        hand_z = self._push_hand_height(clutter_id)
         robot.set_base(base, heading)
         robot.set_hand(HandPose(hand[0], hand[1], hand_z))
         self._fresh_contacts()
         start_x, start_y = (b + d for b, d in zip(base, to_world_frame(heading, *hand), strict=True))
         robot.grip_pusher((start_x, start_y, hand_z))
+        travelled, stalled, steps = self._stroke((start_x, start_y, hand_z), (ux, uy), length)
+        robot.release_pusher()  # the hand lets go and the world settles
+        for _ in range(PUSH_SETTLE_STEPS):
+            self.client.stepSimulation()
+        steps += PUSH_SETTLE_STEPS
+        robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
+        held = self._hand_back(carry)
+        self._read_poses()
+        return PushOutcome(travelled=max(travelled, 0.0), stalled=stalled, simulation_steps=steps, held=held)
+
+    def _push_hand_height(self, clutter_id: str) -> float:
+        """The hand's height for a push of ``clutter_id``: its mid-height, at least just above the table top."""
+        (_, _, center_z), _ = self._poses[clutter_id]
+        item_height = self._scenario.clutter_item(clutter_id).height
+        return center_z - item_height / 2 + max(item_height / 2, HAND_HALF_SIZE + HAND_LIFT)
+
+    def _stroke(self, start: Point3, unit: Point, length: float) -> tuple[float, bool, int]:
+        """Drive the gripped pusher from ``start`` along ``unit`` (:func:`stroke_profile`) until done or jammed.
+
+        Returns how far the pusher went along the stroke (``length`` unless it stalled),
+        whether it stalled, and the simulation steps it took.
+        """
+        start_x, start_y, hand_z = start
+        ux, uy = unit
+        robot = self._robot_body
         step, drive, reached = self.client.stepSimulation, robot.drive_pusher, robot.pusher_position
         travelled, stalled, steps = 0.0, False, 0
         for s in stroke_profile(length):
@@ -269,20 +292,19 @@ class Simulation:
                 break
         if not stalled:
             travelled = length
-        robot.release_pusher()  # the hand lets go and the world settles
-        for _ in range(PUSH_SETTLE_STEPS):
-            step()
-        steps += PUSH_SETTLE_STEPS
-        robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
-        held = None
+        return travelled, stalled, steps
+
+    def _hand_back(self, carry: HandPose | None) -> Point3 | None:
+        """After a stroke, the hand at rest, or back where it carried the object (then where the object is)."""
+        robot = self._robot_body
         if carry is None:
             robot.set_hand(robot.rest_hand)
-        else:  # the held object fell freely through the stroke, touching nothing: back into the hand
-            robot.set_hand(carry)
-            held = self._hand_world_position()
-            self._grasp(self._held, held)
-        self._read_poses()
-        return PushOutcome(travelled=max(travelled, 0.0), stalled=stalled, simulation_steps=steps, held=held)
+            return None
+        # The held object fell freely through the stroke, touching nothing: back into the hand.
+        robot.set_hand(carry)
+        held = self._hand_world_position()
+        self._grasp(self._held, held)
+        return held
 
     # ------------------------------------------------------------------ reading back
     def item_position(self, name: str) -> Point3:
