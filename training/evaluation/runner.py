@@ -29,9 +29,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.observation import Capacity
 from training.data.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
-from training.evaluation.episodes import close_all, run_task
 from training.errors import BenchmarkError
+from training.evaluation.episodes import close_all, run_task
 from training.evaluation.metrics import Row, fill_expert_costs, summarise
 from training.evaluation.report import plot_splits, source_table, summary_markdown
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
@@ -160,8 +161,6 @@ def with_references(policies: list[str]) -> list[PolicySpec]:
 
 def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
     """Every scenario fits the observation capacity of every policy; :class:`BenchmarkError` names what does not."""
-    from fetchcarry_env.observation import Capacity
-
     problems = []
     for spec in specs:
         capacity = spec.env_options.get("capacity")

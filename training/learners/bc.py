@@ -28,7 +28,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
+from fetchcarry_env.phases import PhaseLayout
 from training.data.expert_labels import Demonstrations, record_demonstrations  # noqa: F401  (re-exported)
 from training.learners import runs
 from training.learners.encoders import CandidateScorer, build_network
@@ -223,8 +224,6 @@ class ReturnMemory:
         self._world_now = b""  # the world of the state last given to arrive
         self._moves: np.ndarray | None = None  # (K,) bool: the approach and waypoint candidates
         if active:
-            from fetchcarry_env.observation import FIELDS, observation_layout
-
             layout = observation_layout(capacity)
             self._base = np.arange(layout["robot"].start, layout["robot"].start + 2)  # x, y
             width = len(FIELDS["object"])
@@ -266,8 +265,6 @@ class ReturnMemory:
 
 def candidates_of_kinds(capacity: Capacity, candidates: int, kinds: tuple[str, ...]) -> np.ndarray:
     """(K,) bool: the candidates of the phase layout's ``kinds`` (``"approach"``, ``"waypoint"``, ...)."""
-    from fetchcarry_env.phases import PhaseLayout
-
     layout = PhaseLayout.for_postures(capacity=capacity)
     if layout.size != candidates:
         raise ValueError(f"the network scores {candidates} candidates, the phase layout has {layout.size}")
@@ -402,7 +399,8 @@ def train_bc(
 
     Deterministic on CPU for one ``config.seed``. ``progress``, if given, is called
     with each epoch's metrics (a dict). The run folder (:mod:`training.learners.runs`)
-    loads with :func:`training.load_policy`; ``ValueError`` if ``out`` holds a run already.
+    loads with :func:`training.load_policy`; :class:`~training.learners.runs.RunFolderError`
+    (bad input) if ``out`` holds a run already.
     """
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
     folder = None
