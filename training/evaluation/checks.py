@@ -16,17 +16,15 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
-import numpy as np
 import torch
 
-from training.learners.bc import BCConfig, record_demonstrations, train_bc
 from training.envs import make_env
+from training.learners.bc import BCConfig, record_demonstrations, train_bc
 from training.learners.heldout import evaluate, evaluate_env_actions, expert_costs, summarise
 from training.learners.options import HELDOUT_SEED_BASE
 from training.policies.greedy import GreedyPolicy
-from training.policies.random_phases import RandomPhasePolicy
+from training.policies.random import RandomPhasePolicy
 
 
 def check_bc(
@@ -92,7 +90,7 @@ def check_ppo(
     while done < steps:
         model.learn(chunk, reset_num_timesteps=False)
         done += chunk
-        summary = summarise(evaluate(_Masked(model), family, seeds), expert)
+        summary = summarise(evaluate(model, family, seeds), expert)
         curve.append((done, time.perf_counter() - start, summary.success, summary.cost_ratio))
         report(summary.line(f"ppo {done}") + f"  ({time.perf_counter() - start:.0f} s)")
     if out is not None:
@@ -100,20 +98,3 @@ def check_ppo(
         model.save(out / "ppo.zip")
         lines = ["steps,seconds,success,cost_ratio", *(",".join(str(v) for v in row) for row in curve)]
         (out / "metrics.csv").write_text("\n".join(lines) + "\n")
-
-
-class _Masked:
-    """MaskablePPO's predict with the masks passed through (the evaluation gives them)."""
-
-    def __init__(self, model: Any) -> None:
-        self.model = model
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-        action_masks: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, Any]:
-        return self.model.predict(observation, state, episode_start, deterministic, action_masks=action_masks)
