@@ -202,17 +202,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         width: int = DEFAULT_IMAGE_SIZE[0],
         height: int = DEFAULT_IMAGE_SIZE[1],
     ) -> None:
-        if scenario is not None and family is not None:
-            raise ValueError("give a scenario or a family, not both")
-        if render_mode is not None and render_mode not in type(self).metadata["render_modes"]:
-            modes = type(self).metadata["render_modes"]
-            raise ValueError(f"render_mode must be one of {modes} or None, got {render_mode!r}")
-        if camera not in CAMERAS:
-            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
-        if width < 1 or height < 1:
-            raise ValueError(f"image size must be positive, got {width} x {height}")
-        if render_mode == "human":
-            check_display()
+        self._check_arguments(scenario, family, render_mode, camera, width, height)
         # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
         modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
         self.metadata = {**type(self).metadata, "render_modes": modes}
@@ -243,6 +233,23 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._path_length = 0.0
         self._travel_cost = 0.0
         self._collisions = 0
+
+    @classmethod
+    def _check_arguments(
+        cls, scenario: object, family: str | None, render_mode: str | None, camera: str, width: int, height: int
+    ) -> None:
+        """``ValueError`` for both a scenario and a family, an unknown mode or camera, or an empty image."""
+        if scenario is not None and family is not None:
+            raise ValueError("give a scenario or a family, not both")
+        if render_mode is not None and render_mode not in cls.metadata["render_modes"]:
+            modes = cls.metadata["render_modes"]
+            raise ValueError(f"render_mode must be one of {modes} or None, got {render_mode!r}")
+        if camera not in CAMERAS:
+            raise ValueError(f"camera must be one of {', '.join(CAMERAS)}, got {camera!r}")
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be positive, got {width} x {height}")
+        if render_mode == "human":
+            check_display()
 
     # ------------------------------------------------------------------ public state
     @property

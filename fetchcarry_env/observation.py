@@ -226,42 +226,20 @@ def decode(observation: dict[str, np.ndarray] | np.ndarray, capacity: Capacity) 
     stands where it is now. The result is not validated: it is a state, not a file.
     """
     flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, dtype=np.float64)
-    flat = flat.tolist()  # plain Python floats from here on
-    cursor = 0
-
-    def take(n: int) -> list[float]:
-        nonlocal cursor
-        chunk = flat[cursor : cursor + n]
-        cursor += n
-        return chunk
-
-    def rows(count: int, width: int) -> list[list[float]]:
-        chunk = take(count * width)
-        return [row for row in (chunk[k * width : (k + 1) * width] for k in range(count)) if row[0] > 0.5]
-
+    reader = _Reader(flat.tolist())  # plain Python floats from here on
+    take, rows = reader.take, reader.rows
     area = Rect(*take(_AREA))
     robot_row = take(_ROBOT)
     base, radius, heading = (robot_row[0], robot_row[1]), robot_row[2], HEADINGS[int(np.argmax(robot_row[3:]))]
     postures = tuple(
         Posture(f"posture_{k}", (r[1], r[2]), (r[3], r[4])) for k, r in enumerate(rows(capacity.postures, _POSTURE))
     )
-    object_rows = rows(capacity.objects, _OBJECT)
+    objects, positions, holding = _decode_objects(rows(capacity.objects, _OBJECT))
     clutter_rows = rows(capacity.clutter, _CLUTTER)
     tables = tuple(Table(f"table_{k}", Rect(*r[1:5]), r[5]) for k, r in enumerate(rows(capacity.tables, _TABLE)))
     obstacles = tuple(
         Obstacle(f"obstacle_{k}", Rect(*r[1:5])) for k, r in enumerate(rows(capacity.obstacles, _OBSTACLE))
     )
-
-    objects, positions, holding = [], {}, None
-    for k, r in enumerate(object_rows):
-        object_id = f"object_{k}"
-        position, goal = (r[1], r[2], r[3]), (r[4], r[5])
-        held = r[9] > 0.5
-        if held:
-            holding = object_id
-        start = goal if held else (r[1], r[2])
-        objects.append(DeliveryObject(object_id, start, goal, r[7], r[8]))
-        positions[object_id] = position
     clutter = tuple(Clutter(f"clutter_{k}", Rect(*r[1:5]), r[5]) for k, r in enumerate(clutter_rows))
     scenario = Scenario(
         name="observed",
@@ -269,7 +247,7 @@ def decode(observation: dict[str, np.ndarray] | np.ndarray, capacity: Capacity) 
         robot=Robot(start=base, heading=heading, radius=radius, postures=postures),
         tables=tables,
         obstacles=obstacles,
-        objects=tuple(objects),
+        objects=objects,
         clutter=clutter,
     )
     state = WorldState(
@@ -280,6 +258,39 @@ def decode(observation: dict[str, np.ndarray] | np.ndarray, capacity: Capacity) 
         clutter={c.id: c.rect.center for c in clutter},
     )
     return scenario, state
+
+
+class _Reader:
+    """An observation vector read front to back, part by part."""
+
+    def __init__(self, flat: list[float]) -> None:
+        self.flat = flat
+        self.cursor = 0
+
+    def take(self, n: int) -> list[float]:
+        chunk = self.flat[self.cursor : self.cursor + n]
+        self.cursor += n
+        return chunk
+
+    def rows(self, count: int, width: int) -> list[list[float]]:
+        """The present rows (first feature above 0.5) of ``count`` slots of ``width`` features."""
+        chunk = self.take(count * width)
+        return [row for row in (chunk[k * width : (k + 1) * width] for k in range(count)) if row[0] > 0.5]
+
+
+def _decode_objects(object_rows: list[list[float]]) -> tuple[tuple[DeliveryObject, ...], dict[str, Point3], str | None]:
+    """The objects of the rows (a held object starts at its goal), where each is now, and the one held."""
+    objects, positions, holding = [], {}, None
+    for k, r in enumerate(object_rows):
+        object_id = f"object_{k}"
+        position, goal = (r[1], r[2], r[3]), (r[4], r[5])
+        held = r[9] > 0.5
+        if held:
+            holding = object_id
+        start = goal if held else (r[1], r[2])
+        objects.append(DeliveryObject(object_id, start, goal, r[7], r[8]))
+        positions[object_id] = position
+    return tuple(objects), positions, holding
 
 
 def with_state(scenario: Scenario, state: WorldState) -> Scenario:

@@ -339,61 +339,74 @@ def _rule_no_overlap(scenario: Scenario) -> list[str]:
 
 def _rule_numbers(scenario: Scenario) -> list[str]:
     """Rule 6: finite numbers of sane size (coordinates, radii, heights, range and rectangle widths)."""
-    out: list[str] = []
-
-    def finite(owner: str, name: str, value: float) -> bool:
-        if math.isfinite(value):
-            return True
-        out.append(f"rule 6 (numbers): {owner} {name} is not a finite number")
-        return False
-
-    def coordinate(owner: str, name: str, value: float) -> None:
-        if finite(owner, name, value) and abs(value) > COORD_LIMIT:
-            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is more than {COORD_LIMIT:g} m from the origin")
-
-    def size(owner: str, name: str, value: float, high: float = COORD_LIMIT) -> None:
-        if not finite(owner, name, value):
-            return
-        if value < 0:
-            out.append(f"rule 6 (numbers): {owner} {name} is negative")
-        elif value < MIN_SIZE:
-            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is less than {MIN_SIZE * 1000:g} mm")
-        elif value > high:
-            out.append(f"rule 6 (numbers): {owner} {name} {value:g} is more than {high:g} m")
-
-    def rect(owner: str, r: Rect) -> None:
-        for name, value in zip(("min x", "min y", "max x", "max y"), (r.min_x, r.min_y, r.max_x, r.max_y), strict=True):
-            coordinate(owner, name, value)
-        width, depth = r.size
-        if r.is_proper and min(width, depth) < MIN_SIZE:
-            out.append(f"rule 6 (numbers): {owner} is {width:g} x {depth:g} m, less than {MIN_SIZE * 1000:g} mm wide")
-
-    rect("area", scenario.area)
-    size("robot", "radius", scenario.robot.radius)
+    check = _Numbers()
+    check.rect("area", scenario.area)
+    check.size("robot", "radius", scenario.robot.radius)
     for name, value in zip(("start x", "start y"), scenario.robot.start, strict=True):
-        coordinate("robot", name, value)
+        check.coordinate("robot", name, value)
     for posture in scenario.robot.postures:
-        for axis in ("forward", "lateral"):
-            low, high = getattr(posture, axis)
-            coordinate(f"posture {posture.name!r}", f"{axis} range", low)
-            coordinate(f"posture {posture.name!r}", f"{axis} range", high)
-            if math.isfinite(low) and math.isfinite(high) and high < low:
-                out.append(f"rule 6 (numbers): posture {posture.name!r} {axis} range has a negative width")
+        check.posture(posture)
     for table in scenario.tables:
-        rect(repr(table.id), table.rect)
-        size(repr(table.id), "height", table.height)
+        check.rect(repr(table.id), table.rect)
+        check.size(repr(table.id), "height", table.height)
     for obstacle in scenario.obstacles:
-        rect(repr(obstacle.id), obstacle.rect)
+        check.rect(repr(obstacle.id), obstacle.rect)
     for obj in scenario.objects:
         for which, point in (("start", obj.start), ("goal", obj.goal)):
-            coordinate(repr(obj.id), f"{which} x", point[0])
-            coordinate(repr(obj.id), f"{which} y", point[1])
-        size(repr(obj.id), "radius", obj.radius)
-        size(repr(obj.id), "height", obj.height, _headroom(scenario, obj.start, obj.goal))
+            check.coordinate(repr(obj.id), f"{which} x", point[0])
+            check.coordinate(repr(obj.id), f"{which} y", point[1])
+        check.size(repr(obj.id), "radius", obj.radius)
+        check.size(repr(obj.id), "height", obj.height, _headroom(scenario, obj.start, obj.goal))
     for item in scenario.clutter:
-        rect(repr(item.id), item.rect)
-        size(repr(item.id), "height", item.height, _headroom(scenario, item.rect.center))
-    return out
+        check.rect(repr(item.id), item.rect)
+        check.size(repr(item.id), "height", item.height, _headroom(scenario, item.rect.center))
+    return check.out
+
+
+class _Numbers:
+    """Rule 6's checks of single numbers; the violations gather in ``out``."""
+
+    def __init__(self) -> None:
+        self.out: list[str] = []
+
+    def finite(self, owner: str, name: str, value: float) -> bool:
+        if math.isfinite(value):
+            return True
+        self.out.append(f"rule 6 (numbers): {owner} {name} is not a finite number")
+        return False
+
+    def coordinate(self, owner: str, name: str, value: float) -> None:
+        if self.finite(owner, name, value) and abs(value) > COORD_LIMIT:
+            self.out.append(
+                f"rule 6 (numbers): {owner} {name} {value:g} is more than {COORD_LIMIT:g} m from the origin"
+            )
+
+    def size(self, owner: str, name: str, value: float, high: float = COORD_LIMIT) -> None:
+        if not self.finite(owner, name, value):
+            return
+        if value < 0:
+            self.out.append(f"rule 6 (numbers): {owner} {name} is negative")
+        elif value < MIN_SIZE:
+            self.out.append(f"rule 6 (numbers): {owner} {name} {value:g} is less than {MIN_SIZE * 1000:g} mm")
+        elif value > high:
+            self.out.append(f"rule 6 (numbers): {owner} {name} {value:g} is more than {high:g} m")
+
+    def rect(self, owner: str, r: Rect) -> None:
+        for name, value in zip(("min x", "min y", "max x", "max y"), (r.min_x, r.min_y, r.max_x, r.max_y), strict=True):
+            self.coordinate(owner, name, value)
+        width, depth = r.size
+        if r.is_proper and min(width, depth) < MIN_SIZE:
+            self.out.append(
+                f"rule 6 (numbers): {owner} is {width:g} x {depth:g} m, less than {MIN_SIZE * 1000:g} mm wide"
+            )
+
+    def posture(self, posture: Posture) -> None:
+        for axis in ("forward", "lateral"):
+            low, high = getattr(posture, axis)
+            self.coordinate(f"posture {posture.name!r}", f"{axis} range", low)
+            self.coordinate(f"posture {posture.name!r}", f"{axis} range", high)
+            if math.isfinite(low) and math.isfinite(high) and high < low:
+                self.out.append(f"rule 6 (numbers): posture {posture.name!r} {axis} range has a negative width")
 
 
 def _headroom(scenario: Scenario, *points: Point) -> float:

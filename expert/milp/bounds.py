@@ -399,6 +399,11 @@ def action_windows(
     start = (frozenset(), problem.holding, frozenset(), None)
     arrival = {state: int(phase) for phase, state in settle(start, expand, deadline, limit=n_phases)}
     remaining = _phases_still_needed(problem, arrival, pair, n_phases, deadline)
+    return _union_of_windows(problem, n_phases, arrival, remaining, last_at_end)
+
+
+def _union_of_windows(problem: Problem, n_phases: int, arrival: dict, remaining: dict, last_at_end: bool) -> Windows:
+    """:func:`action_windows`' union over the states: ``[arrival(s), N - 1 - remaining(s)]`` per action."""
     keys = list(_actions_by_key(problem))
     phases: dict[tuple[str, str], set[int]] = {}
     given: dict[tuple[tuple[str, str], tuple[str, str], bool], set[int]] = {}

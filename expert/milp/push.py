@@ -29,10 +29,17 @@ from expert.milp.variables import Milp
 
 def add_push_constraints(milp: Milp) -> None:
     """Eq. 20-26 (stroke), once per piece, before the covered object's place, exclusions and precedences."""
+    if not milp.problem.pushes.pushable:
+        return
+    _add_strokes(milp)
+    _add_push_once(milp)
+    _add_exclusions_and_precedences(milp)
+
+
+def _add_strokes(milp: Milp) -> None:
+    """Eq. 20-26: a push phase moves the base by its stroke, along one axis only."""
     problem, model, n = milp.problem, milp.model, milp.n_phases
     plan = problem.pushes
-    if not plan.pushable:
-        return
     di_max = max(abs(c.cells[0]) + abs(c.cells[1]) for c in plan.candidates)
     for k in range(1, n):
         chosen = milp.push_options_at(k)
@@ -48,6 +55,12 @@ def add_push_constraints(milp: Milp) -> None:
             model.addCons(delta >= -big_m * (1 - total), name=f"eq25_no_diagonal_{axis}_{k}")
             length = quicksum(abs(problem.options[o].push.cells[axis]) * z for o, z in chosen)
             model.addCons(moved[k] >= length, name=f"eq20_length_{axis}_{k}")
+
+
+def _add_push_once(milp: Milp) -> None:
+    """Each piece is pushed exactly once, before the place of every object whose goal it covers."""
+    problem, model, n = milp.problem, milp.model, milp.n_phases
+    plan = problem.pushes
     for clutter_id in plan.pushable:
         pushed = milp.pushed[clutter_id]
         for k in range(1, n):
@@ -61,6 +74,12 @@ def add_push_constraints(milp: Milp) -> None:
                 places = milp.action_sum("place", object_id, k)
                 if places is not None:
                     model.addCons(places <= pushed[k - 1], name=f"push_before_place_{clutter_id}_{object_id}_{k}")
+
+
+def _add_exclusions_and_precedences(milp: Milp) -> None:
+    """Strokes that exclude each other, room for the hand behind the piece, and pushes that must come after others."""
+    model, n = milp.model, milp.n_phases
+    plan = milp.problem.pushes
     uses = {index: milp.candidate_uses(index) for index in range(len(plan.candidates))}
     for a, b in plan.exclusive:
         if uses[a] is not None and uses[b] is not None:

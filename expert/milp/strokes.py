@@ -121,7 +121,12 @@ def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...
                 if other != clutter_id and (swept.overlaps_rect(other_rect) or hand.overlaps_rect(other_rect, tol=0.0)):
                     waits.append((len(candidates), other))
             candidates.append(candidate)
-    exclusive = [
+    return PushPlan(pushable, tuple(candidates), blocked, _exclusive_pairs(candidates), tuple(waits))
+
+
+def _exclusive_pairs(candidates: list[PushCandidate]) -> tuple[tuple[int, int], ...]:
+    """Pairs ``(a, b)``, ``a < b``, of strokes of different clutter where one sweeps over where the other ends."""
+    return tuple(
         (a, b)
         for a in range(len(candidates))
         for b in range(a + 1, len(candidates))
@@ -129,8 +134,7 @@ def plan_pushes(scenario: Scenario, grid: Grid, covers: dict[str, tuple[str, ...
         and (
             candidates[a].swept.overlaps_rect(candidates[b].end) or candidates[b].swept.overlaps_rect(candidates[a].end)
         )
-    ]
-    return PushPlan(pushable, tuple(candidates), blocked, tuple(exclusive), tuple(waits))
+    )
 
 
 def _blocked_by(

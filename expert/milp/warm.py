@@ -20,12 +20,22 @@ if TYPE_CHECKING:
 
 def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
     """Values of the model's variables for ``steps`` (padded with idle phases), or None if it does not fit."""
-    problem, n = milp.problem, milp.n_phases
+    n = milp.n_phases
     if len(steps) > n - 1 or not steps:
         return None
     steps = list(steps) + [Step(steps[-1].cell, None)] * (n - 1 - len(steps))
-    index = {id(option): o for o, option in enumerate(problem.options)}
     values = _Values()
+    if not _set_moves(milp, steps, values):
+        return None
+    _set_states(milp, steps, values)
+    if not _set_regions(milp, values):
+        return None
+    return values
+
+
+def _set_moves(milp: Milp, steps: list[Step], values: _Values) -> bool:
+    """The base's lattice point, its move and the option chosen at every phase; False if one is not in the model."""
+    index = {id(option): o for o, option in enumerate(milp.problem.options)}
     for k, step in enumerate(steps, start=1):
         i, j = step.cell
         values[milp.u[k]], values[milp.v[k]] = float(i), float(j)
@@ -34,9 +44,15 @@ def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
         values[milp.mx[k]], values[milp.my[k]], values[milp.mxy[k]] = dx, dy, abs(dx - dy)
         chosen = None if step.option is None else index.get(id(step.option))
         if step.option is not None and (chosen is None or chosen not in milp.z[k]):
-            return None
+            return False
         for o, z in milp.z[k].items():
             values[z] = 1.0 if o == chosen else 0.0
+    return True
+
+
+def _set_states(milp: Milp, steps: list[Step], values: _Values) -> None:
+    """What is held, delivered and pushed (and in which direction) after every phase."""
+    problem = milp.problem
     held = {i: (1.0 if i == problem.holding else 0.0) for i in problem.deliver}
     done = dict.fromkeys(problem.deliver, 0.0)
     pushed = dict.fromkeys(problem.pushes.pushable, 0.0)
@@ -58,17 +74,21 @@ def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
         for key, series in milp._pushed_dir.items():
             if not isinstance(series[k], float):
                 values[series[k]] = by_key.get(key, 0.0)
+
+
+def _set_regions(milp: Milp, values: _Values) -> bool:
+    """The region binaries: the first region holding both ends of each move; False if none does."""
     for k, planes, binaries in milp.regions:
         ends = [(values[milp.u[k]], values[milp.v[k]])]
         if k > 1:
             ends.append((values[milp.u[k - 1]], values[milp.v[k - 1]]))
         holding = [n for n, plane in enumerate(planes) if all(_holds(plane, p) for p in ends)]
         if not holding:
-            return None
+            return False
         if binaries is not None:
             for n, r in enumerate(binaries):
                 values[r] = 1.0 if n == holding[0] else 0.0
-    return values
+    return True
 
 
 def add_warm_start(milp: Milp, steps: list[Step]) -> bool:
