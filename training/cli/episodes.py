@@ -9,15 +9,27 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.errors import UsageError
+from fetchcarry_env.families import FAMILY_NAMES
+from fetchcarry_env.kinematics import DELIVERY_BONUS
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
+from training.evaluation.expert import (
+    DEFAULT_FAMILIES,
+    SUCCESS_GOAL,
+    EvaluationInterrupted,
+    evaluate_expert,
+    results_table,
+)
+from training.pictures.files import render_size
+from training.rollout import run_episode
 
 DEFAULT_DEMO_PICTURE = "episode.png"
 DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
@@ -111,8 +123,6 @@ def return_and_objective(figures: Any) -> list[str]:
     phase it stands at its goal: a cost the planner minimises, so an earlier delivery
     counts more). They share the travel cost and differ in how delivery counts.
     """
-    from fetchcarry_env.kinematics import DELIVERY_BONUS
-
     bonus = DELIVERY_BONUS * figures.delivered
     lines = [
         f"return     {figures.episode_return:.2f} (the env's rewards summed, a gain: +{bonus:.2f} for "
@@ -142,19 +152,13 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
 
 def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
-    from training.rollout import run_episode
-
     if run is not None:
-        from dataclasses import replace
-
         source = replace(source, interface="phases")
 
     if picture is None:
         env = source.build_env()
     else:
-        from training.pictures.episode import GIF_RENDER_SIZE, STILL_RENDER_SIZE, is_gif
-
-        size = GIF_RENDER_SIZE if is_gif(picture) else STILL_RENDER_SIZE
+        size = render_size(picture)
         env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1])
     try:
         policy = source.build_policy(env) if run is None else _load_run(run, env)
@@ -162,22 +166,20 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     finally:
         env.close()
     if picture is not None:
-        from training.pictures.episode import save_episode_picture
+        from training.pictures.episode import save_episode_picture  # matplotlib at its top
 
         save_episode_picture(record, picture)
     return record
 
 
 def _load_run(run: Path, env: Any) -> Any:
-    import torch
+    """The policy of run folder ``run`` for ``env`` (a ``RunFolderError``, bad input, when it is not one)."""
+    import torch  # torch only when a run folder is rolled out
 
-    from training import load_policy
+    from training.learners.runs import load_policy  # torch at its top
 
     torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
-    try:
-        return load_policy(run, env)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
+    return load_policy(run, env)
 
 
 def _run_folder(policy: str) -> Path | None:
@@ -270,8 +272,6 @@ def run_demo(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- evaluate-expert
 def _register_evaluate(commands: argparse._SubParsersAction) -> None:
-    from training.evaluation.expert import DEFAULT_FAMILIES
-
     parser = commands.add_parser(
         "evaluate-expert",
         help="success rate and speed of the expert in physics, per family",
@@ -302,8 +302,7 @@ def _register_evaluate(commands: argparse._SubParsersAction) -> None:
 
 
 def families(text: str) -> tuple[str, ...]:
-    from fetchcarry_env.families import FAMILY_NAMES
-
+    """The family names of ``--families`` (comma-separated); an unknown one is a ``UsageError``."""
     names = tuple(name.strip() for name in text.split(",") if name.strip())
     unknown = [name for name in names if name not in FAMILY_NAMES]
     if not names or unknown:
@@ -312,8 +311,6 @@ def families(text: str) -> tuple[str, ...]:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
-    from training.evaluation.expert import SUCCESS_GOAL, EvaluationInterrupted, evaluate_expert
-
     try:
         results = evaluate_expert(
             families(args.families),
@@ -336,8 +333,6 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 
 def _print_evaluation(results: list[Any], as_json: bool) -> None:
-    from training.evaluation.expert import results_table
-
     if as_json:
         print(json.dumps([r.to_dict() for r in results], indent=2))
         return

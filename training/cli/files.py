@@ -8,6 +8,7 @@ from pathlib import Path
 from expert.plans import Plan, PlanFormatError
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
+from training.pictures.files import check_picture_path
 
 MAX_PEEK_BYTES = 50_000_000  # files larger than this are not opened just to guess what they are
 
@@ -60,7 +61,7 @@ def check_writable(path: Path, what: str) -> None:
 
 def check_plot_format(path: Path) -> None:
     """Raise ``UsageError`` unless matplotlib can write ``path``'s format."""
-    from matplotlib.backend_bases import FigureCanvasBase
+    from matplotlib.backend_bases import FigureCanvasBase  # matplotlib: only when a plot is asked for
 
     formats = FigureCanvasBase.get_supported_filetypes()
     if path.suffix.lower().lstrip(".") not in formats:
@@ -68,15 +69,13 @@ def check_plot_format(path: Path) -> None:
 
 
 def check_picture(path: str | None) -> Path | None:
-    """The episode picture's path (a .png or .gif in an existing folder), or ``None`` when none is asked for."""
+    """The episode picture's path (a .png or .gif in an existing folder), or ``None`` when none is asked for.
+
+    A suffix that is not a picture format, or a folder that does not exist, is an ``InputError``.
+    """
     if path is None:
         return None
-    from training.pictures.episode import check_picture_path
-
-    try:
-        picture = check_picture_path(path)
-    except ValueError as error:
-        raise UsageError(str(error)) from None
+    picture = check_picture_path(path)
     if not picture.parent.is_dir():
         raise UsageError(f"cannot write {picture}: folder {picture.parent} does not exist")
     return picture

@@ -30,6 +30,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
+from PIL import Image, ImageDraw, ImageFont
 
 from expert.plot import PICK, PLACE, PUSH, TRAVEL, draw_arm, path_legend_handles
 from fetchcarry_env import drawing
@@ -37,9 +38,11 @@ from fetchcarry_env.actions import Action, Mode
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.sim.camera import view_and_projection
+from fetchcarry_env.sim.client import pybullet
+from training.pictures.files import check_picture_path, is_gif
 from training.rollout import EpisodeFigures, EpisodeRecord
 
-STILL_SUFFIXES = (".png", ".jpg", ".jpeg", ".svg", ".pdf")
 GIF_FRAME_MS = 700  # milliseconds each state is shown in a GIF
 MAX_RENDERS = 6  # env renders in the strip of a still picture
 MAP_WIDTH_IN = 6.6  # inches of the whole-area map (the close-up has the same size)
@@ -48,24 +51,9 @@ CROP_MARGIN = 0.06  # of the frame's width, kept around the robot and its target
 CROP_MIN_WIDTH = 0.28  # of the frame's width: the smallest crop (a zoom of about 3.5)
 ROBOT_TOP = 1.0  # metres: the height of the robot's head, kept inside a crop
 STILL_DPI = 100
-# The env's render size for a still picture: the strip crops it, so it is rendered large.
-STILL_RENDER_SIZE = (1024, 768)  # pixels (width, height)
-GIF_RENDER_SIZE = (1024, 768)  # pixels (width, height) the env renders a GIF's frames at, before the crop
 GIF_HEIGHT = 540  # pixels: a GIF's render and map, side by side at this height (under the caption)
 GIF_MAP_IN = 5.4  # inches (at 100 dpi) of the map beside a GIF's render
 CAPTION_PX = 30  # pixels: the caption's font size; its band is twice as high
-
-
-def check_picture_path(path: str | Path) -> Path:
-    """``path`` as a Path, or ``ValueError`` when its suffix is not a picture format this module writes."""
-    path = Path(path)
-    if path.suffix.lower() not in (".gif", *STILL_SUFFIXES):
-        raise ValueError(f"cannot write a picture to {path}: use a .gif, {', '.join(STILL_SUFFIXES)} file")
-    return path
-
-
-def is_gif(path: str | Path) -> bool:
-    return Path(path).suffix.lower() == ".gif"
 
 
 def save_episode_picture(record: EpisodeRecord, path: str | Path) -> Path:
@@ -94,8 +82,6 @@ def save_gif(
     frames: Sequence[np.ndarray], path: Path, frame_ms: int = GIF_FRAME_MS, captions: Sequence[str] | None = None
 ) -> None:
     """An animated GIF of ``frames`` (uint8 rgb arrays), each under its caption; the last frame held twice as long."""
-    from PIL import Image
-
     images = [Image.fromarray(np.asarray(frame, dtype=np.uint8)) for frame in frames]
     if captions is not None:
         images = [captioned(image, text) for image, text in zip(images, captions, strict=True)]
@@ -119,8 +105,6 @@ def map_so_far(scenario: Scenario, states: Sequence[WorldState], steps: Sequence
 
 def side_by_side(left: np.ndarray, right: np.ndarray, height: int = GIF_HEIGHT) -> np.ndarray:
     """Two rgb arrays scaled to ``height`` pixels and put next to each other."""
-    from PIL import Image
-
     parts = []
     for array in (left, right):
         image = Image.fromarray(np.asarray(array, dtype=np.uint8))
@@ -151,10 +135,8 @@ def gif_captions(record: EpisodeRecord) -> list[str]:
     return captions
 
 
-def captioned(image, text: str):
+def captioned(image: Image.Image, text: str) -> Image.Image:
     """``image`` (a Pillow image) under a white band with ``text`` in black."""
-    from PIL import Image, ImageDraw, ImageFont
-
     band = 2 * CAPTION_PX
     out = Image.new("RGB", (image.width, image.height + band), "white")
     out.paste(image.convert("RGB"), (0, band))
@@ -377,10 +359,6 @@ def crop(frame: np.ndarray, scenario: Scenario, points: Sequence[tuple[float, fl
     ``frame`` is the env's perspective render of ``scenario``; the points are projected with
     the env's camera (:func:`fetchcarry_env.sim.camera.view_and_projection`).
     """
-    import pybullet  # already imported (quietly) by the env that rendered the frame
-
-    from fetchcarry_env.sim.camera import view_and_projection
-
     height, width = frame.shape[:2]
     # The camera's matrices are pure math: pybullet's module functions compute them without a connection.
     view, projection = view_and_projection(pybullet, scenario, "perspective", width, height)
