@@ -13,28 +13,19 @@ import math
 import sys
 from dataclasses import asdict
 
-from fetchcarry_env.errors import UsageError
 from training.cli.arguments import add_worker_options, positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
+from training.evaluation.runner import RESULTS, SUMMARY, run_benchmark
+from training.evaluation.splits import SPLITS
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``benchmark`` to the ``fetchcarry`` parser."""
-    from training.evaluation.splits import SPLITS
-
-    splits = ", ".join(f"{s.base_name} ({s.description})" for s in SPLITS.values())
     parser = commands.add_parser(
         "benchmark",
         help="evaluate policies against the MILP expert on a split or a folder of scenarios",
-        description="Run every policy on the same scenarios and compare it with the MILP expert on each: "
-        "success with a 95 % Wilson interval, objects delivered, cost ratio to the expert, a cost-weighted "
-        "success (SPL), phases and pushes, invalid actions, contacts, time per decision, and the normalised "
-        "score 100 x (R - R_random) / (R_expert - R_random). The expert and random policies always run as "
-        "references. Writes OUT_DIR/results.json (one record per policy and episode, rewritten as episodes "
-        "finish), OUT_DIR/summary.md (the table, then success and cost ratio per scenario source) and "
-        "OUT_DIR/splits.png. "
-        f"Splits: {splits}. Evaluation seeds start at 10^9, so they never meet training seeds.",
+        description=_description(),
         epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
         "scenario file), 130 interrupted (the finished episodes are kept in results.json).",
     )
@@ -73,10 +64,23 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.set_defaults(handler=run_benchmark_command)
 
 
-def run_benchmark_command(args: argparse.Namespace) -> int:
-    from training.benchmark import BenchmarkError, run_benchmark
-    from training.evaluation.runner import RESULTS, SUMMARY
+def _description() -> str:
+    """``fetchcarry benchmark --help``'s description: what it measures and writes, and the splits."""
+    splits = ", ".join(f"{s.base_name} ({s.description})" for s in SPLITS.values())
+    return (
+        "Run every policy on the same scenarios and compare it with the MILP expert on each: "
+        "success with a 95 % Wilson interval, objects delivered, cost ratio to the expert, a cost-weighted "
+        "success (SPL), phases and pushes, invalid actions, contacts, time per decision, and the normalised "
+        "score 100 x (R - R_random) / (R_expert - R_random). The expert and random policies always run as "
+        "references. Writes OUT_DIR/results.json (one record per policy and episode, rewritten as episodes "
+        "finish), OUT_DIR/summary.md (the table, then success and cost ratio per scenario source) and "
+        "OUT_DIR/splits.png. "
+        f"Splits: {splits}. Evaluation seeds start at 10^9, so they never meet training seeds."
+    )
 
+
+def run_benchmark_command(args: argparse.Namespace) -> int:
+    """``fetchcarry benchmark``: 0 done, 130 interrupted (bad input is a ``BenchmarkError``, an ``InputError``)."""
     try:
         report = run_benchmark(
             args.policies,
@@ -90,8 +94,6 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             resume=args.resume,
         )
-    except BenchmarkError as error:
-        raise UsageError(str(error)) from None
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}; add --resume to finish them")

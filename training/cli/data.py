@@ -16,6 +16,15 @@ from training.cli.arguments import add_worker_options, positive_int, whole_numbe
 from training.cli.episodes import add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
+from training.data.datasets import dataset_path, info, replay
+from training.data.generate import (
+    DatasetExistsError,
+    GenerationConfig,
+    GenerationReport,
+    StagingMismatchError,
+    generate,
+)
+from training.data.staging import Staging, StagingError
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -59,10 +68,7 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
 
 
 def run_generate(args: argparse.Namespace) -> int:
-    from training.data.datasets import dataset_path
-    from training.data.generate import DatasetExistsError, GenerationConfig, StagingMismatchError, generate
-    from training.data.staging import Staging, StagingError
-
+    """``fetchcarry generate``: 0 the dataset is complete, 130 interrupted (what is staged is kept)."""
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
     try:
         report = generate(
@@ -88,14 +94,19 @@ def run_generate(args: argparse.Namespace) -> int:
         raise UsageError(f"{error}; pass --overwrite to start the dataset again") from None
     for file in report.set_aside:
         say(f"warning: the staged episode {file} could not be read: set aside in its folder's corrupt/ and made again")
+    _print_generation(report, args.json)
+    return 0
+
+
+def _print_generation(report: GenerationReport, as_json: bool) -> None:
+    """What ``generate`` did, as text or as one JSON object."""
     if report.already_complete:
         message = f"dataset {report.dataset_id} is already complete ({report.episodes} episodes): nothing to do"
-        if args.json:
+        if as_json:
             print(json.dumps({"dataset_id": report.dataset_id, "already_complete": True, "message": message}))
         else:
             echo(f"{message}\nit is in {dataset_path(report.dataset_id)}")
-        return 0
-
+        return
     summary = {
         "dataset_id": report.dataset_id,
         "path": str(dataset_path(report.dataset_id)),
@@ -112,7 +123,7 @@ def run_generate(args: argparse.Namespace) -> int:
         "set_aside": report.set_aside,
         "already_complete": False,
     }
-    if args.json:
+    if as_json:
         print(json.dumps(summary, indent=2))
     else:
         echo(
@@ -122,7 +133,6 @@ def run_generate(args: argparse.Namespace) -> int:
             f"({report.assembly_s:.1f} s of it writing the dataset)\n"
             f"written to {summary['path']}"
         )
-    return 0
 
 
 # ---------------------------------------------------------------------------- dataset
@@ -153,8 +163,7 @@ def _register_dataset(commands: argparse._SubParsersAction) -> None:
 
 
 def run_dataset_info(args: argparse.Namespace) -> int:
-    from training.data.datasets import info
-
+    """``fetchcarry dataset info``: 0."""
     summary = info(args.dataset_id)
     if args.json:
         print(json.dumps(summary, indent=2))
@@ -188,8 +197,7 @@ def run_dataset_info(args: argparse.Namespace) -> int:
 
 
 def run_dataset_replay(args: argparse.Namespace) -> int:
-    from training.data.datasets import replay
-
+    """``fetchcarry dataset replay``: 0 the episode is reproduced, 1 not."""
     report = replay(args.dataset_id, args.episode)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2))
