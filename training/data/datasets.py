@@ -22,6 +22,9 @@ Read the episode metadata with ``dataset.storage.get_episode_metadata([k])``.
 
 The dataset is built in the staging folder and moved into place with one rename, so
 a dataset id either does not exist or holds a whole dataset.
+
+Minari (and h5py under it) is imported by the functions that read or write a dataset,
+not with this module: the command line imports it and starts without them.
 """
 
 from __future__ import annotations
@@ -35,12 +38,14 @@ import shutil
 import sys
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
+import fetchcarry_env  # noqa: F401  (registers this project's env ids: recovering and rebuilding a dataset's env)
 from fetchcarry_env.errors import UsageError
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
@@ -80,7 +85,7 @@ class UnknownEnvError(UsageError):
 
 def validate_dataset_id(dataset_id: str) -> None:
     """Raise :class:`UsageError` unless ``dataset_id`` is a Minari id (``namespace/name-vN``)."""
-    from minari.dataset.minari_dataset import parse_dataset_id
+    from minari.dataset.minari_dataset import parse_dataset_id  # minari (h5py) only when a dataset is used
 
     try:
         parse_dataset_id(dataset_id)
@@ -286,8 +291,6 @@ def load(dataset_id: str):
     """``minari.load_dataset(dataset_id)`` with a clear error when it is not there."""
     import minari
 
-    import fetchcarry_env  # noqa: F401  (the env must be registered to recover it)
-
     validate_dataset_id(dataset_id)
     if not (dataset_path(dataset_id) / "data").exists():
         raise UsageError(f"no dataset {dataset_id!r} under {datasets_root()} (set MINARI_DATASETS_PATH?)")
@@ -367,8 +370,6 @@ class ReplayReport:
     reproduced: bool  # all of the above agree
 
     def to_dict(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
         return asdict(self)
 
 
@@ -413,10 +414,6 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
     this project's packages, the spec names that same entry point, it adds no wrappers,
     and every keyword argument is one of :data:`TRUSTED_ENV_KWARGS` with a plain value.
     """
-    import gymnasium as gym
-
-    import fetchcarry_env  # noqa: F401  (registers this project's env ids)
-
     ours = sorted(k for k, v in gym.envs.registry.items() if _is_ours(v.entry_point))
     if spec is None:
         raise UnknownEnvError(f"dataset {dataset_id!r} names no env: it cannot be replayed")
@@ -442,8 +439,6 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
 
 def _own_wrappers(env_id: str, kwargs: dict[str, Any]) -> tuple[Any, ...]:
     """The wrappers this project's entry point itself puts around the env (``FetchCarryPushPhases-v0``'s)."""
-    import gymnasium as gym
-
     try:
         env = gym.make(env_id, **kwargs)
     except Exception:  # kwargs the env refuses: not its own wrappers either
@@ -456,8 +451,6 @@ def _own_wrappers(env_id: str, kwargs: dict[str, Any]) -> tuple[Any, ...]:
 
 def make_recorded_env(dataset: Any, dataset_id: str):
     """The env a dataset was recorded in, made from this project's registry (see :func:`trusted_env_spec`)."""
-    import gymnasium as gym
-
     env_id, kwargs = trusted_env_spec(dataset.spec.env_spec, dataset_id)
     return gym.make(env_id, **kwargs)
 

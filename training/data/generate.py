@@ -28,6 +28,8 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from tqdm import tqdm
+
 from fetchcarry_env.errors import UsageError
 from training.data.datasets import (
     REPLACED_FOLDER,
@@ -143,23 +145,10 @@ def generate(
         set_aside = [str(source) for source, _ in staging.set_aside_corrupt()]
         done = {k for k in staging.staged() if k < config.episodes}
         missing = [k for k in range(config.episodes) if k not in done]
-        figures: list[dict[str, Any]] = []
         with progress_bar(config.episodes, config.dataset_id, initial=len(done), enabled=progress) as bar:
-            for index, record in run_episodes(
-                config.source, missing, workers=workers, backend=backend, ray_address=ray_address
-            ):
-                staging.write(index, record)
-                figures.append(record.figures.to_dict())
-                bar.update(1)
-                bar.set_postfix_str(_postfix(figures), refresh=False)
-                if on_episode is not None:
-                    on_episode(index, record)
-        assembly_started = time.perf_counter()
-        check_free_space(staging)
-        built = assemble(config, staging)
-        publish(built, config.dataset_id, staging.path / REPLACED_FOLDER)
-        staging.remove()
-        assembly_s = time.perf_counter() - assembly_started
+            episodes = run_episodes(config.source, missing, workers=workers, backend=backend, ray_address=ray_address)
+            figures = _stage_episodes(staging, episodes, bar, on_episode)
+        assembly_s = _assemble_and_publish(config, staging)
     return GenerationReport(
         dataset_id=config.dataset_id,
         episodes=config.episodes,
@@ -172,6 +161,34 @@ def generate(
         figures=figures,
         set_aside=set_aside,
     )
+
+
+def _stage_episodes(
+    staging: Staging,
+    episodes: Iterator[tuple[int, EpisodeRecord]],
+    bar: tqdm,
+    on_episode: Callable[[int, EpisodeRecord], None] | None,
+) -> list[dict[str, Any]]:
+    """Stage each of ``episodes`` as it finishes, advancing ``bar``; the figures of every episode staged."""
+    figures: list[dict[str, Any]] = []
+    for index, record in episodes:
+        staging.write(index, record)
+        figures.append(record.figures.to_dict())
+        bar.update(1)
+        bar.set_postfix_str(_postfix(figures), refresh=False)
+        if on_episode is not None:
+            on_episode(index, record)
+    return figures
+
+
+def _assemble_and_publish(config: GenerationConfig, staging: Staging) -> float:
+    """Write the Minari dataset from the staging, move it into place and remove the staging; the seconds it took."""
+    started = time.perf_counter()
+    check_free_space(staging)
+    built = assemble(config, staging)
+    publish(built, config.dataset_id, staging.path / REPLACED_FOLDER)
+    staging.remove()
+    return time.perf_counter() - started
 
 
 def _check_staging(staging: Staging, config: GenerationConfig, overwrite: bool) -> None:
@@ -287,7 +304,7 @@ def _run_ray(
     source: Any, indices: list[int], workers: int, address: str | None, episode: Callable[[Any, int], Any]
 ) -> Iterator[tuple[int, Any]]:
     try:
-        import ray
+        import ray  # an optional extra
     except ModuleNotFoundError:
         raise UsageError("the Ray backend needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
     started_here = not ray.is_initialized()
@@ -356,10 +373,8 @@ def _postfix(figures: list[dict[str, Any]]) -> str:
     return f"success {successes}/{len(figures)}"
 
 
-def progress_bar(total: int, description: str, *, initial: int = 0, enabled: bool = True):
+def progress_bar(total: int, description: str, *, initial: int = 0, enabled: bool = True) -> tqdm:
     """A tqdm bar over episodes (on stderr)."""
-    from tqdm import tqdm
-
     return tqdm(
         total=total,
         initial=initial,

@@ -43,7 +43,7 @@ _EPISODE_FILE = re.compile(r"^episode_(\d{6,})\.npz$")
 
 def datasets_root() -> Path:
     """Where Minari keeps local datasets (``MINARI_DATASETS_PATH`` or ``~/.minari/datasets``)."""
-    from minari.storage.datasets_root_dir import get_dataset_path
+    from minari.storage.datasets_root_dir import get_dataset_path  # minari (h5py) only when a dataset is used
 
     return Path(get_dataset_path())
 
