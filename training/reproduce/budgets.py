@@ -4,13 +4,15 @@ Two budgets: ``full`` (the published table; about 115 minutes for three training
 a quiet 2-core machine with two workers, estimated from the CPU seconds of smaller runs in
 docs/benchmarks/learning.md, "The published table") and ``smoke``
 (every stage at a toy size, in about a minute: what the tests run). Every field is
-saved in ``DIR/reproduce.json``, so a folder is never continued with another budget.
+saved in ``DIR/reproduce.json``, so a folder is never continued with another budget. A
+budget with counts out of range raises :class:`~fetchcarry_env.errors.InputError`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from fetchcarry_env.errors import InputError
 from training.learners.options import BCConfig, DaggerOptions, PPOOptions
 
 TRAINING_FAMILY = "training"  # basic, push, corridor or multi-2, uniformly: the iid split's families
@@ -41,9 +43,9 @@ class Budget:
     def __post_init__(self) -> None:
         counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
         if min(counts) < 1 or any(n < 1 or n > self.demonstrations for n in self.curve):
-            raise ValueError("a budget's counts must be positive and its curve within its demonstrations")
+            raise InputError("a budget's counts must be positive and its curve within its demonstrations")
         if self.aimed_iterations < 0:
-            raise ValueError(f"aimed_iterations must be >= 0, got {self.aimed_iterations}")
+            raise InputError(f"aimed_iterations must be >= 0, got {self.aimed_iterations}")
         self.dagger_options()  # their own checks
         if self.aimed_iterations:
             self.aimed_options("dataset")
