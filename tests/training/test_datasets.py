@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import h5py
@@ -154,7 +155,6 @@ def test_ray_backend_makes_the_same_dataset_on_a_local_instance() -> None:
 
 def test_a_tampered_episode_does_not_replay(tmp_path: Path, generated: str, monkeypatch) -> None:
     """A copy of the dataset with one recorded reward changed: the replay notices."""
-    import shutil
 
     copy_root = tmp_path / "copy"
     shutil.copytree(dataset_path(generated).parent.parent, copy_root)

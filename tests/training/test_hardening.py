@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil as shutil_module
 import signal
 import subprocess
 import sys
@@ -17,9 +18,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cli_run import run
+from gymnasium.envs.registration import EnvSpec
 
-from training.data.datasets import dataset_path
-from training.data.staging import DatasetLock, Staging
+import expert.planner
+import training.cli.planning
+import training.data.datasets
+import training.data.generate
+import training.data.staging
+import training.evaluation.expert
+from expert.plans import Plan
+from training.data.datasets import UnknownEnvError, dataset_path, recover_replaced, trusted_env_spec
+from training.data.generate import EpisodeSource, GenerationConfig, run_indexed_episode
+from training.data.staging import DatasetLock, Staging, StagingError
 
 DATASET_ID = "fetchcarry/hard-v0"
 
@@ -96,8 +106,6 @@ def interrupted_solve(*args, **kwargs):
 
 
 def test_ctrl_c_during_a_solve_of_plan_writes_no_plan_and_exits_130(capsys, monkeypatch, tmp_path: Path) -> None:
-    import expert.planner
-
     monkeypatch.setattr(expert.planner, "plan", interrupted_solve)
     output = tmp_path / "out.plan.json"
     status, _, err = run(capsys, "plan", EXAMPLE, "-o", output)
@@ -107,7 +115,6 @@ def test_ctrl_c_during_a_solve_of_plan_writes_no_plan_and_exits_130(capsys, monk
 
 def test_ctrl_c_during_a_solve_of_generate_records_no_episode(capsys, monkeypatch) -> None:
     """One worker: the first episode is staged, Ctrl-C arrives in the second episode's solve."""
-    import expert.planner
 
     real_plan = expert.planner.plan
     calls = {"n": 0}
@@ -127,8 +134,6 @@ def test_ctrl_c_during_a_solve_of_generate_records_no_episode(capsys, monkeypatc
 
 
 def test_ctrl_c_during_a_rollout_exits_130(capsys, monkeypatch) -> None:
-    import expert.planner
-
     monkeypatch.setattr(expert.planner, "plan", interrupted_solve)
     status, out, err = run(capsys, "rollout", "--scenario", EXAMPLE)
     assert status == 130 and out == "" and "interrupted" in err
@@ -184,8 +189,6 @@ def test_an_interrupted_then_resumed_dataset_equals_an_uninterrupted_one(tmp_pat
 
 
 def test_an_internal_error_exits_3_with_the_path_of_a_full_report(capsys, monkeypatch) -> None:
-    import training.cli.planning
-
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
 
@@ -262,7 +265,6 @@ def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
     # Stage two episodes of another dataset, then spoil one, as an interrupted run with a bad disk would leave it.
     other = "fetchcarry/hard-v1"
     staging = Staging(other)
-    from training.data.generate import EpisodeSource, GenerationConfig, run_indexed_episode
 
     config = GenerationConfig(other, 3, EpisodeSource(family="basic", policy="random"))
     staging.start(config.manifest())
@@ -277,8 +279,6 @@ def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
 
 
 def test_a_staged_episode_that_cannot_be_read_names_its_file() -> None:
-    from training.data.staging import StagingError
-
     staging = Staging(DATASET_ID)
     staging.start({})
     staging.episode_path(0).write_bytes(b"not a zip file")
@@ -298,8 +298,6 @@ def test_a_corrupt_manifest_names_the_file(capsys) -> None:
 
 
 def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monkeypatch, dataset: str) -> None:
-    import training.data.generate
-
     before = json.loads((dataset_path(dataset) / "data" / "metadata.json").read_text())
 
     def killed(*args, **kwargs):
@@ -317,7 +315,6 @@ def test_overwrite_keeps_the_old_dataset_until_the_new_one_is_whole(capsys, monk
 
 def test_an_interrupted_two_step_replacement_is_repaired(dataset: str) -> None:
     """Where folders cannot be exchanged atomically: a kill between the two renames loses nothing."""
-    from training.data.datasets import recover_replaced
 
     aside = Staging(dataset).path / "replaced"
     aside.parent.mkdir(parents=True)
@@ -327,10 +324,6 @@ def test_an_interrupted_two_step_replacement_is_repaired(dataset: str) -> None:
 
 
 def test_no_space_to_assemble_exits_2_and_keeps_the_staged_episodes(capsys, monkeypatch) -> None:
-    import shutil as shutil_module
-
-    import training.data.datasets
-
     usage = shutil_module.disk_usage(".")
     with monkeypatch.context() as patch:
         patch.setattr(training.data.datasets.shutil, "disk_usage", lambda path: usage._replace(free=1000))
@@ -367,8 +360,6 @@ def test_a_bad_dataset_id_is_exit_2(capsys, dataset_id: str) -> None:
 
 
 def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) -> None:
-    import training.data.staging
-
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
@@ -381,8 +372,6 @@ def test_a_full_disk_while_staging_is_exit_2_with_the_path(capsys, monkeypatch) 
 
 def test_a_plan_whose_solve_was_interrupted_is_not_written(capsys, monkeypatch, tmp_path: Path) -> None:
     """Should the planner report SCIP's status instead of raising, the command still writes nothing."""
-    import expert.planner
-    from expert.plans import Plan
 
     interrupted = Plan(scenario="s", status="userinterrupt", objective=None)
     monkeypatch.setattr(expert.planner, "plan", lambda *args, **kwargs: interrupted)
@@ -392,10 +381,6 @@ def test_a_plan_whose_solve_was_interrupted_is_not_written(capsys, monkeypatch, 
 
 
 def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None:
-    from gymnasium.envs.registration import EnvSpec
-
-    from training.data.datasets import UnknownEnvError, trusted_env_spec
-
     phases = EnvSpec(
         "FetchCarryPushPhases-v0",
         "fetchcarry_env.phase_env:make_phase_env",
@@ -410,8 +395,6 @@ def test_every_env_of_the_project_is_trusted_with_plain_arguments_only() -> None
 
 
 def test_ctrl_c_during_evaluate_expert_keeps_what_finished(capsys, monkeypatch, tmp_path: Path) -> None:
-    import training.evaluation.expert
-
     real = training.evaluation.expert.run_episodes
 
     def two_then_interrupt(*args, **kwargs):

@@ -2,18 +2,35 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pybullet
 import pytest
+from matplotlib import colors
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from PIL import Image
 
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from expert import ExpertPolicy
+from fetchcarry_env import drawing
 from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.sim.bodies import CLUTTER_COLOR, GOAL_COLOR, OBJECT_COLOR
 from fetchcarry_env.sim.camera import PERSPECTIVE_TARGET_HEIGHT, view_and_projection
-from training.pictures.episode import MAX_RENDERS, crop, episode_steps, key_states, project, save_episode_picture
+from training.pictures.episode import (
+    CAPTION_PX,
+    GIF_HEIGHT,
+    MAX_RENDERS,
+    crop,
+    episode_steps,
+    gif_captions,
+    key_states,
+    project,
+    save_episode_picture,
+)
 from training.rollout import run_episode
 
 
@@ -57,8 +74,6 @@ def test_projection_agrees_with_the_env_camera() -> None:
 
 
 def test_a_picture_needs_frames(record, tmp_path: Path) -> None:
-    from dataclasses import replace
-
     with pytest.raises(ValueError, match="render=True"):
         save_episode_picture(replace(record, frames=[]), tmp_path / "x.png")
     with pytest.raises(ValueError, match="cannot write a picture"):
@@ -66,11 +81,6 @@ def test_a_picture_needs_frames(record, tmp_path: Path) -> None:
 
 
 def test_maps_and_renders_share_the_colours_of_objects_goals_and_clutter() -> None:
-    from matplotlib import colors
-
-    from fetchcarry_env import drawing
-    from fetchcarry_env.sim.bodies import CLUTTER_COLOR, GOAL_COLOR, OBJECT_COLOR
-
     for map_colour, render_colour in (
         (drawing.PALETTE.object, OBJECT_COLOR),
         (drawing.PALETTE.goal, GOAL_COLOR),
@@ -80,11 +90,6 @@ def test_maps_and_renders_share_the_colours_of_objects_goals_and_clutter() -> No
 
 
 def test_labels_are_moved_apart() -> None:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from fetchcarry_env import drawing
-
     figure = Figure(figsize=(3, 3))
     FigureCanvasAgg(figure)
     axes = figure.add_subplot()
@@ -100,10 +105,6 @@ def test_labels_are_moved_apart() -> None:
 
 
 def test_the_gif_is_large_and_captions_every_state(record, tmp_path: Path) -> None:
-    from PIL import Image
-
-    from training.pictures.episode import CAPTION_PX, GIF_HEIGHT, gif_captions
-
     path = save_episode_picture(record, tmp_path / "episode.gif")
     captions = gif_captions(record)
     assert captions[0].startswith("start: ") and captions[-1].startswith(f"step {len(record.actions)}/")

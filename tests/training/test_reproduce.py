@@ -11,8 +11,10 @@ from pathlib import Path
 import pytest
 
 from tests.cli_run import run
-from training.reproduce import SMOKE
-from training.reproduce.pipeline import training_jobs
+from training.cli import main
+from training.reproduce import SMOKE, pipeline
+from training.reproduce.budgets import FULL
+from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings, training_jobs
 from training.reproduce.table import REFERENCES, baselines
 
 SPLITS = ("iid-v0", "more-objects-v0", "layouts-v0", "push-required-v0")
@@ -22,7 +24,6 @@ MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 @pytest.fixture(scope="module")
 def smoke(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One smoke reproduction (1 training seed, 2 workers), made once for the module; its folder."""
-    from training.cli import main
 
     out = tmp_path_factory.mktemp("reproduce") / "table"
     assert main(["reproduce", "--out", str(out), "--seeds", "1", "--budget", "smoke", "--no-progress"]) == 0
@@ -115,8 +116,6 @@ def test_a_folder_of_another_budget_or_of_other_files_is_refused(capsys, smoke: 
 
 
 def test_ctrl_c_exits_130_and_says_how_to_continue(capsys, tmp_path: Path, monkeypatch) -> None:
-    from training.reproduce import pipeline
-
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
@@ -129,7 +128,6 @@ def test_ctrl_c_exits_130_and_says_how_to_continue(capsys, tmp_path: Path, monke
 
 def test_an_internal_error_is_exit_3_not_bad_input(capsys, tmp_path: Path, monkeypatch) -> None:
     # a plotting ValueError inside the pipeline once printed as bad input (exit 2)
-    from training.reproduce import pipeline
 
     def broken(*args, **kwargs):
         raise ValueError("'yerr' must not contain negative values")
@@ -140,9 +138,6 @@ def test_an_internal_error_is_exit_3_not_bad_input(capsys, tmp_path: Path, monke
 
 
 def test_a_folder_made_before_a_budget_field_existed_is_still_the_same_budget(tmp_path: Path) -> None:
-    from training.reproduce.budgets import SMOKE
-    from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings
-
     out = tmp_path / "table"
     check_settings(out, 1, SMOKE)
     saved = json.loads((out / SETTINGS_FILE).read_text())
@@ -158,8 +153,6 @@ def test_a_folder_made_before_a_budget_field_existed_is_still_the_same_budget(tm
 
 
 def test_the_budget_aims_a_second_dagger_from_the_dataset(tmp_path: Path) -> None:
-    from training.reproduce.budgets import FULL
-
     options = FULL.aimed_options("some/dataset-v0")
     assert options.dataset == "some/dataset-v0" and options.demonstrations == FULL.demonstrations
     assert options.learner_families == ("push", "multi-2") and options.epochs == FULL.bc_epochs
@@ -174,8 +167,6 @@ def test_the_budget_aims_a_second_dagger_from_the_dataset(tmp_path: Path) -> Non
 
 
 def test_with_two_seeds_or_more_the_aimed_runs_make_an_ensemble(tmp_path: Path) -> None:
-    from training.reproduce.budgets import FULL
-
     jobs = {job.name: job for job in training_jobs(tmp_path, 3, FULL)}
     ensemble = jobs["dagger-aimed-ensemble"]
     assert ensemble.kind == "ensemble" and ensemble.needs == ("dagger-aimed-s0", "dagger-aimed-s1", "dagger-aimed-s2")
