@@ -51,10 +51,17 @@ def test_segment_through_and_past_a_rectangle():
     assert segment_rect_distance((0.0, 0.0), (0.5, 0.5), box) == pytest.approx(math.hypot(0.5, 0.5))
 
 
-def test_disc_stops_at_first_contact():
-    wall = Rect(2.0, -1.0, 2.5, 1.0)
-    t = first_contact((0.0, 0.0), (4.0, 0.0), 0.2, [wall])
-    assert 4.0 * t == pytest.approx(1.8)
+@pytest.mark.parametrize(
+    ("end", "radius", "wall", "travelled"),
+    [
+        pytest.param((4.0, 0.0), 0.2, Rect(2.0, -1.0, 2.5, 1.0), 1.8, id="stops-at-first-contact"),
+        pytest.param((100.0, 0.0), 0.22, Rect(5.0, -10.0, 5.001, 10.0), 4.78, id="long-move-no-tunnel-thin-wall"),
+    ],
+)
+def test_disc_stops_at_first_contact(end, radius, wall, travelled):
+    """From the origin along +x the disc stops where it first touches the wall; a long move does not tunnel."""
+    t = first_contact((0.0, 0.0), end, radius, [wall])
+    assert end[0] * t == pytest.approx(travelled)
 
 
 def test_disc_touching_a_corner_stops_there():
@@ -63,12 +70,6 @@ def test_disc_touching_a_corner_stops_there():
     t = first_contact((0.0, 0.9), (3.0, 0.9), 0.2, [box])
     x = 3.0 * t
     assert math.hypot(x - 1.0, 0.9 - 1.0) == pytest.approx(0.2, abs=1e-9)
-
-
-def test_long_move_does_not_tunnel_through_thin_wall():
-    wall = Rect(5.0, -10.0, 5.001, 10.0)
-    t = first_contact((0.0, 0.0), (100.0, 0.0), 0.22, [wall])
-    assert 100.0 * t == pytest.approx(4.78)
 
 
 def test_clear_move_and_move_away():

@@ -87,20 +87,40 @@ def test_a_plan_for_another_scenario_is_named(spec_example, hand_plan):
 
 
 # ---------------------------------------------------------------------- rule 1
-def test_rule1_base_outside_the_area(spec_example, hand_plan):
-    plan = with_phase(hand_plan, 1, base=(4.0, -0.9))  # the disc reaches y = -1.12 < -1.0
-    assert validate_plan(spec_example, plan) == [
-        "rule 1 (area): phase 1 base disc at [4.000, -0.900] is not inside the area"
-    ]
-
-
-def test_rule1_a_move_that_grazes_a_table(spec_example, hand_plan):
-    # From (0, 0) to (3, 2) the base centre passes 0.139 m from table_src's corner (2.3, 1.7).
-    violations = validate_plan(spec_example, with_phase(hand_plan, 1, base=(3.0, 2.0)))
-    assert violations == [
-        "rule 1 (clearance): phase 1 move from [0.000, 0.000] to [3.000, 2.000] passes 0.139 m from table "
-        "'table_src', less than the base radius 0.220 m"
-    ]
+@pytest.mark.parametrize(
+    ("k", "base", "message"),
+    [
+        pytest.param(
+            1,
+            (4.0, -0.9),  # the disc reaches y = -1.12 < -1.0
+            "rule 1 (area): phase 1 base disc at [4.000, -0.900] is not inside the area",
+            id="rule1-base-outside-the-area",
+        ),
+        pytest.param(
+            1,
+            (3.0, 2.0),  # from (0, 0) to (3, 2) the base centre passes 0.139 m from table_src's corner (2.3, 1.7)
+            "rule 1 (clearance): phase 1 move from [0.000, 0.000] to [3.000, 2.000] passes 0.139 m from table "
+            "'table_src', less than the base radius 0.220 m",
+            id="rule1-a-move-that-grazes-a-table",
+        ),
+        pytest.param(
+            5,
+            (2.8, 2.0),
+            "rule 4 (reach): phase 5 pick 'bottle' is 0.800 m ahead, outside posture 'reach_far' forward range "
+            "[0.550, 0.700]",
+            id="rule4-target-too-far-ahead",
+        ),
+        pytest.param(
+            5,
+            (2.6, 2.1),  # facing -x, the robot's left is -y: the bottle at y = 2.0 is 0.1 m to the left
+            "rule 4 (reach): phase 5 pick 'bottle' is 0.100 m to the left (lateral 0.100), outside posture "
+            "'reach_far' lateral range [-0.050, 0.050]",
+            id="rule4-target-off-to-the-side",
+        ),
+    ],
+)
+def test_a_base_moved_breaks_exactly_one_rule(spec_example, hand_plan, k, base, message):
+    assert validate_plan(spec_example, with_phase(hand_plan, k, base=base)) == [message]
 
 
 def test_rule1_a_move_across_a_table_and_past_an_obstacle(spec_example, hand_plan):
@@ -136,23 +156,6 @@ def test_rule3_an_object_that_moves_by_itself(spec_example, hand_plan):
 
 
 # ---------------------------------------------------------------------- rule 4
-def test_rule4_target_too_far_ahead(spec_example, hand_plan):
-    violations = validate_plan(spec_example, with_phase(hand_plan, 5, base=(2.8, 2.0)))
-    assert violations == [
-        "rule 4 (reach): phase 5 pick 'bottle' is 0.800 m ahead, outside posture 'reach_far' forward range "
-        "[0.550, 0.700]"
-    ]
-
-
-def test_rule4_target_off_to_the_side(spec_example, hand_plan):
-    # Facing -x, the robot's left is -y: the bottle at y = 2.0 is 0.1 m to the left of a base at y = 2.1.
-    violations = validate_plan(spec_example, with_phase(hand_plan, 5, base=(2.6, 2.1)))
-    assert violations == [
-        "rule 4 (reach): phase 5 pick 'bottle' is 0.100 m to the left (lateral 0.100), outside posture "
-        "'reach_far' lateral range [-0.050, 0.050]"
-    ]
-
-
 def test_rule4_placing_onto_clutter_across_the_arm_line(spec_example, hand_plan):
     # Skip the push: the block still stands on the goal when the bottle is placed there.
     phases = [p for k, p in enumerate(hand_plan.phases) if k not in (2, 3)]

@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from mutations import file_bytes, mutated, to_json_text
+from mutations import file_bytes, mutated, to_json_text, write_mutated
 from test_fuzz_inputs import PLAN_FILE, SCENARIO, VALID_PLAN, VALID_SCENARIO
 
 from expert.plans import Plan, PlanFormatError
@@ -61,8 +61,7 @@ def campaign(examples: int, workdir: Path) -> dict[str, Counter]:
     @config
     @given(data=st.data())
     def scenarios(data):
-        path = workdir / "s.json"
-        path.write_bytes(data.draw(file_bytes(to_json_text(data.draw(mutated(VALID_SCENARIO))))))
+        path = write_mutated(data, workdir / "s.json", VALID_SCENARIO)
         try:
             Scenario.load(path)
             counts["scenario"]["accepted"] += 1
@@ -75,8 +74,7 @@ def campaign(examples: int, workdir: Path) -> dict[str, Counter]:
     @config
     @given(data=st.data())
     def plans(data):
-        path = workdir / "p.json"
-        path.write_bytes(data.draw(file_bytes(to_json_text(data.draw(mutated(VALID_PLAN))))))
+        path = write_mutated(data, workdir / "p.json", VALID_PLAN)
         try:
             violations = validate_plan(SCENARIO, Plan.load(path))
             counts["plan"]["read, valid" if not violations else f"read, invalid: {_kind(violations[0])}"] += 1

@@ -14,6 +14,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+from pathlib import Path
 from typing import Any
 
 from hypothesis import strategies as st
@@ -147,6 +148,13 @@ def file_bytes(draw: st.DrawFn, text: str) -> bytes:
         depth = draw(st.sampled_from([1_000, 100_000]))
         return b"[" * depth + raw + b"]" * depth
     return raw
+
+
+def write_mutated(data: st.DataObject, path: Path, valid: dict, max_mutations: int = 3) -> Path:
+    """Write a mutated copy of ``valid`` (:func:`mutated`) to ``path`` as file bytes drawn by :func:`file_bytes`."""
+    document = data.draw(mutated(valid, max_mutations=max_mutations))
+    path.write_bytes(data.draw(file_bytes(to_json_text(document))))
+    return path
 
 
 @st.composite

@@ -27,7 +27,7 @@ import pytest
 from cli_run import run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from mutations import file_bytes, mutated, nudged, to_json_text
+from mutations import file_bytes, mutated, nudged, to_json_text, write_mutated
 
 from expert.plans import Phase, Plan, PlanFormatError
 from expert.validate import validate_plan
@@ -58,6 +58,12 @@ def write(tmp_path: Path, name: str, content: bytes) -> Path:
     return path
 
 
+def assert_short_and_printable(message: str, limit: int) -> None:
+    """``message`` encodes as UTF-8 (no lone surrogate), has no terminal escape and is under ``limit`` characters."""
+    message.encode("utf-8")
+    assert "\x1b" not in message and len(message) < limit, message
+
+
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("fuzz")
@@ -67,16 +73,12 @@ def workdir(tmp_path_factory) -> Path:
 @fuzz(200)
 @given(data=st.data())
 def test_the_scenario_loader_raises_only_scenario_error(workdir, data):
-    document = data.draw(mutated(VALID_SCENARIO))
-    content = data.draw(file_bytes(to_json_text(document)))
-    path = write(workdir, "scenario.json", content)
+    path = write_mutated(data, workdir / "scenario.json", VALID_SCENARIO)
     try:
         scenario = Scenario.load(path)
     except ScenarioError as error:
         assert error.violations and all(isinstance(v, str) for v in error.violations)
-        message = str(error)
-        message.encode("utf-8")  # printable: no lone surrogate
-        assert "\x1b" not in message and len(message) < 20_000
+        assert_short_and_printable(str(error), 20_000)
         assert all(v.startswith(("format:", "rule ")) for v in error.violations), error.violations
     else:
         assert check_rules(scenario) == []
@@ -90,15 +92,12 @@ SCENARIO = Scenario.load(SCENARIO_FILE)
 @fuzz(200)
 @given(data=st.data())
 def test_plan_load_raises_only_plan_format_error_and_the_validator_only_returns(workdir, data):
-    document = data.draw(mutated(VALID_PLAN))
-    content = data.draw(file_bytes(to_json_text(document)))
-    path = write(workdir, "plan.json", content)
+    path = write_mutated(data, workdir / "plan.json", VALID_PLAN)
     try:
         plan = Plan.load(path)
     except PlanFormatError as error:
-        message = str(error)
-        message.encode("utf-8")
-        assert message.startswith(str(path)) and "\x1b" not in message and len(message) < 2_000, message
+        assert str(error).startswith(str(path)), str(error)
+        assert_short_and_printable(str(error), 2_000)
         return
     violations = validate_plan(SCENARIO, plan)
     assert all(isinstance(v, str) and v.startswith(("structure", "rule ")) for v in violations), violations
@@ -226,8 +225,7 @@ def test_fetchcarry_plan_exits_0_1_or_2_without_a_traceback(capsys, workdir, dat
     if gentle:
         scenario = write(workdir, "s.json", to_json_text(data.draw(nudged(VALID_SCENARIO))).encode())
     else:
-        document = data.draw(mutated(VALID_SCENARIO, max_mutations=2))
-        scenario = write(workdir, "s.json", data.draw(file_bytes(to_json_text(document))))
+        scenario = write_mutated(data, workdir / "s.json", VALID_SCENARIO, max_mutations=2)
     output = workdir / "out.plan.json"
     status, err = run_cli(capsys, "plan", scenario, "-o", output, "--time-limit", "1")
     assert status in (0, 1, 2), (status, err)
