@@ -9,25 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import fetchcarry_env.sim.physics as physics
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim.client import QuietClient, pybullet
-from fetchcarry_env.sim.physics import (
-    ANGULAR_DAMPING,
-    CLUTTER_MASS,
-    FLOOR_THICKNESS,
-    FRICTION,
-    GROUP_ITEM,
-    GROUP_STATIC,
-    LINEAR_DAMPING,
-    MASK_ITEM,
-    MASK_NONE,
-    OBJECT_MASS,
-    OBSTACLE_HEIGHT,
-    RESTITUTION,
-    ROLLING_FRICTION,
-    SPINNING_FRICTION,
-)
 
 RGBA = tuple[float, float, float, float]
 
@@ -56,9 +41,11 @@ class LayoutBodies:
 
 def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
     """Create every body of ``scenario``'s layout, movable ones at their start poses."""
-    floor = _static_box(client, scenario.area, -FLOOR_THICKNESS, 0.0, FLOOR_COLOR)
+    floor = _static_box(client, scenario.area, -physics.FLOOR_THICKNESS, 0.0, FLOOR_COLOR)
     tables = {t.id: _static_box(client, t.rect, 0.0, t.height, TABLE_COLOR) for t in scenario.tables}
-    obstacles = {o.id: _static_box(client, o.rect, 0.0, OBSTACLE_HEIGHT, OBSTACLE_COLOR) for o in scenario.obstacles}
+    obstacles = {
+        o.id: _static_box(client, o.rect, 0.0, physics.OBSTACLE_HEIGHT, OBSTACLE_COLOR) for o in scenario.obstacles
+    }
     objects = {}
     markers = {}
     for obj in scenario.objects:
@@ -67,7 +54,7 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
             pybullet.GEOM_CYLINDER, radius=obj.radius, length=obj.height, rgbaColor=OBJECT_COLOR
         )
         objects[obj.id] = client.createMultiBody(
-            OBJECT_MASS,
+            physics.OBJECT_MASS,
             collision,
             visual,
             _on_table(scenario, obj.start, obj.height),
@@ -82,19 +69,19 @@ def build_layout(client: QuietClient, scenario: Scenario) -> LayoutBodies:
         collision = client.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
         visual = client.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=CLUTTER_COLOR)
         clutter[item.id] = client.createMultiBody(
-            CLUTTER_MASS,
+            physics.CLUTTER_MASS,
             collision,
             visual,
             _on_table(scenario, item.rect.center, item.height),
         )
     for body in (floor, *tables.values(), *obstacles.values()):
-        client.setCollisionFilterGroupMask(body, -1, GROUP_STATIC, GROUP_ITEM)
-        client.changeDynamics(body, -1, lateralFriction=FRICTION, restitution=RESTITUTION)
+        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_STATIC, physics.GROUP_ITEM)
+        client.changeDynamics(body, -1, lateralFriction=physics.FRICTION, restitution=physics.RESTITUTION)
     for body in (*objects.values(), *clutter.values()):
         set_item_dynamics(client, body)
-        client.setCollisionFilterGroupMask(body, -1, GROUP_ITEM, MASK_ITEM)
+        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_ITEM)
     for body in markers.values():
-        client.setCollisionFilterGroupMask(body, -1, 0, MASK_NONE)
+        client.setCollisionFilterGroupMask(body, -1, 0, physics.MASK_NONE)
     return LayoutBodies(floor, tables, obstacles, objects, clutter, markers)
 
 
@@ -107,12 +94,12 @@ def set_item_dynamics(client: QuietClient, body: int) -> None:
     client.changeDynamics(
         body,
         -1,
-        lateralFriction=FRICTION,
-        spinningFriction=SPINNING_FRICTION,
-        rollingFriction=ROLLING_FRICTION,
-        restitution=RESTITUTION,
-        linearDamping=LINEAR_DAMPING,
-        angularDamping=ANGULAR_DAMPING,
+        lateralFriction=physics.FRICTION,
+        spinningFriction=physics.SPINNING_FRICTION,
+        rollingFriction=physics.ROLLING_FRICTION,
+        restitution=physics.RESTITUTION,
+        linearDamping=physics.LINEAR_DAMPING,
+        angularDamping=physics.ANGULAR_DAMPING,
         activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING,
     )
 

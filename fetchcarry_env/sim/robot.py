@@ -23,20 +23,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import fetchcarry_env.sim.physics as physics
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, heading_yaw
 from fetchcarry_env.kinematics import HAND_HALF_SIZE
 from fetchcarry_env.sim.client import QuietClient, pybullet
-from fetchcarry_env.sim.physics import (
-    BASE_HEIGHT,
-    FRICTION,
-    GROUP_HAND,
-    GROUP_ITEM,
-    GROUP_ROBOT,
-    MASK_NONE,
-    PUSH_FORCE,
-    PUSHER_MASS,
-    RESTITUTION,
-)
 
 BASE_COLOR = (0.92, 0.92, 0.92, 1.0)
 LINK_COLOR = (0.18, 0.18, 0.20, 1.0)
@@ -72,23 +62,23 @@ class RobotBody:
         self.arm_height = arm_height
         wrist_length = max(arm_height - lowest_hand, 2 * HAND_HALF_SIZE)
         self.body, hand_collision = _build_robot(client, radius, arm_height, wrist_length)
-        client.setCollisionFilterGroupMask(self.body, -1, GROUP_ROBOT, MASK_NONE)
+        client.setCollisionFilterGroupMask(self.body, -1, physics.GROUP_ROBOT, physics.MASK_NONE)
         # Asleep from the start, the robot costs the physics engine nothing (a third of a step); it is
         # only ever teleported and touches nothing, so it never wakes, in this world or a rebuilt one.
         client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_ENABLE_SLEEPING)
         client.changeDynamics(self.body, -1, activationState=pybullet.ACTIVATION_STATE_SLEEP)
-        self.pusher = client.createMultiBody(PUSHER_MASS, hand_collision, -1, PUSHER_PARKING)
+        self.pusher = client.createMultiBody(physics.PUSHER_MASS, hand_collision, -1, PUSHER_PARKING)
         self._grip: int | None = None  # the constraint that holds the pusher during a stroke
-        client.setCollisionFilterGroupMask(self.pusher, -1, GROUP_HAND, GROUP_ITEM)
+        client.setCollisionFilterGroupMask(self.pusher, -1, physics.GROUP_HAND, physics.GROUP_ITEM)
         client.changeDynamics(
             self.pusher,
             -1,
-            lateralFriction=FRICTION,
-            restitution=RESTITUTION,
+            lateralFriction=physics.FRICTION,
+            restitution=physics.RESTITUTION,
             activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING,
         )
         self.release_pusher()
-        client.resetJointState(self.body, LIFT, arm_height - BASE_HEIGHT)
+        client.resetJointState(self.body, LIFT, arm_height - physics.BASE_HEIGHT)
         self.pose: tuple[Point, Heading] = ((0.0, 0.0), "+x")
         self._yaw_quaternion = {h: client.getQuaternionFromEuler([0.0, 0.0, heading_yaw(h)]) for h in HEADINGS}
         self.set_hand(self.rest_hand)
@@ -101,7 +91,7 @@ class RobotBody:
     def set_base(self, base: Point, heading: Heading) -> None:
         """Put the base centre at ``base`` facing ``heading`` (the arm follows)."""
         self._client.resetBasePositionAndOrientation(
-            self.body, (base[0], base[1], BASE_HEIGHT / 2), self._yaw_quaternion[heading]
+            self.body, (base[0], base[1], physics.BASE_HEIGHT / 2), self._yaw_quaternion[heading]
         )
         self.pose = (base, heading)
 
@@ -123,7 +113,7 @@ class RobotBody:
         client = self._client
         self._pose_pusher(position)
         self._grip = client.createConstraint(self.pusher, -1, -1, -1, pybullet.JOINT_FIXED, ZERO, ZERO, position)
-        client.changeConstraint(self._grip, maxForce=PUSH_FORCE)
+        client.changeConstraint(self._grip, maxForce=physics.PUSH_FORCE)
 
     def drive_pusher(self, position: tuple[float, float, float]) -> None:
         """Move the point the arm holds the pusher at (world, metres); PyBullet pulls the pusher there."""
@@ -160,11 +150,11 @@ class RobotBody:
 
 def _build_robot(client: QuietClient, radius: float, arm_height: float, wrist_length: float) -> tuple[int, int]:
     """The robot's multibody (base, lift, forward and lateral links, wrist) and the hand's collision shape."""
-    half_base = BASE_HEIGHT / 2
-    mast_length = arm_height - BASE_HEIGHT
-    base_collision = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=BASE_HEIGHT)
+    half_base = physics.BASE_HEIGHT / 2
+    mast_length = arm_height - physics.BASE_HEIGHT
+    base_collision = client.createCollisionShape(pybullet.GEOM_CYLINDER, radius=radius, height=physics.BASE_HEIGHT)
     base_visual = client.createVisualShape(
-        pybullet.GEOM_CYLINDER, radius=radius, length=BASE_HEIGHT, rgbaColor=BASE_COLOR
+        pybullet.GEOM_CYLINDER, radius=radius, length=physics.BASE_HEIGHT, rgbaColor=BASE_COLOR
     )
     mast_visual, arm_visual, hand_collision, hand_visual = _link_shapes(client, mast_length, wrist_length)
     body = client.createMultiBody(

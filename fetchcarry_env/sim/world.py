@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import fetchcarry_env.sim.physics as physics
 from fetchcarry_env.geometry import Heading, Point, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import HAND_HALF_SIZE, hand_offset
 from fetchcarry_env.observation import LIFT_HEIGHT, Point3, WorldState
@@ -26,24 +27,6 @@ from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim.bodies import IDENTITY, LayoutBodies, build_layout, table_top
 from fetchcarry_env.sim.camera import Camera, render_image
 from fetchcarry_env.sim.client import QuietClient, connect
-from fetchcarry_env.sim.physics import (
-    ARM_CLEARANCE,
-    BASE_HEIGHT,
-    CONSTRAINT_ERP,
-    GRAVITY,
-    GROUP_ITEM,
-    MASK_ITEM,
-    MASK_NONE,
-    MAX_HAND_STEP,
-    PLACE_SETTLE_STEPS,
-    PUSH_ACCELERATION,
-    PUSH_MIN_SPEED,
-    PUSH_SETTLE_STEPS,
-    PUSH_SPEED,
-    SOLVER_ITERATIONS,
-    STALL_DEPTH,
-    TIME_STEP,
-)
 from fetchcarry_env.sim.robot import HandPose, RobotBody
 
 Quaternion = tuple[float, float, float, float]
@@ -215,7 +198,7 @@ class Simulation:
         robot.set_hand(robot.rest_hand)
         self._fresh_contacts()
         step = self.client.stepSimulation
-        for _ in range(PLACE_SETTLE_STEPS):
+        for _ in range(physics.PLACE_SETTLE_STEPS):
             step()
         return self._read_poses()
 
@@ -256,9 +239,9 @@ class Simulation:
         robot.grip_pusher((start_x, start_y, hand_z))
         travelled, stalled, steps = self._stroke((start_x, start_y, hand_z), (ux, uy), length)
         robot.release_pusher()  # the hand lets go and the world settles
-        for _ in range(PUSH_SETTLE_STEPS):
+        for _ in range(physics.PUSH_SETTLE_STEPS):
             self.client.stepSimulation()
-        steps += PUSH_SETTLE_STEPS
+        steps += physics.PUSH_SETTLE_STEPS
         robot.set_base((base[0] + ux * travelled, base[1] + uy * travelled), heading)
         held = self._hand_back(carry)
         self._read_poses()
@@ -287,7 +270,7 @@ class Simulation:
             steps += 1
             x, y, _ = reached()
             travelled = (x - start_x) * ux + (y - start_y) * uy
-            if s - travelled > STALL_DEPTH:
+            if s - travelled > physics.STALL_DEPTH:
                 stalled = True
                 break
         if not stalled:
@@ -349,18 +332,18 @@ class Simulation:
     def _build(self, scenario: Scenario) -> None:
         client = self.client
         client.resetSimulation()
-        client.setGravity(0.0, 0.0, -GRAVITY)
+        client.setGravity(0.0, 0.0, -physics.GRAVITY)
         client.setPhysicsEngineParameter(
-            fixedTimeStep=TIME_STEP,
-            numSolverIterations=SOLVER_ITERATIONS,
-            erp=CONSTRAINT_ERP,
+            fixedTimeStep=physics.TIME_STEP,
+            numSolverIterations=physics.SOLVER_ITERATIONS,
+            erp=physics.CONSTRAINT_ERP,
             deterministicOverlappingPairs=1,
             collisionFilterMode=0,  # AND: two shapes touch only when each one's group is in the other's mask
         )
         self._bodies = build_layout(client, scenario)
         tops = [t.height for t in scenario.tables] or [0.0]
         standing = [o.height for o in scenario.objects] + [c.height for c in scenario.clutter]
-        arm_height = max(max(tops) + max(standing) + ARM_CLEARANCE, BASE_HEIGHT + 0.1)
+        arm_height = max(max(tops) + max(standing) + physics.ARM_CLEARANCE, physics.BASE_HEIGHT + 0.1)
         self._robot = RobotBody(client, scenario.robot.radius, arm_height, lowest_hand=min(tops))
         self._layout_key = scenario.layout_key
         self._held = None
@@ -382,13 +365,15 @@ class Simulation:
         """
         client = self.client
         body = self._layout.objects[object_id]
-        client.setCollisionFilterGroupMask(body, -1, GROUP_ITEM, MASK_NONE)
+        client.setCollisionFilterGroupMask(body, -1, physics.GROUP_ITEM, physics.MASK_NONE)
         client.resetBasePositionAndOrientation(body, position, IDENTITY)
         client.resetBaseVelocity(body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         self._held = object_id
 
     def _release(self, object_id: str) -> None:
-        self.client.setCollisionFilterGroupMask(self._layout.objects[object_id], -1, GROUP_ITEM, MASK_ITEM)
+        self.client.setCollisionFilterGroupMask(
+            self._layout.objects[object_id], -1, physics.GROUP_ITEM, physics.MASK_ITEM
+        )
         self._held = None
 
     def _item_bodies(self) -> dict[str, int]:
@@ -433,14 +418,14 @@ def stroke_profile(length: float) -> list[float]:
     :data:`physics.PUSH_MIN_SPEED`. The deceleration stays below what friction gives the
     clutter, so it stops with the hand instead of sliding on.
     """
-    dt, accel = TIME_STEP, PUSH_ACCELERATION
+    dt, accel = physics.TIME_STEP, physics.PUSH_ACCELERATION
     positions: list[float] = []
     s, v = 0.0, 0.0
     while s < length - 1e-12:
         if v * v / (2 * accel) >= length - s:
-            v = max(v - accel * dt, PUSH_MIN_SPEED)
+            v = max(v - accel * dt, physics.PUSH_MIN_SPEED)
         else:
-            v = min(v + accel * dt, PUSH_SPEED)
-        s = min(s + min(v * dt, MAX_HAND_STEP), length)
+            v = min(v + accel * dt, physics.PUSH_SPEED)
+        s = min(s + min(v * dt, physics.MAX_HAND_STEP), length)
         positions.append(s)
     return positions
