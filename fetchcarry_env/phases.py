@@ -344,7 +344,7 @@ class _Enumerator:
                 for i in range(layout.corner_cells):
                     for j in range(layout.corner_cells):
                         point = (cx + sx * (first + i) * res, cy + sy * (first + j) * res)
-                        if not _inside(self.lattice, point):
+                        if not inside_lattice(self.lattice, point):
                             continue
                         index = layout.index("waypoint", slot, corner, i, j)
                         self._offer(index, self._move(self.lattice.index(point)), None)
@@ -364,7 +364,7 @@ class _Enumerator:
                         point = (rect.max_x + out if ux > 0 else rect.min_x - out, by)
                     else:
                         point = (bx, rect.max_y + out if uy > 0 else rect.min_y - out)
-                    if _inside(self.lattice, point):
+                    if inside_lattice(self.lattice, point):
                         self._offer(layout.index("edge", slot, side, i), self._move(self.lattice.index(point)), None)
 
     def _blockers(self) -> list[tuple[int, Rect]]:
@@ -437,7 +437,7 @@ class _Enumerator:
         return self._stops[end]
 
 
-def _inside(lattice: Lattice, point: Point) -> bool:
+def inside_lattice(lattice: Lattice, point: Point) -> bool:
     """True when ``point`` lies within half a cell of the lattice's extent."""
     half = lattice.resolution / 2
     nx, ny = lattice.shape

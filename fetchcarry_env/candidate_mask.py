@@ -1,0 +1,614 @@
+"""The candidate mask as array operations: :mod:`fetchcarry_env.phases`' rules over all candidates at once.
+
+:class:`FastPhases` answers what :func:`fetchcarry_env.phases.enumerate_phases` answers
+(the reference: one candidate at a time through :func:`fetchcarry_env.rules.check_action`
+and :func:`fetchcarry_env.rules.move_stop`), decision for decision, in a few array
+operations per kind:
+
+* the reach tests (which posture puts the hand over the target from each pose), the
+  arm-line tests (Eq. 19, Liang-Barsky clipping) and the base's swept-disc tests
+  (``first_contact``'s Minkowski sum: two grown rectangles and four rounded corners)
+  are the scalar formulas applied to arrays, operation for operation, so that every
+  comparison sees the same floating-point numbers as the scalar code;
+* the one test whose numpy and Python forms may differ in the last bit (a hypot against
+  a threshold) is redone with :func:`math.hypot` wherever the two are within 1e-12 m of
+  the threshold, and a candidate whose choice of item is not obvious (two objects or
+  two pieces of clutter within reach of one pose) is decided by ``check_action`` itself;
+* what depends on the scenario alone is cached once per scenario (which lattice points
+  the base disc fits in the area at, where it may stand without a contact, the
+  blockers as arrays, the waypoint cells), and what depends on the movable items
+  (pick, place and approach candidates before the base's move) is cached per state of
+  the items: a move changes only the base, so a step after a move recomputes only the
+  swept-disc tests from the new base, the pushes and the edge moves.
+
+Units: metres for points, lattice cells for indices.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from fetchcarry_env.actions import Action, Lattice, Mode
+from fetchcarry_env.geometry import EPS, HEADINGS, heading_vector, to_world_frame
+from fetchcarry_env.kinematics import hand_blocker, push_contact, push_headings
+from fetchcarry_env.observation import WorldState
+from fetchcarry_env.phases import CORNERS, STILL, PhaseLayout, PhaseTable, inside_lattice
+from fetchcarry_env.rules import CONTACT_SLACK, base_blockers, check_action, clutter_rect, move_stop
+from fetchcarry_env.scenario import Scenario
+
+REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance (the rules use the default)
+ARM_TOL = 1e-6  # metres: arm_line_clear's tolerance
+GUARD = 1e-12  # metres: a hypot this close to its threshold is redone with math.hypot
+UNIT = np.array([heading_vector(h) for h in HEADINGS], dtype=np.int64)  # (4, 2): heading index -> unit vector
+PUSH_HEADING = np.array([[HEADINGS.index(h) for h in push_headings(d)] for d in HEADINGS], dtype=np.int64)  # (4, 3)
+
+
+# ---------------------------------------------------------------------- vectorised geometry
+def _clip(px, py, dx, dy, rect) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Liang-Barsky over arrays (geometry._clip): ``(valid, t0, t1)`` of ``p + t (dx, dy)`` in ``rect``.
+
+    ``rect`` is ``(min_x, min_y, max_x, max_y)``, each an array or a number (metres). The
+    scalar loop's four constraints, taken per axis: a constraint whose denominator is
+    negative raises ``t0``, a positive one lowers ``t1``, a zero one (within 1e-15) only
+    asks that the point be on its side; max and min do not care in which order.
+    """
+    x0, y0, x1, y1 = rect
+    t0, t1, bad = 0.0, 1.0, False
+    for d, low, high in ((dx, px - x0, x1 - px), (dy, py - y0, y1 - py)):
+        zero = np.abs(d) <= 1e-15
+        bad = bad | (zero & ((low < 0) | (high < 0)))
+        safe = np.where(zero, 1.0, d)
+        t_low, t_high = low / -safe, high / safe  # the constraints (-d, low) and (d, high)
+        rising = d > 0
+        t0 = np.where(zero, t0, np.maximum(t0, np.where(rising, t_low, t_high)))
+        t1 = np.where(zero, t1, np.minimum(t1, np.where(rising, t_high, t_low)))
+    return ~bad & (t0 <= t1), t0, t1
+
+
+def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: float) -> np.ndarray:
+    """``hypot(dx, dy) < limit`` elementwise, exactly as :func:`math.hypot` decides it (1-D arrays)."""
+    value = np.hypot(dx, dy)
+    out = value < limit
+    for i in np.flatnonzero(np.abs(value - limit) <= GUARD):
+        out[i] = math.hypot(float(dx[i]), float(dy[i])) < limit
+    return out
+
+
+def _sweep_hits(px, py, qx, qy, radius: float, rect) -> np.ndarray:
+    """True where a disc of ``radius`` sliding ``p`` -> ``q`` touches ``rect`` before the end (1-D arrays).
+
+    geometry._sweep_disc_rect(...) < 1.0, operation for operation: the start inside the
+    rounded rectangle, an entry into one of the two grown rectangles or the four
+    corner circles before ``t = 1``. The two rectangles, and the four circles, go
+    through one array pass each.
+    """
+    x0, y0, x1, y1 = rect
+    n = px.size
+    hit = _hypot_below(
+        np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), radius - EPS
+    )
+    dx, dy = qx - px, qy - py
+    p2x, p2y, d2x, d2y = (np.concatenate([v, v]) for v in (px, py, dx, dy))
+    grown = (np.concatenate([x0 - radius, x0]), np.concatenate([y0, y0 - radius]))
+    grown += (np.concatenate([x1 + radius, x1]), np.concatenate([y1, y1 + radius]))
+    valid, t0, t1 = _clip(p2x, p2y, d2x, d2y, grown)
+    hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).reshape(2, n).any(axis=0)
+    p4x, p4y, d4x, d4y = (np.tile(v, 4) for v in (px, py, dx, dy))
+    fx, fy = p4x - np.concatenate([x0, x1, x1, x0]), p4y - np.concatenate([y0, y0, y1, y1])
+    a = d4x * d4x + d4y * d4y
+    b = 2 * (fx * d4x + fy * d4y)
+    disc = b * b - 4 * a * (fx * fx + fy * fy - radius * radius)
+    real = (a > 1e-18) & (disc > 0)
+    root, two_a = np.sqrt(np.where(real, disc, 0.0)), np.where(real, 2 * a, 1.0)
+    t_in, t_out = (-b - root) / two_a, (-b + root) / two_a
+    return hit | (real & (t_out > EPS) & (t_in < 1.0)).reshape(4, n).any(axis=0)
+
+
+def moves_free(start_x, start_y, end_x, end_y, radius: float, blockers: np.ndarray) -> np.ndarray:
+    """True where ``move_stop`` of a base of ``radius`` from start to end reports no contact (1-D arrays).
+
+    ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y, max_x, max_y`` (metres).
+    """
+    sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
+    box = (
+        np.minimum(sx, ex) - radius,
+        np.minimum(sy, ey) - radius,
+        np.maximum(sx, ex) + radius,
+        np.maximum(sy, ey) + radius,
+    )
+    X0, Y0, X1, Y1 = (blockers[:, i][None, :] for i in range(4))
+    overlap = (np.minimum(box[2][:, None], X1) - np.maximum(box[0][:, None], X0) > 0.0) & (
+        np.minimum(box[3][:, None], Y1) - np.maximum(box[1][:, None], Y0) > 0.0
+    )
+    n, m = np.nonzero(overlap)
+    free = np.ones(sx.shape, dtype=bool)
+    if n.size:
+        args = (sx[n], sy[n], ex[n], ey[n])
+        rect = tuple(blockers[m, i] for i in range(4))
+        hit = np.flatnonzero(_sweep_hits(*args, radius - CONTACT_SLACK, rect))  # the slack test first
+        if hit.size:
+            again = tuple(v[hit] for v in args)
+            hit = hit[_sweep_hits(*again, radius, tuple(v[hit] for v in rect))]
+            free[n[hit]] = False
+    return free
+
+
+def arm_crosses(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
+    """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
+    px, py, qx, qy = (np.asarray(v, dtype=float)[:, None] for v in np.broadcast_arrays(px, py, qx, qy))
+    if rects.shape[0] == 0:
+        return np.zeros(px.shape[0], dtype=bool)
+    x0, y0, x1, y1 = (rects[:, i][None, :] + s for i, s in enumerate((ARM_TOL, ARM_TOL, -ARM_TOL, -ARM_TOL)))
+    proper = (x0 < x1) & (y0 < y1)
+    valid, _t0, _t1 = _clip(px, py, qx - px, qy - py, (x0, y0, x1, y1))
+    return (proper & valid).any(axis=1)
+
+
+def _rects(rects) -> np.ndarray:
+    """``(N, 4)`` array of rectangles (metres)."""
+    return np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in rects], dtype=float).reshape(-1, 4)
+
+
+# ---------------------------------------------------------------------- the candidates
+@dataclass
+class _Offers:
+    """Candidates that passed every test but the base's: numbers, end cells, heading, posture, mode (1-D arrays)."""
+
+    index: np.ndarray
+    ci: np.ndarray
+    cj: np.ndarray
+    heading: np.ndarray
+    posture: np.ndarray
+    mode: int
+
+    def take(self, keep: np.ndarray) -> _Offers:
+        return _Offers(
+            self.index[keep], self.ci[keep], self.cj[keep], self.heading[keep], self.posture[keep], self.mode
+        )
+
+
+def _empty(mode: int) -> _Offers:
+    nothing = np.zeros(0, dtype=np.int64)
+    return _Offers(nothing, nothing, nothing, nothing, nothing, mode)
+
+
+@dataclass
+class _Items:
+    """What the movable items decide, for one placement of objects and clutter and one hand (cached per state)."""
+
+    picks: _Offers
+    places: _Offers
+    approaches: _Offers
+    contacts: np.ndarray  # (clutter, 4, 2): push contact of each piece along each direction, metres
+    clutter: list  # ids of the scenario's clutter, in slot order
+
+
+class FastPhases:
+    """The candidates of one scenario's states, as :func:`~fetchcarry_env.phases.enumerate_phases` decides them.
+
+    Build one per scenario (what depends on the scenario alone is computed here, once);
+    :meth:`table` gives the :class:`~fetchcarry_env.phases.PhaseTable` of a state.
+    """
+
+    def __init__(self, layout: PhaseLayout, scenario: Scenario, lattice: Lattice) -> None:
+        self.layout, self.scenario, self.lattice = layout, scenario, lattice
+        res, (nx, ny) = lattice.resolution, lattice.shape
+        self.xs = lattice.origin[0] + np.arange(nx) * res  # metres: lattice.point's x of each column
+        self.ys = lattice.origin[1] + np.arange(ny) * res
+        radius = scenario.robot.radius
+        self.radius = radius
+        area, margin = scenario.area, -radius  # check_action: area.contains_disc(target, radius, tol=1e-9)
+        self.fits_x = (self.xs >= (area.min_x - margin) - 1e-9) & (self.xs <= (area.max_x + margin) + 1e-9)
+        self.fits_y = (self.ys >= (area.min_y - margin) - 1e-9) & (self.ys <= (area.max_y + margin) + 1e-9)
+        self.blockers = _rects(rect for _, rect in base_blockers(scenario))
+        self.obstacles = _rects(o.rect for o in scenario.obstacles)
+        postures = scenario.robot.postures
+        self.reach = np.array(
+            [
+                (p.forward[0] - REACH_TOL, p.forward[1] + REACH_TOL, p.lateral[0] - REACH_TOL, p.lateral[1] + REACH_TOL)
+                for p in postures
+            ],
+            dtype=float,
+        ).reshape(-1, 4)
+        nf, nl = layout.window
+        self.window = np.array(
+            [
+                [
+                    [to_world_frame(h, layout.forward[0] + f, lat - layout.lateral) for lat in range(nl)]
+                    for f in range(nf)
+                ]
+                for h in HEADINGS
+            ]
+        ).astype(np.int64)  # (4, nf, nl, 2): cells from a pose to its target, world frame
+        self._stand = np.full((nx, ny), -1, dtype=np.int8)  # where the base may stand: 1 yes, 0 no, -1 not known yet
+        self._stops: dict = {}  # move_stop of a zero-length move at off-lattice points (push ends)
+        self._waypoints = self._waypoint_cells()
+        self._edges = self._edge_lines()
+        self._items: dict = {}
+
+    # ------------------------------------------------------------------ the table
+    def table(self, state: WorldState) -> PhaseTable:
+        """Which candidates are allowed in ``state`` and their env actions: :func:`enumerate_phases`' answer."""
+        layout = self.layout
+        items = self._items_of(state)
+        heading = HEADINGS.index(state.heading)
+        moves = self._moves(state, items.approaches, heading)
+        lattice_ends = [items.picks, items.places, moves]
+        free = self._free_from(state.base, lattice_ends)
+        mask = np.zeros(layout.size, dtype=bool)
+        actions = np.zeros((layout.size, 5), dtype=np.int64)
+        for offers, ok in zip(lattice_ends, free, strict=True):
+            offers = offers.take(ok)
+            if offers is not items.picks and offers.mode == Mode.MOVE:
+                _, first = np.unique(offers.ci * self.lattice.shape[1] + offers.cj, return_index=True)
+                offers = offers.take(np.sort(first))  # one candidate per env action: the first allowed
+            _fill(mask, actions, offers)
+        for index, key in self._pushes(state):
+            mask[index] = True
+            actions[index] = key
+        allowed = np.flatnonzero(mask)
+        lookup = dict(zip(map(tuple, actions[allowed].tolist()), allowed.tolist(), strict=True))
+        return PhaseTable(mask, actions, lookup)
+
+    def _free_from(self, base: tuple[float, float], groups: list[_Offers]) -> list[np.ndarray]:
+        """Per group, True where the base goes from ``base`` to the candidate's end cell without a contact."""
+        cells = np.concatenate([g.ci * self.lattice.shape[1] + g.cj for g in groups])
+        unique, inverse = np.unique(cells, return_inverse=True)
+        ui, uj = np.divmod(unique, self.lattice.shape[1])
+        free = moves_free(base[0], base[1], self.xs[ui], self.ys[uj], self.radius, self.blockers)[inverse]
+        return np.split(free, np.cumsum([g.index.size for g in groups])[:-1])
+
+    # ------------------------------------------------------------------ what the items decide
+    def _items_of(self, state: WorldState) -> _Items:
+        """The pick, place and approach candidates before the base's tests, cached per placement of the items."""
+        held = state.holding  # the held object goes with the hand: nothing here depends on where it is
+        key = (tuple(None if k == held else v for k, v in state.objects.items()), tuple(state.clutter.values()), held)
+        items = self._items.get(key)
+        if items is None:
+            if len(self._items) > 256:
+                self._items.clear()
+            scenario = self.scenario
+            clutter = [c.id for c in scenario.clutter]
+            contacts = np.array(
+                [[push_contact(clutter_rect(scenario, state, c), d) for d in HEADINGS] for c in clutter], dtype=float
+            ).reshape(-1, 4, 2)
+            picks, places = self._acts(state, Mode.PICK), self._acts(state, Mode.PLACE)
+            items = _Items(picks, places, self._approaches(state, contacts), contacts, clutter)
+            self._items[key] = items
+        return items
+
+    def _arm_rects(self, state: WorldState, ignore: str | None) -> np.ndarray:
+        """The rectangles the arm line may not cross: obstacles, then clutter but ``ignore`` (rules._arm_blocker)."""
+        scenario = self.scenario
+        clutter = _rects(clutter_rect(scenario, state, c.id) for c in scenario.clutter if c.id != ignore)
+        return np.concatenate([self.obstacles, clutter])
+
+    def _acts(self, state: WorldState, mode: Mode) -> _Offers:
+        """Pick (``mode`` PICK) or place candidates allowed but for the base's move (``_Enumerator._acts``)."""
+        scenario, layout = self.scenario, self.layout
+        if (state.holding is None) != (mode == Mode.PICK) or not scenario.objects:
+            return _empty(int(mode))
+        ids = [o.id for o in scenario.objects]
+        slots = range(len(ids)) if mode == Mode.PICK else [ids.index(state.holding)]
+        kind = "pick" if mode == Mode.PICK else "place"
+        groups = []
+        for slot in slots:
+            obj = scenario.objects[slot]
+            target = state.objects[obj.id][:2] if mode == Mode.PICK else obj.goal
+            if mode == Mode.PLACE and _goal_taken(scenario, state, obj):
+                continue
+            first = np.array([layout.index(kind, slot, h, 0, 0) for h in range(len(HEADINGS))])
+            offers, _g = self._window_offers(first, [_index(self.lattice, target)] * 4, np.arange(4), [target] * 4)
+            offers = offers.take(self._fits(offers.ci, offers.cj) & self._stand_at(offers.ci, offers.cj))
+            offers.mode = int(mode)
+            keep = ~arm_crosses(
+                self.xs[offers.ci], self.ys[offers.cj], target[0], target[1], self._arm_rects(state, None)
+            )
+            if mode == Mode.PICK:
+                keep &= self._picks_take(state, offers, slot)
+            groups.append(offers.take(keep))
+        return _concat(groups, int(mode))
+
+    def _picks_take(self, state: WorldState, offers: _Offers, slot: int) -> np.ndarray:
+        """True where the object nearest the posture's centre within reach is the candidate's own (_check_pick)."""
+        scenario = self.scenario
+        points = np.array([state.objects[o.id][:2] for o in scenario.objects], dtype=float)
+        reaching = self._reaches_all(offers, points)
+        keep = reaching.sum(axis=1) == 1  # only its own object in reach (it always reaches its own)
+        for n in np.flatnonzero(~keep):
+            action = Action(
+                (int(offers.ci[n]), int(offers.cj[n])), HEADINGS[offers.heading[n]], int(offers.posture[n]), Mode.PICK
+            )
+            phase = check_action(scenario, state, self.lattice, action)
+            keep[n] = not isinstance(phase, str) and phase.target == scenario.objects[slot].id
+        return keep
+
+    def _approaches(self, state: WorldState, contacts: np.ndarray) -> _Offers:
+        """Approach moves allowed but for the base's move and the still test (``_Enumerator._approaches``)."""
+        scenario, layout, lattice = self.scenario, self.layout, self.lattice
+        n = len(scenario.clutter)
+        if n == 0:
+            return _empty(int(Mode.MOVE))
+        c, d, k = (a.ravel() for a in np.indices((n, 4, 3)))
+        first = np.array(
+            [layout.index("approach", *g, 0, 0) for g in zip(c.tolist(), d.tolist(), k.tolist(), strict=True)]
+        )
+        targets = contacts[c, d]
+        centers = [_index(lattice, (float(x), float(y))) for x, y in targets]
+        offers, g = self._window_offers(first, centers, PUSH_HEADING[d, k], targets)
+        c, d = c[g], d[g]
+        ux, uy = UNIT[d, 0], UNIT[d, 1]
+        ei, ej = offers.ci + ux, offers.cj + uy
+        on = (ei >= 0) & (ei < lattice.shape[0]) & (ej >= 0) & (ej < lattice.shape[1])
+        offers, c, d, ux, uy, ei, ej = offers.take(on), c[on], d[on], ux[on], uy[on], ei[on], ej[on]
+        keep = self._fits(offers.ci, offers.cj) & self._fits(ei, ej) & self._stand_at(offers.ci, offers.cj)
+        keep &= self._pushes_from(state, offers, contacts, c, d, ei, ej)
+        out = offers.take(keep)
+        out.heading = np.full(
+            out.index.size, HEADINGS.index(state.heading)
+        )  # replaced by the heading of the state asked
+        out.posture = np.zeros(out.index.size, dtype=np.int64)
+        out.mode = int(Mode.MOVE)
+        return out
+
+    def _pushes_from(self, state, offers: _Offers, contacts, c, d, ei, ej) -> np.ndarray:
+        """True where the env would accept the one-cell push from the pose (``_Enumerator._pushes_from``)."""
+        scenario = self.scenario
+        px, py = self.xs[offers.ci], self.ys[offers.cj]
+        dx, dy = self.xs[ei] - px, self.ys[ej] - py
+        dx, dy = np.where(np.abs(dx) <= 1e-6, 0.0, dx), np.where(np.abs(dy) <= 1e-6, 0.0, dy)
+        length = np.abs(dx) + np.abs(dy)
+        keep = np.zeros(offers.index.size, dtype=bool)
+        for slot, item in enumerate(scenario.clutter):
+            rect = clutter_rect(scenario, state, item.id)
+            table = scenario.table_under_rect(rect)
+            if table is None:
+                continue
+            arm = self._arm_rects(state, item.id)
+            for direction in range(4):
+                sel = np.flatnonzero((c == slot) & (d == direction))
+                if sel.size == 0 or self._hand_blocked(state, item.id, tuple(contacts[slot, direction])):
+                    continue
+                ux, uy = heading_vector(HEADINGS[direction])
+                t, lx, ly = table.rect, ux * length[sel], uy * length[sel]
+                on_table = (rect.min_x + lx >= t.min_x - 1e-6) & (rect.min_y + ly >= t.min_y - 1e-6)
+                on_table &= (rect.max_x + lx <= t.max_x + 1e-6) & (rect.max_y + ly <= t.max_y + 1e-6)
+                cx, cy = contacts[slot, direction]
+                ok = on_table & ~arm_crosses(px[sel], py[sel], cx, cy, arm)
+                nearest = self._reaches_all(offers.take(sel), contacts[:, direction]).sum(axis=1) == 1
+                ok &= nearest
+                keep[sel] = ok
+                for n in sel[~nearest]:
+                    keep[n] = self._push_exact(state, offers, n, (int(ei[n]), int(ej[n])), item.id)
+        return keep
+
+    def _push_exact(self, state: WorldState, offers: _Offers, n: int, end: tuple[int, int], item: str) -> bool:
+        """``_Enumerator._pushes_from`` itself, for a pose from which more than one piece is within reach."""
+        pose = (float(self.xs[offers.ci[n]]), float(self.ys[offers.cj[n]]))
+        heading = HEADINGS[offers.heading[n]]
+        there = replace(state, base=pose, heading=heading)
+        phase = check_action(
+            self.scenario, there, self.lattice, Action(end, heading, int(offers.posture[n]), Mode.PUSH)
+        )
+        return not isinstance(phase, str) and phase.target == item
+
+    def _hand_blocked(self, state: WorldState, item: str, contact: tuple[float, float]) -> bool:
+        """True when something leaves no room for the hand at ``contact`` behind ``item`` (rules._check_push)."""
+        scenario = self.scenario
+        return (
+            hand_blocker(
+                contact,
+                ((c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != item),
+                ((o.id, state.objects[o.id][:2], o.radius) for o in scenario.objects if o.id != state.holding),
+            )
+            is not None
+        )
+
+    # ------------------------------------------------------------------ what the base decides
+    def _moves(self, state: WorldState, approaches: _Offers, heading: int) -> _Offers:
+        """Approach, waypoint and edge moves allowed but for the swept-disc test and the one-per-action rule."""
+        bx, by = state.base
+        ex, ey, eindex = self._edges
+        x = np.where(np.isnan(ex), bx, ex)
+        y = np.where(np.isnan(ey), by, ey)
+        inside = (x >= self._inside[0]) & (x <= self._inside[2]) & (y >= self._inside[1]) & (y <= self._inside[3])
+        x, y, eindex = x[inside], y[inside], eindex[inside]
+        nx, ny = self.lattice.shape
+        res, (ox, oy) = self.lattice.resolution, self.lattice.origin
+        ei = np.minimum(np.maximum(np.rint((x - ox) / res), 0), nx - 1).astype(np.int64)
+        ej = np.minimum(np.maximum(np.rint((y - oy) / res), 0), ny - 1).astype(np.int64)
+        keep = self._fits(ei, ej) & self._stand_at(ei, ej)
+        wi, wj, windex = self._waypoints
+        index = np.concatenate([approaches.index, windex, eindex[keep]])
+        ci = np.concatenate([approaches.ci, wi, ei[keep]])
+        cj = np.concatenate([approaches.cj, wj, ej[keep]])
+        near = np.flatnonzero((np.abs(self.xs[ci] - bx) <= 1e-6) & (np.abs(self.ys[cj] - by) <= 1e-6))
+        still = np.zeros(index.size, dtype=bool)
+        for n in near:
+            still[n] = math.dist((float(self.xs[ci[n]]), float(self.ys[cj[n]])), state.base) <= STILL
+        size = index.size
+        offers = _Offers(index, ci, cj, np.full(size, heading), np.zeros(size, dtype=np.int64), int(Mode.MOVE))
+        return offers.take(~still)
+
+    def _pushes(self, state: WorldState) -> list[tuple[int, tuple[int, ...]]]:
+        """``(candidate, env action)`` of the allowed pushes (``_Enumerator._pushes``, reach tested at once)."""
+        scenario, layout, lattice = self.scenario, self.layout, self.lattice
+        if not scenario.clutter:
+            return []
+        contacts = self._items_of(state).contacts  # (n, 4, 2)
+        n = contacts.shape[0]
+        c, d, k = (a.ravel() for a in np.indices((n, 4, 3)))
+        h = PUSH_HEADING[d, k]
+        bx, by = state.base
+        fwd, lat = _hand_offset(h, bx, by, contacts[c, d, 0], contacts[c, d, 1])
+        posture = self._first_posture(fwd, lat)
+        here = _index(lattice, state.base)
+        out = []
+        for g in np.flatnonzero(posture >= 0):
+            slot, direction, kk = int(c[g]), int(d[g]), int(k[g])
+            ux, uy = heading_vector(HEADINGS[direction])
+            for s in range(1, layout.strokes + 1):
+                cell = (here[0] + ux * s, here[1] + uy * s)
+                if not (0 <= cell[0] < lattice.shape[0] and 0 <= cell[1] < lattice.shape[1]):
+                    break
+                action = Action(cell, HEADINGS[int(h[g])], int(posture[g]), Mode.PUSH)
+                if self._push_allowed(state, action, scenario.clutter[slot].id):
+                    key = (cell[0], cell[1], int(h[g]), int(posture[g]), int(Mode.PUSH))
+                    out.append((layout.index("push", slot, direction, kk, s - 1), key))
+        return out
+
+    def _push_allowed(self, state: WorldState, action: Action, item: str) -> bool:
+        """``_Enumerator._offer`` for a push: the env accepts it on ``item``, the stroke's end is free and reached."""
+        phase = check_action(self.scenario, state, self.lattice, action)
+        if isinstance(phase, str) or phase.target != item:
+            return False
+        end = phase.base
+        if end not in self._stops:
+            self._stops[end] = move_stop(self.scenario, end, end)[1] is None
+        return self._stops[end] and move_stop(self.scenario, state.base, end)[1] is None
+
+    # ------------------------------------------------------------------ helpers
+    def _window_offers(self, first, centers, headings, targets) -> tuple[_Offers, np.ndarray]:
+        """The on-lattice poses of each group's window with the first posture reaching its target, and their group.
+
+        Group ``g`` is the window of ``headings[g]`` around cell ``centers[g]``, numbered
+        from candidate ``first[g]``, facing point ``targets[g]`` (``_Enumerator._window`` and ``_posture``).
+        """
+        first, headings = np.asarray(first, dtype=np.int64), np.asarray(headings, dtype=np.int64)
+        centers, targets = np.asarray(centers, dtype=np.int64), np.asarray(targets, dtype=float)
+        nf, nl = self.layout.window
+        offsets = self.window[headings]  # (G, nf, nl, 2)
+        ci = (centers[:, 0, None, None] - offsets[..., 0]).ravel()
+        cj = (centers[:, 1, None, None] - offsets[..., 1]).ravel()
+        index = (first[:, None, None] + np.arange(nf)[:, None] * nl + np.arange(nl)).ravel()
+        group = np.repeat(np.arange(first.size), nf * nl)
+        on = (ci >= 0) & (ci < self.lattice.shape[0]) & (cj >= 0) & (cj < self.lattice.shape[1])
+        ci, cj, index, group = ci[on], cj[on], index[on], group[on]
+        h = headings[group]
+        fwd, lat = _hand_offset(h, self.xs[ci], self.ys[cj], targets[group, 0], targets[group, 1])
+        posture = self._first_posture(fwd, lat)
+        ok = posture >= 0
+        return _Offers(index[ok], ci[ok], cj[ok], h[ok], posture[ok], -1), group[ok]
+
+    def _first_posture(self, fwd: np.ndarray, lat: np.ndarray) -> np.ndarray:
+        """The first posture whose ranges hold each robot-frame offset (metres), or -1 (``Posture.reaches``)."""
+        r = self.reach
+        ok = (
+            (r[:, 0] <= fwd[:, None])
+            & (fwd[:, None] <= r[:, 1])
+            & (r[:, 2] <= lat[:, None])
+            & (lat[:, None] <= r[:, 3])
+        )
+        return np.where(ok.any(axis=1), ok.argmax(axis=1), -1)
+
+    def _reaches_all(self, offers: _Offers, points: np.ndarray) -> np.ndarray:
+        """``(N, J)``: True where candidate ``n``'s posture, from its pose, reaches point ``j`` (metres)."""
+        h = offers.heading[:, None]
+        fwd, lat = _hand_offset(
+            h, self.xs[offers.ci][:, None], self.ys[offers.cj][:, None], points[None, :, 0], points[None, :, 1]
+        )
+        r = self.reach[offers.posture][:, None, :]
+        return (r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])
+
+    def _fits(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
+        """True where the base disc at the lattice point fits in the area (check_action's first test)."""
+        return self.fits_x[ci] & self.fits_y[cj]
+
+    def _stand_at(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
+        """True where a base standing at the lattice point touches nothing (``move_stop`` of a zero-length move)."""
+        known = self._stand[ci, cj]
+        todo = known < 0
+        if todo.any():
+            ui, uj = ci[todo], cj[todo]
+            x, y = self.xs[ui], self.ys[uj]
+            self._stand[ui, uj] = moves_free(x, y, x, y, self.radius, self.blockers)
+            known = self._stand[ci, cj]
+        return known == 1
+
+    def _waypoint_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(ci, cj, candidate)`` of the waypoints that fit in the area and where the base may stand."""
+        layout, lattice, res = self.layout, self.lattice, self.lattice.resolution
+        first = round(self.radius / res)
+        rows = []
+        for slot, rect in self._blocker_slots():
+            for corner, (sx, sy) in enumerate(CORNERS):
+                cx = rect.max_x if sx > 0 else rect.min_x
+                cy = rect.max_y if sy > 0 else rect.min_y
+                for i in range(layout.corner_cells):
+                    for j in range(layout.corner_cells):
+                        point = (cx + sx * (first + i) * res, cy + sy * (first + j) * res)
+                        if inside_lattice(lattice, point):
+                            rows.append((*_index(lattice, point), layout.index("waypoint", slot, corner, i, j)))
+        ci, cj, index = (
+            (np.array(v, dtype=np.int64) for v in zip(*rows, strict=True)) if rows else (np.zeros(0, int),) * 3
+        )
+        keep = self._fits(ci, cj) & self._stand_at(ci, cj)
+        return ci[keep], cj[keep], index[keep]
+
+    def _edge_lines(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(x, y, candidate)`` of every edge move's line: x for a line across x (y NaN: the base's), or y."""
+        layout, lattice, res = self.layout, self.lattice, self.lattice.resolution
+        half, (nx, ny) = res / 2, lattice.shape
+        ox, oy = lattice.origin
+        self._inside = (ox - half, oy - half, ox + (nx - 1) * res + half, oy + (ny - 1) * res + half)
+        first = round(self.radius / res)
+        rows = []
+        for slot, rect in self._blocker_slots():
+            for side, heading in enumerate(HEADINGS):
+                ux, uy = heading_vector(heading)
+                for i in range(layout.corner_cells):
+                    out = (first + i) * res
+                    if ux:
+                        line = (rect.max_x + out if ux > 0 else rect.min_x - out, math.nan)
+                    else:
+                        line = (math.nan, rect.max_y + out if uy > 0 else rect.min_y - out)
+                    rows.append((*line, layout.index("edge", slot, side, i)))
+        x, y, index = (np.array(v, dtype=float) for v in zip(*rows, strict=True)) if rows else (np.zeros(0),) * 3
+        return x, y, index.astype(np.int64)
+
+    def _blocker_slots(self) -> list:
+        """``(slot, rectangle)`` of every table and obstacle (``_Enumerator._blockers``)."""
+        scenario, tables = self.scenario, self.layout.capacity.tables
+        return [(k, t.rect) for k, t in enumerate(scenario.tables)] + [
+            (tables + k, o.rect) for k, o in enumerate(scenario.obstacles)
+        ]
+
+
+def _index(lattice: Lattice, point: tuple[float, float]) -> tuple[int, int]:
+    """``Lattice.index`` without numpy's scalar overhead: the nearest lattice point's ``(i, j)``, clipped."""
+    (ox, oy), res, (nx, ny) = lattice.origin, lattice.resolution, lattice.shape
+    return (min(max(round((point[0] - ox) / res), 0), nx - 1), min(max(round((point[1] - oy) / res), 0), ny - 1))
+
+
+def _hand_offset(h, bx, by, tx, ty) -> tuple[np.ndarray, np.ndarray]:
+    """``kinematics.hand_offset`` over arrays: robot-frame ``(forward, lateral)`` of the target (metres)."""
+    dx, dy = tx - bx, ty - by
+    hx, hy = UNIT[h, 0], UNIT[h, 1]
+    return dx * hx + dy * hy, -dx * hy + dy * hx
+
+
+def _fill(mask: np.ndarray, actions: np.ndarray, offers: _Offers) -> None:
+    """Allow ``offers``' candidates and write their env actions."""
+    mask[offers.index] = True
+    actions[offers.index] = np.stack(
+        [offers.ci, offers.cj, offers.heading, offers.posture, np.full(offers.index.size, offers.mode)], axis=1
+    )
+
+
+def _concat(groups: list[_Offers], mode: int) -> _Offers:
+    if not groups:
+        return _empty(mode)
+    return _Offers(
+        *(np.concatenate([getattr(g, f) for g in groups]) for f in ("index", "ci", "cj", "heading", "posture")), mode
+    )
+
+
+def _goal_taken(scenario: Scenario, state: WorldState, obj) -> bool:
+    """True when another object or a piece of clutter stands on ``obj``'s goal (rules._check_place)."""
+    for other in scenario.objects:
+        if other.id != obj.id and math.dist(state.objects[other.id][:2], obj.goal) < other.radius + obj.radius - 1e-9:
+            return True
+    return any(clutter_rect(scenario, state, item.id).overlaps_disc(obj.goal, obj.radius) for item in scenario.clutter)
