@@ -16,8 +16,9 @@ import numpy as np
 from gymnasium import spaces
 
 from fetchcarry_env.actions import Action, Mode
+from fetchcarry_env.candidate_mask import FastPhases
 from fetchcarry_env.env import FetchCarryPushEnv
-from fetchcarry_env.phases import PhaseLayout, PhaseTable, enumerate_phases
+from fetchcarry_env.phases import PhaseLayout, PhaseTable
 from fetchcarry_env.rules import check_action
 from fetchcarry_env.shaping import DEFAULT_GAMMA, LearningReward
 
@@ -38,7 +39,9 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
     the candidate's own item, reaches its end without a contact, stands for no
     earlier candidate's env action, and is not a move that goes nowhere. So an allowed
     candidate always executes as asked, and allowed candidates and env actions are one
-    to one (:meth:`index_of`, :meth:`env_action`). The mask is computed once per state, when first asked for.
+    to one (:meth:`index_of`, :meth:`env_action`). The mask is computed once per state, when first asked for,
+    in array operations (:mod:`fetchcarry_env.candidate_mask`), decision for decision as
+    :func:`~fetchcarry_env.phases.enumerate_phases` (the reference) decides it.
 
     A masked candidate is refused: the world does not change and the env's penalty
     for an impossible action applies (``info["invalid_action"]`` says which candidate).
@@ -72,8 +75,7 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self.layout = layout
         self.action_space = spaces.Discrete(layout.size)
         self._table: PhaseTable | None = None
-        self._standing: dict = {}  # where the base may stand, per point: fixed for one scenario
-        self._standing_in: Any = None  # the scenario those points belong to
+        self._phases: FastPhases | None = None  # what the current scenario decides once (its static geometry)
 
     # ------------------------------------------------------------------ Gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[Any, dict[str, Any]]:
@@ -105,12 +107,18 @@ class PhaseActions(gym.Wrapper, gym.utils.RecordConstructorArgs):
     # ------------------------------------------------------------------ candidates and env actions
     @property
     def table(self) -> PhaseTable:
-        """The current state's candidates (computed once per state)."""
+        """The current state's candidates (computed once per state).
+
+        :class:`~fetchcarry_env.candidate_mask.FastPhases` computes them, one per scenario:
+        the same table as :func:`~fetchcarry_env.phases.enumerate_phases` (the reference,
+        one candidate at a time), in array operations.
+        """
         if self._table is None:
             base = self._base
-            if self._standing_in is not base.scenario:
-                self._standing, self._standing_in = {}, base.scenario
-            self._table = enumerate_phases(self.layout, base.scenario, base.state, base.lattice, self._standing)
+            phases = self._phases
+            if phases is None or phases.scenario is not base.scenario or phases.lattice != base.lattice:
+                phases = self._phases = FastPhases(self.layout, base.scenario, base.lattice)
+            self._table = phases.table(base.state)
         return self._table
 
     def index_of(self, action: np.ndarray | Sequence[int] | Action) -> int | None:

@@ -1,0 +1,185 @@
+"""The fast candidate mask (fetchcarry_env.candidate_mask) is the reference's (phases.enumerate_phases), exactly.
+
+Every test compares whole tables, the mask, every env action and the lookup, on states
+reached by random masked steps from seeded resets of every family, with a bias
+towards picks, places and pushes (pushes jam against neighbours and walls there) and
+some refused candidates; and the array geometry against the scalar functions on random
+and on grazing segments. ``python tests/env/test_phase_mask_fast.py --states N`` runs the
+walk comparison longer (not collected by pytest).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import fetchcarry_env  # noqa: F401  (registers the ids)
+from fetchcarry_env.actions import Mode
+from fetchcarry_env.candidate_mask import FastPhases, arm_crosses, moves_free
+from fetchcarry_env.families import FAMILY_NAMES
+from fetchcarry_env.kinematics import arm_line_clear
+from fetchcarry_env.phases import PhaseTable, enumerate_phases
+from fetchcarry_env.rules import base_blockers, move_stop
+
+ENV_ID = "FetchCarryPushPhases-v0"
+STATES_PER_FAMILY = 110  # x 11 families, plus the refused steps' states
+
+
+@dataclass
+class Tally:
+    """How much a comparison covered."""
+
+    states: int = 0
+    candidates: int = 0
+    allowed: int = 0
+    pushes: int = 0  # push steps taken
+    refused: int = 0  # refused steps taken
+
+
+def same_table(got: PhaseTable, want: PhaseTable) -> bool:
+    return (
+        np.array_equal(got.mask, want.mask) and np.array_equal(got.actions, want.actions) and got.lookup == want.lookup
+    )
+
+
+def _choose(rng: np.random.Generator, mask: np.ndarray, actions: np.ndarray, size: int) -> int:
+    """A candidate: sometimes a masked one, often a pick, place or push when one is allowed, else any allowed."""
+    if rng.random() < 0.06:
+        return int(rng.integers(size))
+    allowed = np.flatnonzero(mask)
+    acting = allowed[actions[allowed, 4] != Mode.MOVE]
+    if acting.size and rng.random() < 0.5:
+        return int(rng.choice(acting))
+    return int(rng.choice(allowed))
+
+
+def compare_walk(family: str, seed: int, states: int, tally: Tally) -> list[str]:
+    """Walk ``states`` states of ``family`` from ``seed``; the states where the two tables differ."""
+    env = gym.make(ENV_ID, family=family)
+    wrapper = env.unwrapped
+    phase_env = env
+    while not hasattr(phase_env, "layout"):
+        phase_env = phase_env.env
+    layout = phase_env.layout
+    rng = np.random.default_rng(seed)
+    env.reset(seed=seed)
+    fast, standing, differ = None, {}, []
+    for step in range(states):
+        scenario, state, lattice = wrapper.scenario, wrapper.state, wrapper.lattice
+        if fast is None or fast.scenario is not scenario:
+            fast, standing = FastPhases(layout, scenario, lattice), {}
+        want = enumerate_phases(layout, scenario, state, lattice, standing)
+        got = fast.table(state)
+        if not same_table(got, want):
+            differ.append(f"{family} seed {seed} step {step}: {np.flatnonzero(got.mask != want.mask)[:8].tolist()}")
+        assert same_table(phase_env.table, want)  # the wrapper's own table too
+        tally.states += 1
+        tally.candidates += layout.size
+        tally.allowed += int(want.mask.sum())
+        index = _choose(rng, want.mask, want.actions, layout.size)
+        tally.pushes += bool(want.mask[index] and want.actions[index, 4] == Mode.PUSH)
+        tally.refused += not want.mask[index]
+        _obs, _r, terminated, truncated, _info = env.step(index)
+        if terminated or truncated:
+            env.reset()
+    env.close()
+    return differ
+
+
+@pytest.mark.parametrize("family", FAMILY_NAMES)
+def test_fast_mask_is_the_reference_mask_on_random_walks(family):
+    tally = Tally()
+    differ = compare_walk(family, seed=FAMILY_NAMES.index(family), states=STATES_PER_FAMILY, tally=tally)
+    assert differ == []
+    assert tally.states == STATES_PER_FAMILY and tally.allowed > 0
+    assert tally.refused > 0  # states after refused candidates are compared too
+
+
+def test_the_walks_push_pick_and_place():
+    tally = Tally()
+    assert compare_walk("push", seed=11, states=150, tally=tally) == []
+    assert tally.pushes >= 5
+
+
+def _array(rects) -> np.ndarray:
+    return np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in rects], dtype=float)
+
+
+def _scenario(family: str, seed: int):
+    env = gym.make("FetchCarryPush-v0", family=family)
+    env.reset(seed=seed)
+    return env.unwrapped.scenario, env.unwrapped.lattice
+
+
+@pytest.mark.parametrize("family", ["basic", "corridor", "push"])
+def test_swept_disc_is_move_stop_on_random_and_grazing_moves(family):
+    """moves_free against move_stop: random moves, lattice moves and moves that end exactly a radius from a blocker."""
+    scenario, lattice = _scenario(family, 5)
+    rng = np.random.default_rng(7)
+    radius = scenario.robot.radius
+    rects = [rect for _, rect in base_blockers(scenario)]
+    area = scenario.area
+    starts = rng.uniform((area.min_x, area.min_y), (area.max_x, area.max_y), size=(1500, 2))
+    ends = rng.uniform((area.min_x, area.min_y), (area.max_x, area.max_y), size=(1500, 2))
+    lattice_ends = np.array([lattice.point(*cell) for cell in rng.integers(0, lattice.shape, size=(1500, 2))])
+    grazing = []
+    for k in range(1500):  # ends exactly radius (or radius - slack) from a corner's edge of a rect
+        rect = rects[k % len(rects)]
+        gap = radius - (0.0, 1e-6, 2e-6, 1e-9)[k % 4]
+        grazing.append(
+            (rect.min_x - gap, rng.uniform(rect.min_y, rect.max_y))
+            if k % 2
+            else (rng.uniform(rect.min_x, rect.max_x), rect.max_y + gap)
+        )
+    starts = np.concatenate([starts, starts[:1500], starts[:1500], lattice_ends[:1500]])
+    ends = np.concatenate([ends, lattice_ends, np.array(grazing), lattice_ends[::-1]])
+    blockers = _array(rects)
+    got = moves_free(starts[:, 0], starts[:, 1], ends[:, 0], ends[:, 1], radius, blockers)
+    want = [
+        move_stop(scenario, tuple(s), tuple(e))[1] is None for s, e in zip(starts.tolist(), ends.tolist(), strict=True)
+    ]
+    assert got.tolist() == want
+    still = moves_free(ends[:, 0], ends[:, 1], ends[:, 0], ends[:, 1], radius, blockers)
+    assert still.tolist() == [move_stop(scenario, tuple(e), tuple(e))[1] is None for e in ends.tolist()]
+
+
+def test_arm_line_is_arm_line_clear():
+    scenario, _lattice = _scenario("push", 2)
+    rects = [o.rect for o in scenario.obstacles] + [c.rect for c in scenario.clutter]
+    array = _array(rects)
+    rng = np.random.default_rng(3)
+    area = scenario.area
+    p = rng.uniform((area.min_x, area.min_y), (area.max_x, area.max_y), size=(3000, 2))
+    q = p + rng.normal(scale=0.6, size=(3000, 2))
+    q[::3, 1] = p[::3, 1]  # axis-aligned lines, as the arm's often are
+    got = arm_crosses(p[:, 0], p[:, 1], q[:, 0], q[:, 1], array)
+    assert got.tolist() == [
+        not arm_line_clear(tuple(a), tuple(b), rects) for a, b in zip(p.tolist(), q.tolist(), strict=True)
+    ]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The longer check: ``--states`` states of each family from ``--seeds`` seeds each."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--states", type=int, default=2000, help="states per family and seed (default 2000)")
+    parser.add_argument("--seeds", type=int, default=1, help="seeds per family (default 1)")
+    args = parser.parse_args(argv)
+    tally, differ = Tally(), []
+    for family in FAMILY_NAMES:
+        for seed in range(args.seeds):
+            differ += compare_walk(family, 100 + seed, args.states, tally)
+    print(
+        f"{tally.states} states, {tally.candidates} candidates compared ({tally.allowed} allowed), "
+        f"{tally.pushes} pushes, {tally.refused} refused steps taken; {len(differ)} differ"
+    )
+    print("\n".join(differ[:20]))
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
