@@ -22,7 +22,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from expert.milp.deadline import Deadline, TimeUp
-from expert.milp.decode import Step
+from expert.milp.decode import SolvedPhase
 from expert.milp.problem import Problem
 from expert.plans import Phase, Plan
 from fetchcarry_env.actions import Lattice
@@ -115,10 +115,10 @@ def _moved(rect: Rect, center) -> Rect:
     return rect.translate(center[0] - cx, center[1] - cy)
 
 
-def steps_of(problem: Problem, phases: Sequence[Phase]) -> list[Step] | None:
+def steps_of(problem: Problem, phases: Sequence[Phase]) -> list[SolvedPhase] | None:
     """The plan's phases after the start as MILP steps (lattice cell, pose option); None if one does not map."""
     lattice = problem.grid.lattice
-    steps: list[Step] = []
+    steps: list[SolvedPhase] = []
     previous = problem.start_index
     for phase in phases[1:]:
         if not lattice.on_lattice(phase.base):
@@ -144,6 +144,6 @@ def steps_of(problem: Problem, phases: Sequence[Phase]) -> list[Step] | None:
             )
             if option is None:
                 return None
-        steps.append(Step(cell, option))
+        steps.append(SolvedPhase(cell, option))
         previous = cell
     return steps

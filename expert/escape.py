@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from expert.milp.grid import point_in_region
 from expert.plans import Phase
-from expert.tracking import Step
+from expert.tracking import PlannedAction
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.rules import move_stop
@@ -31,7 +31,7 @@ def corner_gap(scenario: Scenario, world: WorldState) -> str | None:
     return None
 
 
-def escape_move(scenario: Scenario, world: WorldState, lattice: Lattice) -> Step | None:
+def escape_move(scenario: Scenario, world: WorldState, lattice: Lattice) -> PlannedAction | None:
     """A move to the nearest lattice point outside every grown square, reached without a contact, or None."""
     for cell in cells_around(lattice, lattice.index(world.base), ESCAPE_RADIUS_CELLS):
         base = lattice.point(*cell)
@@ -42,7 +42,7 @@ def escape_move(scenario: Scenario, world: WorldState, lattice: Lattice) -> Step
         ):
             objects = {k: v[:2] for k, v in world.objects.items()}
             expected = Phase(base, world.heading, "move", holding=world.holding, objects=objects)
-            return Step(Action(cell, world.heading, 0, Mode.MOVE), expected)
+            return PlannedAction(Action(cell, world.heading, 0, Mode.MOVE), expected)
     return None
 
 

@@ -36,7 +36,7 @@ from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
 from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
-from expert.milp.decode import Step, phases_of, plan_objective, read_steps
+from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
@@ -167,7 +167,7 @@ class _Run:
     conditional: bool = True
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
-    warm: list[Step] | None = None  # the decoupled plan as MILP steps, for warm starts
+    warm: list[SolvedPhase] | None = None  # the decoupled plan as MILP steps, for warm starts
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -296,7 +296,7 @@ class _Run:
         self.stats["reach_s"] = time.perf_counter() - t_reach
         return reason
 
-    def solve_longer(self, problem: Problem, pairs: PairCosts | None, n_phases: int, steps: list[Step]) -> None:
+    def solve_longer(self, problem: Problem, pairs: PairCosts | None, n_phases: int, steps: list[SolvedPhase]) -> None:
         """Solve again with ``extra_phases`` more phases, warm-started from the optimal ``steps``; keep the best."""
         self.stats["fewest_phases"] = n_phases
         self.stats["fewest_phases_objective"] = plan_objective(self.scenario, self.best[1])
@@ -388,7 +388,7 @@ class _Run:
         problem: Problem,
         n_phases: int,
         pairs: PairCosts | None,
-        warm: list[Step] | None = None,
+        warm: list[SolvedPhase] | None = None,
         fewest: bool = False,
     ):
         """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``.
@@ -454,7 +454,7 @@ class _Run:
         problem: Problem,
         n_phases: int,
         cond: Conditional | None,
-        warm: list[Step] | None,
+        warm: list[SolvedPhase] | None,
         record: dict[str, Any],
     ) -> None:
         """The conditional cuts, the warm start and, when the warm start has ``n_phases``, the options it beats."""
@@ -466,7 +466,7 @@ class _Run:
             if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
                 record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
 
-    def read_solution(self, problem: Problem, milp: Milp) -> list[Step]:
+    def read_solution(self, problem: Problem, milp: Milp) -> list[SolvedPhase]:
         """The best solution's steps; its objective, dual bound and gap go to the stats."""
         stats, model = self.stats, milp.model
         steps = read_steps(problem, milp, model.getBestSol())
@@ -490,7 +490,7 @@ def _first_solution_planner(scenario: Scenario, **kwargs: Any) -> Plan:
     return plan(scenario, presolving="fast", heuristics="fast", params={"limits/solutions": 1}, **kwargs)
 
 
-def _without_trailing_idle(steps: list[Step]) -> list[Step]:
+def _without_trailing_idle(steps: list[SolvedPhase]) -> list[SolvedPhase]:
     """``steps`` without the idle phases at the end (no action, no move): the padding of a shorter plan."""
     out = list(steps)
     while len(out) > 1 and out[-1].option is None and out[-1].cell == out[-2].cell:

@@ -45,7 +45,7 @@ import numpy as np
 from expert import planner
 from expert.escape import corner_gap, escape_move
 from expert.plans import Plan
-from expert.tracking import Step, Track, departure, solved
+from expert.tracking import PlannedAction, Track, departure, solved
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.rules import check_action
@@ -265,7 +265,7 @@ class ExpertPolicy:
         self._stats = self._stats.plus(repairs=1)
         return Decision(False, False, why, repaired=True)
 
-    def _refusal(self, scenario: Scenario, world: WorldState, step: Step) -> str | None:
+    def _refusal(self, scenario: Scenario, world: WorldState, step: PlannedAction) -> str | None:
         """Why the env would not do what ``step`` plans from ``world`` (refuse it, or act on another item)."""
         if step.action.mode == Mode.MOVE:
             return None

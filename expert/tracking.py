@@ -19,7 +19,7 @@ from fetchcarry_env.scenario import Scenario
 
 
 @dataclass(frozen=True)
-class Step:
+class PlannedAction:
     """One action of the plan and the phase the world should be in after it."""
 
     action: Action
@@ -30,7 +30,7 @@ class Step:
 class Track:
     """The plan being followed in one env of a batch."""
 
-    steps: list[Step] = field(default_factory=list)  # actions not yet given
+    steps: list[PlannedAction] = field(default_factory=list)  # actions not yet given
     now: Phase | None = None  # the phase the world should be in now
     started: bool = False  # the planner already ran in this episode
     replan: str | None = None  # a reason to replan at the next call, whatever the state
@@ -42,7 +42,7 @@ class Track:
         self.started, self.replan, self.steps, self.now = True, None, [], None
         if plan.found:
             actions = plan_to_actions(plan, scenario, lattice)
-            self.steps = [Step(a, p) for a, p in zip(actions, plan.phases[1:], strict=True)]
+            self.steps = [PlannedAction(a, p) for a, p in zip(actions, plan.phases[1:], strict=True)]
             self.now = plan.phases[0]
 
     def fail(self, world: WorldState, failure: str) -> None:

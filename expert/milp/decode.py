@@ -20,17 +20,17 @@ from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_fra
 
 
 @dataclass(frozen=True)
-class Step:
+class SolvedPhase:
     """One solved phase after the start: its lattice point and the option chosen (None: a move)."""
 
     cell: tuple[int, int]
     option: PoseOption | None
 
 
-def read_steps(problem: Problem, milp, solution) -> list[Step]:
+def read_steps(problem: Problem, milp, solution) -> list[SolvedPhase]:
     """The lattice point and option of every phase ``k >= 1`` of a solution."""
     model = milp.model
-    steps: list[Step] = []
+    steps: list[SolvedPhase] = []
     for k in range(1, milp.n_phases):
         chosen = [o for o, z in milp.z[k].items() if model.getSolVal(solution, z) > 0.5]
         option = problem.options[chosen[0]] if chosen else None
@@ -39,11 +39,11 @@ def read_steps(problem: Problem, milp, solution) -> list[Step]:
             before = steps[-1].cell if steps else problem.start_index
             assert before is not None, "a push from the off-lattice start"
             cell = (before[0] + option.push.cells[0], before[1] + option.push.cells[1])
-        steps.append(Step(cell, option))
+        steps.append(SolvedPhase(cell, option))
     return steps
 
 
-def phases_of(problem: Problem, steps: list[Step]) -> tuple[Phase, ...]:
+def phases_of(problem: Problem, steps: list[SolvedPhase]) -> tuple[Phase, ...]:
     """The plan's phases: phase 0 (the start) and one per step, with every object and clutter position."""
     scenario = problem.scenario
     robot = scenario.robot

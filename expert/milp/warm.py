@@ -11,19 +11,19 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from expert.milp.decode import Step
+from expert.milp.decode import SolvedPhase
 from expert.milp.grid import DiagonalPlane
 
 if TYPE_CHECKING:
     from expert.milp.variables import Milp
 
 
-def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
+def solution_values(milp: Milp, steps: list[SolvedPhase]) -> _Values | None:
     """Values of the model's variables for ``steps`` (padded with idle phases), or None if it does not fit."""
     n = milp.n_phases
     if len(steps) > n - 1 or not steps:
         return None
-    steps = list(steps) + [Step(steps[-1].cell, None)] * (n - 1 - len(steps))
+    steps = list(steps) + [SolvedPhase(steps[-1].cell, None)] * (n - 1 - len(steps))
     values = _Values()
     if not _set_moves(milp, steps, values):
         return None
@@ -33,7 +33,7 @@ def solution_values(milp: Milp, steps: list[Step]) -> _Values | None:
     return values
 
 
-def _set_moves(milp: Milp, steps: list[Step], values: _Values) -> bool:
+def _set_moves(milp: Milp, steps: list[SolvedPhase], values: _Values) -> bool:
     """The base's lattice point, its move and the option chosen at every phase; False if one is not in the model."""
     index = {id(option): o for o, option in enumerate(milp.problem.options)}
     for k, step in enumerate(steps, start=1):
@@ -50,7 +50,7 @@ def _set_moves(milp: Milp, steps: list[Step], values: _Values) -> bool:
     return True
 
 
-def _set_states(milp: Milp, steps: list[Step], values: _Values) -> None:
+def _set_states(milp: Milp, steps: list[SolvedPhase], values: _Values) -> None:
     """What is held, delivered and pushed (and in which direction) after every phase."""
     problem = milp.problem
     held = {i: (1.0 if i == problem.holding else 0.0) for i in problem.deliver}
@@ -91,7 +91,7 @@ def _set_regions(milp: Milp, values: _Values) -> bool:
     return True
 
 
-def add_warm_start(milp: Milp, steps: list[Step]) -> bool:
+def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     """Give SCIP the plan ``steps`` as a first solution; True when SCIP accepted it as feasible."""
     values = solution_values(milp, steps)
     if values is None:
