@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from expert.plans import Plan
+from expert.plans import Phase, Plan, phase_rows
 from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
@@ -165,17 +165,18 @@ def no_plan_reason(plan: Plan, time_limit: float) -> str:
     return f"the solver ended with status {plan.status}"
 
 
+def _phase_row(k: int, phase: Phase) -> str:
+    base = f"{phase.base[0]:6.2f}, {phase.base[1]:6.2f}"
+    return (
+        f"{k:>3}  {phase.action:<6}  {phase.target or '-':<12}  {phase.posture or '-':<12}  {base:<16}  "
+        f"{phase.heading:<3}  {phase.holding or '-'}"
+    )
+
+
 def _phase_table(plan: Plan) -> str:
-    rows = [f"{'k':>3}  {'action':<6}  {'target':<12}  {'posture':<12}  {'base [m]':<16}  {'hd':<3}  holding"]
-    for k, phase in enumerate(plan.phases[:MAX_SUMMARY_PHASES]):
-        base = f"{phase.base[0]:6.2f}, {phase.base[1]:6.2f}"
-        rows.append(
-            f"{k:>3}  {phase.action:<6}  {phase.target or '-':<12}  {phase.posture or '-':<12}  {base:<16}  "
-            f"{phase.heading:<3}  {phase.holding or '-'}"
-        )
-    if len(plan.phases) > MAX_SUMMARY_PHASES:
-        rows.append(f"  ... and {len(plan.phases) - MAX_SUMMARY_PHASES} more phases (see the plan file)")
-    return "\n".join(rows)
+    header = f"{'k':>3}  {'action':<6}  {'target':<12}  {'posture':<12}  {'base [m]':<16}  {'hd':<3}  holding"
+    more = "  ... and {} more phases (see the plan file)"
+    return "\n".join([header, *phase_rows(plan, _phase_row, MAX_SUMMARY_PHASES, more)])
 
 
 def _phases_tried(plan: Plan) -> str:

@@ -332,42 +332,6 @@ def _run_ray(
             ray.shutdown()
 
 
-def bench_generation(source: EpisodeSource, episodes: int, worker_counts: list[int]) -> list[dict[str, Any]]:
-    """Run episodes ``0 .. episodes-1`` of ``source`` with each worker count; one row of figures per count.
-
-    Wall time includes the pool's start-up, as a user of ``generate`` sees it. ``policy_s``
-    includes the planner's seconds (``planning_s``); ``planning_share`` is the planner's
-    part of the policy and simulation seconds; ``speed_up`` is relative to the first count.
-    """
-    rows: list[dict[str, Any]] = []
-    for workers in worker_counts:
-        started = time.perf_counter()
-        figures = [record.figures for _, record in run_episodes(source, list(range(episodes)), workers=workers)]
-        wall = time.perf_counter() - started
-        planning = sum(f.planning_s for f in figures)
-        policy = sum(f.policy_s for f in figures)
-        simulation = sum(f.simulation_s for f in figures)
-        rows.append(
-            {
-                "family": source.family if source.family is not None else source.label,
-                "workers": workers,
-                "episodes": len(figures),
-                "successes": sum(f.success for f in figures),
-                "wall_s": wall,
-                "episodes_per_s": len(figures) / wall,
-                "episodes_per_s_per_worker": len(figures) / wall / workers,
-                "planning_s_per_episode": planning / len(figures),
-                "policy_s_per_episode": policy / len(figures),
-                "simulation_s_per_episode": simulation / len(figures),
-                "planning_share": planning / (policy + simulation) if policy + simulation else 0.0,
-                "speed_up": 0.0,
-            }
-        )
-    for row in rows:
-        row["speed_up"] = row["episodes_per_s"] / rows[0]["episodes_per_s"]
-    return rows
-
-
 def _postfix(figures: list[dict[str, Any]]) -> str:
     successes = sum(f["success"] for f in figures)
     return f"success {successes}/{len(figures)}"
