@@ -89,7 +89,9 @@ def save_gif(
     images[0].save(path, save_all=True, append_images=images[1:], duration=durations, loop=0)
 
 
-def map_so_far(scenario: Scenario, states: Sequence[WorldState], steps: Sequence[Step], index: int) -> np.ndarray:
+def map_so_far(
+    scenario: Scenario, states: Sequence[WorldState], steps: Sequence[EpisodeStep], index: int
+) -> np.ndarray:
     """The top-down map of state ``index`` with the base's path up to it, as a uint8 rgb array."""
     figure = Figure(figsize=(GIF_MAP_IN, GIF_MAP_IN), dpi=100, layout="constrained")
     FigureCanvasAgg(figure)
@@ -147,7 +149,7 @@ def captioned(image: Image.Image, text: str) -> Image.Image:
 
 # ---------------------------------------------------------------------------- what each step did
 @dataclass(frozen=True)
-class Step:
+class EpisodeStep:
     """What one step of the episode did, read from the states before and after it."""
 
     number: int  # 1-based: step k leads from state k-1 to state k
@@ -173,8 +175,8 @@ class Step:
         return f"{self.number} move"
 
 
-def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[Step]:
-    """One :class:`Step` per action, from the states around it (``len(states) == len(actions) + 1``).
+def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[EpisodeStep]:
+    """One :class:`EpisodeStep` per action, from the states around it (``len(states) == len(actions) + 1``).
 
     An action is an env action vector (``FetchCarryPush-v0``) or a candidate's index
     (``FetchCarryPushPhases-v0``, e.g. a learned policy's episode); an index does not say
@@ -197,7 +199,7 @@ def episode_steps(states: Sequence[WorldState], actions: np.ndarray) -> list[Ste
             if moved and max(moved.values()) > 1e-3:
                 target = max(moved, key=moved.get)
                 pushed = moved[target]
-        steps.append(Step(k + 1, mode, before, after, target, pushed))
+        steps.append(EpisodeStep(k + 1, mode, before, after, target, pushed))
     return steps
 
 
@@ -212,7 +214,7 @@ def _mode_from_states(before: WorldState, after: WorldState) -> Mode:
     return Mode.MOVE
 
 
-def key_states(steps: Sequence[Step], most: int = MAX_RENDERS) -> list[int]:
+def key_states(steps: Sequence[EpisodeStep], most: int = MAX_RENDERS) -> list[int]:
     """State indices for the strip: the start, the state after each arm action, and the end (at most ``most``)."""
     acted = [s.number for s in steps if s.acted]
     chosen = sorted({0, *acted, len(steps)})
@@ -281,7 +283,7 @@ def title(figures: EpisodeFigures) -> str:
 
 
 def draw_episode(
-    axes: Axes, scenario: Scenario, states: Sequence[WorldState], steps: Sequence[Step], *, label_size_m: float
+    axes: Axes, scenario: Scenario, states: Sequence[WorldState], steps: Sequence[EpisodeStep], *, label_size_m: float
 ) -> None:
     """The scene at the end of the episode, the clutter's start (dashed), and every step of the base."""
     last = states[-1]
@@ -299,7 +301,7 @@ def draw_episode(
     drawing.number_points(axes, [s.base for s in states], label_size_m, 0.75 * scenario.robot.radius, fontsize=8)
 
 
-def close_up_view(scenario: Scenario, steps: Sequence[Step]) -> Rect:
+def close_up_view(scenario: Scenario, steps: Sequence[EpisodeStep]) -> Rect:
     """A square around the goal tables and the bases of every push and place."""
     boxes = [t.rect for o in scenario.objects if (t := scenario.table_under(o.goal, o.radius)) is not None]
     for step in steps:
@@ -315,7 +317,7 @@ def close_up_view(scenario: Scenario, steps: Sequence[Step]) -> Rect:
     return Rect.around(box.center, half, half)
 
 
-def _draw_step(axes: Axes, scenario: Scenario, step: Step) -> None:
+def _draw_step(axes: Axes, scenario: Scenario, step: EpisodeStep) -> None:
     before, after = step.before, step.after
     if step.mode == Mode.PUSH and step.target is not None:
         drawing.draw_arrow(axes, before.base, after.base, PUSH, width=3.0)
@@ -340,7 +342,7 @@ def legend_handles(scenario: Scenario) -> list:
 
 
 # ---------------------------------------------------------------------------- render crops
-def focus_points(step: Step) -> list[tuple[float, float, float]]:
+def focus_points(step: EpisodeStep) -> list[tuple[float, float, float]]:
     """World points (metres) a render of the state after ``step`` must show: the robot and what it acted on."""
     after = step.after
     points = [(after.base[0], after.base[1], 0.0), (after.base[0], after.base[1], ROBOT_TOP)]
