@@ -7,12 +7,14 @@ report = benchmark.run_benchmark(["expert", "random", "runs/bc-set"], split="iid
 report.rows          # one benchmark.Row per policy and split (success, cost ratio, SPL, score, ...)
 ```
 
-One module per concern: :mod:`~training.evaluation.splits` (the versioned splits and
-folders of scenario files), :mod:`~training.resolve` (the registry of named
-policies and run folders), :mod:`~training.evaluation.episodes` (one episode, one
-record), :mod:`~training.evaluation.metrics` (Wilson intervals, cost ratio, SPL, the
-normalised score), :mod:`~training.evaluation.report` (``summary.md`` and plots) and
-:mod:`~training.evaluation.runner` (workers, incremental ``results.json``).
+The public facade of the benchmark: the names below, gathered from the modules that own
+them: :mod:`~training.evaluation.splits` (the versioned splits and folders of scenario
+files), :mod:`~training.resolve` (named policies, run folders, ``module:factory``),
+:mod:`~training.evaluation.episodes` (one episode, one record),
+:mod:`~training.evaluation.metrics` (cost ratio, SPL, the normalised score; Wilson
+intervals from :mod:`training.stats`), :mod:`~training.evaluation.report` (``summary.md``),
+:mod:`~training.pictures.benchmark` (the plots) and :mod:`~training.evaluation.runner`
+(workers, incremental ``results.json``).
 """
 
 from training.errors import BenchmarkError
