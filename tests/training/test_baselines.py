@@ -11,11 +11,11 @@ import torch
 
 from fetchcarry_env.observation import Capacity
 from training import load_policy
+from training.envs import make_env
 from training.learners.bc import BCConfig, Demonstrations, record_demonstrations, train_bc
 from training.learners.encoders import SetScorer
-from training.envs import make_env
 from training.learners.heldout import evaluate, expert_costs, summarise
-from training.policies.random_phases import RandomPhasePolicy
+from training.policies.random import RandomPhasePolicy
 
 HELD_OUT = range(100_000, 100_015)
 
