@@ -8,6 +8,7 @@ import torch
 
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout, observation_size
 from fetchcarry_env.phases import PhaseLayout
+from training.envs import make_env
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.learners.encoders import (
     RELATIVE_COLUMNS,
@@ -17,7 +18,6 @@ from training.learners.encoders import (
     SetScorer,
     build_network,
 )
-from training.envs import make_env
 
 
 @pytest.fixture(scope="module")
