@@ -86,25 +86,21 @@ def _sweep_hits(px, py, qx, qy, radius: float, rect) -> np.ndarray:
     through one array pass each.
     """
     x0, y0, x1, y1 = rect
-    n = px.size
     hit = _hypot_below(
         np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), radius - EPS
     )
     dx, dy = qx - px, qy - py
-    p2x, p2y, d2x, d2y = (np.concatenate([v, v]) for v in (px, py, dx, dy))
-    grown = (np.concatenate([x0 - radius, x0]), np.concatenate([y0, y0 - radius]))
-    grown += (np.concatenate([x1 + radius, x1]), np.concatenate([y1, y1 + radius]))
-    valid, t0, t1 = _clip(p2x, p2y, d2x, d2y, grown)
-    hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).reshape(2, n).any(axis=0)
-    p4x, p4y, d4x, d4y = (np.tile(v, 4) for v in (px, py, dx, dy))
-    fx, fy = p4x - np.concatenate([x0, x1, x1, x0]), p4y - np.concatenate([y0, y0, y1, y1])
-    a = d4x * d4x + d4y * d4y
-    b = 2 * (fx * d4x + fy * d4y)
+    grown = (np.stack([x0 - radius, x0]), np.stack([y0, y0 - radius]), np.stack([x1 + radius, x1]))
+    valid, t0, t1 = _clip(px, py, dx, dy, (*grown, np.stack([y1, y1 + radius])))  # (2, n)
+    hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).any(axis=0)
+    fx, fy = px - np.stack([x0, x1, x1, x0]), py - np.stack([y0, y0, y1, y1])  # (4, n): from each corner
+    a = dx * dx + dy * dy
+    b = 2 * (fx * dx + fy * dy)
     disc = b * b - 4 * a * (fx * fx + fy * fy - radius * radius)
     real = (a > 1e-18) & (disc > 0)
     root, two_a = np.sqrt(np.where(real, disc, 0.0)), np.where(real, 2 * a, 1.0)
     t_in, t_out = (-b - root) / two_a, (-b + root) / two_a
-    return hit | (real & (t_out > EPS) & (t_in < 1.0)).reshape(4, n).any(axis=0)
+    return hit | (real & (t_out > EPS) & (t_in < 1.0)).any(axis=0)
 
 
 def moves_free(start_x, start_y, end_x, end_y, radius: float, blockers: np.ndarray) -> np.ndarray:
@@ -113,32 +109,45 @@ def moves_free(start_x, start_y, end_x, end_y, radius: float, blockers: np.ndarr
     ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y, max_x, max_y`` (metres).
     """
     sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
-    box = (
-        np.minimum(sx, ex) - radius,
-        np.minimum(sy, ey) - radius,
-        np.maximum(sx, ex) + radius,
-        np.maximum(sy, ey) + radius,
+    n, m = np.nonzero(
+        _box_overlaps(
+            sx[:, None], sy[:, None], ex[:, None], ey[:, None], radius, *(blockers[None, :, i] for i in range(4))
+        )
     )
-    X0, Y0, X1, Y1 = (blockers[:, i][None, :] for i in range(4))
-    overlap = (np.minimum(box[2][:, None], X1) - np.maximum(box[0][:, None], X0) > 0.0) & (
-        np.minimum(box[3][:, None], Y1) - np.maximum(box[1][:, None], Y0) > 0.0
-    )
-    n, m = np.nonzero(overlap)
     free = np.ones(sx.shape, dtype=bool)
-    if n.size:
-        args = (sx[n], sy[n], ex[n], ey[n])
-        rect = tuple(blockers[m, i] for i in range(4))
-        hit = np.flatnonzero(_sweep_hits(*args, radius - CONTACT_SLACK, rect))  # the slack test first
-        if hit.size:
-            again = tuple(v[hit] for v in args)
-            hit = hit[_sweep_hits(*again, radius, tuple(v[hit] for v in rect))]
-            free[n[hit]] = False
+    blocked = _pairs_blocked(sx[n], sy[n], ex[n], ey[n], radius, blockers[m], boxes_known=True)
+    free[n[blocked]] = False
     return free
+
+
+def _box_overlaps(sx, sy, ex, ey, radius: float, x0, y0, x1, y1) -> np.ndarray:
+    """move_stop's first test: the box around every disc of the move overlaps the blocker (tol 0)."""
+    box_x0, box_y0 = np.minimum(sx, ex) - radius, np.minimum(sy, ey) - radius
+    box_x1, box_y1 = np.maximum(sx, ex) + radius, np.maximum(sy, ey) + radius
+    return (np.minimum(box_x1, x1) - np.maximum(box_x0, x0) > 0.0) & (
+        np.minimum(box_y1, y1) - np.maximum(box_y0, y0) > 0.0
+    )
+
+
+def _pairs_blocked(sx, sy, ex, ey, radius: float, rects: np.ndarray, boxes_known: bool = False) -> np.ndarray:
+    """Per pair (move ``n``, blocker ``rects[n]``): True where ``move_stop`` says that blocker stops the move.
+
+    The box test, then the swept disc of ``radius - CONTACT_SLACK``, then of ``radius`` (1-D arrays, metres).
+    """
+    rect = tuple(rects[:, i] for i in range(4))
+    hit = np.arange(sx.size) if boxes_known else np.flatnonzero(_box_overlaps(sx, sy, ex, ey, radius, *rect))
+    for r in (radius - CONTACT_SLACK, radius):
+        if hit.size == 0:
+            break
+        hit = hit[_sweep_hits(sx[hit], sy[hit], ex[hit], ey[hit], r, tuple(v[hit] for v in rect))]
+    out = np.zeros(sx.size, dtype=bool)
+    out[hit] = True
+    return out
 
 
 def arm_crosses(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
     """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
-    px, py, qx, qy = (np.asarray(v, dtype=float)[:, None] for v in np.broadcast_arrays(px, py, qx, qy))
+    px, py, qx, qy = (np.atleast_1d(np.asarray(v, dtype=float))[:, None] for v in np.broadcast_arrays(px, py, qx, qy))
     if rects.shape[0] == 0:
         return np.zeros(px.shape[0], dtype=bool)
     x0, y0, x1, y1 = (rects[:, i][None, :] + s for i, s in enumerate((ARM_TOL, ARM_TOL, -ARM_TOL, -ARM_TOL)))
@@ -176,14 +185,29 @@ def _empty(mode: int) -> _Offers:
 
 
 @dataclass
+class _Pieces:
+    """The clutter where a state has it, in slot order: footprints, push contacts, tables, room for the hand."""
+
+    rects: list  # Rect per piece (rules.clutter_rect), metres
+    array: np.ndarray  # (n, 4) the same rectangles, metres
+    contacts: np.ndarray  # (n, 4, 2): push contact of each piece along each direction, metres
+    tables: list  # the table under each piece, or None (Scenario.table_under_rect)
+    hand_free: np.ndarray  # (n, 4) bool: nothing leaves no room for the hand at the contact (rules.hand_blocker)
+
+    def arm_rects(self, obstacles: np.ndarray, ignore: int | None) -> np.ndarray:
+        """What the arm line may not cross: obstacles, then every piece but slot ``ignore`` (rules._arm_blocker)."""
+        keep = np.arange(len(self.rects)) != (-1 if ignore is None else ignore)
+        return np.concatenate([obstacles, self.array[keep]])
+
+
+@dataclass
 class _Items:
     """What the movable items decide, for one placement of objects and clutter and one hand (cached per state)."""
 
     picks: _Offers
     places: _Offers
     approaches: _Offers
-    contacts: np.ndarray  # (clutter, 4, 2): push contact of each piece along each direction, metres
-    clutter: list  # ids of the scenario's clutter, in slot order
+    pieces: _Pieces
 
 
 class FastPhases:
@@ -223,7 +247,7 @@ class FastPhases:
                 for h in HEADINGS
             ]
         ).astype(np.int64)  # (4, nf, nl, 2): cells from a pose to its target, world frame
-        self._stand = np.full((nx, ny), -1, dtype=np.int8)  # where the base may stand: 1 yes, 0 no, -1 not known yet
+        self._stand = self._stand_grid()  # (nx, ny) bool: where the base may stand
         self._stops: dict = {}  # move_stop of a zero-length move at off-lattice points (push ends)
         self._waypoints = self._waypoint_cells()
         self._edges = self._edge_lines()
@@ -246,9 +270,7 @@ class FastPhases:
                 _, first = np.unique(offers.ci * self.lattice.shape[1] + offers.cj, return_index=True)
                 offers = offers.take(np.sort(first))  # one candidate per env action: the first allowed
             _fill(mask, actions, offers)
-        for index, key in self._pushes(state):
-            mask[index] = True
-            actions[index] = key
+        _fill(mask, actions, self._pushes(state, items.pieces))
         allowed = np.flatnonzero(mask)
         lookup = dict(zip(map(tuple, actions[allowed].tolist()), allowed.tolist(), strict=True))
         return PhaseTable(mask, actions, lookup)
@@ -270,23 +292,30 @@ class FastPhases:
         if items is None:
             if len(self._items) > 256:
                 self._items.clear()
-            scenario = self.scenario
-            clutter = [c.id for c in scenario.clutter]
-            contacts = np.array(
-                [[push_contact(clutter_rect(scenario, state, c), d) for d in HEADINGS] for c in clutter], dtype=float
-            ).reshape(-1, 4, 2)
-            picks, places = self._acts(state, Mode.PICK), self._acts(state, Mode.PLACE)
-            items = _Items(picks, places, self._approaches(state, contacts), contacts, clutter)
+            pieces = self._pieces(state)
+            picks, places = self._acts(state, Mode.PICK, pieces), self._acts(state, Mode.PLACE, pieces)
+            items = _Items(picks, places, self._approaches(state, pieces), pieces)
             self._items[key] = items
         return items
 
-    def _arm_rects(self, state: WorldState, ignore: str | None) -> np.ndarray:
-        """The rectangles the arm line may not cross: obstacles, then clutter but ``ignore`` (rules._arm_blocker)."""
+    def _pieces(self, state: WorldState) -> _Pieces:
+        """The clutter of ``state``, as the push and arm tests need it."""
         scenario = self.scenario
-        clutter = _rects(clutter_rect(scenario, state, c.id) for c in scenario.clutter if c.id != ignore)
-        return np.concatenate([self.obstacles, clutter])
+        rects = [clutter_rect(scenario, state, c.id) for c in scenario.clutter]
+        contacts = [[push_contact(rect, d) for d in HEADINGS] for rect in rects]
+        hand_free = [
+            [not self._hand_blocked(state, rects, item.id, point) for point in row]
+            for item, row in zip(scenario.clutter, contacts, strict=True)
+        ]
+        return _Pieces(
+            rects,
+            _rects(rects),
+            np.array(contacts, dtype=float).reshape(-1, 4, 2),
+            [scenario.table_under_rect(rect) for rect in rects],
+            np.array(hand_free, dtype=bool).reshape(-1, 4),
+        )
 
-    def _acts(self, state: WorldState, mode: Mode) -> _Offers:
+    def _acts(self, state: WorldState, mode: Mode, pieces: _Pieces) -> _Offers:
         """Pick (``mode`` PICK) or place candidates allowed but for the base's move (``_Enumerator._acts``)."""
         scenario, layout = self.scenario, self.layout
         if (state.holding is None) != (mode == Mode.PICK) or not scenario.objects:
@@ -305,7 +334,7 @@ class FastPhases:
             offers = offers.take(self._fits(offers.ci, offers.cj) & self._stand_at(offers.ci, offers.cj))
             offers.mode = int(mode)
             keep = ~arm_crosses(
-                self.xs[offers.ci], self.ys[offers.cj], target[0], target[1], self._arm_rects(state, None)
+                self.xs[offers.ci], self.ys[offers.cj], target[0], target[1], pieces.arm_rects(self.obstacles, None)
             )
             if mode == Mode.PICK:
                 keep &= self._picks_take(state, offers, slot)
@@ -326,7 +355,7 @@ class FastPhases:
             keep[n] = not isinstance(phase, str) and phase.target == scenario.objects[slot].id
         return keep
 
-    def _approaches(self, state: WorldState, contacts: np.ndarray) -> _Offers:
+    def _approaches(self, state: WorldState, pieces: _Pieces) -> _Offers:
         """Approach moves allowed but for the base's move and the still test (``_Enumerator._approaches``)."""
         scenario, layout, lattice = self.scenario, self.layout, self.lattice
         n = len(scenario.clutter)
@@ -336,6 +365,7 @@ class FastPhases:
         first = np.array(
             [layout.index("approach", *g, 0, 0) for g in zip(c.tolist(), d.tolist(), k.tolist(), strict=True)]
         )
+        contacts = pieces.contacts
         targets = contacts[c, d]
         centers = [_index(lattice, (float(x), float(y))) for x, y in targets]
         offers, g = self._window_offers(first, centers, PUSH_HEADING[d, k], targets)
@@ -345,7 +375,7 @@ class FastPhases:
         on = (ei >= 0) & (ei < lattice.shape[0]) & (ej >= 0) & (ej < lattice.shape[1])
         offers, c, d, ux, uy, ei, ej = offers.take(on), c[on], d[on], ux[on], uy[on], ei[on], ej[on]
         keep = self._fits(offers.ci, offers.cj) & self._fits(ei, ej) & self._stand_at(offers.ci, offers.cj)
-        keep &= self._pushes_from(state, offers, contacts, c, d, ei, ej)
+        keep &= self._pushes_from(state, offers, pieces, c, d, ei, ej)
         out = offers.take(keep)
         out.heading = np.full(
             out.index.size, HEADINGS.index(state.heading)
@@ -354,7 +384,7 @@ class FastPhases:
         out.mode = int(Mode.MOVE)
         return out
 
-    def _pushes_from(self, state, offers: _Offers, contacts, c, d, ei, ej) -> np.ndarray:
+    def _pushes_from(self, state, offers: _Offers, pieces: _Pieces, c, d, ei, ej) -> np.ndarray:
         """True where the env would accept the one-cell push from the pose (``_Enumerator._pushes_from``)."""
         scenario = self.scenario
         px, py = self.xs[offers.ci], self.ys[offers.cj]
@@ -362,15 +392,15 @@ class FastPhases:
         dx, dy = np.where(np.abs(dx) <= 1e-6, 0.0, dx), np.where(np.abs(dy) <= 1e-6, 0.0, dy)
         length = np.abs(dx) + np.abs(dy)
         keep = np.zeros(offers.index.size, dtype=bool)
+        contacts = pieces.contacts
         for slot, item in enumerate(scenario.clutter):
-            rect = clutter_rect(scenario, state, item.id)
-            table = scenario.table_under_rect(rect)
+            rect, table = pieces.rects[slot], pieces.tables[slot]
             if table is None:
                 continue
-            arm = self._arm_rects(state, item.id)
+            arm = pieces.arm_rects(self.obstacles, slot)
             for direction in range(4):
                 sel = np.flatnonzero((c == slot) & (d == direction))
-                if sel.size == 0 or self._hand_blocked(state, item.id, tuple(contacts[slot, direction])):
+                if sel.size == 0 or not pieces.hand_free[slot, direction]:
                     continue
                 ux, uy = heading_vector(HEADINGS[direction])
                 t, lx, ly = table.rect, ux * length[sel], uy * length[sel]
@@ -395,13 +425,13 @@ class FastPhases:
         )
         return not isinstance(phase, str) and phase.target == item
 
-    def _hand_blocked(self, state: WorldState, item: str, contact: tuple[float, float]) -> bool:
+    def _hand_blocked(self, state: WorldState, rects: list, item: str, contact: tuple[float, float]) -> bool:
         """True when something leaves no room for the hand at ``contact`` behind ``item`` (rules._check_push)."""
         scenario = self.scenario
         return (
             hand_blocker(
                 contact,
-                ((c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != item),
+                ((c.id, rect) for c, rect in zip(scenario.clutter, rects, strict=True) if c.id != item),
                 ((o.id, state.objects[o.id][:2], o.radius) for o in scenario.objects if o.id != state.holding),
             )
             is not None
@@ -433,32 +463,73 @@ class FastPhases:
         offers = _Offers(index, ci, cj, np.full(size, heading), np.zeros(size, dtype=np.int64), int(Mode.MOVE))
         return offers.take(~still)
 
-    def _pushes(self, state: WorldState) -> list[tuple[int, tuple[int, ...]]]:
-        """``(candidate, env action)`` of the allowed pushes (``_Enumerator._pushes``, reach tested at once)."""
-        scenario, layout, lattice = self.scenario, self.layout, self.lattice
-        if not scenario.clutter:
-            return []
-        contacts = self._items_of(state).contacts  # (n, 4, 2)
-        n = contacts.shape[0]
-        c, d, k = (a.ravel() for a in np.indices((n, 4, 3)))
+    def _pushes(self, state: WorldState, pieces: _Pieces) -> _Offers:
+        """The allowed push candidates (``_Enumerator._pushes``): strokes from the base, every test at once."""
+        layout, lattice = self.layout, self.lattice
+        if not self.scenario.clutter:
+            return _empty(int(Mode.PUSH))
+        c, d, k = (a.ravel() for a in np.indices((len(pieces.rects), 4, 3)))
         h = PUSH_HEADING[d, k]
         bx, by = state.base
-        fwd, lat = _hand_offset(h, bx, by, contacts[c, d, 0], contacts[c, d, 1])
-        posture = self._first_posture(fwd, lat)
+        posture = self._first_posture(*_hand_offset(h, bx, by, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1]))
+        g = np.flatnonzero(posture >= 0)  # the strokes' (piece, direction, heading) whose contact is within reach
+        strokes = np.arange(1, layout.strokes + 1)
         here = _index(lattice, state.base)
-        out = []
-        for g in np.flatnonzero(posture >= 0):
-            slot, direction, kk = int(c[g]), int(d[g]), int(k[g])
-            ux, uy = heading_vector(HEADINGS[direction])
-            for s in range(1, layout.strokes + 1):
-                cell = (here[0] + ux * s, here[1] + uy * s)
-                if not (0 <= cell[0] < lattice.shape[0] and 0 <= cell[1] < lattice.shape[1]):
-                    break
-                action = Action(cell, HEADINGS[int(h[g])], int(posture[g]), Mode.PUSH)
-                if self._push_allowed(state, action, scenario.clutter[slot].id):
-                    key = (cell[0], cell[1], int(h[g]), int(posture[g]), int(Mode.PUSH))
-                    out.append((layout.index("push", slot, direction, kk, s - 1), key))
-        return out
+        ci = (here[0] + UNIT[d[g], 0][:, None] * strokes).ravel()
+        cj = (here[1] + UNIT[d[g], 1][:, None] * strokes).ravel()
+        first = np.array(
+            [layout.index("push", *v, 0) for v in zip(c[g].tolist(), d[g].tolist(), k[g].tolist(), strict=True)],
+            dtype=np.int64,
+        )
+        index = (first.reshape(-1, 1) + strokes - 1).ravel()
+        g = np.repeat(g, strokes.size)
+        on = (ci >= 0) & (ci < lattice.shape[0]) & (cj >= 0) & (cj < lattice.shape[1])  # the loop's break
+        offers = _Offers(index[on], ci[on], cj[on], h[g[on]], posture[g[on]], int(Mode.PUSH))
+        offers = offers.take(self._fits(offers.ci, offers.cj))
+        g = g[on][self._fits(ci[on], cj[on])]
+        return offers.take(self._strokes_allowed(state, pieces, offers, c[g], d[g]))
+
+    def _strokes_allowed(self, state, pieces: _Pieces, offers: _Offers, c: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """rules._check_push from the base, then the stroke's end free and reached (``_offer``), per push candidate."""
+        bx, by = state.base
+        dx, dy = self.xs[offers.ci] - bx, self.ys[offers.cj] - by
+        dx, dy = np.where(np.abs(dx) <= 1e-6, 0.0, dx), np.where(np.abs(dy) <= 1e-6, 0.0, dy)
+        along_x, along_y = (np.abs(dy) <= EPS) & (np.abs(dx) > EPS), (np.abs(dx) <= EPS) & (np.abs(dy) > EPS)
+        direction = np.where(along_x, np.where(dx > 0, 0, 2), np.where(along_y, np.where(dy > 0, 1, 3), -1))
+        aligned = direction >= 0  # a zero or diagonal stroke is refused
+        length = np.abs(dx) + np.abs(dy)
+        ux, uy = UNIT[d, 0], UNIT[d, 1]
+        keep = aligned & (direction == d)
+        plain = keep.copy()  # decided here; the rest (another direction, two pieces in reach) by check_action
+        for n in np.flatnonzero(keep):
+            slot, way = int(c[n]), int(d[n])
+            fwd, lat = _hand_offset(offers.heading[n], bx, by, pieces.contacts[:, way, 0], pieces.contacts[:, way, 1])
+            r = self.reach[offers.posture[n]]
+            if ((r[0] <= fwd) & (fwd <= r[1]) & (r[2] <= lat) & (lat <= r[3])).sum() != 1:  # from the base
+                plain[n] = False
+                continue
+            table, rect = pieces.tables[slot], pieces.rects[slot]
+            if table is None or not pieces.hand_free[slot, way]:
+                keep[n] = False
+                continue
+            t, lx, ly = table.rect, ux[n] * length[n], uy[n] * length[n]
+            keep[n] = (
+                rect.min_x + lx >= t.min_x - 1e-6
+                and rect.min_y + ly >= t.min_y - 1e-6
+                and rect.max_x + lx <= t.max_x + 1e-6
+                and rect.max_y + ly <= t.max_y + 1e-6
+                and not arm_crosses(bx, by, *pieces.contacts[slot, way], pieces.arm_rects(self.obstacles, slot))[0]
+            )
+        ex, ey = bx + ux * length, by + uy * length  # where the stroke ends (ResolvedPhase.base)
+        sel = np.flatnonzero(keep & plain)
+        keep[sel] = moves_free(ex[sel], ey[sel], ex[sel], ey[sel], self.radius, self.blockers)
+        keep[sel] &= moves_free(bx, by, ex[sel], ey[sel], self.radius, self.blockers)
+        for n in np.flatnonzero(aligned & ~plain):
+            action = Action(
+                (int(offers.ci[n]), int(offers.cj[n])), HEADINGS[offers.heading[n]], int(offers.posture[n]), Mode.PUSH
+            )
+            keep[n] = self._push_allowed(state, action, self.scenario.clutter[int(c[n])].id)
+        return keep
 
     def _push_allowed(self, state: WorldState, action: Action, item: str) -> bool:
         """``_Enumerator._offer`` for a push: the env accepts it on ``item``, the stroke's end is free and reached."""
@@ -518,15 +589,34 @@ class FastPhases:
         return self.fits_x[ci] & self.fits_y[cj]
 
     def _stand_at(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
-        """True where a base standing at the lattice point touches nothing (``move_stop`` of a zero-length move)."""
-        known = self._stand[ci, cj]
-        todo = known < 0
-        if todo.any():
-            ui, uj = ci[todo], cj[todo]
-            x, y = self.xs[ui], self.ys[uj]
-            self._stand[ui, uj] = moves_free(x, y, x, y, self.radius, self.blockers)
-            known = self._stand[ci, cj]
-        return known == 1
+        """True where a base standing at the lattice point fits in the area and touches nothing.
+
+        ``check_action``'s area test and ``move_stop`` of a zero-length move there (every
+        use asks both).
+        """
+        return self._stand[ci, cj]
+
+    def _stand_grid(self) -> np.ndarray:
+        """``(nx, ny)``: where the base fits in the area and a zero-length move reports no contact.
+
+        Each blocker is tested at the lattice points of its window only (the points whose
+        base box can overlap it, with a cell to spare): elsewhere no test can fail.
+        """
+        fits = self.fits_x[:, None] & self.fits_y[None, :]
+        r, res = self.radius, self.lattice.resolution
+        ii, jj, mm = [], [], []
+        for m, (x0, y0, x1, y1) in enumerate(self.blockers.tolist()):
+            i = np.flatnonzero(self.fits_x & (self.xs > x0 - r - res) & (self.xs < x1 + r + res))
+            j = np.flatnonzero(self.fits_y & (self.ys > y0 - r - res) & (self.ys < y1 + r + res))
+            gi, gj = np.meshgrid(i, j, indexing="ij")
+            ii.append(gi.ravel())
+            jj.append(gj.ravel())
+            mm.append(np.full(gi.size, m))
+        ii, jj, mm = np.concatenate(ii), np.concatenate(jj), np.concatenate(mm)
+        x, y = self.xs[ii], self.ys[jj]
+        blocked = _pairs_blocked(x, y, x, y, r, self.blockers[mm])
+        fits[ii[blocked], jj[blocked]] = False
+        return fits
 
     def _waypoint_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(ci, cj, candidate)`` of the waypoints that fit in the area and where the base may stand."""
