@@ -68,16 +68,16 @@ def _clip(px, py, dx, dy, rect) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return ~bad & (t0 <= t1), t0, t1
 
 
-def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: float) -> np.ndarray:
-    """``hypot(dx, dy) < limit`` elementwise, exactly as :func:`math.hypot` decides it (1-D arrays)."""
+def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """``hypot(dx, dy) < limit`` elementwise, exactly as :func:`math.hypot` decides it (1-D arrays, metres)."""
     value = np.hypot(dx, dy)
     out = value < limit
     for i in np.flatnonzero(np.abs(value - limit) <= GUARD):
-        out[i] = math.hypot(float(dx[i]), float(dy[i])) < limit
+        out[i] = math.hypot(float(dx[i]), float(dy[i])) < float(limit[i])
     return out
 
 
-def _sweep_hits(px, py, qx, qy, radius: float, rect) -> np.ndarray:
+def _sweep_hits(px, py, qx, qy, radius: np.ndarray, rect) -> np.ndarray:
     """True where a disc of ``radius`` sliding ``p`` -> ``q`` touches ``rect`` before the end (1-D arrays).
 
     geometry._sweep_disc_rect(...) < 1.0, operation for operation: the start inside the
@@ -132,16 +132,17 @@ def _box_overlaps(sx, sy, ex, ey, radius: float, x0, y0, x1, y1) -> np.ndarray:
 def _pairs_blocked(sx, sy, ex, ey, radius: float, rects: np.ndarray, boxes_known: bool = False) -> np.ndarray:
     """Per pair (move ``n``, blocker ``rects[n]``): True where ``move_stop`` says that blocker stops the move.
 
-    The box test, then the swept disc of ``radius - CONTACT_SLACK``, then of ``radius`` (1-D arrays, metres).
+    The box test, then the swept disc of ``radius - CONTACT_SLACK`` and of ``radius``
+    (both must touch; one array pass for the two) (1-D arrays, metres).
     """
     rect = tuple(rects[:, i] for i in range(4))
     hit = np.arange(sx.size) if boxes_known else np.flatnonzero(_box_overlaps(sx, sy, ex, ey, radius, *rect))
-    for r in (radius - CONTACT_SLACK, radius):
-        if hit.size == 0:
-            break
-        hit = hit[_sweep_hits(sx[hit], sy[hit], ex[hit], ey[hit], r, tuple(v[hit] for v in rect))]
     out = np.zeros(sx.size, dtype=bool)
-    out[hit] = True
+    if hit.size:
+        two = np.r_[hit, hit]
+        radii = np.repeat([radius - CONTACT_SLACK, radius], hit.size)
+        touch = _sweep_hits(sx[two], sy[two], ex[two], ey[two], radii, tuple(v[two] for v in rect)).reshape(2, -1)
+        out[hit[touch.all(axis=0)]] = True
     return out
 
 
@@ -501,29 +502,40 @@ class FastPhases:
         ux, uy = UNIT[d, 0], UNIT[d, 1]
         keep = aligned & (direction == d)
         plain = keep.copy()  # decided here; the rest (another direction, two pieces in reach) by check_action
-        for n in np.flatnonzero(keep):
-            slot, way = int(c[n]), int(d[n])
-            fwd, lat = _hand_offset(offers.heading[n], bx, by, pieces.contacts[:, way, 0], pieces.contacts[:, way, 1])
-            r = self.reach[offers.posture[n]]
-            if ((r[0] <= fwd) & (fwd <= r[1]) & (r[2] <= lat) & (lat <= r[3])).sum() != 1:  # from the base
-                plain[n] = False
-                continue
-            table, rect = pieces.tables[slot], pieces.rects[slot]
-            if table is None or not pieces.hand_free[slot, way]:
-                keep[n] = False
-                continue
-            t, lx, ly = table.rect, ux[n] * length[n], uy[n] * length[n]
-            keep[n] = (
-                rect.min_x + lx >= t.min_x - 1e-6
-                and rect.min_y + ly >= t.min_y - 1e-6
-                and rect.max_x + lx <= t.max_x + 1e-6
-                and rect.max_y + ly <= t.max_y + 1e-6
-                and not arm_crosses(bx, by, *pieces.contacts[slot, way], pieces.arm_rects(self.obstacles, slot))[0]
+        sel = np.flatnonzero(keep)
+        contacts = pieces.contacts[:, d[sel]].transpose(1, 0, 2)  # (S, pieces, 2): every piece's, along the stroke
+        fwd, lat = _hand_offset(offers.heading[sel][:, None], bx, by, contacts[..., 0], contacts[..., 1])
+        r = self.reach[offers.posture[sel]][:, None, :]
+        single = ((r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])).sum(axis=1) == 1
+        plain[sel[~single]] = False
+        keep[sel[~single]] = False
+        sel = sel[single]
+        slot, way = c[sel], d[sel]
+        tables = np.array(
+            [(t.rect.min_x, t.rect.min_y, t.rect.max_x, t.rect.max_y) if t else (np.nan,) * 4 for t in pieces.tables]
+        )
+        t, rect = tables.reshape(-1, 4)[slot], pieces.array[slot]
+        lx, ly = ux[sel] * length[sel], uy[sel] * length[sel]  # Rect.translate of the piece by the stroke
+        ok = pieces.hand_free[slot, way] & (rect[:, 0] + lx >= t[:, 0] - 1e-6) & (rect[:, 1] + ly >= t[:, 1] - 1e-6)
+        ok &= (rect[:, 2] + lx <= t[:, 2] + 1e-6) & (rect[:, 3] + ly <= t[:, 3] + 1e-6)  # NaN: no table, refused
+        for piece, stroke in set(zip(slot[ok].tolist(), way[ok].tolist(), strict=True)):
+            cx, cy = pieces.contacts[piece, stroke]
+            if arm_crosses(bx, by, cx, cy, pieces.arm_rects(self.obstacles, piece))[0]:
+                ok &= ~((slot == piece) & (way == stroke))
+        ex, ey = bx + ux[sel] * length[sel], by + uy[sel] * length[sel]  # where the stroke ends (ResolvedPhase.base)
+        ends = np.flatnonzero(ok)
+        if ends.size:
+            x, y = ex[ends], ey[ends]
+            free = moves_free(
+                np.r_[x, np.full(x.size, bx)],
+                np.r_[y, np.full(y.size, by)],
+                np.r_[x, x],
+                np.r_[y, y],
+                self.radius,
+                self.blockers,
             )
-        ex, ey = bx + ux * length, by + uy * length  # where the stroke ends (ResolvedPhase.base)
-        sel = np.flatnonzero(keep & plain)
-        keep[sel] = moves_free(ex[sel], ey[sel], ex[sel], ey[sel], self.radius, self.blockers)
-        keep[sel] &= moves_free(bx, by, ex[sel], ey[sel], self.radius, self.blockers)
+            ok[ends] = free[: x.size] & free[x.size :]  # stands free at the end, and gets there
+        keep[sel] = ok
         for n in np.flatnonzero(aligned & ~plain):
             action = Action(
                 (int(offers.ci[n]), int(offers.cj[n])), HEADINGS[offers.heading[n]], int(offers.posture[n]), Mode.PUSH
