@@ -253,6 +253,8 @@ class FastPhases:
         self._waypoints = self._waypoint_cells()
         self._edges = self._edge_lines()
         self._items: dict = {}
+        c, d, k = (a.ravel() for a in np.indices((len(scenario.clutter), 4, 3)))
+        self._push_grid = (c, d, PUSH_HEADING[d, k])
 
     # ------------------------------------------------------------------ the table
     def table(self, state: WorldState) -> PhaseTable:
@@ -469,20 +471,17 @@ class FastPhases:
         layout, lattice = self.layout, self.lattice
         if not self.scenario.clutter:
             return _empty(int(Mode.PUSH))
-        c, d, k = (a.ravel() for a in np.indices((len(pieces.rects), 4, 3)))
-        h = PUSH_HEADING[d, k]
+        c, d, h = self._push_grid  # (piece, direction, heading) of every push candidate's first stroke
         bx, by = state.base
         posture = self._first_posture(*_hand_offset(h, bx, by, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1]))
         g = np.flatnonzero(posture >= 0)  # the strokes' (piece, direction, heading) whose contact is within reach
+        if g.size == 0:
+            return _empty(int(Mode.PUSH))
         strokes = np.arange(1, layout.strokes + 1)
         here = _index(lattice, state.base)
         ci = (here[0] + UNIT[d[g], 0][:, None] * strokes).ravel()
         cj = (here[1] + UNIT[d[g], 1][:, None] * strokes).ravel()
-        first = np.array(
-            [layout.index("push", *v, 0) for v in zip(c[g].tolist(), d[g].tolist(), k[g].tolist(), strict=True)],
-            dtype=np.int64,
-        )
-        index = (first.reshape(-1, 1) + strokes - 1).ravel()
+        index = (layout.offsets["push"] + g[:, None] * layout.strokes + strokes - 1).ravel()  # push's C order
         g = np.repeat(g, strokes.size)
         on = (ci >= 0) & (ci < lattice.shape[0]) & (cj >= 0) & (cj < lattice.shape[1])  # the loop's break
         offers = _Offers(index[on], ci[on], cj[on], h[g[on]], posture[g[on]], int(Mode.PUSH))
