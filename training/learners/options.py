@@ -1,27 +1,104 @@
-"""The settings of a BC and a PPO run: plain dataclasses, light to import (the command line shows their defaults).
+"""The settings of every learner's run: plain dataclasses, light to import (the command line is made from them).
 
 Every field is saved in a run folder's ``config.json``; the defaults are the budgets a
-published table uses.
+published table uses. A field made with :func:`option` (a help text and how its values
+read) is also an option of ``fetchcarry train KIND``, ``--name-with-dashes``; a field
+holding another such dataclass (metadata :func:`nested`) contributes that dataclass's options.
+The command line (:mod:`training.cli.train`) reads these fields, so no option is written
+twice. Bad values raise :class:`~fetchcarry_env.errors.InputError` (the user's bad input).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import MISSING, dataclass, field
+from typing import Any
+
+from fetchcarry_env.errors import InputError
 
 HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
+
+EPOCHS_HELP = "epochs (per iteration for dagger; default {default})"
+HIDDEN_HELP = "units per hidden layer / token width (default {default})"
+STEP_SIZE_HELP = "Adam step size (default {default})"
+FAMILY_HELP = "scenario family (basic, push, ...)"
+
+
+def option(
+    default: Any = MISSING,
+    help: str = "",
+    *,
+    metavar: str | None = None,
+    choices: tuple[str, ...] | None = None,
+    positive: bool = False,
+    parse: Callable[[str], Any] | None = None,
+    nargs: str | None = None,
+) -> Any:
+    """A dataclass field that is also a command-line option (no ``default``: a required one).
+
+    ``help`` may say ``{default}`` (floats print with ``:g``). An ``int`` or ``float``
+    field reads a number (above 0 with ``positive``); a ``bool`` field is a switch
+    (``--name`` if it defaults to False, ``--no-name`` if True); ``parse`` reads the
+    text itself (raising :class:`InputError`); ``nargs`` takes several values (a tuple).
+    """
+    metadata = {"help": help, "metavar": metavar, "choices": choices, "positive": positive, "parse": parse,
+                "nargs": nargs}  # fmt: skip
+    return field(default=default, metadata=metadata)
+
+
+def nested(*, omit: tuple[str, ...] = ()) -> dict[str, Any]:
+    """The metadata of a field holding a settings dataclass whose options (but ``omit``) join the command line.
+
+    For example ``config: BCConfig = field(default_factory=BCConfig, metadata=nested())``:
+    the options show the factory's defaults.
+    """
+    return {"nested": True, "omit": omit}
+
+
+def seed_option() -> Any:
+    """The ``seed`` field of every learner (``--seed``): the run's weights depend on it alone, on CPU."""
+    return option(0, "training seed (default {default})")
+
+
+def check_family(name: str) -> None:
+    """:class:`InputError` unless ``name`` is a scenario family of the benchmark."""
+    from fetchcarry_env.families import FAMILY_NAMES  # numpy and the env's geometry: not for every command
+
+    if name not in FAMILY_NAMES:
+        raise InputError(f"unknown family {name!r}: choose one of {', '.join(FAMILY_NAMES)}")
+
+
+def _scenario_family(name: str) -> None:
+    """:class:`InputError` unless ``name`` is a family of the benchmark or of the paper (what the env takes)."""
+    from fetchcarry_env.families import get_family
+
+    try:
+        get_family(name)
+    except ValueError as error:  # get_family's message lists the known names
+        raise InputError(str(error)) from None
+
+
+def family_names(text: str) -> tuple[str, ...]:
+    """``push,multi-2`` -> ``("push", "multi-2")``, each a known family (:class:`InputError` otherwise)."""
+    from fetchcarry_env.families import FAMILY_NAMES
+
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    if not names or any(name not in FAMILY_NAMES for name in names):
+        raise InputError(f"expected family names separated by commas ({', '.join(FAMILY_NAMES)}), got {text!r}")
+    return names
 
 
 @dataclass(frozen=True)
 class BCConfig:
     """What a BC run trains (every field is saved in the run folder's ``config.json``)."""
 
-    encoder: str = "mlp"  # "mlp" or "set"
-    hidden: int = 256  # units per hidden layer (mlp) or token width (set)
-    epochs: int = 60
-    batch_size: int = 128
-    learning_rate: float = 1e-3
+    encoder: str = option("mlp", "flat MLP or object-centric set encoder (default {default})", choices=("mlp", "set"))
+    hidden: int = option(256, HIDDEN_HELP, positive=True)  # units per hidden layer (mlp) or token width (set)
+    epochs: int = option(60, EPOCHS_HELP, positive=True)
+    batch_size: int = option(128, "minibatch size (default {default})", positive=True)
+    learning_rate: float = option(1e-3, STEP_SIZE_HELP, metavar="LR", positive=True)
     weight_decay: float = 1e-5
-    seed: int = 0
+    seed: int = seed_option()
     relative: bool = True  # append positions relative to the base (mlp: and clutter relative to goals; set: per token)
     push_scores: bool = False  # mlp: add scores from whether each push leaves a goal covered (PushScores)
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
@@ -30,32 +107,33 @@ class BCConfig:
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set"):
-            raise ValueError(f"encoder must be 'mlp' or 'set', got {self.encoder!r}")
+            raise InputError(f"encoder must be 'mlp' or 'set', got {self.encoder!r}")
         if min(self.hidden, self.epochs, self.batch_size) < 1 or self.learning_rate <= 0:
-            raise ValueError("hidden, epochs and batch_size must be positive, learning_rate > 0")
+            raise InputError("hidden, epochs and batch_size must be positive, learning_rate > 0")
 
 
 @dataclass(frozen=True)
 class PPOOptions:
     """A PPO run's budget and settings (the defaults are the published budget)."""
 
-    steps: int = 20_000  # env steps in total
-    n_steps: int = 256  # env steps per rollout
+    steps: int = option(20_000, "env steps in total (default {default})", positive=True)
+    n_steps: int = option(256, "env steps per rollout (default {default})", positive=True)
     batch_size: int = 64
     n_epochs: int = 10
-    learning_rate: float = 3e-4
+    learning_rate: float = option(3e-4, STEP_SIZE_HELP, metavar="LR", positive=True)
     gamma: float = 0.99
-    checkpoint_every: int = 1024  # env steps between checkpoints
-    encoder: str = "mlp"  # the actor's network ("mlp" or "set"; with init, the init run's)
-    hidden: int = 256
-    seed: int = 0
-    init: str | None = None  # a bc or dagger run folder whose network starts the actor
+    checkpoint_every: int = option(1024, "env steps between checkpoints (default {default})", positive=True)
+    encoder: str = option("mlp", "the actor's network (default {default}; with --init, the init run's)",
+                          choices=("mlp", "set"))  # fmt: skip
+    hidden: int = option(256, HIDDEN_HELP, positive=True)
+    seed: int = seed_option()
+    init: str | None = option(None, "a bc or dagger run folder whose network starts the actor", metavar="RUN_DIR")
 
     def __post_init__(self) -> None:
         if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
-            raise ValueError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
+            raise InputError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
         if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
-            raise ValueError("learning_rate must be positive and gamma in (0, 1]")
+            raise InputError("learning_rate must be positive and gamma in (0, 1]")
         BCConfig(encoder=self.encoder, hidden=self.hidden)
 
 
@@ -63,19 +141,81 @@ class PPOOptions:
 class DaggerOptions:
     """A DAgger run's budget (the defaults are the published budget)."""
 
-    demonstrations: int = 100  # expert episodes of iteration 0
-    iterations: int = 4  # learner iterations after iteration 0
-    episodes_per_iteration: int = 50  # learner episodes labelled per iteration
-    eval_episodes: int = 50  # held-out episodes measured after each iteration
-    time_limit: float = 10.0  # seconds per planning call of the expert
-    epochs: int = 40  # epochs of each retraining
-    nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
-    learner_families: tuple[str, ...] = ()  # learner episode k draws from the k-th (cycled); () = the run's family
-    dataset: str | None = None  # iteration 0: the first `demonstrations` episodes of this phases dataset, not new ones
+    demonstrations: int = option(100, "expert episodes before the first iteration (default {default})", positive=True)
+    iterations: int = option(4, "DAgger iterations (default {default})", positive=True)
+    episodes_per_iteration: int = option(50, "learner episodes per iteration (default {default})", positive=True)
+    eval_episodes: int = option(50, "held-out episodes per iteration (default {default})", positive=True)
+    time_limit: float = option(10.0, "seconds per planning call of the expert (default {default})", metavar="S",
+                               positive=True)  # fmt: skip
+    epochs: int = option(40, EPOCHS_HELP, positive=True)  # epochs of each retraining
+    nearest_moves: bool = option(
+        False, "label an expert move no candidate expresses with the allowed move nearest it (default: no label)"
+    )
+    learner_families: tuple[str, ...] = option(
+        (),
+        "families the learner episodes draw from, in turn (for example push,multi-2: where learners fail most); "
+        "iteration 0 and the held-out success stay on --family (default: --family)",
+        metavar="NAME[,NAME...]",
+        parse=family_names,
+    )  # learner episode k draws from the k-th (cycled); () = the run's family
+    dataset: str | None = option(
+        None,
+        "iteration 0 trains on the first --demonstrations episodes of this phases dataset instead of running the "
+        "expert again (default: new expert episodes)",
+        metavar="ID",
+    )
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "learner_families", tuple(self.learner_families))  # a list from config.json too
         if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
-            raise ValueError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
+            raise InputError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
         if self.time_limit <= 0:
-            raise ValueError(f"the time limit must be positive, got {self.time_limit}")
+            raise InputError(f"the time limit must be positive, got {self.time_limit}")
+        for name in self.learner_families:
+            _scenario_family(name)
+
+
+# ------------------------------------------------- what each ``fetchcarry train KIND`` takes
+@dataclass(frozen=True)
+class BCRun:
+    """``fetchcarry train bc``: behaviour cloning on a phases dataset (its first ``episodes``, or all)."""
+
+    dataset: str = option(help="Minari dataset id (made with --interface phases)", metavar="ID")
+    episodes: int | None = option(None, "train on the dataset's first N episodes (default: all)", positive=True)
+    config: BCConfig = field(default_factory=BCConfig, metadata=nested())
+
+
+@dataclass(frozen=True)
+class DaggerRun:
+    """``fetchcarry train dagger``: DAgger on ``family`` (the network's epochs are ``options.epochs``)."""
+
+    family: str = option(help=FAMILY_HELP, metavar="NAME")
+    options: DaggerOptions = field(default_factory=DaggerOptions, metadata=nested())
+    config: BCConfig = field(default_factory=BCConfig, metadata=nested(omit=("epochs",)))
+
+    def __post_init__(self) -> None:
+        check_family(self.family)
+
+
+@dataclass(frozen=True)
+class PPORun:
+    """``fetchcarry train ppo``: MaskablePPO on ``family``."""
+
+    family: str = option(help=FAMILY_HELP, metavar="NAME")
+    options: PPOOptions = field(default_factory=PPOOptions, metadata=nested())
+
+    def __post_init__(self) -> None:
+        check_family(self.family)
+
+
+@dataclass(frozen=True)
+class EnsembleRun:
+    """``fetchcarry train ensemble``: finished run folders combined into one policy."""
+
+    members: tuple[str, ...] = option(help="finished run folders", metavar="RUN_DIR", nargs="+")
+    avoid_returns: bool = option(
+        True, "act without the episode memory that skips moves known to lead back to a state met before"
+    )
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "members", tuple(str(member) for member in self.members))
