@@ -39,7 +39,6 @@ import numpy as np
 import torch
 
 from expert.policy import ExpertPolicy
-from fetchcarry_env.families import get_family
 from fetchcarry_env.observation import Capacity
 from training.envs import make_env
 from training.learners import runs
@@ -187,7 +186,12 @@ def train_dagger(
     resume: bool = False,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
-    """Run DAgger into the run folder ``out``; return its metrics rows (one per iteration, 0 first)."""
+    """Run DAgger into the run folder ``out``; return its metrics rows (one per iteration, 0 first).
+
+    The ``train`` of the ``dagger`` learner (:mod:`training.learners.registry`: the fields
+    of :class:`~training.learners.options.DaggerRun` as keyword arguments). ``options``
+    has checked its families' names (:class:`~fetchcarry_env.errors.InputError`).
+    """
     import gymnasium as gym
     from tqdm import tqdm
 
@@ -195,8 +199,6 @@ def train_dagger(
     from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
-    for name in options.learner_families:
-        get_family(name)  # ValueError for an unknown name, before any work
     probe = gym.make(runs.ENV_ID, family=family)
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space["observation"].shape[0])

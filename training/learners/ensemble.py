@@ -22,6 +22,7 @@ from pathlib import Path
 from training.learners import runs
 from training.learners.bc import BCPolicy
 from training.learners.encoders import Ensemble
+from training.learners.runs import RunFolderError
 
 SHARED_KEYS = ("capacity", "candidates", "features")  # what every member must have alike
 
@@ -33,22 +34,25 @@ def make_ensemble(members: Sequence[str | Path], out: str | Path, *, avoid_retur
     ``avoid_returns`` as given. Raises ``ValueError`` when fewer than two members are
     given, when one is not a complete run folder or is an ensemble itself, or when their
     observation capacity, candidates or features differ (they would not score the
-    same candidates), and when ``out`` holds a run already.
+    same candidates), and when ``out`` holds a run already: all :class:`RunFolderError`
+    (bad input, a ``ValueError``). The ``train`` of the ``ensemble`` learner
+    (:mod:`training.learners.registry`: the fields of
+    :class:`~training.learners.options.EnsembleRun` as keyword arguments).
     """
     if (Path(out) / runs.CONFIG_FILE).exists():
-        raise ValueError(f"{out} already holds a run: choose another folder")
+        raise RunFolderError(f"{out} already holds a run: choose another folder")
     paths = [Path(member) for member in members]
     if len(paths) < 2:
-        raise ValueError(f"an ensemble needs at least two run folders, got {len(paths)}")
+        raise RunFolderError(f"an ensemble needs at least two run folders, got {len(paths)}")
     saved = [runs.read_config(path) for path in paths]
     for path, config in zip(paths, saved, strict=True):
         if config["kind"] == "ensemble":
-            raise ValueError(f"{path} is an ensemble: give its members instead")
+            raise RunFolderError(f"{path} is an ensemble: give its members instead")
         if not config.get("complete"):
-            raise ValueError(f"{path} is not a finished run: resume it first")
+            raise RunFolderError(f"{path} is not a finished run: resume it first")
         for key in SHARED_KEYS:
             if config[key] != saved[0][key]:
-                raise ValueError(f"{path} has another {key} than {paths[0]}: its network scores other candidates")
+                raise RunFolderError(f"{path} has another {key} than {paths[0]}: its network scores other candidates")
     policies = [runs.load_policy(path) for path in paths]
     config = replace(policies[0].config, avoid_repeats=True, avoid_returns=avoid_returns)
     listed = [{"run": str(p), "kind": c["kind"], "config": c["config"]} for p, c in zip(paths, saved, strict=True)]

@@ -77,7 +77,7 @@ def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) ->
 
 
 def train_bc_run(
-    dataset_id: str,
+    dataset: str,
     config: BCConfig,
     out: str | Path,
     *,
@@ -85,14 +85,16 @@ def train_bc_run(
     progress: bool = True,
     episodes: int | None = None,
 ) -> BCPolicy:
-    """Behaviour cloning on the phases dataset ``dataset_id`` (its first ``episodes``, or all) into ``out``.
+    """Behaviour cloning on the phases dataset ``dataset`` (its first ``episodes``, or all) into ``out``.
 
     Resumable: an interrupted run continues from its last epoch; a complete one is loaded.
+    The ``train`` of the ``bc`` learner (:mod:`training.learners.registry`: the fields of
+    :class:`~training.learners.options.BCRun` as keyword arguments).
     """
     from tqdm import tqdm
 
-    demonstrations, capacity = demonstrations_from_dataset(dataset_id, episodes)
-    options = {"dataset": dataset_id, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
+    demonstrations, capacity = demonstrations_from_dataset(dataset, episodes)
+    options = {"dataset": dataset, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
     config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)

@@ -33,6 +33,7 @@ from fetchcarry_env.observation import Capacity
 from training.learners import runs
 from training.learners.encoders import build_network
 from training.learners.options import BCConfig, PPOOptions
+from training.learners.runs import RunFolderError
 
 SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
 VALUE_LAYERS = (256, 256)  # units of the value MLP
@@ -145,7 +146,12 @@ def save_ppo_checkpoint(folder: Path, model: Any, rows: list[dict[str, Any]]) ->
 def train_ppo(
     family: str, options: PPOOptions, out: str | Path, *, resume: bool = False, progress: bool = True
 ) -> list[dict[str, Any]]:
-    """Train MaskablePPO on ``family`` into the run folder ``out``; return the learning-curve rows."""
+    """Train MaskablePPO on ``family`` into the run folder ``out``; return the learning-curve rows.
+
+    The ``train`` of the ``ppo`` learner (:mod:`training.learners.registry`: the fields of
+    :class:`~training.learners.options.PPORun` as keyword arguments). An ``options.init``
+    that is not a bc or dagger run of this interface is a :class:`RunFolderError`.
+    """
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import DummyVecEnv
@@ -155,7 +161,9 @@ def train_ppo(
     if options.init is not None:
         init = runs.read_config(options.init)
         if init["kind"] not in ("bc", "dagger"):
-            raise ValueError(f"a PPO actor starts from a bc or dagger run; {options.init} holds a {init['kind']!r} run")
+            raise RunFolderError(
+                f"a PPO actor starts from a bc or dagger run; {options.init} holds a {init['kind']!r} run"
+            )
         options = PPOOptions(**{**asdict(options), "encoder": init["config"]["encoder"],
                                 "hidden": init["config"]["hidden"]})  # fmt: skip
     config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed)
@@ -167,7 +175,7 @@ def train_ppo(
     capacity, candidates = base.capacity, int(env.action_space.n)
     features = int(env.observation_space.shape[0])
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
-        raise ValueError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
+        raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
     run_options = {"family": family, **asdict(options)}
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
                              {"init": options.init, "steps": options.steps})  # fmt: skip

@@ -1,8 +1,9 @@
-"""Run folders of trained policies (``bc``, ``dagger``, ``ppo``, ``ensemble``): what they hold, and loading them.
+"""Run folders of trained policies (``bc``, ``dagger``, ``ppo``, ``ensemble``, ...): what they hold, and loading them.
 
 A run folder holds
 
-- ``config.json``: ``kind`` (``bc``, ``dagger``, ``ppo`` or ``ensemble``), ``interface`` (``phases``:
+- ``config.json``: ``kind`` (``bc``, ``dagger``, ``ppo``, ``ensemble`` or another registered
+  learner's, :mod:`training.learners.registry`), ``interface`` (``phases``:
   the policy acts in ``FetchCarryPushPhases-v0``'s candidate phases), ``env_id``,
   ``options`` (every option of the run, as given), ``config`` (the network:
   :class:`~training.learners.bc.BCConfig`), ``capacity`` (the observation's slots),
@@ -12,14 +13,15 @@ A run folder holds
 - ``checkpoint.pt``: the training state to resume from (weights, optimiser, counters);
 - ``model.pt``: the policy's weights (a scorer of candidates, :mod:`training.learners.encoders`).
 
-Every kind acts through the same network (a PPO run's actor is a BC network, so a BC
-run of the same encoder initialises it), so :func:`load_policy` builds one
+:func:`load_policy` loads a run folder through the learner its ``kind`` names. Every
+built-in kind acts through the same network (a PPO run's actor is a BC network, so a BC
+run of the same encoder initialises it), so :func:`load_network_policy` builds one
 :class:`~training.learners.bc.BCPolicy` for all of them; an ``ensemble``
 (:mod:`training.learners.ensemble`) holds several such networks, each member's settings
 in ``options.members``, and acts on the mean of their log-probabilities. Loading reads JSON and
 ``torch.load(..., weights_only=True)`` tensors only: nothing in a run folder runs code.
 A ``config.json`` with an unknown key, a missing key, a bad kind or a value of the
-wrong type is a ``ValueError``.
+wrong type is a :class:`RunFolderError` (the user's bad input).
 """
 
 from __future__ import annotations
@@ -37,9 +39,9 @@ import torch
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
+from training.learners import registry
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
-KINDS = ("bc", "dagger", "ppo", "ensemble")
 INTERFACE = "phases"
 ENV_ID = "FetchCarryPushPhases-v0"
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
@@ -50,10 +52,13 @@ class RunFolderError(InputError):
     """A folder that is not a loadable run folder (bad or missing ``config.json``, weights that do not fit)."""
 
 
-def read_config(path: str | Path) -> dict[str, Any]:
-    """The checked ``config.json`` of run folder ``path``; :class:`RunFolderError` (a ``ValueError``) otherwise."""
-    from training.learners.bc import BCConfig
+def network_kinds() -> tuple[str, ...]:
+    """The registered kinds whose runs act through the BC network (``bc``, ``dagger``, ``ppo``, ``ensemble``)."""
+    return tuple(learner.kind for learner in registry.learners() if learner.load is None)
 
+
+def read_saved(path: str | Path) -> dict[str, Any]:
+    """The JSON object in run folder ``path``'s ``config.json`` (any kind, unchecked); :class:`RunFolderError` else."""
     file = Path(path) / CONFIG_FILE
     try:
         saved = json.loads(file.read_text())
@@ -63,14 +68,24 @@ def read_config(path: str | Path) -> dict[str, Any]:
         raise RunFolderError(f"{file} is not valid JSON: {error}") from None
     if not isinstance(saved, dict):
         raise RunFolderError(f"{file} does not hold a run's configuration (a JSON object)")
+    return saved
+
+
+def read_config(path: str | Path) -> dict[str, Any]:
+    """The checked ``config.json`` of a run folder of the BC network; :class:`RunFolderError` otherwise."""
+    from training.learners.bc import BCConfig
+
+    file = Path(path) / CONFIG_FILE
+    saved = read_saved(path)
     unknown = sorted(set(saved) - set(REQUIRED_KEYS) - set(OPTIONAL_KEYS))
     if unknown:
         raise RunFolderError(f"{file}: unknown keys {', '.join(unknown)}")
     missing = [key for key in REQUIRED_KEYS if key not in saved]
     if missing:
         raise RunFolderError(f"{file}: missing keys {', '.join(missing)}")
-    if saved["kind"] not in KINDS:
-        raise RunFolderError(f"{file}: kind must be one of {', '.join(KINDS)}, got {saved['kind']!r}")
+    kinds = network_kinds()
+    if saved["kind"] not in kinds:
+        raise RunFolderError(f"{file}: kind must be one of {', '.join(kinds)}, got {saved['kind']!r}")
     if saved.get("interface", INTERFACE) != INTERFACE:
         raise RunFolderError(f"{file}: interface must be {INTERFACE!r}, got {saved['interface']!r}")
     _check_fields(file, "config", saved["config"], BCConfig)
@@ -108,7 +123,7 @@ LEGACY_CONFIG: dict[str, Any] = {"relative": False, "push_scores": False, "avoid
 
 
 def network_config(saved: dict[str, Any]) -> Any:
-    """The :class:`BCConfig` of a checked config (its own checks raise ``ValueError``).
+    """The :class:`BCConfig` of a checked config (its own checks raise :class:`InputError`).
 
     A field missing from an older run folder takes the value it had before the field
     existed (:data:`LEGACY_CONFIG`), so old runs load and act as they did.
@@ -119,11 +134,21 @@ def network_config(saved: dict[str, Any]) -> Any:
 
 
 def load_policy(path: str | Path, env: Any = None) -> Any:
-    """The policy of a run folder of any kind, behind stable-baselines3's ``predict`` protocol.
+    """The policy of a run folder of any registered kind, behind stable-baselines3's ``predict`` protocol.
 
-    ``env`` (a ``FetchCarryPushPhases-v0`` env) lets ``predict`` ask it for the masks when
-    none are given. Raises ``ValueError`` for anything that is not a loadable run folder.
+    ``config.json``'s ``kind`` names the learner (:mod:`training.learners.registry`) whose
+    ``load(path, env)`` loads it; the built-in kinds load with :func:`load_network_policy`
+    (as does a folder of no known kind: its checks say what is wrong). ``env`` (a
+    ``FetchCarryPushPhases-v0`` env) lets ``predict`` ask it for the masks when none are
+    given. Raises :class:`RunFolderError` (bad input) for anything that is not a loadable run folder.
     """
+    kind = read_saved(path).get("kind")
+    load = registry.loader(kind) if isinstance(kind, str) and kind in registry.kinds() else None
+    return load_network_policy(path, env) if load is None else load(Path(path), env)
+
+
+def load_network_policy(path: str | Path, env: Any = None) -> Any:
+    """The :class:`~training.learners.bc.BCPolicy` of a ``bc``, ``dagger``, ``ppo`` or ``ensemble`` run folder."""
     from training.learners.bc import BCPolicy
     from training.learners.encoders import Ensemble, build_network
 
@@ -225,20 +250,20 @@ def start_run(out: str | Path, config: dict[str, Any], *, resume: bool) -> tuple
     """Prepare run folder ``out`` for ``config``; return it and the checkpoint to resume from (or None).
 
     Without ``resume`` the folder must not hold a run already (``FileExistsError`` is
-    not used: a ``ValueError`` says what to do). With ``resume`` the folder's
+    not used: a :class:`RunFolderError` says what to do). With ``resume`` the folder's
     ``config.json`` must describe the same run (its ``options`` equal), and a complete
     run is not trained again.
     """
     out = Path(out)
     if (out / CONFIG_FILE).exists():
         if not resume:
-            raise ValueError(f"{out} already holds a run: resume it, or choose another folder")
-        saved = read_config(out)
+            raise RunFolderError(f"{out} already holds a run: resume it, or choose another folder")
+        saved = read_saved(out)
         if saved.get("kind") != config["kind"] or saved.get("options") != config["options"]:
-            raise ValueError(f"{out} holds a run with other options: resume it with the same options")
+            raise RunFolderError(f"{out} holds a run with other options: resume it with the same options")
         return out, load_checkpoint(out)
     if out.exists() and any(out.iterdir()):
-        raise ValueError(f"{out} exists and is not an empty folder or a run folder")
+        raise RunFolderError(f"{out} exists and is not an empty folder or a run folder")
     write_config(out, {**config, "complete": False})
     return out, None
 

@@ -1,12 +1,13 @@
 """Training jobs of a reproduction, up to ``workers`` at a time, each a resumable run folder.
 
-A :class:`TrainJob` is one ``fetchcarry train`` run (bc, dagger, ppo or ensemble) described by
-plain, picklable fields; :func:`run_job` trains it through the library functions the
-commands use, with ``resume=True`` (a complete run folder is left as it is; an
-interrupted one continues from its checkpoint) and torch on one thread. :func:`run_jobs`
-runs jobs in this process (one worker) or on a spawned process pool (the worker set-up
-of ``fetchcarry generate``: workers ignore Ctrl-C and die with their parent), starting a
-job once the jobs it needs (a PPO run's BC init) are done.
+A :class:`TrainJob` is one ``fetchcarry train KIND`` run: a registered learner's kind and
+its options dataclass (:mod:`training.learners.registry`), plain and picklable;
+:func:`run_job` trains it through the registry, as the command does, with ``resume=True``
+(a complete run folder is left as it is; an interrupted one continues from its
+checkpoint) and torch on one thread. :func:`run_jobs` runs jobs in this process (one
+worker) or on a spawned process pool (the worker set-up of ``fetchcarry generate``:
+workers ignore Ctrl-C and die with their parent), starting a job once the jobs it needs
+(a PPO run's BC init) are done.
 """
 
 from __future__ import annotations
@@ -18,34 +19,37 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
-from training.learners.options import BCConfig, DaggerOptions, PPOOptions
+from training.learners import registry
 
 
 @dataclass(frozen=True)
 class TrainJob:
-    """One run folder to train: ``kind`` with its settings, after the jobs named in ``needs``."""
+    """One run folder to train: the learner ``kind`` with its ``options``, after the jobs named in ``needs``."""
 
     name: str  # the run folder's name (unique: the benchmark labels policies by it)
-    kind: str  # "bc", "dagger", "ppo" or "ensemble"
+    kind: str  # a registered learner: "bc", "dagger", "ppo", "ensemble", ...
     out: str  # the run folder
-    seed: int  # the training seed
-    config: BCConfig | None = None  # bc and dagger: the network
-    dataset: str | None = None  # bc: the Minari dataset id
-    episodes: int | None = None  # bc: the dataset's first episodes (None: all)
-    family: str | None = None  # dagger and ppo: the scenario family
-    dagger: DaggerOptions | None = None
-    ppo: PPOOptions | None = None
+    options: Any  # the learner's options dataclass (BCRun, DaggerRun, PPORun, EnsembleRun, ...)
     needs: tuple[str, ...] = field(default=())  # names of jobs that must finish first
-    members: tuple[str, ...] = field(default=())  # ensemble: the run folders it combines
+
+    def __getattr__(self, name: str) -> Any:
+        """An option of the job reads as the job's own (``job.members``, ``job.family``: as before options existed)."""
+        if name == "options" or name.startswith("__"):  # not set yet (unpickling): no recursion
+            raise AttributeError(name)
+        try:
+            return getattr(self.options, name)
+        except AttributeError:
+            raise AttributeError(f"{type(self).__name__} of kind {self.kind!r} has no {name!r}") from None
 
 
 def is_complete(job: TrainJob) -> bool:
     """Whether ``job``'s run folder holds a finished run."""
-    from training.learners.runs import CONFIG_FILE, read_config
+    from training.learners.runs import CONFIG_FILE, read_saved
 
     folder = Path(job.out)
-    return (folder / CONFIG_FILE).is_file() and bool(read_config(folder).get("complete"))
+    return (folder / CONFIG_FILE).is_file() and bool(read_saved(folder).get("complete"))
 
 
 def run_job(job: TrainJob) -> tuple[float, float]:
@@ -54,24 +58,7 @@ def run_job(job: TrainJob) -> tuple[float, float]:
 
     torch.set_num_threads(1)
     started, cpu = time.perf_counter(), time.process_time()
-    if job.kind == "bc":
-        from training.learners.imitation import train_bc_run
-
-        train_bc_run(job.dataset, job.config, job.out, resume=True, progress=False, episodes=job.episodes)
-    elif job.kind == "dagger":
-        from training.learners.dagger import train_dagger
-
-        train_dagger(job.family, job.dagger, job.config, job.out, workers=1, resume=True, progress=False)
-    elif job.kind == "ppo":
-        from training.learners.ppo import train_ppo
-
-        train_ppo(job.family, job.ppo, job.out, resume=True, progress=False)
-    elif job.kind == "ensemble":
-        from training.learners.ensemble import make_ensemble
-
-        make_ensemble(job.members, job.out)
-    else:
-        raise ValueError(f"unknown kind of training job {job.kind!r}")
+    registry.train(job.kind, job.options, job.out, resume=True, progress=False)
     return time.perf_counter() - started, time.process_time() - cpu
 
 

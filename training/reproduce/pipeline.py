@@ -44,6 +44,7 @@ from training.data.generate import generate
 from training.data.sources import EpisodeSource, GenerationConfig
 from training.evaluation.runner import RESULTS, run_benchmark
 from training.evaluation.splits import get_split
+from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 from training.reproduce.aggregate import write_published
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
@@ -81,20 +82,20 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
         for label, options in (("ppo-scratch", budget.ppo_options(seed)), ("ppo-bc", budget.ppo_options(seed, init))):
             needs = (run_name("bc-mlp", seed),) if options.init else ()
             name = run_name(label, seed)
-            jobs.append(TrainJob(name, "ppo", str(runs / name), seed, family=TRAINING_FAMILY, ppo=options, needs=needs))
+            jobs.append(TrainJob(name, "ppo", str(runs / name), PPORun(TRAINING_FAMILY, options), needs=needs))
     for seed in range(seeds):
         name = run_name("dagger", seed)
-        jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
-                             family=TRAINING_FAMILY, dagger=budget.dagger_options()))  # fmt: skip
+        jobs.append(TrainJob(name, "dagger", str(runs / name), DaggerRun(TRAINING_FAMILY, budget.dagger_options(),
+                                                                         budget.bc_config("mlp", seed))))  # fmt: skip
         if budget.aimed_iterations:
             name = run_name("dagger-aimed", seed)
-            jobs.append(TrainJob(name, "dagger", str(runs / name), seed, config=budget.bc_config("mlp", seed),
-                                 family=TRAINING_FAMILY, dagger=budget.aimed_options(DATASET_ID)))  # fmt: skip
+            jobs.append(TrainJob(name, "dagger", str(runs / name), DaggerRun(
+                TRAINING_FAMILY, budget.aimed_options(DATASET_ID), budget.bc_config("mlp", seed))))  # fmt: skip
         jobs.append(_bc(runs, "bc-set", seed, budget, "set"))
     if has_ensemble(seeds, budget):
         members = run_names("dagger-aimed", seeds)
-        jobs.append(TrainJob(ENSEMBLE, "ensemble", str(runs / ENSEMBLE), 0, needs=members,
-                             members=tuple(str(runs / name) for name in members)))  # fmt: skip
+        jobs.append(TrainJob(ENSEMBLE, "ensemble", str(runs / ENSEMBLE),
+                             EnsembleRun(tuple(str(runs / name) for name in members)), needs=members))  # fmt: skip
     for seed in range(seeds):
         jobs += [_bc(runs, curve_label(n), seed, budget, "mlp", n) for n in budget.curve]
     return jobs
@@ -102,8 +103,7 @@ def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
 
 def _bc(runs: Path, label: str, seed: int, budget: Budget, encoder: str, episodes: int | None = None) -> TrainJob:
     name = run_name(label, seed)
-    return TrainJob(name, "bc", str(runs / name), seed, config=budget.bc_config(encoder, seed), dataset=DATASET_ID,
-                    episodes=episodes)  # fmt: skip
+    return TrainJob(name, "bc", str(runs / name), BCRun(DATASET_ID, episodes, budget.bc_config(encoder, seed)))
 
 
 @contextmanager
