@@ -4,7 +4,8 @@ One module per group of commands (:mod:`~training.cli.planning`: ``plan``,
 ``validate``; :mod:`~training.cli.episodes`: ``rollout``, ``demo``,
 ``evaluate-expert``; :mod:`~training.cli.data`: ``generate``, ``dataset``;
 :mod:`~training.cli.bench`: ``bench env|planner|generate|phases|projection``; :mod:`~training.cli.benchmark`:
-``benchmark``; :mod:`~training.cli.train`: ``train bc|dagger|ppo``, ``bench learned|learning-checks``;
+``benchmark``; :mod:`~training.cli.train`: ``train KIND``, one per registered learner; :mod:`~training.cli.checks`:
+``bench learned|learning-checks``;
 :mod:`~training.cli.reproduce`: ``reproduce``), each with a
 ``register(commands, bench)`` function. Library code never speaks of flags or exit
 statuses: this package turns its exceptions into them (:mod:`~training.cli.exits`).
@@ -29,6 +30,7 @@ COMMAND_MODULES = (
     "training.cli.bench",
     "training.cli.benchmark",
     "training.cli.train",
+    "training.cli.checks",
     "training.cli.reproduce",
 )
 """Modules that add commands; a module that is not installed (an optional part) is skipped."""
