@@ -146,15 +146,22 @@ def _pairs_blocked(sx, sy, ex, ey, radius: float, rects: np.ndarray, boxes_known
     return out
 
 
-def arm_crosses(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
-    """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
+def arm_crossings(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
+    """``(N, R)``: True where the segment ``p`` - ``q`` crosses rectangle ``r`` of ``rects`` (``(R, 4)``, metres).
+
+    ``segment_intersects_rect`` with ``arm_line_clear``'s tolerance: Liang-Barsky
+    clipping against the rectangle shrunk by 1e-6 m.
+    """
     px, py, qx, qy = (np.atleast_1d(np.asarray(v, dtype=float))[:, None] for v in np.broadcast_arrays(px, py, qx, qy))
-    if rects.shape[0] == 0:
-        return np.zeros(px.shape[0], dtype=bool)
     x0, y0, x1, y1 = (rects[:, i][None, :] + s for i, s in enumerate((ARM_TOL, ARM_TOL, -ARM_TOL, -ARM_TOL)))
     proper = (x0 < x1) & (y0 < y1)
     valid, _t0, _t1 = _clip(px, py, qx - px, qy - py, (x0, y0, x1, y1))
-    return (proper & valid).any(axis=1)
+    return np.broadcast_to(proper & valid, (px.shape[0], rects.shape[0])).copy()
+
+
+def arm_crosses(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
+    """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
+    return arm_crossings(px, py, qx, qy, rects).any(axis=1)
 
 
 def _rects(rects) -> np.ndarray:
@@ -193,6 +200,7 @@ class _Pieces:
     array: np.ndarray  # (n, 4) the same rectangles, metres
     contacts: np.ndarray  # (n, 4, 2): push contact of each piece along each direction, metres
     tables: list  # the table under each piece, or None (Scenario.table_under_rect)
+    table_array: np.ndarray  # (n, 4): the rectangle of each one's table (NaN: none), metres
     hand_free: np.ndarray  # (n, 4) bool: nothing leaves no room for the hand at the contact (rules.hand_blocker)
 
     def arm_rects(self, obstacles: np.ndarray, ignore: int | None) -> np.ndarray:
@@ -305,6 +313,7 @@ class FastPhases:
         """The clutter of ``state``, as the push and arm tests need it."""
         scenario = self.scenario
         rects = [clutter_rect(scenario, state, c.id) for c in scenario.clutter]
+        tables = [scenario.table_under_rect(rect) for rect in rects]
         contacts = [[push_contact(rect, d) for d in HEADINGS] for rect in rects]
         hand_free = [
             [not self._hand_blocked(state, rects, item.id, point) for point in row]
@@ -314,7 +323,10 @@ class FastPhases:
             rects,
             _rects(rects),
             np.array(contacts, dtype=float).reshape(-1, 4, 2),
-            [scenario.table_under_rect(rect) for rect in rects],
+            tables,
+            np.array(
+                [(t.rect.min_x, t.rect.min_y, t.rect.max_x, t.rect.max_y) if t else (np.nan,) * 4 for t in tables]
+            ).reshape(-1, 4),
             np.array(hand_free, dtype=bool).reshape(-1, 4),
         )
 
@@ -332,7 +344,9 @@ class FastPhases:
             target = state.objects[obj.id][:2] if mode == Mode.PICK else obj.goal
             if mode == Mode.PLACE and _goal_taken(scenario, state, obj):
                 continue
-            first = np.array([layout.index(kind, slot, h, 0, 0) for h in range(len(HEADINGS))])
+            first = layout.offsets[kind] + (slot * len(HEADINGS) + np.arange(len(HEADINGS))) * int(
+                np.prod(layout.window)
+            )
             offers, _g = self._window_offers(first, [_index(self.lattice, target)] * 4, np.arange(4), [target] * 4)
             offers = offers.take(self._fits(offers.ci, offers.cj) & self._stand_at(offers.ci, offers.cj))
             offers.mode = int(mode)
@@ -365,9 +379,7 @@ class FastPhases:
         if n == 0:
             return _empty(int(Mode.MOVE))
         c, d, k = (a.ravel() for a in np.indices((n, 4, 3)))
-        first = np.array(
-            [layout.index("approach", *g, 0, 0) for g in zip(c.tolist(), d.tolist(), k.tolist(), strict=True)]
-        )
+        first = layout.offsets["approach"] + np.arange(c.size) * int(np.prod(layout.window))  # C order of (c, d, k)
         contacts = pieces.contacts
         targets = contacts[c, d]
         centers = [_index(lattice, (float(x), float(y))) for x, y in targets]
@@ -388,34 +400,28 @@ class FastPhases:
         return out
 
     def _pushes_from(self, state, offers: _Offers, pieces: _Pieces, c, d, ei, ej) -> np.ndarray:
-        """True where the env would accept the one-cell push from the pose (``_Enumerator._pushes_from``)."""
-        scenario = self.scenario
+        """True where the env would accept the one-cell push from the pose (``_Enumerator._pushes_from``).
+
+        rules._check_push from a base at the pose, for the push of piece ``c`` along
+        ``d`` to cell ``(ei, ej)``: the piece alone in reach (else check_action decides),
+        on a table after the stroke, room for the hand, the arm line clear.
+        """
         px, py = self.xs[offers.ci], self.ys[offers.cj]
         dx, dy = self.xs[ei] - px, self.ys[ej] - py
         dx, dy = np.where(np.abs(dx) <= 1e-6, 0.0, dx), np.where(np.abs(dy) <= 1e-6, 0.0, dy)
         length = np.abs(dx) + np.abs(dy)
-        keep = np.zeros(offers.index.size, dtype=bool)
-        contacts = pieces.contacts
-        for slot, item in enumerate(scenario.clutter):
-            rect, table = pieces.rects[slot], pieces.tables[slot]
-            if table is None:
-                continue
-            arm = pieces.arm_rects(self.obstacles, slot)
-            for direction in range(4):
-                sel = np.flatnonzero((c == slot) & (d == direction))
-                if sel.size == 0 or not pieces.hand_free[slot, direction]:
-                    continue
-                ux, uy = heading_vector(HEADINGS[direction])
-                t, lx, ly = table.rect, ux * length[sel], uy * length[sel]
-                on_table = (rect.min_x + lx >= t.min_x - 1e-6) & (rect.min_y + ly >= t.min_y - 1e-6)
-                on_table &= (rect.max_x + lx <= t.max_x + 1e-6) & (rect.max_y + ly <= t.max_y + 1e-6)
-                cx, cy = contacts[slot, direction]
-                ok = on_table & ~arm_crosses(px[sel], py[sel], cx, cy, arm)
-                nearest = self._reaches_all(offers.take(sel), contacts[:, direction]).sum(axis=1) == 1
-                ok &= nearest
-                keep[sel] = ok
-                for n in sel[~nearest]:
-                    keep[n] = self._push_exact(state, offers, n, (int(ei[n]), int(ej[n])), item.id)
+        lx, ly = UNIT[d, 0] * length, UNIT[d, 1] * length  # Rect.translate of the piece by the stroke
+        rect, t = pieces.array[c], pieces.table_array[c]  # NaN where no table: refused
+        keep = pieces.hand_free[c, d] & (rect[:, 0] + lx >= t[:, 0] - 1e-6) & (rect[:, 1] + ly >= t[:, 1] - 1e-6)
+        keep &= (rect[:, 2] + lx <= t[:, 2] + 1e-6) & (rect[:, 3] + ly <= t[:, 3] + 1e-6)
+        alone = self._reaches_all(offers, pieces.contacts[:, d].transpose(1, 0, 2)).sum(axis=1) == 1
+        cross = arm_crossings(
+            px, py, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1], pieces.arm_rects(self.obstacles, None)
+        )
+        cross[np.arange(c.size), self.obstacles.shape[0] + c] = False  # rules._arm_blocker ignores the pushed piece
+        keep &= alone & ~cross.any(axis=1)
+        for n in np.flatnonzero(~alone):
+            keep[n] = self._push_exact(state, offers, n, (int(ei[n]), int(ej[n])), self.scenario.clutter[int(c[n])].id)
         return keep
 
     def _push_exact(self, state: WorldState, offers: _Offers, n: int, end: tuple[int, int], item: str) -> bool:
@@ -510,10 +516,7 @@ class FastPhases:
         keep[sel[~single]] = False
         sel = sel[single]
         slot, way = c[sel], d[sel]
-        tables = np.array(
-            [(t.rect.min_x, t.rect.min_y, t.rect.max_x, t.rect.max_y) if t else (np.nan,) * 4 for t in pieces.tables]
-        )
-        t, rect = tables.reshape(-1, 4)[slot], pieces.array[slot]
+        t, rect = pieces.table_array[slot], pieces.array[slot]
         lx, ly = ux[sel] * length[sel], uy[sel] * length[sel]  # Rect.translate of the piece by the stroke
         ok = pieces.hand_free[slot, way] & (rect[:, 0] + lx >= t[:, 0] - 1e-6) & (rect[:, 1] + ly >= t[:, 1] - 1e-6)
         ok &= (rect[:, 2] + lx <= t[:, 2] + 1e-6) & (rect[:, 3] + ly <= t[:, 3] + 1e-6)  # NaN: no table, refused
@@ -587,10 +590,14 @@ class FastPhases:
         return np.where(ok.any(axis=1), ok.argmax(axis=1), -1)
 
     def _reaches_all(self, offers: _Offers, points: np.ndarray) -> np.ndarray:
-        """``(N, J)``: True where candidate ``n``'s posture, from its pose, reaches point ``j`` (metres)."""
+        """``(N, J)``: True where candidate ``n``'s posture, from its pose, reaches point ``j`` (metres).
+
+        ``points`` is ``(J, 2)``, or ``(N, J, 2)``: points per candidate.
+        """
         h = offers.heading[:, None]
+        points = points if points.ndim == 3 else points[None]
         fwd, lat = _hand_offset(
-            h, self.xs[offers.ci][:, None], self.ys[offers.cj][:, None], points[None, :, 0], points[None, :, 1]
+            h, self.xs[offers.ci][:, None], self.ys[offers.cj][:, None], points[..., 0], points[..., 1]
         )
         r = self.reach[offers.posture][:, None, :]
         return (r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])
@@ -633,6 +640,7 @@ class FastPhases:
         """``(ci, cj, candidate)`` of the waypoints that fit in the area and where the base may stand."""
         layout, lattice, res = self.layout, self.lattice, self.lattice.resolution
         first = round(self.radius / res)
+        start, cells = layout.offsets["waypoint"], layout.corner_cells
         rows = []
         for slot, rect in self._blocker_slots():
             for corner, (sx, sy) in enumerate(CORNERS):
@@ -642,7 +650,9 @@ class FastPhases:
                     for j in range(layout.corner_cells):
                         point = (cx + sx * (first + i) * res, cy + sy * (first + j) * res)
                         if inside_lattice(lattice, point):
-                            rows.append((*_index(lattice, point), layout.index("waypoint", slot, corner, i, j)))
+                            rows.append(
+                                (*_index(lattice, point), start + ((slot * 4 + corner) * cells + i) * cells + j)
+                            )
         ci, cj, index = (
             (np.array(v, dtype=np.int64) for v in zip(*rows, strict=True)) if rows else (np.zeros(0, int),) * 3
         )
@@ -656,6 +666,7 @@ class FastPhases:
         ox, oy = lattice.origin
         self._inside = (ox - half, oy - half, ox + (nx - 1) * res + half, oy + (ny - 1) * res + half)
         first = round(self.radius / res)
+        start = layout.offsets["edge"]
         rows = []
         for slot, rect in self._blocker_slots():
             for side, heading in enumerate(HEADINGS):
@@ -666,7 +677,7 @@ class FastPhases:
                         line = (rect.max_x + out if ux > 0 else rect.min_x - out, math.nan)
                     else:
                         line = (math.nan, rect.max_y + out if uy > 0 else rect.min_y - out)
-                    rows.append((*line, layout.index("edge", slot, side, i)))
+                    rows.append((*line, start + (slot * 4 + side) * layout.corner_cells + i))
         x, y, index = (np.array(v, dtype=float) for v in zip(*rows, strict=True)) if rows else (np.zeros(0),) * 3
         return x, y, index.astype(np.int64)
 
