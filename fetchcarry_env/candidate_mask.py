@@ -146,6 +146,28 @@ def _pairs_blocked(sx, sy, ex, ey, radius: float, rects: np.ndarray, boxes_known
     return out
 
 
+def _standing_blocked(px: np.ndarray, py: np.ndarray, radius: float, rects: np.ndarray) -> np.ndarray:
+    """``_pairs_blocked`` of zero-length moves (``move_stop(p, p)``), per pair (point ``n``, ``rects[n]``).
+
+    With ``q = p`` the sweep reduces to: the start inside the rounded rectangle, or
+    inside one of the two closed grown rectangles (Liang-Barsky with zero denominators
+    only asks ``low >= 0`` and ``high >= 0``; then ``t0 = 0``, ``t1 = 1``); the corner
+    circles need a motion. The same comparisons as the scalar code, for both radii.
+    """
+    x0, y0, x1, y1 = (rects[:, i] for i in range(4))
+    box = (np.minimum(px + radius, x1) - np.maximum(px - radius, x0) > 0.0) & (
+        np.minimum(py + radius, y1) - np.maximum(py - radius, y0) > 0.0
+    )
+    blocked = box
+    for r in (radius - CONTACT_SLACK, radius):
+        near = np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1)
+        touch = _hypot_below(*near, np.full(px.size, r - EPS))
+        touch |= (px - (x0 - r) >= 0) & ((x1 + r) - px >= 0) & (py - y0 >= 0) & (y1 - py >= 0)
+        touch |= (px - x0 >= 0) & (x1 - px >= 0) & (py - (y0 - r) >= 0) & ((y1 + r) - py >= 0)
+        blocked = blocked & touch
+    return blocked
+
+
 def arm_crossings(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
     """``(N, R)``: True where the segment ``p`` - ``q`` crosses rectangle ``r`` of ``rects`` (``(R, 4)``, metres).
 
@@ -632,7 +654,7 @@ class FastPhases:
             mm.append(np.full(gi.size, m))
         ii, jj, mm = np.concatenate(ii), np.concatenate(jj), np.concatenate(mm)
         x, y = self.xs[ii], self.ys[jj]
-        blocked = _pairs_blocked(x, y, x, y, r, self.blockers[mm])
+        blocked = _standing_blocked(x, y, r, self.blockers[mm])
         fits[ii[blocked], jj[blocked]] = False
         return fits
 

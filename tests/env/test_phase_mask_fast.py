@@ -183,3 +183,20 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+@pytest.mark.parametrize("family", ["corridor", "push", "turned-corridor"])
+def test_where_the_base_may_stand_is_move_stop_at_every_lattice_point(family):
+    """The per-scenario grid: the area test of check_action and move_stop of a zero-length move, everywhere."""
+    scenario, lattice = _scenario(family, 4)
+    env = gym.make(ENV_ID, family=family)
+    fast = FastPhases(env.get_wrapper_attr("layout"), scenario, lattice)
+    radius = scenario.robot.radius
+    want = np.zeros(lattice.shape, dtype=bool)
+    for i in range(lattice.shape[0]):
+        for j in range(lattice.shape[1]):
+            point = lattice.point(i, j)
+            want[i, j] = (
+                scenario.area.contains_disc(point, radius, tol=1e-9) and move_stop(scenario, point, point)[1] is None
+            )
+    assert np.array_equal(fast._stand, want)
