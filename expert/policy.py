@@ -45,7 +45,7 @@ import numpy as np
 from expert import planner
 from expert.escape import corner_gap, escape_move
 from expert.plans import Plan
-from expert.tracking import PlannedAction, Track, departure, solved
+from expert.tracking import PlannedAction, Track, departure, on_lattice, solved
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.rules import check_action
@@ -197,7 +197,7 @@ class ExpertPolicy:
     # -- one env -----------------------------------------------------------------------------
 
     def _act(self, track: Track, row: np.ndarray) -> tuple[Action, Decision]:
-        scenario, world = decode(row, self.capacity)
+        scenario, world = on_lattice(*decode(row, self.capacity), self.lattice)
         if track.failed_in is not None:
             if departure(track.failed_in, world, self.lattice.resolution, self.item_tolerance) is None:
                 self._stats = self._stats.plus(fallbacks=1)

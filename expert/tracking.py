@@ -3,13 +3,18 @@
 A :class:`Track` is what :class:`expert.policy.ExpertPolicy` keeps per env: the plan's
 remaining actions, each with the phase the world should be in after it, and the phase
 it should be in now. :func:`departure` says how an observed state departs from a planned
-one beyond tolerances (metres), which is when the expert plans again.
+one beyond tolerances (metres), which is when the expert plans again. :func:`on_lattice`
+puts a decoded base back on the lattice point the env has it at: the observation is
+float32, whose spacing far from the origin (7.6e-6 m at 64 m) exceeds the rules' 1e-6 m
+tolerances.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+
+import numpy as np
 
 from expert.plans import Phase, Plan
 from expert.to_actions import plan_to_actions
@@ -91,3 +96,20 @@ def departure(
 def solved(scenario: Scenario, world: WorldState) -> bool:
     """Every object delivered and the hand empty."""
     return world.holding is None and len(world.delivered(scenario)) == len(scenario.objects)
+
+
+def on_lattice(scenario: Scenario, world: WorldState, lattice: Lattice) -> tuple[Scenario, WorldState]:
+    """``(scenario, world)`` with the base on its lattice point when float32 rounding is all that separates them.
+
+    A base the env stopped on a lattice point is observed as that point rounded to
+    float32; a coordinate within one float32 spacing (``np.spacing(np.float32(x))``,
+    metres) of the nearest lattice point's is that point's exact value. A base elsewhere
+    (stopped at a contact, after a push that stalled) is left as observed.
+    """
+    point = lattice.snap(world.base)
+    if point == world.base or any(
+        abs(p - b) > abs(float(np.spacing(np.float32(b)))) for p, b in zip(point, world.base, strict=True)
+    ):
+        return scenario, world
+    robot = replace(scenario.robot, start=point)
+    return replace(scenario, robot=robot), replace(world, base=point)

@@ -25,7 +25,8 @@ Point3 = tuple[float, float, float]
 
 LIFT_HEIGHT = 0.05  # metres a picked object is lifted above where it stood
 DELIVERY_TOLERANCE = 0.01  # metres: an object within this of its goal (x, y and z) is delivered
-COORD_LIMIT = 100.0  # metres: bound of every coordinate in the observation space
+COORD_LIMIT = 100.0  # metres: every coordinate of a valid scenario lies within this of the origin (rule 6)
+OBSERVATION_LIMIT = 2 * COORD_LIMIT  # metres: bound of every entry of the observation space (see observation_space)
 
 
 @dataclass(frozen=True)
@@ -161,10 +162,17 @@ def observation_layout(capacity: Capacity) -> dict[str, slice]:
 
 
 def observation_space(capacity: Capacity) -> spaces.Dict:
-    """The ``Dict`` observation space for a capacity."""
+    """The ``Dict`` observation space for a capacity: every entry within :data:`OBSERVATION_LIMIT` (200 m).
+
+    The bound holds every observation of a valid scenario (rule 6: coordinates and sizes
+    within ``COORD_LIMIT``, 100 m). A standing object's centre is at most 100 m up; a held
+    one rides at the hand, :data:`LIFT_HEIGHT` above its table (100.05 m up at most) and
+    as far from the base as a posture reaches (at most 100 m), so its ``x`` and ``y`` may
+    lie up to 200 m from the origin.
+    """
 
     def box(n: int) -> spaces.Box:
-        return spaces.Box(-COORD_LIMIT, COORD_LIMIT, shape=(n,), dtype=np.float32)
+        return spaces.Box(-OBSERVATION_LIMIT, OBSERVATION_LIMIT, shape=(n,), dtype=np.float32)
 
     return spaces.Dict(
         {
