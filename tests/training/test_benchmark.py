@@ -16,6 +16,7 @@ from fetchcarry_env.scenario import Scenario
 from training import benchmark
 from training.cli import main
 from training.evaluation import runner
+from training.evaluation.results import read_results
 from training.evaluation.splits import SPLIT_BLOCK, TRAINING_FAMILIES
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "push_basic.json"
@@ -25,6 +26,7 @@ KEYS = {
     "split": str,
     "source": str,
     "seed": int,
+    "digest": str,
     "success": bool,
     "delivered": int,
     "objects": int,
@@ -54,7 +56,7 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 # ------------------------------------------------------------------ end to end
 def test_expert_and_random_end_to_end(tiny: Path):
-    records = json.loads((tiny / "results.json").read_text())
+    records = read_results(tiny / "results.json")
     assert [(r["policy"], r["source"]) for r in records] == [
         ("expert", "basic"),
         ("expert", "push"),
@@ -84,16 +86,16 @@ def test_expert_and_random_end_to_end(tiny: Path):
 def test_same_command_same_results_except_timing(tiny: Path, tmp_path: Path):
     argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
     assert main([*argv, "--out", str(tmp_path)]) == 0
-    first = json.loads((tiny / "results.json").read_text())
-    again = json.loads((tmp_path / "results.json").read_text())
+    first = read_results(tiny / "results.json")
+    again = read_results(tmp_path / "results.json")
     assert _untimed(first) == _untimed(again)
 
 
 def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path, capsys: pytest.CaptureFixture):
     argv = ["benchmark", "--policies", "expert", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
     assert main([*argv, "--workers", "2", "--json", "--out", str(tmp_path)]) == 0
-    first = json.loads((tiny / "results.json").read_text())
-    again = json.loads((tmp_path / "results.json").read_text())
+    first = read_results(tiny / "results.json")
+    again = read_results(tmp_path / "results.json")
     assert _untimed(first) == _untimed(again)
     rows = json.loads(capsys.readouterr().out)
     assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows] == [("expert", 1.0, 1.0), ("random", 0.0, None)]
@@ -107,7 +109,7 @@ def test_scenario_folder(tmp_path: Path):
     out = tmp_path / "out"
     argv = ["benchmark", "--policies", "expert", "--scenarios", str(folder), "--out", str(out), "--no-progress"]
     assert main(argv) == 0
-    records = json.loads((out / "results.json").read_text())
+    records = read_results(out / "results.json")
     assert [(r["policy"], r["source"]) for r in records] == [
         ("expert", "a_example.json"),
         ("expert", "b_turned.json"),
@@ -154,7 +156,7 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     monkeypatch.setattr(runner, "run_task", interrupted_third)
     argv = ["benchmark", "--policies", "random", "--split", "iid", "--episodes", "2", "--no-progress"]
     assert main([*argv, "--out", str(tmp_path)]) == 130
-    records = json.loads((tmp_path / "results.json").read_text())
+    records = read_results(tmp_path / "results.json")
     assert [r["policy"] for r in records] == ["expert", "expert"]
     assert (tmp_path / "summary.md").exists()
     # --resume keeps those two and runs only the random policy's episodes
@@ -162,16 +164,16 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     monkeypatch.setattr(runner, "run_task", lambda task: calls.append(task) or real(task))
     assert main([*argv, "--resume", "--out", str(tmp_path)]) == 0
     assert [task[0].name for task in calls] == ["random", "random"]
-    records = json.loads((tmp_path / "results.json").read_text())
+    records = read_results(tmp_path / "results.json")
     assert [r["policy"] for r in records] == ["expert", "expert", "random", "random"]
     assert all(r["expert_cost"] is not None for r in records)
 
 
 def test_resume_keeps_the_records_of_other_policies_and_splits(tiny: Path, tmp_path: Path):
     shutil.copy(tiny / "results.json", tmp_path / "results.json")
-    before = json.loads((tmp_path / "results.json").read_text())
+    before = read_results(tmp_path / "results.json")
     benchmark.run_benchmark(["random"], split="layouts", episodes=1, out=tmp_path, resume=True)
-    records = json.loads((tmp_path / "results.json").read_text())
+    records = read_results(tmp_path / "results.json")
     assert [(r["policy"], r["split"]) for r in records[: -len(before)]] == [
         ("expert", "layouts-v0"),
         ("random", "layouts-v0"),

@@ -1,7 +1,8 @@
 """The ``fetchcarry benchmark`` command: learned policies against the MILP expert on a split or a folder.
 
 Exit statuses: 0 done; 2 bad input (an unknown policy or split, a missing or broken run
-folder, an unusable scenario file); 130 interrupted (the finished episodes are kept in
+folder, an unusable scenario file, a ``results.json`` that breaks its schema, another
+benchmark writing to the same ``OUT_DIR``); 130 interrupted (the finished episodes are kept in
 ``OUT_DIR/results.json``).
 """
 
@@ -27,7 +28,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="evaluate policies against the MILP expert on a split or a folder of scenarios",
         description=_description(),
         epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
-        "scenario file), 130 interrupted (the finished episodes are kept in results.json).",
+        "scenario file, a results.json that breaks its schema, another benchmark writing to OUT_DIR), "
+        "130 interrupted (the finished episodes are kept in results.json).",
     )
     parser.add_argument(
         "--policies",
@@ -57,8 +59,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.add_argument(
         "--resume",
         action="store_true",
-        help="keep the episodes already in OUT_DIR/results.json and run the others; its records of other "
-        "policies and splits stay (one folder can grow a policy at a time)",
+        help="keep the episodes already in OUT_DIR/results.json and run the others (a scenario whose content "
+        "changed runs again); its records of other policies and splits stay (one folder can grow a policy at a time)",
     )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     parser.set_defaults(handler=run_benchmark_command)

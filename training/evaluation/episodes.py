@@ -2,7 +2,8 @@
 
 :func:`benchmark_episode` is what the workers run: one pass of the episode loop
 (:func:`training.rollout.run_episode`), whose figures and final ``info`` become one
-record (a plain dict, the shape of ``results.json``'s entries):
+record (a plain dict, the shape of ``results.json``'s records; their schema is
+:mod:`training.evaluation.results`, docs/results-format.md):
 
 ============== =====================================================================
 key            value
@@ -12,6 +13,9 @@ scenario       the scenario's name
 split          the split's name (``iid-v0``), or ``scenarios:FOLDER``
 source         the family it was drawn from, or its file name
 seed           the reset seed (and the random policy's seed for the episode)
+digest         the sha256 (hex) of the scenario's canonical JSON
+               (:func:`training.evaluation.results.scenario_digest`): what ``--resume``
+               matches, so a scenario file that changed runs again
 success        every object at its goal and the hand empty (``info["is_success"]``)
 delivered      objects at their goals at the end (``info["delivered"]``)
 objects        objects in the scenario
@@ -41,6 +45,7 @@ from typing import Any
 import gymnasium as gym
 
 from training.envs import make_env
+from training.evaluation.results import scenario_digest
 from training.evaluation.splits import EvalScenario
 from training.resolve import PolicySpec, build
 from training.rollout import run_episode
@@ -78,6 +83,7 @@ def benchmark_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool 
         "split": item.split,
         "source": item.source,
         "seed": item.seed,
+        "digest": scenario_digest(item.scenario),
         "success": bool(info["is_success"]),
         "delivered": int(info["delivered"]),
         "objects": len(item.scenario.objects),

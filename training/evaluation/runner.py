@@ -13,13 +13,22 @@ its finished episodes; ``summary.md`` and ``splits.png`` are written at the end 
 an interrupt. With ``resume``, the episodes already in ``results.json`` are kept and
 only the others run (an interrupted benchmark continues where it stopped); the records
 of other policies or splits in the file stay after this run's, and in the summary, so
-one folder can grow a policy at a time. Records are kept in a fixed order (policy, then
-episode), so the same command gives the same file, timings aside.
+one folder can grow a policy at a time. A record is this run's episode when its policy,
+split, seed and scenario digest (:func:`training.evaluation.results.scenario_digest`)
+are the episode's: a scenario file whose content changed runs again, and its old record
+goes. Records are kept in a fixed order (policy, then episode), so the same command
+gives the same file, timings aside.
+
+The file's format, its validation and atomic writes are
+:mod:`training.evaluation.results`'s: a file that breaks the schema is refused (exit 2,
+naming the file and the record), never partly dropped. A benchmark holds the output
+folder's lock (:class:`~training.evaluation.results.ResultsLock`) from before it reads
+the file until it wrote the last one, so a second benchmark on the same folder stops at
+once (exit 2, naming the holder) rather than overwrite the first one's records.
 """
 
 from __future__ import annotations
 
-import json
 import multiprocessing
 import os
 import time
@@ -35,11 +44,12 @@ from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
 from training.evaluation.metrics import Row, fill_expert_costs, summarise
 from training.evaluation.report import plot_splits, source_table, summary_markdown
+from training.evaluation.results import RESULTS, ResultsLock, read_results, scenario_digest
+from training.evaluation.results import write_results as write_results_file
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
 from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
 
-RESULTS, SUMMARY, PLOT = "results.json", "summary.md", "splits.png"
-RECORD_KEYS = (("policy", str), ("split", str), ("seed", int))  # what identifies a record's episode (resume)
+SUMMARY, PLOT = "summary.md", "splits.png"
 WRITE_EVERY_S = 1.0  # seconds between rewrites of results.json while episodes finish
 
 Task = tuple[PolicySpec, EvalScenario]
@@ -72,10 +82,11 @@ def run_benchmark(
 
     ``split`` is a split's name or a list of names (the first ``episodes`` of each).
     ``resume`` keeps the records of ``out/results.json`` that belong to this run's
-    episodes (same policy, split and seed) and runs only the others; the file's other
-    records (other policies or splits) are written back after this run's.
+    episodes (same policy, split, seed and scenario digest) and runs only the others; the
+    file's other records (other policies or splits) are written back after this run's.
 
-    Raises :class:`BenchmarkError` for bad input before any episode runs; a
+    Raises :class:`BenchmarkError` for bad input before any episode runs (a results file
+    that breaks its schema, another benchmark writing to ``out``); a
     ``KeyboardInterrupt`` propagates after the finished episodes are written.
     """
     if (split is None) == (scenarios is None):
@@ -97,7 +108,15 @@ def run_benchmark(
     check_fits(specs, items)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    tasks = [(spec, item) for spec in specs for item in items]
+    with ResultsLock(out):
+        return _run([(spec, item) for spec in specs for item in items], out, workers, backend, ray_address,
+                    progress, resume)  # fmt: skip
+
+
+def _run(
+    tasks: list[Task], out: Path, workers: int, backend: str, ray_address: str | None, progress: bool, resume: bool
+) -> BenchmarkReport:
+    """Run ``tasks`` (those not in ``out/results.json`` with ``resume``), writing the results as they finish."""
     order = {(spec.name, item.split, item.index): k for k, (spec, item) in enumerate(tasks)}
     records, others = finished_records(out, tasks) if resume else ([], [])
     done = {(r["policy"], r["split"], r["index"]) for r in records}
@@ -125,24 +144,28 @@ def run_benchmark(
 
 def finished_records(out: Path, tasks: list[Task]) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """``(finished, others)``: the records of ``out/results.json`` that are episodes of ``tasks`` (with their
-    ``index``), and its other well-formed records as they are; both [] without the file."""
+    ``index``), and its records of other episodes as they are; both [] without the file.
+
+    A record of a task's policy, split and seed but another scenario digest (the scenario
+    file changed, or a schema-0 record without a digest) is the task's old result: it is
+    left out and the task runs again. A file that breaks the schema is a
+    :class:`~training.evaluation.results.ResultsError`.
+    """
     try:
-        saved = json.loads((out / RESULTS).read_text())
+        saved = read_results(out / RESULTS)
     except FileNotFoundError:
         return [], []
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise BenchmarkError(f"{out / RESULTS} cannot be resumed: it is not valid JSON ({error})") from None
-    index = {(spec.name, item.split, item.seed): item.index for spec, item in tasks}
-    kept, others = {}, {}
-    for record in saved if isinstance(saved, list) else []:
-        if not (isinstance(record, dict) and all(isinstance(record.get(k), t) for k, t in RECORD_KEYS)):
-            continue
-        key = (record["policy"], record["split"], record["seed"])
-        if key in index:
-            kept[key] = {**record, "index": index[key]}
-        else:
-            others[key] = record
-    return list(kept.values()), list(others.values())
+    items = {(item.split, item.seed): item for _, item in tasks}
+    digests = {key: scenario_digest(item.scenario) for key, item in items.items()}
+    names = {spec.name for spec, _ in tasks}
+    kept, others = {}, []
+    for record in saved:
+        key = (record["split"], record["seed"])
+        if record["policy"] not in names or key not in items:
+            others.append(record)
+        elif record["digest"] == digests[key]:
+            kept[(record["policy"], *key)] = {**record, "index": items[key].index}
+    return list(kept.values()), others
 
 
 def with_references(policies: list[str]) -> list[PolicySpec]:
@@ -185,9 +208,7 @@ def write_results(
     fill_expert_costs(records)
     ordered = sorted(records, key=lambda r: order[(r["policy"], r["split"], r["index"])])
     public = [{k: v for k, v in r.items() if k != "index"} for r in ordered] + list(others)
-    temporary = out / f".{RESULTS}.tmp"
-    temporary.write_text(json.dumps(public, indent=1) + "\n")
-    os.replace(temporary, out / RESULTS)
+    write_results_file(out / RESULTS, public)
     return public
 
 
