@@ -91,17 +91,7 @@ def set_item_dynamics(client: QuietClient, body: int) -> None:
     Sleeping is disabled so that the outcome of a primitive depends only on the poses it
     starts from (a body asleep in one run and awake in another would break replays).
     """
-    client.changeDynamics(
-        body,
-        -1,
-        lateralFriction=physics.FRICTION,
-        spinningFriction=physics.SPINNING_FRICTION,
-        rollingFriction=physics.ROLLING_FRICTION,
-        restitution=physics.RESTITUTION,
-        linearDamping=physics.LINEAR_DAMPING,
-        angularDamping=physics.ANGULAR_DAMPING,
-        activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING,
-    )
+    client.changeDynamics(body, -1, **physics.ITEM_DYNAMICS, activationState=pybullet.ACTIVATION_STATE_DISABLE_SLEEPING)
 
 
 def table_top(scenario: Scenario, xy: tuple[float, float]) -> float:

@@ -13,6 +13,15 @@ ROLLING_FRICTION = 0.0001  # N*m per N: resists cylinders rolling once toppled
 RESTITUTION = 0.0  # nothing bounces
 LINEAR_DAMPING = 0.1  # 1/s: velocity decay of objects and clutter (PyBullet's default is 0.04)
 ANGULAR_DAMPING = 0.1  # 1/s
+# The dynamics above as changeDynamics keywords: what an object or a piece of clutter is set to.
+ITEM_DYNAMICS = {
+    "lateralFriction": FRICTION,
+    "spinningFriction": SPINNING_FRICTION,
+    "rollingFriction": ROLLING_FRICTION,
+    "restitution": RESTITUTION,
+    "linearDamping": LINEAR_DAMPING,
+    "angularDamping": ANGULAR_DAMPING,
+}
 
 OBJECT_MASS = 0.3  # kg: a bottle
 CLUTTER_MASS = 1.0  # kg: a box standing in the way

@@ -16,6 +16,15 @@ from fetchcarry_env.errors import InputError
 from training.learners.options import BCConfig, DaggerOptions, PPOOptions
 
 TRAINING_FAMILY = "training"  # basic, push, corridor or multi-2, uniformly: the iid split's families
+# DaggerOptions' field -> the Budget field it is taken from
+DAGGER_FIELDS = {
+    "demonstrations": "dagger_demonstrations",
+    "iterations": "dagger_iterations",
+    "episodes_per_iteration": "dagger_episodes",
+    "eval_episodes": "dagger_eval",
+    "time_limit": "time_limit",
+    "epochs": "dagger_epochs",
+}
 
 
 @dataclass(frozen=True)
@@ -57,14 +66,8 @@ class Budget:
         return BCConfig(encoder=encoder, epochs=epochs, seed=seed)
 
     def dagger_options(self) -> DaggerOptions:
-        return DaggerOptions(
-            demonstrations=self.dagger_demonstrations,
-            iterations=self.dagger_iterations,
-            episodes_per_iteration=self.dagger_episodes,
-            eval_episodes=self.dagger_eval,
-            time_limit=self.time_limit,
-            epochs=self.dagger_epochs,
-        )
+        """The DAgger run of the table: the budget's fields named in :data:`DAGGER_FIELDS`, the rest defaulted."""
+        return DaggerOptions(**{option: getattr(self, field) for option, field in DAGGER_FIELDS.items()})
 
     def aimed_options(self, dataset: str) -> DaggerOptions:
         """dagger-aimed: iteration 0 is BC on all of ``dataset`` (the flat MLP's epochs: the same network as
