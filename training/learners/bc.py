@@ -34,9 +34,10 @@ from training.data.expert_labels import Demonstrations, record_demonstrations  #
 from training.learners import runs
 from training.learners.encoders import CandidateScorer, build_network
 from training.learners.options import BCConfig
+from training.policies.protocol import MaskedPolicy
 
 
-class BCPolicy:
+class BCPolicy(MaskedPolicy):
     """A trained scorer of candidates behind stable-baselines3's ``predict`` protocol.
 
     ``predict(observation, action_masks=mask)`` returns the allowed candidate with the
@@ -72,6 +73,8 @@ class BCPolicy:
     (:meth:`candidate_scores`); a batch's, every score (:meth:`scores`).
     """
 
+    deterministic_default = True
+
     def __init__(self, network: nn.Module, config: BCConfig, capacity: Capacity, env: Any = None) -> None:
         self.network = flush_subnormal(network).eval()
         self.config = config
@@ -94,23 +97,14 @@ class BCPolicy:
         self.returns.reset()
         self.last = None
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-        action_masks: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, Any]:
+    def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
+        """The best-scoring allowed candidate (sampled from the scores' softmax unless ``deterministic``)."""
         flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, np.float32)
         batched = flat.ndim == 2
-        if action_masks is None:
-            if self.env is None:
-                raise ValueError("give action_masks= or build the policy with an env")
-            action_masks = self.env.get_wrapper_attr("action_masks")()
-        masks = np.asarray(action_masks, dtype=bool).reshape(len(flat) if batched else 1, -1)
+        masks = self.env_masks() if action_masks is None else np.asarray(action_masks, dtype=bool)
+        masks = masks.reshape(len(flat) if batched else 1, -1)
         if batched:
-            return self._predict_rows(flat, masks, deterministic), state
+            return self._predict_rows(flat, masks, deterministic)
         if episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0]):
             self.reset()
         allowed = self._allowed(flat, masks[0])
@@ -125,7 +119,7 @@ class BCPolicy:
             self.chosen.setdefault(flat.tobytes(), set()).add(action)
             self.returns.leave(action)
             self.last = action
-        return np.int64(action), state
+        return np.int64(action)
 
     def _allowed(self, flat: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """The indices of the candidates to choose from in the state ``flat``: the allowed ones, less the memory's.

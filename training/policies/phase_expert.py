@@ -33,14 +33,17 @@ import numpy as np
 from expert.policy import Decision, ExpertPolicy
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.kinematics import travel_cost
+from training.policies.protocol import MaskedPolicy
 
 MASK_INFO = "action_mask"  # per-step info of a phases dataset: the state's candidate mask (bool, K)
 PROJECTED_INFO = "projected"  # per-step info of a phases dataset: the step is a projected expert move (bool)
 UNEXPRESSIBLE = "unexpressible"  # the failure status (and episode outcome) of an expert action no candidate expresses
 
 
-class PhaseExpert:
+class PhaseExpert(MaskedPolicy):
     """:class:`expert.ExpertPolicy` on a phase env, answering with candidate indices (``predict`` protocol)."""
+
+    deterministic_default = True
 
     def __init__(self, env: Any, *, time_limit: float, rule: str = "end") -> None:
         self.env = env
@@ -61,14 +64,7 @@ class PhaseExpert:
         self.last_projected = False
         self.projected = 0
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-        action_masks: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, Any]:
+    def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
         """The candidate that stands for the expert's action, the nearest move for a move none stands for.
 
         An action other than a move that no candidate stands for gets a masked candidate
@@ -85,10 +81,10 @@ class PhaseExpert:
                 self.last_projected = True
                 reason = f"{decision.reason}; move projected onto candidate {index}"
                 self.last_decision = replace(decision, reason=reason)
-                return np.int64(index), state
+                return np.int64(index)
         if index is None:
             self.unexpressible += 1
-            mask = self.env.get_wrapper_attr("action_masks")()
+            mask = self.env_masks() if action_masks is None else np.asarray(action_masks, dtype=bool)
             masked = np.flatnonzero(~mask)
             if masked.size == 0:
                 raise RuntimeError("every candidate is allowed: an unexpressible action has no masked stand-in")
@@ -102,9 +98,9 @@ class PhaseExpert:
                 objective=decision.objective if decision else None,
                 failure=reason,
             )
-            return np.int64(masked[0]), state
+            return np.int64(masked[0])
         self.last_decision = decision
-        return np.int64(index), state
+        return np.int64(index)
 
 
 NEAREST_RULES = ("end", "detour")  # how nearest_move ranks the allowed move candidates

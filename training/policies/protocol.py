@@ -14,6 +14,7 @@ A user's policy enters every command as ``package.module:factory`` where
 
 from __future__ import annotations
 
+import abc
 import inspect
 from typing import Any, Protocol, runtime_checkable
 
@@ -34,6 +35,43 @@ class Policy(Protocol):
     ) -> tuple[Any, Any]:
         """The action for ``observation`` (a batch gives a batch) and the next recurrent ``state``."""
         ...
+
+
+class MaskedPolicy(abc.ABC):
+    """The project's own policies: SB3's ``predict`` written once; a subclass says how it :meth:`act` s.
+
+    ``predict`` hands :meth:`act` the masks it was given (None when it was given none:
+    :meth:`env_masks` reads the env's), and resolves ``deterministic=None`` to the
+    policy's own default (:attr:`deterministic_default`: a learned or planning policy
+    acts deterministically unless asked otherwise, a random one draws).
+    """
+
+    env: Any = None  # the env (or VecEnv) whose masks to read when none are given
+    deterministic_default: bool = False
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool | None = None,
+        action_masks: np.ndarray | None = None,
+    ) -> tuple[Any, Any]:
+        """The action for ``observation`` (a batch gives a batch) and ``state`` unchanged."""
+        chosen = self.deterministic_default if deterministic is None else deterministic
+        return self.act(observation, action_masks, episode_start, chosen), state
+
+    @abc.abstractmethod
+    def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
+        """The action (or batch of actions) for ``observation``."""
+
+    def env_masks(self) -> np.ndarray:
+        """The env's ``action_masks()`` (stacked over a stable-baselines3 ``VecEnv``), as bools."""
+        if self.env is None:
+            raise ValueError("give action_masks= or build the policy with an env")
+        if hasattr(self.env, "env_method"):  # a VecEnv (sb3-contrib's get_action_masks would import torch)
+            return np.stack(self.env.env_method("action_masks")).astype(bool)
+        return np.asarray(self.env.get_wrapper_attr("action_masks")(), dtype=bool)
 
 
 def reset_policy(policy: Any, seed: int | None) -> None:

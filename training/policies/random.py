@@ -21,8 +21,10 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from training.policies.protocol import MaskedPolicy
 
-class _SeededPolicy:
+
+class _SeededPolicy(MaskedPolicy):
     """A policy that draws from its own generator, re-seeded by :meth:`reset`."""
 
     def __init__(self, seed: int | None) -> None:
@@ -51,34 +53,13 @@ class RandomMaskedPolicy(_SeededPolicy):
         self.nvec = np.asarray(space.nvec, dtype=np.int64).reshape(-1)
         self._bounds = np.concatenate([[0], np.cumsum(self.nvec)])
 
-    def predict(
-        self,
-        observation: dict[str, np.ndarray] | np.ndarray,
-        state: Any = None,
-        episode_start: np.ndarray | None = None,
-        deterministic: bool = False,
-        action_masks: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, Any]:
-        """One action per observation (a batch gives a batch), and ``state`` unchanged.
-
-        ``deterministic`` is accepted for the protocol; a random policy is random either way
-        (reproducible through its seed).
-        """
-        batched = _is_batched(observation, self.env)
-        masks = self._masks(action_masks)
-        if masks.ndim == 1:
-            masks = masks[None, :]
-        actions = np.stack([self._sample(mask) for mask in masks])
-        return (actions if batched else actions[0]), state
-
-    def _masks(self, action_masks: np.ndarray | None) -> np.ndarray:
-        if action_masks is not None:
-            masks = np.asarray(action_masks, dtype=bool)
-        else:
-            masks = np.asarray(_env_action_masks(self.env), dtype=bool)
+    def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
+        """One action per observation (a batch gives a batch); random either way (reproducible through the seed)."""
+        masks = self.env_masks() if action_masks is None else np.asarray(action_masks, dtype=bool)
         if masks.shape[-1] != self._bounds[-1]:
             raise ValueError(f"action mask has length {masks.shape[-1]}, expected sum(nvec) = {self._bounds[-1]}")
-        return masks
+        actions = np.stack([self._sample(mask) for mask in np.atleast_2d(masks)])
+        return actions if _is_batched(observation, self.env) else actions[0]
 
     def _sample(self, mask: np.ndarray) -> np.ndarray:
         action = np.empty(len(self.nvec), dtype=np.int64)
@@ -98,23 +79,11 @@ class RandomPhasePolicy(_SeededPolicy):
         super().__init__(seed)
         self.env = env
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = False,
-        action_masks: np.ndarray | None = None,
-    ) -> tuple[np.ndarray, Any]:
-        """A random allowed candidate for each mask row; ``deterministic`` is accepted for the protocol."""
-        if action_masks is None:
-            if self.env is None:
-                raise ValueError("give action_masks= or build the policy with an env")
-            action_masks = self.env.get_wrapper_attr("action_masks")()
-        masks = np.asarray(action_masks, dtype=bool)
-        rows = masks if masks.ndim == 2 else masks[None, :]
-        actions = np.array([self._draw(row) for row in rows], dtype=np.int64)
-        return (actions if masks.ndim == 2 else actions[0]), state
+    def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
+        """A random allowed candidate for each mask row (one row: one candidate)."""
+        masks = self.env_masks() if action_masks is None else np.asarray(action_masks, dtype=bool)
+        actions = np.array([self._draw(row) for row in np.atleast_2d(masks)], dtype=np.int64)
+        return actions if masks.ndim == 2 else actions[0]
 
     def _draw(self, mask: np.ndarray) -> int:
         allowed = np.flatnonzero(mask)
@@ -130,15 +99,3 @@ def _is_batched(observation: dict[str, np.ndarray] | np.ndarray, env: Any) -> bo
     if isinstance(space, gym.spaces.Box):
         return np.ndim(observation) > len(space.shape)
     return False
-
-
-def _env_action_masks(env: Any) -> np.ndarray:
-    """The env's ``action_masks()``: stacked over a ``VecEnv``, through wrappers for a Gymnasium env.
-
-    (sb3-contrib's ``get_action_masks`` does the same, but importing it imports torch.)
-    """
-    if hasattr(env, "env_method"):
-        return np.stack(env.env_method("action_masks"))
-    if hasattr(env, "get_wrapper_attr"):
-        return env.get_wrapper_attr("action_masks")()
-    return env.action_masks()
