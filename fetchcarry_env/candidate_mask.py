@@ -295,18 +295,20 @@ class FastPhases:
         moves = self._moves(state, items.approaches, heading)
         lattice_ends = [items.picks, items.places, moves]
         free = self._free_from(state.base, lattice_ends)
+        groups = [offers.take(ok) for offers, ok in zip(lattice_ends, free, strict=True)]
+        _, first = np.unique(groups[2].ci * self.lattice.shape[1] + groups[2].cj, return_index=True)
+        groups[2] = groups[2].take(np.sort(first))  # one move candidate per env action: the first allowed
+        groups.append(self._pushes(state, items.pieces))
         mask = np.zeros(layout.size, dtype=bool)
         actions = np.zeros((layout.size, 5), dtype=np.int64)
-        for offers, ok in zip(lattice_ends, free, strict=True):
-            offers = offers.take(ok)
-            if offers is not items.picks and offers.mode == Mode.MOVE:
-                _, first = np.unique(offers.ci * self.lattice.shape[1] + offers.cj, return_index=True)
-                offers = offers.take(np.sort(first))  # one candidate per env action: the first allowed
-            _fill(mask, actions, offers)
-        _fill(mask, actions, self._pushes(state, items.pieces))
-        allowed = np.flatnonzero(mask)
-        lookup = dict(zip(map(tuple, actions[allowed].tolist()), allowed.tolist(), strict=True))
-        return PhaseTable(mask, actions, lookup)
+        index = np.concatenate([g.index for g in groups])
+        mask[index] = True
+        actions[index] = np.stack(
+            [np.concatenate([getattr(g, f) for g in groups]) for f in ("ci", "cj", "heading", "posture")]
+            + [np.concatenate([np.full(g.index.size, g.mode) for g in groups])],
+            axis=1,
+        )
+        return PhaseTable(mask, actions)
 
     def _free_from(self, base: tuple[float, float], groups: list[_Offers]) -> list[np.ndarray]:
         """Per group, True where the base goes from ``base`` to the candidate's end cell without a contact."""
@@ -722,14 +724,6 @@ def _hand_offset(h, bx, by, tx, ty) -> tuple[np.ndarray, np.ndarray]:
     dx, dy = tx - bx, ty - by
     hx, hy = UNIT[h, 0], UNIT[h, 1]
     return dx * hx + dy * hy, -dx * hy + dy * hx
-
-
-def _fill(mask: np.ndarray, actions: np.ndarray, offers: _Offers) -> None:
-    """Allow ``offers``' candidates and write their env actions."""
-    mask[offers.index] = True
-    actions[offers.index] = np.stack(
-        [offers.ci, offers.cj, offers.heading, offers.posture, np.full(offers.index.size, offers.mode)], axis=1
-    )
 
 
 def _concat(groups: list[_Offers], mode: int) -> _Offers:

@@ -205,13 +205,25 @@ class PhaseLayout:
         return Candidate(kind, slot, side, -1, i, 0)
 
 
-@dataclass
 class PhaseTable:
-    """The candidates of one state: which are allowed, and the env action of each allowed one."""
+    """The candidates of one state: which are allowed, and the env action of each allowed one.
 
-    mask: np.ndarray  # (K,) bool
-    actions: np.ndarray  # (K, 5) int64: the MultiDiscrete env action of each allowed candidate (zeros elsewhere)
-    lookup: dict[tuple[int, ...], int]  # env action -> the allowed candidate standing for it
+    ``mask`` is ``(K,)`` bool; ``actions`` ``(K, 5)`` int64, the ``MultiDiscrete`` env action
+    of each allowed candidate (zeros elsewhere); ``lookup`` maps an env action (a tuple)
+    to the allowed candidate standing for it, built from the two when first asked for
+    if not given.
+    """
+
+    def __init__(self, mask: np.ndarray, actions: np.ndarray, lookup: dict[tuple[int, ...], int] | None = None) -> None:
+        self.mask, self.actions, self._lookup = mask, actions, lookup
+
+    @property
+    def lookup(self) -> dict[tuple[int, ...], int]:
+        """Env action -> the allowed candidate standing for it."""
+        if self._lookup is None:
+            allowed = np.flatnonzero(self.mask)
+            self._lookup = dict(zip(map(tuple, self.actions[allowed].tolist()), allowed.tolist(), strict=True))
+        return self._lookup
 
     def index_of(self, action: np.ndarray | Sequence[int] | Action) -> int | None:
         """The allowed candidate whose env action is ``action``, or None."""
