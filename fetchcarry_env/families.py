@@ -55,8 +55,9 @@ Units are metres.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import numpy as np
 
@@ -78,6 +79,7 @@ PUSH_RESOLUTION = 0.05  # metres: the default lattice; strokes are checked on it
 MAX_ATTEMPTS = 200  # layouts drawn before a family gives up (never reached in tests)
 
 Sampler = Callable[[np.random.Generator], Scenario]
+T = TypeVar("T")
 
 
 @dataclass(frozen=True)
@@ -549,6 +551,13 @@ def draw_turned_corridor(rng: np.random.Generator) -> Scenario:
 
 
 # ---------------------------------------------------------------------- registry
+def _family_per_value(
+    name: str, description: str, draw: Callable[[np.random.Generator, T], Scenario], values: Iterable[T]
+) -> list[Family]:
+    """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument."""
+    return [Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v)) for v in values]
+
+
 def draw_mixed(rng: np.random.Generator) -> Scenario:
     """One of basic, push, corridor and multi, uniformly."""
     return (draw_basic, draw_push, draw_corridor, draw_multi)[int(rng.integers(4))](rng)
@@ -569,10 +578,7 @@ FAMILIES: dict[str, Family] = {
         Family("push", "V-C: clutter on the goal to push aside, Table I neighbours", EXTENT, draw_push),
         Family("corridor", "IV-F: rooms joined by an L-shaped or straight corridor", EXTENT, draw_corridor),
         Family("multi", "2 to 4 objects over two or three tables", EXTENT, draw_multi),
-        *(
-            Family(f"multi-{n}", f"{n} objects over two or three tables", EXTENT, lambda rng, n=n: draw_multi(rng, n))
-            for n in (2, 3, 4)
-        ),
+        *_family_per_value("multi-{}", "{} objects over two or three tables", draw_multi, (2, 3, 4)),
         Family("mixed", "basic, push, corridor or multi, uniformly", EXTENT, draw_mixed),
         Family("training", "basic, push, corridor or multi-2, uniformly (one and two objects)", EXTENT, draw_training),
         Family("turned-room", "held out: a basic or push room turned a quarter turn", EXTENT, draw_turned_room),
@@ -589,42 +595,16 @@ PAPER_COVERED_COUNTS: tuple[int, ...] = (2, 3)  # objects of the paper-covered-N
 PAPER_FAMILIES: dict[str, Family] = {
     family.name: family
     for family in (
-        *(
-            Family(
-                f"paper-basic-{a}",
-                f"V-B: one object, the obstacle in area {a}",
-                EXTENT,
-                lambda rng, a=a: draw_paper_basic(rng, a),
-            )
-            for a in PAPER_AREAS
-        ),
-        *(
-            Family(
-                f"paper-push-{p}",
-                f"V-C: a block on the goal, Table I pattern {p}",
-                EXTENT,
-                lambda rng, p=p: draw_paper_push(rng, p),
-            )
-            for p in PUSH_PATTERNS
+        *_family_per_value("paper-basic-{}", "V-B: one object, the obstacle in area {}", draw_paper_basic, PAPER_AREAS),
+        *_family_per_value(
+            "paper-push-{}", "V-C: a block on the goal, Table I pattern {}", draw_paper_push, PUSH_PATTERNS
         ),
         Family("paper-corridor", "IV-F: the L corridor of Fig. 4", EXTENT, draw_paper_corridor),
-        *(
-            Family(
-                f"paper-multi-{n}",
-                f"{n} objects over three fixed tables",
-                EXTENT,
-                lambda rng, n=n: draw_paper_multi(rng, n),
-            )
-            for n in PAPER_MULTI_COUNTS
+        *_family_per_value(
+            "paper-multi-{}", "{} objects over three fixed tables", draw_paper_multi, PAPER_MULTI_COUNTS
         ),
-        *(
-            Family(
-                f"paper-covered-{n}",
-                f"{n} objects, a block on every goal",
-                EXTENT,
-                lambda rng, n=n: draw_paper_covered(rng, n),
-            )
-            for n in PAPER_COVERED_COUNTS
+        *_family_per_value(
+            "paper-covered-{}", "{} objects, a block on every goal", draw_paper_covered, PAPER_COVERED_COUNTS
         ),
     )
 }
