@@ -44,6 +44,12 @@ kind          numbered by                     env action
                                               order) of blocker ``b``: to get clear of it
 ============  ==============================  =====================================================
 
+:func:`enumerate_phases` is the reference: one candidate at a time, through the rules
+themselves. :class:`fetchcarry_env.candidate_mask.FastPhases`, which
+:class:`~fetchcarry_env.phase_env.PhaseActions` uses, computes the same table (mask,
+env actions, numbering) in array operations, a transcription of the same tests;
+``tests/env/test_phase_mask_fast.py`` compares the two on random walks of every family.
+
 Moves keep the current heading (every later phase turns to its own). Nothing here
 filters on what the hand holds: that is the rules' business, so a change of the rules
 (a push made while holding an object, say) changes the allowed candidates by itself.
@@ -243,6 +249,9 @@ def enumerate_phases(
     standing: dict[Point, bool] | None = None,
 ) -> PhaseTable:
     """Which candidates are allowed in ``state`` (see the module docstring), and their env actions.
+
+    The reference computation (a few to tens of milliseconds a state): the fast mask of
+    :mod:`fetchcarry_env.candidate_mask` must give the same table.
 
     ``standing`` caches, per point, whether the base may stand there without touching a
     table, an obstacle or the edge (``move_stop`` of a zero-length move). That depends
