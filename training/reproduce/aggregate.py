@@ -27,7 +27,7 @@ import numpy as np
 
 from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import source_table
-from training.evaluation.runner import RESULTS
+from training.evaluation.results import RESULTS, read_results
 from training.pictures.benchmark import plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
 from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
@@ -42,7 +42,7 @@ def collect(out: Path, baselines: Sequence[Baseline]) -> list[dict[str, Any]]:
     owner = {name: (b.label, seed if b.per_seed else None) for b in baselines for seed, name in enumerate(b.runs)}
     records = []
     for split in SPLIT_NAMES:
-        for record in json.loads((out / "benchmark" / split / RESULTS).read_text()):
+        for record in read_results(out / "benchmark" / split / RESULTS):
             label, seed = owner.get(record["policy"], (record["policy"], None))
             records.append({**record, "baseline": label, "training_seed": seed})
     return records

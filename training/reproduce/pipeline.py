@@ -42,7 +42,8 @@ from typing import Any
 from fetchcarry_env.errors import InputError
 from training.data.generate import generate
 from training.data.sources import EpisodeSource, GenerationConfig
-from training.evaluation.runner import RESULTS, run_benchmark
+from training.evaluation.results import RESULTS, read_results, write_results
+from training.evaluation.runner import run_benchmark
 from training.evaluation.splits import get_split
 from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 from training.reproduce.aggregate import write_published
@@ -278,9 +279,9 @@ def forget_retrained(folder: Path, runs: list[Path]) -> None:
     changed = {name for name in now if before.get(name) != now[name]}
     results = folder / RESULTS
     if changed and results.is_file():
-        records = json.loads(results.read_text())
+        records = read_results(results)
         kept = [r for r in records if not (isinstance(r, dict) and r.get("policy") in changed)]
         if len(kept) < len(records):
-            results.write_text(json.dumps(kept, indent=1) + "\n")
+            write_results(results, kept)
     folder.mkdir(parents=True, exist_ok=True)
     file.write_text(json.dumps(now, indent=1) + "\n")
