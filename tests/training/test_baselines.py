@@ -141,7 +141,7 @@ def test_greedy_delivers_through_the_env_actions(family, seeds):
 
 
 def test_nearest_move_labels_an_expert_move_no_candidate_expresses():
-    from training.evaluation.projection import nearest_move
+    from training.policies.phase_expert import nearest_move
 
     env = make_env("phases", family="basic")
     env.reset(seed=0)

@@ -9,8 +9,8 @@ import pytest
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.phase_env import PhaseActions
-from training.evaluation.projection import check_projection, nearest_move, summarise_projection
-from training.policies.phase_expert import PROJECTED_INFO, UNEXPRESSIBLE, PhaseExpert
+from training.evaluation.projection import check_projection, summarise_projection
+from training.policies.phase_expert import PROJECTED_INFO, UNEXPRESSIBLE, PhaseExpert, nearest_move
 from training.rollout import run_episode
 
 UNEXPRESSIBLE_SEED = 0  # basic seed 0: its expert made a move no candidate expresses (the episode used to end there)

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from expert import ExpertPolicy
-from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name  # noqa: F401  (speed.phases)
+from training.data.expert_labels import expert_episode
 from training.envs import make_env
-from training.policies.phase_expert import NEAREST_RULES, PhaseExpert, nearest_move  # noqa: F401  (cli.bench, tests)
+from training.policies.phase_expert import PhaseExpert
 from training.rollout import run_episode
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the ids)
 from expert import ExpertPolicy
-from training.evaluation.projection import NOT_EXPRESSIBLE, expert_episode, mode_name
+from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name
 from training.policies.random import RandomMaskedPolicy
 
 FAMILIES = ("basic", "push", "corridor", "multi-2")
