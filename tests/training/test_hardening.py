@@ -413,3 +413,62 @@ def test_ctrl_c_during_evaluate_expert_keeps_what_finished(capsys, monkeypatch, 
     assert "failed: basic seed 0" in out and "failed: basic seed 1" in out
     written = sorted(p.name for p in failures.glob("*.outcome.json"))
     assert written == ["basic-seed0.outcome.json", "basic-seed1.outcome.json"]
+
+
+# ---------------------------------------------------------------------------- round 2, 0. a dataset missing its spaces
+def plant_command(dataset_id: str, marker: Path) -> None:
+    """The bypass: the env entry point is a shell command and the action space is gone, so Minari would make the env."""
+    edit_env_spec(dataset_id, entry_point="os:system", kwargs={"command": f"touch {marker}"})
+    metadata_file = dataset_path(dataset_id) / "data" / "metadata.json"
+    metadata = json.loads(metadata_file.read_text())
+    del metadata["action_space"]
+    metadata_file.write_text(json.dumps(metadata))
+
+
+OPENING_COMMANDS = {
+    "info": ("dataset", "info", DATASET_ID),
+    "replay": ("dataset", "replay", DATASET_ID, "--episode", "0"),
+    "bc": ("train", "bc", "--dataset", DATASET_ID, "--epochs", "1"),
+    "dagger": ("train", "dagger", "--family", "basic", "--dataset", DATASET_ID, "--iterations", "1"),
+}
+
+
+@pytest.mark.parametrize("command", sorted(OPENING_COMMANDS))
+def test_a_dataset_without_its_action_space_runs_no_command(capsys, tmp_path: Path, dataset: str, command: str) -> None:
+    marker = tmp_path / "MARKER"
+    plant_command(dataset, marker)
+    argv = OPENING_COMMANDS[command] + (("--out", tmp_path / "run") if command in ("bc", "dagger") else ())
+    status, out, err = run(capsys, *argv)
+    assert not marker.exists(), "the dataset ran its command"
+    assert status == 2 and out == "", err
+    assert str(dataset_path(dataset) / "data" / "metadata.json") in err
+
+
+@pytest.mark.parametrize(
+    "edit",
+    [
+        lambda m: m.pop("total_episodes"),
+        lambda m: m.pop("observation_space"),
+        lambda m: m.update(total_episodes=5),  # more episodes than the HDF5 file holds
+        lambda m: m.update(total_episodes="2"),
+        lambda m: m.update(env_spec=7),
+        lambda m: m.update(env_spec="{not json"),
+        lambda m: m.update(observation_space='{"type": "Box"}'),
+        lambda m: m.update(author=5),
+        lambda m: m.update(dataset_size="big"),
+        lambda m: m.update(data_format="arrow"),
+        lambda m: m.update(minari_version=None),
+        lambda m: m.clear(),
+    ],
+    ids=["no-episodes", "no-observation-space", "more-episodes", "episodes-text", "spec-number", "spec-not-json",
+         "space-no-shape", "author-number", "size-text", "arrow", "no-version", "empty"],
+)  # fmt: skip
+def test_a_hand_edited_metadata_file_is_exit_2_naming_it(capsys, dataset: str, edit) -> None:
+    metadata_file = dataset_path(dataset) / "data" / "metadata.json"
+    metadata = json.loads(metadata_file.read_text())
+    edit(metadata)
+    metadata_file.write_text(json.dumps(metadata))
+    for argv in (OPENING_COMMANDS["info"], OPENING_COMMANDS["replay"]):
+        status, out, err = run(capsys, *argv)
+        assert status == 2 and out == "", err
+        assert str(metadata_file) in err

@@ -29,6 +29,7 @@ not with this module: the command line imports it and starts without them.
 
 from __future__ import annotations
 
+import codecs
 import ctypes
 import errno
 import json
@@ -47,6 +48,7 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers this project's env ids: recovering and rebuilding a dataset's env)
 from fetchcarry_env.errors import UsageError
+from fetchcarry_env.jsontext import JsonInputError, describe, parse_json, read_json
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.policies.phase_expert import PROJECTED_INFO
@@ -62,6 +64,11 @@ MIN_FREE_BYTES = 1_000_000  # bytes kept free besides the estimate
 _AT_FDCWD = -100  # Linux: paths relative to the current directory
 _RENAME_EXCHANGE = 2  # Linux renameat2 flag: swap the two paths
 REPLAY_TOLERANCE = 1e-5  # observation units (metres): replayed observations must agree this closely
+METADATA_FILE = "metadata.json"  # Minari's: in the dataset's data/ folder
+MAIN_DATA_FILE = "main_data.hdf5"  # Minari's HDF5 file of the episodes
+MAX_METADATA_BYTES = 20_000_000  # a dataset's metadata.json (the spaces' bounds are its largest part)
+MAX_SPACE_ELEMENTS = 10_000_000  # elements of one box of a recorded space (its bounds are made in memory)
+_OPTIONAL_STRING_LISTS = ("author", "author_email", "combined_datasets")  # Minari makes sets of the first two
 
 
 ENV_PACKAGES = ("fetchcarry_env", "training")  # entry points of this project's envs live here
@@ -81,6 +88,10 @@ class NoSpaceError(UsageError):
 
 class UnknownEnvError(UsageError):
     """A dataset names an env that is not one of this project's (its env is never made)."""
+
+
+class DatasetError(UsageError):
+    """A dataset's files are not what this project writes (an edited or broken ``metadata.json``); names the file."""
 
 
 def validate_dataset_id(dataset_id: str) -> None:
@@ -288,13 +299,165 @@ def _episode_metadata(record: EpisodeRecord) -> dict[str, Any]:
 
 
 def load(dataset_id: str):
-    """``minari.load_dataset(dataset_id)`` with a clear error when it is not there."""
-    import minari
+    """The Minari dataset ``dataset_id``, its ``metadata.json`` checked before Minari reads any of it.
+
+    Minari itself (``minari.load_dataset``) ``gym.make``s the env a dataset names when a
+    space is missing from its metadata, which would run whatever entry point an edited
+    file names. Here the metadata is checked first (:func:`check_metadata`: every key
+    Minari reads, the env spec trusted, both spaces present and sane, the episode count
+    that of the HDF5 file) and the storage is built from the spaces read here, so no
+    code of Minari's ever makes an env. A bad file is a :class:`DatasetError` naming it.
+    """
+    from minari import MinariDataset
+    from minari.dataset._storages import get_minari_storage
 
     validate_dataset_id(dataset_id)
-    if not (dataset_path(dataset_id) / "data").exists():
+    data = dataset_path(dataset_id) / "data"
+    if not data.exists():
         raise UsageError(f"no dataset {dataset_id!r} under {datasets_root()} (set MINARI_DATASETS_PATH?)")
-    return minari.load_dataset(dataset_id)
+    observation_space, action_space = check_metadata(dataset_id)
+    storage = get_minari_storage("hdf5")(data, observation_space, action_space)
+    return MinariDataset(storage)
+
+
+def check_metadata(dataset_id: str) -> tuple[gym.Space, gym.Space]:
+    """The observation and action spaces of dataset ``dataset_id``, once its ``metadata.json`` is found sane.
+
+    Checks, before Minari reads the file: the keys Minari reads and their types, the
+    Minari version, the env spec (it must pass :func:`trusted_env_spec`, and so must an
+    ``eval_env_spec``), both spaces (present, of sane size, readable), and that the HDF5
+    file holds the episodes the metadata counts. Raises :class:`DatasetError` naming the
+    file (or :class:`UnknownEnvError`); an unreadable file is an ``OSError`` naming it.
+    """
+    file = dataset_path(dataset_id) / "data" / METADATA_FILE
+    try:
+        metadata = read_json(file, MAX_METADATA_BYTES)
+    except JsonInputError as problem:
+        raise DatasetError(_metadata_problem(file, str(problem))) from None
+    if not isinstance(metadata, dict):
+        raise DatasetError(_metadata_problem(file, "not a JSON object"))
+    with file.open("rb") as stream:
+        if stream.read(len(codecs.BOM_UTF8)) == codecs.BOM_UTF8:  # Minari reads the file without one
+            raise DatasetError(_metadata_problem(file, "it starts with a byte order mark"))
+    _check_metadata_fields(file, metadata)
+    for key in ("env_spec", "eval_env_spec"):
+        if metadata.get(key) is not None:
+            try:
+                trusted_env_spec(_env_spec(file, key, metadata[key]), dataset_id)
+            except UnknownEnvError as error:
+                raise UnknownEnvError(f"{file}: {error}") from None
+    spaces = tuple(_space(file, key, metadata.get(key)) for key in ("observation_space", "action_space"))
+    _check_episode_count(file, metadata["total_episodes"])
+    return spaces
+
+
+def _metadata_problem(file: Path, problem: str) -> str:
+    return f"{file}: {problem} (this dataset's metadata is not what fetchcarry writes: generate it again)"
+
+
+def _check_metadata_fields(file: Path, metadata: dict[str, Any]) -> None:
+    """Every key Minari reads from ``metadata.json``, with the type it assumes."""
+    from minari import supported_dataset_versions
+
+    for key in ("total_episodes", "total_steps"):
+        value = metadata.get(key)
+        if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+            raise DatasetError(_metadata_problem(file, f"{key} must be a whole number >= 0, not {describe(value)}"))
+    for key in ("dataset_id", "minari_version", "env_spec"):
+        if not isinstance(metadata.get(key), str):
+            raise DatasetError(_metadata_problem(file, f"{key} must be a string, not {describe(metadata.get(key))}"))
+    version = metadata["minari_version"]
+    if version not in supported_dataset_versions:
+        readable = ", ".join(sorted(supported_dataset_versions))
+        raise DatasetError(_metadata_problem(file, f"minari_version {describe(version)} is not one of {readable}"))
+    if metadata.get("data_format", "hdf5") != "hdf5":
+        raise DatasetError(
+            _metadata_problem(file, f'data_format must be "hdf5", not {describe(metadata["data_format"])}')
+        )
+    if not isinstance(metadata.get("jpeg_encoding", True), bool):
+        raise DatasetError(_metadata_problem(file, "jpeg_encoding must be true or false"))
+    if metadata.get("eval_env_spec") is not None and not isinstance(metadata["eval_env_spec"], str):
+        raise DatasetError(_metadata_problem(file, "eval_env_spec must be a string"))
+    for key in _OPTIONAL_STRING_LISTS:
+        value = metadata.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise DatasetError(_metadata_problem(file, f"{key} must be a list of strings, not {describe(value)}"))
+    size = metadata.get("dataset_size", 0.0)
+    if not isinstance(size, int | float) or isinstance(size, bool) or not math.isfinite(size):
+        raise DatasetError(_metadata_problem(file, f"dataset_size must be a number, not {describe(size)}"))
+
+
+def _env_spec(file: Path, key: str, text: str) -> Any:
+    """The ``EnvSpec`` of the JSON text ``text`` (Minari's own reading of it); :class:`DatasetError` if it is none."""
+    from gymnasium.envs.registration import EnvSpec
+
+    text = (  # what Minari removes for gymnasium 1.0 before it reads the spec
+        text.replace('"order_enforce": true,', "")
+        .replace('"apply_api_compatibility": false,', "")
+        .replace('"autoreset": false, ', "")
+    )
+    try:
+        parse_json(text)  # the size, nesting and number checks of every JSON this project reads
+        spec = EnvSpec.from_json(text)
+    except Exception as error:
+        raise DatasetError(_metadata_problem(file, f"{key} is not an env spec ({type(error).__name__})")) from None
+    if not isinstance(spec.id, str) or not isinstance(spec.kwargs, dict):
+        raise DatasetError(_metadata_problem(file, f"{key} is not an env spec (an id and keyword arguments)"))
+    return spec
+
+
+def _space(file: Path, key: str, text: Any) -> gym.Space:
+    """The space serialized as ``text``; :class:`DatasetError` when it is missing, too large or not a space."""
+    from minari.serialization import deserialize_space
+
+    if not isinstance(text, str):
+        raise DatasetError(_metadata_problem(file, f"{key} must be a serialized space, not {describe(text)}"))
+    try:
+        _check_space_size(parse_json(text))
+        space = deserialize_space(text)
+    except DatasetError as error:
+        raise DatasetError(_metadata_problem(file, f"{key}: {error}")) from None
+    except Exception as error:
+        raise DatasetError(_metadata_problem(file, f"{key} is not a space ({type(error).__name__})")) from None
+    if not isinstance(space, gym.spaces.Space):
+        raise DatasetError(_metadata_problem(file, f"{key} is not a space"))
+    return space
+
+
+def _check_space_size(value: Any, depth: int = 0) -> None:
+    """Refuse a serialized space that nests too deeply or whose box would not fit in memory."""
+    if depth > 20:
+        raise DatasetError("nested too deeply")
+    if isinstance(value, dict):
+        shape = value.get("shape")
+        if isinstance(shape, list):
+            if not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape):
+                raise DatasetError(f"a shape of {describe(shape)}")
+            if math.prod(shape) > MAX_SPACE_ELEMENTS:
+                raise DatasetError(f"a shape of {describe(shape)}: more than {MAX_SPACE_ELEMENTS:,} elements")
+        children = value.values()
+    elif isinstance(value, list):
+        children = value
+    else:
+        return
+    for child in children:
+        _check_space_size(child, depth + 1)
+
+
+def _check_episode_count(file: Path, episodes: int) -> None:
+    """Raise :class:`DatasetError` unless the HDF5 file next to ``file`` holds episodes ``0 .. episodes-1``."""
+    import h5py
+
+    main = file.parent / MAIN_DATA_FILE
+    try:
+        with h5py.File(main, "r") as data:
+            missing = [k for k in range(episodes) if f"episode_{k}" not in data]
+    except OSError as error:  # h5py's errors name no file
+        raise DatasetError(f"{main}: not a readable HDF5 file ({error})") from None
+    if missing:
+        raise DatasetError(
+            _metadata_problem(file, f"total_episodes is {episodes} but {main.name} lacks episode {missing[0]}")
+        )
 
 
 def episode_metadata(dataset, episode: int) -> dict[str, Any]:
@@ -377,9 +540,9 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
     """Re-run episode ``episode`` in the recovered env from its seed and recorded actions; compare."""
     dataset = load(dataset_id)
     metadata = episode_metadata(dataset, episode)
-    data = dataset[episode]
-    env = make_recorded_env(dataset, dataset_id)
+    env = make_recorded_env(dataset, dataset_id)  # first: it checks the spaces the episode is decoded with
     try:
+        data = dataset[episode]
         observation, _ = env.reset(seed=metadata["seed"])
         same_scenario = env.unwrapped.scenario.to_dict() == metadata["scenario"]
         errors = [_observation_error(observation, data.observations, 0)]
@@ -450,9 +613,18 @@ def _own_wrappers(env_id: str, kwargs: dict[str, Any]) -> tuple[Any, ...]:
 
 
 def make_recorded_env(dataset: Any, dataset_id: str):
-    """The env a dataset was recorded in, made from this project's registry (see :func:`trusted_env_spec`)."""
+    """The env a dataset was recorded in, made from this project's registry (see :func:`trusted_env_spec`).
+
+    Raises :class:`DatasetError` when the dataset's spaces are not the env's (its
+    episodes would be decoded with the wrong shapes).
+    """
     env_id, kwargs = trusted_env_spec(dataset.spec.env_spec, dataset_id)
-    return gym.make(env_id, **kwargs)
+    env = gym.make(env_id, **kwargs)
+    if env.observation_space != dataset.observation_space or env.action_space != dataset.action_space:
+        env.close()
+        file = dataset_path(dataset_id) / "data" / METADATA_FILE
+        raise DatasetError(_metadata_problem(file, f"its spaces are not those of {env_id}, the env it names"))
+    return env
 
 
 def _is_ours(entry_point: Any) -> bool:
