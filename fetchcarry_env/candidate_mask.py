@@ -406,7 +406,14 @@ class FastPhases:
         first = layout.offsets["approach"] + np.arange(c.size) * int(np.prod(layout.window))  # C order of (c, d, k)
         contacts = pieces.contacts
         targets = contacts[c, d]
-        centers = [_index(lattice, (float(x), float(y))) for x, y in targets]
+        (ox, oy), res, (nx, ny) = lattice.origin, lattice.resolution, lattice.shape
+        centers = np.stack(  # Lattice.index of every contact (np.rint rounds half to even, as round does)
+            [
+                np.clip(np.rint((targets[:, 0] - ox) / res), 0, nx - 1),
+                np.clip(np.rint((targets[:, 1] - oy) / res), 0, ny - 1),
+            ],
+            axis=1,
+        ).astype(np.int64)
         offers, g = self._window_offers(first, centers, PUSH_HEADING[d, k], targets)
         c, d = c[g], d[g]
         ux, uy = UNIT[d, 0], UNIT[d, 1]
