@@ -20,6 +20,7 @@ from fetchcarry_env.errors import UsageError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.episodes import families
 from training.cli.files import check_readable, check_writable
+from training.cli.options import Command
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
 from training.speed import anytime as anytime_speed
@@ -45,6 +46,53 @@ PLANNER_DESCRIPTION = (
     "solving the final one. Every plan is also checked by the validator."
 )
 
+# the benchmarks' texts in --help (their options are added by the _register_* functions below)
+ENV_COMMAND = Command(
+    name="env",
+    help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
+    description=ENV_DESCRIPTION,
+    epilog="Exit status: 0, or 1 with --strict when a goal is missed.",
+)
+PLANNER_COMMAND = Command(
+    name="planner",
+    help="the paper's Section V timings: V-B, V-C, L corridor, 2-6 objects, covered goals",
+    description=PLANNER_DESCRIPTION,
+    epilog="Exit status: 0 every plan optimal and valid, 1 not, 2 bad input. Times are printed in ms.",
+)
+ANYTIME_COMMAND = Command(
+    name="anytime",
+    help="the planner under 0.1 s and 1 s limits: first plans, how good they are, their proven gaps",
+    description="Plan the scale cases of bench planner (4, 5 and 6 objects, every goal covered with 3; "
+    "seed 2024) at time limits of 0.1 s and 1 s and once at 30 s as the reference, check every plan with "
+    "the validator, and print per case and limit: valid plans, optimal ones, plans with the reference's "
+    "phases, how many lie within 5 %% of a proven optimum, how far each one's Eq. 1 lies above the "
+    "reference and the gaps the planner proved. Takes several minutes.",
+)
+PUSH_COMMAND = Command(
+    name="push",
+    help="push-aside while carrying: phases and travel of the plans on the push family and patterns A-E",
+    description="Plan the push family (seeds 0-39) and the paper's Table I patterns A-E (the paper-push "
+    "families, seeds 0-7 each) and print per group the plans' mean phases and travel (Eq. 1's distance "
+    "term, metres), how many plans push while holding the object and the median planning time; with "
+    "--compare, the records of another checkout scenario by scenario: travel and phases before and after.",
+)
+GENERATE_COMMAND = Command(
+    name="generate",
+    help="episodes per second per worker, planning vs simulation, speed-up with more workers",
+    description="Run the same seeded expert episodes of each family with each worker count (the process "
+    "pool of dataset generation, start-up included) and print episodes per second, episodes per second "
+    "per worker, the seconds per episode in the planner, in the rest of the policy and in the simulation, "
+    "and the speed-up over the first worker count.",
+)
+PROJECTION_COMMAND = Command(
+    name="projection",
+    help="the expert recorded in candidate phases (inexpressible moves projected) against its own episodes",
+    description="Run the MILP expert through FetchCarryPushPhases-v0 as `generate --interface phases` records "
+    "it (a move no candidate expresses replaced by the nearest allowed move, then the expert plans again) and "
+    "on its own, on the same seeds, and print both success rates, the projected moves per episode and the "
+    "extra travel cost of the projection (JSON).",
+)
+
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add the ``env``, ``planner``, ``anytime``, ``push``, ``generate``, ``phases``, ``projection`` benchmarks."""
@@ -57,14 +105,16 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     _register_projection(bench)
 
 
+def _add_seed(parser: argparse.ArgumentParser, default: int, meaning: str) -> None:
+    """``--seed S``: ``meaning``, and its default."""
+    parser.add_argument(
+        "--seed", type=whole_number, default=default, metavar="S", help=f"{meaning} (default {default})"
+    )
+
+
 # ---------------------------------------------------------------------------- bench env
 def _register_env(bench: argparse._SubParsersAction) -> None:
-    parser = bench.add_parser(
-        "env",
-        help="env speed: reset, move/pick/place/push steps, a random masked policy, peak memory",
-        description=ENV_DESCRIPTION,
-        epilog="Exit status: 0, or 1 with --strict when a goal is missed.",
-    )
+    parser = ENV_COMMAND.add(bench, run_env)
     counts = (
         ("--episodes", env_speed.DEFAULT_EPISODES, "episodes of the plan"),
         ("--resets", env_speed.DEFAULT_RESETS, "resets of the same layout"),
@@ -74,17 +124,10 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
         parser.add_argument(
             flag, type=positive_int, default=default, metavar="N", help=f"{meaning} (default {default})"
         )
-    parser.add_argument(
-        "--seed",
-        type=whole_number,
-        default=env_speed.DEFAULT_SEED,
-        metavar="S",
-        help=f"seed of the resets and the policy (default {env_speed.DEFAULT_SEED})",
-    )
+    _add_seed(parser, env_speed.DEFAULT_SEED, "seed of the resets and the policy")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.add_argument("--strict", action="store_true", help="exit status 1 when a goal is missed")
     parser.add_argument("--no-progress", action="store_true", help="no progress bars on stderr")
-    parser.set_defaults(handler=run_env)
 
 
 def run_env(args: argparse.Namespace, out: TextIO | None = None) -> int:
@@ -122,19 +165,8 @@ def format_env_report(report: dict[str, Any]) -> str:
 
 # ---------------------------------------------------------------------------- bench planner
 def _register_planner(bench: argparse._SubParsersAction) -> None:
-    parser = bench.add_parser(
-        "planner",
-        help="the paper's Section V timings: V-B, V-C, L corridor, 2-6 objects, covered goals",
-        description=PLANNER_DESCRIPTION,
-        epilog="Exit status: 0 every plan optimal and valid, 1 not, 2 bad input. Times are printed in ms.",
-    )
-    parser.add_argument(
-        "--seed",
-        type=whole_number,
-        default=planner_speed.DEFAULT_SEED,
-        metavar="S",
-        help=f"seed of every case's generator (default {planner_speed.DEFAULT_SEED})",
-    )
+    parser = PLANNER_COMMAND.add(bench, run_planner)
+    _add_seed(parser, planner_speed.DEFAULT_SEED, "seed of every case's generator")
     parser.add_argument(
         "--scale",
         type=positive_float,
@@ -164,7 +196,6 @@ def _register_planner(bench: argparse._SubParsersAction) -> None:
         help="SCIP's default settings and the paper's deepening from N = 3, without the lower bounds and cuts",
     )
     parser.add_argument("--json", action="store_true", help="print every run and the summaries as JSON")
-    parser.set_defaults(handler=run_planner)
 
 
 def _planner_rows(args: argparse.Namespace) -> list[planner_speed.Case]:
@@ -321,17 +352,8 @@ def _add_records_options(parser: argparse.ArgumentParser) -> None:
 
 # ---------------------------------------------------------------------------- bench anytime
 def _register_anytime(bench: argparse._SubParsersAction) -> None:
-    parser = bench.add_parser(
-        "anytime",
-        help="the planner under 0.1 s and 1 s limits: first plans, how good they are, their proven gaps",
-        description="Plan the scale cases of bench planner (4, 5 and 6 objects, every goal covered with 3; "
-        "seed 2024) at time limits of 0.1 s and 1 s and once at 30 s as the reference, check every plan with "
-        "the validator, and print per case and limit: valid plans, optimal ones, plans with the reference's "
-        "phases, how many lie within 5 %% of a proven optimum, how far each one's Eq. 1 lies above the "
-        "reference and the gaps the planner proved. Takes several minutes.",
-    )
+    parser = ANYTIME_COMMAND.add(bench, run_bench_anytime)
     _add_records_options(parser)
-    parser.set_defaults(handler=run_bench_anytime)
 
 
 def _echo_anytime_record(r: dict[str, Any]) -> None:
@@ -356,19 +378,11 @@ def run_bench_anytime(args: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------------- bench push
 def _register_push(bench: argparse._SubParsersAction) -> None:
-    parser = bench.add_parser(
-        "push",
-        help="push-aside while carrying: phases and travel of the plans on the push family and patterns A-E",
-        description="Plan the push family (seeds 0-39) and the paper's Table I patterns A-E (the paper-push "
-        "families, seeds 0-7 each) and print per group the plans' mean phases and travel (Eq. 1's distance "
-        "term, metres), how many plans push while holding the object and the median planning time; with "
-        "--compare, the records of another checkout scenario by scenario: travel and phases before and after.",
-    )
+    parser = PUSH_COMMAND.add(bench, run_bench_push)
     parser.add_argument("--out", metavar="JSON", help="also write one record per scenario to this file")
     parser.add_argument(
         "--compare", metavar="JSON", help="records another checkout wrote with --out: compared scenario by scenario"
     )
-    parser.set_defaults(handler=run_bench_push)
 
 
 def run_bench_push(args: argparse.Namespace, out: TextIO | None = None) -> int:
@@ -391,14 +405,7 @@ def run_bench_push(args: argparse.Namespace, out: TextIO | None = None) -> int:
 def _register_generate(bench: argparse._SubParsersAction) -> None:
     from training.evaluation.expert import DEFAULT_FAMILIES
 
-    parser = bench.add_parser(
-        "generate",
-        help="episodes per second per worker, planning vs simulation, speed-up with more workers",
-        description="Run the same seeded expert episodes of each family with each worker count (the process "
-        "pool of dataset generation, start-up included) and print episodes per second, episodes per second "
-        "per worker, the seconds per episode in the planner, in the rest of the policy and in the simulation, "
-        "and the speed-up over the first worker count.",
-    )
+    parser = GENERATE_COMMAND.add(bench, run_bench_generate)
     parser.add_argument(
         "--families",
         default=",".join(DEFAULT_FAMILIES),
@@ -417,7 +424,6 @@ def _register_generate(bench: argparse._SubParsersAction) -> None:
         "--workers", type=positive_int, nargs="+", default=[1, 2], metavar="W", help="worker counts (default 1 2)"
     )
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
-    parser.set_defaults(handler=run_bench_generate)
 
 
 def run_bench_generate(args: argparse.Namespace) -> int:
@@ -513,26 +519,18 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
 
 # ---------------------------------------------------------------------------- bench projection
 def _register_projection(bench: argparse._SubParsersAction) -> None:
-    from training.evaluation.projection import NEAREST_RULES
+    from training.policies.phase_expert import NEAREST_RULES
 
-    parser = bench.add_parser(
-        "projection",
-        help="the expert recorded in candidate phases (inexpressible moves projected) against its own episodes",
-        description="Run the MILP expert through FetchCarryPushPhases-v0 as `generate --interface phases` records "
-        "it (a move no candidate expresses replaced by the nearest allowed move, then the expert plans again) and "
-        "on its own, on the same seeds, and print both success rates, the projected moves per episode and the "
-        "extra travel cost of the projection (JSON).",
-    )
+    parser = PROJECTION_COMMAND.add(bench, run_bench_projection)
     parser.add_argument("--family", required=True, metavar="F", help="scenario family, e.g. basic or push")
     parser.add_argument("--episodes", type=positive_int, default=100, metavar="N", help="episodes (default 100)")
-    parser.add_argument("--seed", type=whole_number, default=0, metavar="S", help="first seed (default 0)")
+    _add_seed(parser, 0, "first seed")
     parser.add_argument(
         "--rule", choices=NEAREST_RULES, default="end", help="which allowed move stands in (default end)"
     )
     parser.add_argument(
         "--time-limit", type=positive_float, default=10.0, metavar="S", help="seconds per planning call (default 10)"
     )
-    parser.set_defaults(handler=run_bench_projection)
 
 
 def run_bench_projection(args: argparse.Namespace) -> int:

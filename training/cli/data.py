@@ -15,6 +15,7 @@ from fetchcarry_env.errors import UsageError
 from training.cli.arguments import add_worker_options, positive_int, whole_number
 from training.cli.episodes import add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.options import Command
 from training.cli.text import echo
 from training.data.datasets import dataset_path, info, replay
 from training.data.generate import (
@@ -26,28 +27,29 @@ from training.data.generate import (
 )
 from training.data.staging import Staging, StagingError
 
+GENERATE_COMMAND = Command(
+    name="generate",
+    help="generate a Minari dataset of episodes (resumable)",
+    description="Generate a Minari dataset under MINARI_DATASETS_PATH (default ~/.minari/datasets), "
+    "no network. Episode k uses seed SEED + k; every episode stores its seed and scenario JSON (episode "
+    "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
+    "interrupted run resumes where it stopped when the same command is run again. An existing dataset id "
+    "is never overwritten without --overwrite; with it, the new dataset replaces the old one only once it is "
+    "whole. One run per dataset id at a time; a staged episode that cannot be read is set aside and made again.",
+    epilog="Exit status: 0 the dataset is complete (also when it already was, with the same options), 2 bad "
+    "input (an existing id made with other options, a partial run with other options, another run working on "
+    "the id, too little disk space), 130 interrupted (run the same command again to resume).",
+)
+
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``generate`` and ``dataset`` to the ``fetchcarry`` parser."""
-    _register_generate(commands)
+    _add_generate_options(GENERATE_COMMAND.add(commands, run_generate))
     _register_dataset(commands)
 
 
 # ---------------------------------------------------------------------------- generate
-def _register_generate(commands: argparse._SubParsersAction) -> None:
-    parser = commands.add_parser(
-        "generate",
-        help="generate a Minari dataset of episodes (resumable)",
-        description="Generate a Minari dataset under MINARI_DATASETS_PATH (default ~/.minari/datasets), "
-        "no network. Episode k uses seed SEED + k; every episode stores its seed and scenario JSON (episode "
-        "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
-        "interrupted run resumes where it stopped when the same command is run again. An existing dataset id "
-        "is never overwritten without --overwrite; with it, the new dataset replaces the old one only once it is "
-        "whole. One run per dataset id at a time; a staged episode that cannot be read is set aside and made again.",
-        epilog="Exit status: 0 the dataset is complete (also when it already was, with the same options), 2 bad "
-        "input (an existing id made with other options, a partial run with other options, another run working on "
-        "the id, too little disk space), 130 interrupted (run the same command again to resume).",
-    )
+def _add_generate_options(parser: argparse.ArgumentParser) -> None:
     add_source_arguments(parser)
     parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
     parser.add_argument(
@@ -64,7 +66,6 @@ def _register_generate(commands: argparse._SubParsersAction) -> None:
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset with this id")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
-    parser.set_defaults(handler=run_generate)
 
 
 def run_generate(args: argparse.Namespace) -> int:

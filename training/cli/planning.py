@@ -19,6 +19,7 @@ from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
 from training.cli.files import check_plot_format, check_writable, file_format, load_plan, load_scenario
+from training.cli.options import Command
 from training.cli.text import echo
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
@@ -30,25 +31,37 @@ PLAN_FORMAT = "fetchcarry-plan/1"
 INTERRUPTED_STATUS = "userinterrupt"  # SCIP's status of a solve stopped by Ctrl-C
 SCENARIO_FORMAT = "fetchcarry-scenario/1"
 
+PLAN_COMMAND = Command(
+    name="plan",
+    help="plan a scenario with the MILP expert and write the plan JSON",
+    description="Plan SCENARIO (a fetchcarry-scenario/1 file) with the paper's MILP on SCIP, print a "
+    "one-screen summary (status, objective, the phases, timings) and write the plan as "
+    "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
+    "records the status (infeasible, time_limit) and the timings. The command also checks the "
+    "plan with the validator and warns on stderr if it breaks the rules of docs/plan-format.md.",
+    epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
+)
+VALIDATE_COMMAND = Command(
+    name="validate",
+    help="check a plan against the rules of docs/plan-format.md and list every violation",
+    description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of docs/plan-format.md "
+    "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
+    "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
+    "a forward or lateral stroke, the contact within reach and room for the hand). Every violation is "
+    "listed, one line each, naming the rule, the phase and the ids.",
+    epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
+    "that breaks the rules of docs/scenario-format.md, a plan file that is not fetchcarry-plan/1).",
+)
+
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
-    _register_plan(commands)
-    _register_validate(commands)
+    _add_plan_options(PLAN_COMMAND.add(commands, run_plan))
+    _add_validate_options(VALIDATE_COMMAND.add(commands, run_validate))
 
 
 # ---------------------------------------------------------------------- plan
-def _register_plan(commands: argparse._SubParsersAction) -> None:
-    parser = commands.add_parser(
-        "plan",
-        help="plan a scenario with the MILP expert and write the plan JSON",
-        description="Plan SCENARIO (a fetchcarry-scenario/1 file) with the paper's MILP on SCIP, print a "
-        "one-screen summary (status, objective, the phases, timings) and write the plan as "
-        "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
-        "records the status (infeasible, time_limit) and the timings. The command also checks the "
-        "plan with the validator and warns on stderr if it breaks the rules of docs/plan-format.md.",
-        epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
-    )
+def _add_plan_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
     parser.add_argument(
         "-o",
@@ -80,7 +93,6 @@ def _register_plan(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--plot", metavar="PNG", help="also draw the plan from above into this image file")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object instead of a table")
-    parser.set_defaults(handler=run_plan)
 
 
 def run_plan(args: argparse.Namespace) -> int:
@@ -213,24 +225,12 @@ def _plan_summary_json(
 
 
 # ---------------------------------------------------------------------- validate
-def _register_validate(commands: argparse._SubParsersAction) -> None:
-    parser = commands.add_parser(
-        "validate",
-        help="check a plan against the rules of docs/plan-format.md and list every violation",
-        description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of docs/plan-format.md "
-        "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
-        "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
-        "a forward or lateral stroke, the contact within reach and room for the hand). Every violation is "
-        "listed, one line each, naming the rule, the phase and the ids.",
-        epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
-        "that breaks the rules of docs/scenario-format.md, a plan file that is not fetchcarry-plan/1).",
-    )
+def _add_validate_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
     parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")
     parser.add_argument(
         "--json", action="store_true", help='print {"valid": ..., "violations": [...]} as JSON instead of text'
     )
-    parser.set_defaults(handler=run_validate)
 
 
 def run_validate(args: argparse.Namespace) -> int:
