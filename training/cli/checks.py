@@ -11,14 +11,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from training import load_policy
 from training.cli.arguments import positive_int, whole_number
 from training.cli.text import echo
+from training.learners.options import HELDOUT_SEED_BASE, BCConfig, check_family
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``bench learned`` and ``bench learning-checks`` to the ``fetchcarry`` parser."""
-    from training.learners.options import HELDOUT_SEED_BASE
-
     learned = bench.add_parser(
         "learned",
         help="held-out success and cost ratio of trained run folders against the expert",
@@ -42,8 +42,6 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 
 def _register_learning_checks(bench: argparse._SubParsersAction) -> None:
-    from training.learners.options import BCConfig
-
     epochs = BCConfig().epochs
     parser = bench.add_parser(
         "learning-checks",
@@ -75,8 +73,6 @@ def _register_learning_checks(bench: argparse._SubParsersAction) -> None:
 
 
 def _check_families(*names: str) -> None:
-    from training.learners.options import check_family
-
     for name in names:
         check_family(name)  # InputError for an unknown name, before any work
 
@@ -84,7 +80,6 @@ def _check_families(*names: str) -> None:
 def run_bench_learned(args: argparse.Namespace) -> int:
     import torch
 
-    from training import load_policy
     from training.learners.heldout import evaluate, expert_costs, summarise
 
     _check_families(args.family)

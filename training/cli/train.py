@@ -29,19 +29,19 @@ from fetchcarry_env.errors import InputError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
+from training.learners import registry
 
 RUN_EPILOG = (
     "The run folder holds config.json (the kind, the interface and every option), metrics.csv, checkpoint.pt and, "
     "once finished, model.pt. Exit status: 0 trained, 2 bad input, 130 interrupted (the last checkpoint is kept: "
     "run the same command with --resume to finish)."
 )
+WRITE_EPILOG = "Exit status: 0 written, 2 bad input (an OUT that holds a run already), 130 interrupted."
 DEST = "options."  # the prefix of the parsed options' names (a field "out" cannot clash with --out)
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``train KIND`` for every registered learner to the ``fetchcarry`` parser."""
-    from training.learners import registry
-
     parser = commands.add_parser(
         "train",
         help=f"train a learned baseline ({', '.join(registry.kinds())}) into a run folder",
@@ -50,8 +50,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     )
     kinds = parser.add_subparsers(dest="kind", metavar="KIND", required=True)
     for learner in registry.learners():
-        command = kinds.add_parser(learner.kind, help=learner.help, description=learner.description,
-                                   epilog=learner.epilog or RUN_EPILOG)  # fmt: skip
+        epilog = learner.epilog or (RUN_EPILOG if learner.resumable else WRITE_EPILOG)
+        command = kinds.add_parser(learner.kind, help=learner.help, description=learner.description, epilog=epilog)
         add_options(command, learner.options)
         add_run_options(command, resumable=learner.resumable, pool=learner.pool)
         command.set_defaults(handler=run_train)
@@ -164,8 +164,6 @@ def _reader(parse: Callable[[str], Any]) -> Callable[[str], Any]:
 # ---------------------------------------------------------------------------- running
 def run_train(args: argparse.Namespace) -> int:
     """Train the options of ``args`` with its learner; print what was trained (Ctrl-C keeps the checkpoint)."""
-    from training.learners import registry
-
     learner = registry.get(args.kind)
     options = read_options(learner.options, vars(args))
     try:

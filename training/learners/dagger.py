@@ -35,9 +35,12 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch
+from tqdm import tqdm
 
+import fetchcarry_env  # noqa: F401  (registers the env ids)
 from expert.policy import ExpertPolicy
 from fetchcarry_env.observation import Capacity
 from training.envs import make_env
@@ -186,16 +189,7 @@ def train_dagger(
     resume: bool = False,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
-    """Run DAgger into the run folder ``out``; return its metrics rows (one per iteration, 0 first).
-
-    The ``train`` of the ``dagger`` learner (:mod:`training.learners.registry`: the fields
-    of :class:`~training.learners.options.DaggerRun` as keyword arguments). ``options``
-    has checked its families' names (:class:`~fetchcarry_env.errors.InputError`).
-    """
-    import gymnasium as gym
-    from tqdm import tqdm
-
-    import fetchcarry_env  # noqa: F401
+    """DAgger into the run folder ``out``; its metrics rows (one per iteration, 0 first). The dagger learner's train."""
     from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})

@@ -10,7 +10,8 @@ action can be now: moves are projected to the nearest allowed one) are dropped.
 :func:`train_bc_run` trains on them with BC's loop (:func:`training.learners.bc.fit`,
 a checkpoint after every epoch, so that an interrupted run resumes where it stopped and
 ends with the same weights as an uninterrupted one) into a run folder
-(:mod:`training.learners.runs`).
+(:mod:`training.learners.runs`). :func:`load_network_policy` loads the run folders of
+the BC network (every built-in kind: the ``load`` of their learners).
 """
 
 from __future__ import annotations
@@ -20,29 +21,32 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
+from tqdm import tqdm
 
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.learners.encoders import Ensemble, build_network
 from training.policies.phase_expert import MASK_INFO
 
 
 def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) -> tuple[Demonstrations, Capacity]:
     """The labelled states of a phases dataset (its first ``episodes``, or all) and the capacity of its env.
 
-    Raises ``UsageError`` (a ``ValueError``-like bad input) when the dataset was not
+    Raises :class:`InputError` (bad input) when the dataset was not
     recorded in the candidate-phase interface.
     """
-    from fetchcarry_env.errors import UsageError
     from training.data.datasets import load, make_recorded_env
 
     dataset = load(dataset_id)
     if episodes is not None and not 1 <= episodes <= dataset.total_episodes:
-        raise UsageError(f"dataset {dataset_id!r} has {dataset.total_episodes} episodes, not the first {episodes}")
+        raise InputError(f"dataset {dataset_id!r} has {dataset.total_episodes} episodes, not the first {episodes}")
     env = make_recorded_env(dataset, dataset_id)
     try:
         if env.spec is None or env.spec.id != runs.ENV_ID:
-            raise UsageError(
+            raise InputError(
                 f"dataset {dataset_id!r} was recorded in {env.spec.id if env.spec else '?'}, not {runs.ENV_ID}: "
                 "make one with fetchcarry generate ... --interface phases"
             )
@@ -55,7 +59,7 @@ def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) ->
     episodes = steps = dropped = successes = 0
     for episode in dataset.iterate_episodes(chosen):
         if MASK_INFO not in episode.infos:
-            raise UsageError(f"dataset {dataset_id!r} stores no candidate masks (per-step info {MASK_INFO!r})")
+            raise InputError(f"dataset {dataset_id!r} stores no candidate masks (per-step info {MASK_INFO!r})")
         mask = np.asarray(episode.infos[MASK_INFO], dtype=bool)[:-1]
         actions = np.asarray(episode.actions, dtype=np.int64).reshape(-1)
         allowed = mask[np.arange(len(actions)), actions]
@@ -91,8 +95,6 @@ def train_bc_run(
     The ``train`` of the ``bc`` learner (:mod:`training.learners.registry`: the fields of
     :class:`~training.learners.options.BCRun` as keyword arguments).
     """
-    from tqdm import tqdm
-
     demonstrations, capacity = demonstrations_from_dataset(dataset, episodes)
     options = {"dataset": dataset, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
@@ -120,3 +122,32 @@ def train_bc_run(
         )
     runs.finish_run(folder, network, config_json)
     return BCPolicy(network, config, capacity)
+
+
+def load_network_policy(path: str | Path, env: Any = None) -> Any:
+    """The :class:`BCPolicy` of a ``bc``, ``dagger``, ``ppo`` or ``ensemble`` run folder (their ``load``).
+
+    Reads ``config.json`` (checked: :func:`training.learners.runs.read_config`) and the
+    ``model.pt`` tensors (``weights_only``); :class:`~training.learners.runs.RunFolderError` otherwise.
+    """
+    path = Path(path)
+    saved = runs.read_config(path)
+    config = runs.network_config(saved)
+    capacity = Capacity(**saved["capacity"])
+    ensemble = saved["kind"] == "ensemble"
+    configs = [runs.network_config(member) for member in saved["options"]["members"]] if ensemble else [config]
+    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
+    network = Ensemble(built) if ensemble else built[0]
+    weights = path / runs.WEIGHTS_FILE
+    if not weights.is_file():
+        raise runs.RunFolderError(f"{path} has no {runs.WEIGHTS_FILE} (an unfinished run: resume it first)")
+    try:
+        state = torch.load(weights, weights_only=True, map_location="cpu")
+        network.load_state_dict(state)
+    except (RuntimeError, KeyError, TypeError, EOFError, OSError) as error:
+        raise runs.RunFolderError(f"{weights} does not fit the network its config.json describes: {error}") from None
+    policy = BCPolicy(network, config, capacity, env)
+    with torch.inference_mode():
+        # Trace it now, so that the first decision is not slower.
+        policy.candidate_scores(torch.zeros(1, saved["features"]), torch.arange(saved["candidates"]))
+    return policy

@@ -15,6 +15,7 @@ from dataclasses import MISSING, dataclass, field
 from typing import Any
 
 from fetchcarry_env.errors import InputError
+from fetchcarry_env.families import FAMILY_NAMES, get_family
 
 HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
 
@@ -62,16 +63,12 @@ def seed_option() -> Any:
 
 def check_family(name: str) -> None:
     """:class:`InputError` unless ``name`` is a scenario family of the benchmark."""
-    from fetchcarry_env.families import FAMILY_NAMES  # numpy and the env's geometry: not for every command
-
     if name not in FAMILY_NAMES:
         raise InputError(f"unknown family {name!r}: choose one of {', '.join(FAMILY_NAMES)}")
 
 
 def _scenario_family(name: str) -> None:
     """:class:`InputError` unless ``name`` is a family of the benchmark or of the paper (what the env takes)."""
-    from fetchcarry_env.families import get_family
-
     try:
         get_family(name)
     except ValueError as error:  # get_family's message lists the known names
@@ -80,8 +77,6 @@ def _scenario_family(name: str) -> None:
 
 def family_names(text: str) -> tuple[str, ...]:
     """``push,multi-2`` -> ``("push", "multi-2")``, each a known family (:class:`InputError` otherwise)."""
-    from fetchcarry_env.families import FAMILY_NAMES
-
     names = tuple(name.strip() for name in text.split(",") if name.strip())
     if not names or any(name not in FAMILY_NAMES for name in names):
         raise InputError(f"expected family names separated by commas ({', '.join(FAMILY_NAMES)}), got {text!r}")

@@ -28,7 +28,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from tqdm import tqdm
 
+import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
 from training.learners.encoders import build_network
@@ -52,8 +54,6 @@ class FlatObservation(gym.ObservationWrapper):
 
 def make_training_env(family: str) -> gym.Env:
     """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations."""
-    import fetchcarry_env  # noqa: F401  (registers the env ids)
-
     return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
 
 
@@ -155,7 +155,6 @@ def train_ppo(
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.logger import Logger
     from stable_baselines3.common.vec_env import DummyVecEnv
-    from tqdm import tqdm
 
     torch.set_num_threads(1)
     if options.init is not None:

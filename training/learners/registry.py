@@ -10,8 +10,8 @@ kind acts through), and the texts of ``fetchcarry train KIND --help``. The contr
   ``resume`` and ``progress``; for a ``pool`` learner (one that labels on the worker
   pool of ``fetchcarry generate``) also ``workers`` and ``backend``. It writes the run
   folder: ``config.json`` with the ``kind`` and ``complete`` when done.
-- ``load(path, env)``: the run folder's policy (:class:`training.policies.Policy`).
-  ``None``: the BC network's loader of :mod:`training.learners.runs`.
+- ``load(path, env)``: the run folder's policy (:class:`training.policies.Policy`); by
+  default :data:`NETWORK_LOADER`, the BC network's (the built-in kinds').
 
 The functions are named (``"package.module:function"``), not imported here: a learner's
 module imports torch or stable-baselines3 at its top, while this module is imported
@@ -35,6 +35,9 @@ from typing import Any
 from fetchcarry_env.errors import InputError
 from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 
+NETWORK_LOADER = "training.learners.imitation:load_network_policy"
+"""The ``load`` of the run folders whose policy is the BC network (bc, dagger, ppo, ensemble)."""
+
 Summary = Callable[[Any, list[dict[str, float]], str], str]
 """``summary(options, rows, out)``: the lines ``fetchcarry train`` prints (``rows``: ``metrics.csv``, or [])."""
 
@@ -52,7 +55,7 @@ class Learner:
     train: str  # "package.module:function", called as the module docstring says
     help: str  # one line for ``fetchcarry train --help``
     description: str = ""  # ``fetchcarry train KIND --help``
-    load: str | None = None  # "package.module:function(path, env)"; None: the BC network's loader
+    load: str = NETWORK_LOADER  # "package.module:function", called as load(path, env)
     summary: Summary | None = None  # None: "KIND trained" and the run folder
     resumable: bool = True  # takes resume= and progress= (--resume, --no-progress; Ctrl-C keeps its checkpoint)
     pool: bool = False  # takes workers= and backend= (--workers, --backend)
@@ -62,7 +65,7 @@ class Learner:
         if not (isinstance(self.options, type) and is_dataclass(self.options)):
             raise TypeError(f"{self.kind}: options must be a dataclass, got {self.options!r}")
         for reference in (self.train, self.load):
-            if reference is not None and reference.count(":") != 1:
+            if reference.count(":") != 1:
                 raise ValueError(f"{self.kind}: expected 'package.module:function', got {reference!r}")
 
     def describe(self, options: Any, rows: list[dict[str, float]], out: str) -> str:
@@ -112,10 +115,9 @@ def resolve(reference: str) -> Callable[..., Any]:
     return getattr(importlib.import_module(module), name)
 
 
-def loader(kind: str) -> Callable[..., Any] | None:
-    """The ``load(path, env)`` of ``kind``'s learner, or None when its runs load as the BC network."""
-    reference = get(kind).load
-    return None if reference is None else resolve(reference)
+def loader(kind: str) -> Callable[..., Any]:
+    """The ``load(path, env)`` of ``kind``'s learner (importing its module)."""
+    return resolve(get(kind).load)
 
 
 def train(

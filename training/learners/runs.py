@@ -15,7 +15,8 @@ A run folder holds
 
 :func:`load_policy` loads a run folder through the learner its ``kind`` names. Every
 built-in kind acts through the same network (a PPO run's actor is a BC network, so a BC
-run of the same encoder initialises it), so :func:`load_network_policy` builds one
+run of the same encoder initialises it), so
+:func:`training.learners.imitation.load_network_policy` builds one
 :class:`~training.learners.bc.BCPolicy` for all of them; an ``ensemble``
 (:mod:`training.learners.ensemble`) holds several such networks, each member's settings
 in ``options.members``, and acts on the mean of their log-probabilities. Loading reads JSON and
@@ -40,6 +41,7 @@ import torch
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
 from training.learners import registry
+from training.learners.options import BCConfig
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
 INTERFACE = "phases"
@@ -54,7 +56,7 @@ class RunFolderError(InputError):
 
 def network_kinds() -> tuple[str, ...]:
     """The registered kinds whose runs act through the BC network (``bc``, ``dagger``, ``ppo``, ``ensemble``)."""
-    return tuple(learner.kind for learner in registry.learners() if learner.load is None)
+    return tuple(learner.kind for learner in registry.learners() if learner.load == registry.NETWORK_LOADER)
 
 
 def read_saved(path: str | Path) -> dict[str, Any]:
@@ -73,8 +75,6 @@ def read_saved(path: str | Path) -> dict[str, Any]:
 
 def read_config(path: str | Path) -> dict[str, Any]:
     """The checked ``config.json`` of a run folder of the BC network; :class:`RunFolderError` otherwise."""
-    from training.learners.bc import BCConfig
-
     file = Path(path) / CONFIG_FILE
     saved = read_saved(path)
     unknown = sorted(set(saved) - set(REQUIRED_KEYS) - set(OPTIONAL_KEYS))
@@ -128,8 +128,6 @@ def network_config(saved: dict[str, Any]) -> Any:
     A field missing from an older run folder takes the value it had before the field
     existed (:data:`LEGACY_CONFIG`), so old runs load and act as they did.
     """
-    from training.learners.bc import BCConfig
-
     return BCConfig(**{**LEGACY_CONFIG, **saved["config"]})
 
 
@@ -137,42 +135,15 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
     """The policy of a run folder of any registered kind, behind stable-baselines3's ``predict`` protocol.
 
     ``config.json``'s ``kind`` names the learner (:mod:`training.learners.registry`) whose
-    ``load(path, env)`` loads it; the built-in kinds load with :func:`load_network_policy`
-    (as does a folder of no known kind: its checks say what is wrong). ``env`` (a
+    ``load(path, env)`` loads it; the built-in kinds load with
+    :func:`training.learners.imitation.load_network_policy`. ``env`` (a
     ``FetchCarryPushPhases-v0`` env) lets ``predict`` ask it for the masks when none are
     given. Raises :class:`RunFolderError` (bad input) for anything that is not a loadable run folder.
     """
     kind = read_saved(path).get("kind")
-    load = registry.loader(kind) if isinstance(kind, str) and kind in registry.kinds() else None
-    return load_network_policy(path, env) if load is None else load(Path(path), env)
-
-
-def load_network_policy(path: str | Path, env: Any = None) -> Any:
-    """The :class:`~training.learners.bc.BCPolicy` of a ``bc``, ``dagger``, ``ppo`` or ``ensemble`` run folder."""
-    from training.learners.bc import BCPolicy
-    from training.learners.encoders import Ensemble, build_network
-
-    path = Path(path)
-    saved = read_config(path)
-    config = network_config(saved)
-    capacity = Capacity(**saved["capacity"])
-    ensemble = saved["kind"] == "ensemble"
-    configs = [network_config(member) for member in saved["options"]["members"]] if ensemble else [config]
-    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
-    network = Ensemble(built) if ensemble else built[0]
-    weights = path / WEIGHTS_FILE
-    if not weights.is_file():
-        raise RunFolderError(f"{path} has no {WEIGHTS_FILE} (an unfinished run: resume it first)")
-    try:
-        state = torch.load(weights, weights_only=True, map_location="cpu")
-        network.load_state_dict(state)
-    except (RuntimeError, KeyError, TypeError, EOFError, OSError) as error:
-        raise RunFolderError(f"{weights} does not fit the network its config.json describes: {error}") from None
-    policy = BCPolicy(network, config, capacity, env)
-    with torch.inference_mode():
-        # Trace it now, so that the first decision is not slower.
-        policy.candidate_scores(torch.zeros(1, saved["features"]), torch.arange(saved["candidates"]))
-    return policy
+    if not (isinstance(kind, str) and kind in registry.kinds()):
+        read_config(path)  # raises: it says what is wrong (unknown or missing keys, the kind)
+    return registry.loader(kind)(Path(path), env)
 
 
 # ---------------------------------------------------------------------------- writing
