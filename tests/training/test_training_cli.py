@@ -1,4 +1,5 @@
-"""The training commands: rollout, demo, generate, dataset, evaluate-expert, bench generate|phases|learning-checks.
+"""The training commands: rollout, demo, generate, dataset, evaluate-expert, bench generate|phases|learning-checks,
+train.
 
 Run in-process through ``training.cli.main``. Exit statuses: 0 success, 1 a negative
 answer, 2 bad input with a short message on stderr and never a traceback.
@@ -182,3 +183,49 @@ def test_bench_learning_checks_bc_trains_and_compares_with_the_baselines(capsys,
     assert (tmp_path / "bc-mlp" / "model.pt").is_file()
     status, _, err = run(capsys, "bench", "learning-checks", "ppo", "--family", "nope")
     assert status == 2 and "unknown family" in err
+
+
+# ---------------------------------------------------------------------------- fetchcarry train
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["train", "dagger", "--family", "nope"], "unknown family 'nope'"),
+        (["train", "ppo", "--family", "nope"], "unknown family 'nope'"),
+        (["train", "dagger", "--family", "basic", "--learner-families", "push,zz"], "expected family names"),
+        (["train", "bc", "--dataset", "x/y-v0", "--epochs", "0"], "--epochs: expected a positive number, got 0"),
+        (["train", "ppo", "--family", "basic", "--learning-rate", "-1"], "--learning-rate: expected a positive"),
+        (["train", "ensemble", "--members", "a"], "at least two run folders"),
+    ],
+)
+def test_bad_training_options_exit_2(capsys, tmp_path: Path, argv: list[str], message: str) -> None:
+    status, out, err = run(capsys, *argv, "--out", tmp_path / "run")
+    assert status == 2 and message in err and out == ""
+
+
+def test_train_is_generated_from_the_options_dataclasses(capsys) -> None:
+    status, out, _ = run(capsys, "train", "dagger", "--help")
+    assert status == 0
+    for text in ("--episodes-per-iteration N", "--time-limit S", "--learner-families NAME[,NAME...]",
+                 "--workers W", "--backend {process,ray}", "--encoder {mlp,set}", "--no-progress"):  # fmt: skip
+        assert text in out, text
+    assert "epochs (per iteration for dagger; default 40)" in out and "(default 10)" in out
+    status, out, _ = run(capsys, "train", "ensemble", "--help")
+    assert "--no-avoid-returns" in out and "--seed" not in out and "--resume" not in out
+
+
+def test_ctrl_c_keeps_the_checkpoint_and_a_bug_is_not_bad_input(capsys, tmp_path: Path, monkeypatch) -> None:
+    from training.learners import imitation
+
+    def interrupted(**options: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(imitation, "train_bc_run", interrupted)
+    status, _, err = run(capsys, "train", "bc", "--dataset", "x/y-v0", "--out", tmp_path / "run")
+    assert status == 130 and "the last checkpoint in" in err and "--resume" in err
+
+    def broken(**options: object) -> None:
+        raise ValueError("a bug in a library, not the user's input")
+
+    monkeypatch.setattr(imitation, "train_bc_run", broken)
+    status, _, err = run(capsys, "train", "bc", "--dataset", "x/y-v0", "--out", tmp_path / "run")
+    assert status == 3 and "internal error: ValueError" in err
