@@ -18,21 +18,19 @@ from expert.milp.conditional import conditional_bounds, exit_box_of
 from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
+from fetchcarry_env import families
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.families import (
-    draw_paper_basic,
-    draw_paper_corridor,
-    draw_paper_covered,
-    draw_paper_multi,
-    draw_paper_push,
-)
 
 
 def _cases():
     rng = np.random.default_rng(11)
-    cases = [draw_paper_basic(rng, "II"), draw_paper_push(rng, "E"), draw_paper_corridor(rng)]
-    cases += [draw_paper_multi(rng, 2), draw_paper_multi(rng, 3), draw_paper_multi(rng, 3)]
-    cases += [draw_paper_covered(rng, 2), draw_paper_covered(rng, 2)]
+    cases = [
+        families.draw_paper_basic(rng, "II"),
+        families.draw_paper_push(rng, "E"),
+        families.draw_paper_corridor(rng),
+    ]
+    cases += [families.draw_paper_multi(rng, 2), families.draw_paper_multi(rng, 3), families.draw_paper_multi(rng, 3)]
+    cases += [families.draw_paper_covered(rng, 2), families.draw_paper_covered(rng, 2)]
     return cases
 
 
@@ -70,7 +68,7 @@ def test_the_optimum_respects_every_conditional_bound(scenario):
 
 
 def test_an_action_at_a_phase_too_early_for_it_has_no_bound():
-    scenario = draw_paper_multi(np.random.default_rng(11), 3)
+    scenario = families.draw_paper_multi(np.random.default_rng(11), 3)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
     pairs = PairCosts(problem, Connectivity(problem))
     conditional = conditional_bounds(problem, 12, pairs)
@@ -83,7 +81,7 @@ def test_an_action_at_a_phase_too_early_for_it_has_no_bound():
 @pytest.mark.parametrize("extra", [1, 2])
 def test_extra_phases_keep_their_optimum(extra):
     """The ``N + k`` model (idle phases allowed, no fewest-phases cuts) gets the cuts too: same answer as without."""
-    scenario = draw_paper_multi(np.random.default_rng(3), 2)
+    scenario = families.draw_paper_multi(np.random.default_rng(3), 2)
     with_cuts = plan(scenario, time_limit=60, extra_phases=extra)
     without = plan(scenario, time_limit=60, extra_phases=extra, conditional=False)
     assert with_cuts.status == without.status == "optimal"
@@ -93,7 +91,7 @@ def test_extra_phases_keep_their_optimum(extra):
 
 
 def test_an_object_in_the_hand_keeps_its_optimum():
-    scenario = draw_paper_multi(np.random.default_rng(4), 3)
+    scenario = families.draw_paper_multi(np.random.default_rng(4), 3)
     held = scenario.objects[0].id
     with_cuts = plan(scenario, time_limit=60, holding=held)
     without = plan(scenario, time_limit=60, holding=held, conditional=False)
@@ -106,7 +104,7 @@ def test_an_object_in_the_hand_keeps_its_optimum():
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_order_of_picks_is_the_cheapest_schedules(seed):
     """The decoupled plan's order, read off the bounds, is the one ``cheapest_schedule`` finds."""
-    scenario = draw_paper_multi(np.random.default_rng(seed), 4)
+    scenario = families.draw_paper_multi(np.random.default_rng(seed), 4)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
     pairs = PairCosts(problem, Connectivity(problem))
     n_phases = skeleton(problem, pairs.free).phases + 1

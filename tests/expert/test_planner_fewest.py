@@ -12,29 +12,21 @@ from expert.milp.bounds import Connectivity, PairCosts, action_windows, skeleton
 from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
+from fetchcarry_env import families
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.families import (
-    PAPER_AREAS,
-    PUSH_PATTERNS,
-    draw_paper_basic,
-    draw_paper_corridor,
-    draw_paper_covered,
-    draw_paper_multi,
-    draw_paper_push,
-)
 
 
 def _cases():
     rng = np.random.default_rng(7)
-    cases = [draw_paper_basic(rng, area) for area in PAPER_AREAS]
-    cases += [draw_paper_push(rng, pattern) for pattern in PUSH_PATTERNS]
+    cases = [families.draw_paper_basic(rng, area) for area in families.PAPER_AREAS]
+    cases += [families.draw_paper_push(rng, pattern) for pattern in families.PUSH_PATTERNS]
     cases += [
-        draw_paper_corridor(rng),
-        draw_paper_multi(rng, 2),
-        draw_paper_multi(rng, 2),
-        draw_paper_multi(rng, 3),
+        families.draw_paper_corridor(rng),
+        families.draw_paper_multi(rng, 2),
+        families.draw_paper_multi(rng, 2),
+        families.draw_paper_multi(rng, 3),
     ]
-    cases.append(draw_paper_covered(rng, 2))
+    cases.append(families.draw_paper_covered(rng, 2))
     return cases
 
 
@@ -64,7 +56,7 @@ def test_the_cuts_keep_the_optimum_with_an_object_in_the_hand(spec_example):
 
 def test_the_extra_phases_model_has_no_cuts():
     """Idle phases are how shorter plans live in the N + k model: the cuts would remove them."""
-    scenario = draw_paper_multi(np.random.default_rng(3), 2)
+    scenario = families.draw_paper_multi(np.random.default_rng(3), 2)
     result = plan(scenario, extra_phases=1)
     assert result.status == "optimal"
     solves = result.stats["solves"]
@@ -73,7 +65,7 @@ def test_the_extra_phases_model_has_no_cuts():
 
 def test_windows_are_unions_and_the_last_action_is_at_the_end():
     """V-C: the pick is early (carried through the push) or late (after an empty-hand push), never between."""
-    scenario = draw_paper_push(np.random.default_rng(2024), "A")
+    scenario = families.draw_paper_push(np.random.default_rng(2024), "A")
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
     free = Connectivity(problem)
     n = skeleton(problem, free).phases
