@@ -6,6 +6,7 @@ import json
 import math
 
 import pytest
+from hostile_files import write_content
 
 from fetchcarry_env import Scenario, ScenarioError
 from fetchcarry_env.scenario import DEFAULT_POSTURES
@@ -175,11 +176,7 @@ def test_json_text_round_trip(spec_example):
 # ---------------------------------------------------------------------- hostile input (issue 8, section 4)
 def load_text(tmp_path, text: str | bytes) -> ScenarioError:
     """The ScenarioError of loading a file with this content (the test fails on any other outcome)."""
-    path = tmp_path / "hostile.json"
-    if isinstance(text, str):
-        path.write_text(text, encoding="utf-8", errors="surrogatepass")
-    else:
-        path.write_bytes(text)
+    path = write_content(tmp_path / "hostile.json", text)
     with pytest.raises(ScenarioError) as info:
         Scenario.load(path)
     assert str(path) in str(info.value)

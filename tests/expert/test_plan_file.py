@@ -7,6 +7,7 @@ import json
 import re
 
 import pytest
+from hostile_files import write_content
 
 from expert.plans import Plan, PlanFormatError
 
@@ -163,11 +164,7 @@ def test_a_produced_plan_round_trips(tmp_path, spec_example):
 # ---------------------------------------------------------------------- hostile files (issue 8, section 4)
 def load_error(tmp_path, content: str | bytes) -> str:
     """The PlanFormatError message of loading a file with this content (any other outcome fails)."""
-    path = tmp_path / "hostile.plan.json"
-    if isinstance(content, str):
-        path.write_text(content, encoding="utf-8", errors="surrogatepass")
-    else:
-        path.write_bytes(content)
+    path = write_content(tmp_path / "hostile.plan.json", content)
     with pytest.raises(PlanFormatError) as info:
         Plan.load(path)
     message = str(info.value)
