@@ -2,8 +2,7 @@
 
 :func:`summary_markdown` makes one table row per policy and split, with a legend of the
 columns; :func:`source_table` gives each policy's success and cost ratio per scenario
-source of a split. The plots are :mod:`training.pictures.benchmark`'s (``plot_splits``
-is named here too, for the modules that import it from here).
+source of a split. The plots are :mod:`training.pictures.benchmark`'s.
 """
 
 from __future__ import annotations
@@ -13,9 +12,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from training.evaluation.metrics import Row, summarise
-from training.pictures.benchmark import plot_splits
 
-__all__ = ["COLUMNS", "plot_splits", "source_table", "summary_markdown"]
+__all__ = ["COLUMNS", "source_table", "summary_markdown"]
 
 COLUMNS = (
     ("policy", "policy", "{}"),

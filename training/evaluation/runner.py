@@ -43,10 +43,11 @@ from training.data.generate import BACKENDS, _terminate_workers, progress_bar, w
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
 from training.evaluation.metrics import Row, fill_expert_costs, summarise
-from training.evaluation.report import plot_splits, source_table, summary_markdown
+from training.evaluation.report import source_table, summary_markdown
 from training.evaluation.results import RESULTS, ResultsLock, read_results, scenario_digest
 from training.evaluation.results import write_results as write_results_file
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
+from training.pictures.benchmark import plot_splits
 from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
 
 SUMMARY, PLOT = "summary.md", "splits.png"

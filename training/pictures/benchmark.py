@@ -18,10 +18,13 @@ import csv
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fetchcarry_env.errors import InputError
-from training.evaluation.metrics import Z_95, Row, wilson
+from training.stats import Z_95, wilson
+
+if TYPE_CHECKING:
+    from training.evaluation.metrics import Row
 
 DPI = 100  # dots per inch of every plot
 
