@@ -27,18 +27,20 @@ Units: metres for points, lattice cells for indices.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from fetchcarry_env.actions import Action, Lattice, Mode
-from fetchcarry_env.geometry import EPS, HEADINGS, heading_vector, to_world_frame
+from fetchcarry_env.geometry import EPS, HEADINGS, Rect, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import hand_blocker, push_contact, push_headings
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.phases import CORNERS, STILL, PhaseLayout, PhaseTable, inside_lattice
 from fetchcarry_env.rules import CONTACT_SLACK, base_blockers, check_action, clutter_rect, move_stop
-from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.scenario import DeliveryObject, Scenario
 
+ArrayLike = np.ndarray | float  # metres: an array, or one number broadcast against the others
 REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance (the rules use the default)
 ARM_TOL = 1e-6  # metres: arm_line_clear's tolerance
 GUARD = 1e-12  # metres: a hypot this close to its threshold is redone with math.hypot
@@ -47,7 +49,9 @@ PUSH_HEADING = np.array([[HEADINGS.index(h) for h in push_headings(d)] for d in 
 
 
 # ---------------------------------------------------------------------- vectorised geometry
-def _clip(px, py, dx, dy, rect) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _clip(
+    px: ArrayLike, py: ArrayLike, dx: ArrayLike, dy: ArrayLike, rect: tuple
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Liang-Barsky over arrays (geometry._clip): ``(valid, t0, t1)`` of ``p + t (dx, dy)`` in ``rect``.
 
     ``rect`` is ``(min_x, min_y, max_x, max_y)``, each an array or a number (metres). The
@@ -77,7 +81,9 @@ def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: np.ndarray) -> np.ndarra
     return out
 
 
-def _sweep_hits(px, py, qx, qy, radius: np.ndarray, rect) -> np.ndarray:
+def _sweep_hits(
+    px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray, radius: np.ndarray, rect: tuple
+) -> np.ndarray:
     """True where a disc of ``radius`` sliding ``p`` -> ``q`` touches ``rect`` before the end (1-D arrays).
 
     geometry._sweep_disc_rect(...) < 1.0, operation for operation: the start inside the
@@ -103,7 +109,9 @@ def _sweep_hits(px, py, qx, qy, radius: np.ndarray, rect) -> np.ndarray:
     return hit | (real & (t_out > EPS) & (t_in < 1.0)).any(axis=0)
 
 
-def moves_free(start_x, start_y, end_x, end_y, radius: float, blockers: np.ndarray) -> np.ndarray:
+def moves_free(
+    start_x: ArrayLike, start_y: ArrayLike, end_x: ArrayLike, end_y: ArrayLike, radius: float, blockers: np.ndarray
+) -> np.ndarray:
     """True where ``move_stop`` of a base of ``radius`` from start to end reports no contact (1-D arrays).
 
     ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y, max_x, max_y`` (metres).
@@ -120,7 +128,17 @@ def moves_free(start_x, start_y, end_x, end_y, radius: float, blockers: np.ndarr
     return free
 
 
-def _box_overlaps(sx, sy, ex, ey, radius: float, x0, y0, x1, y1) -> np.ndarray:
+def _box_overlaps(
+    sx: ArrayLike,
+    sy: ArrayLike,
+    ex: ArrayLike,
+    ey: ArrayLike,
+    radius: float,
+    x0: ArrayLike,
+    y0: ArrayLike,
+    x1: ArrayLike,
+    y1: ArrayLike,
+) -> np.ndarray:
     """move_stop's first test: the box around every disc of the move overlaps the blocker (tol 0)."""
     box_x0, box_y0 = np.minimum(sx, ex) - radius, np.minimum(sy, ey) - radius
     box_x1, box_y1 = np.maximum(sx, ex) + radius, np.maximum(sy, ey) + radius
@@ -129,7 +147,15 @@ def _box_overlaps(sx, sy, ex, ey, radius: float, x0, y0, x1, y1) -> np.ndarray:
     )
 
 
-def _pairs_blocked(sx, sy, ex, ey, radius: float, rects: np.ndarray, boxes_known: bool = False) -> np.ndarray:
+def _pairs_blocked(
+    sx: np.ndarray,
+    sy: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+    radius: float,
+    rects: np.ndarray,
+    boxes_known: bool = False,
+) -> np.ndarray:
     """Per pair (move ``n``, blocker ``rects[n]``): True where ``move_stop`` says that blocker stops the move.
 
     The box test, then the swept disc of ``radius - CONTACT_SLACK`` and of ``radius``
@@ -168,7 +194,7 @@ def _standing_blocked(px: np.ndarray, py: np.ndarray, radius: float, rects: np.n
     return blocked
 
 
-def arm_crossings(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
+def arm_crossings(px: ArrayLike, py: ArrayLike, qx: ArrayLike, qy: ArrayLike, rects: np.ndarray) -> np.ndarray:
     """``(N, R)``: True where the segment ``p`` - ``q`` crosses rectangle ``r`` of ``rects`` (``(R, 4)``, metres).
 
     ``segment_intersects_rect`` with ``arm_line_clear``'s tolerance: Liang-Barsky
@@ -181,12 +207,12 @@ def arm_crossings(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
     return np.broadcast_to(proper & valid, (px.shape[0], rects.shape[0])).copy()
 
 
-def arm_crosses(px, py, qx, qy, rects: np.ndarray) -> np.ndarray:
+def arm_crosses(px: ArrayLike, py: ArrayLike, qx: ArrayLike, qy: ArrayLike, rects: np.ndarray) -> np.ndarray:
     """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
     return arm_crossings(px, py, qx, qy, rects).any(axis=1)
 
 
-def _rects(rects) -> np.ndarray:
+def _rects(rects: Iterable[Rect]) -> np.ndarray:
     """``(N, 4)`` array of rectangles (metres)."""
     return np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in rects], dtype=float).reshape(-1, 4)
 
@@ -430,7 +456,16 @@ class FastPhases:
         out.mode = int(Mode.MOVE)
         return out
 
-    def _pushes_from(self, state, offers: _Offers, pieces: _Pieces, c, d, ei, ej) -> np.ndarray:
+    def _pushes_from(
+        self,
+        state: WorldState,
+        offers: _Offers,
+        pieces: _Pieces,
+        c: np.ndarray,
+        d: np.ndarray,
+        ei: np.ndarray,
+        ej: np.ndarray,
+    ) -> np.ndarray:
         """True where the env would accept the one-cell push from the pose (``_Enumerator._pushes_from``).
 
         rules._check_push from a base at the pose, for the push of piece ``c`` along
@@ -526,7 +561,9 @@ class FastPhases:
         g = g[on][self._fits(ci[on], cj[on])]
         return offers.take(self._strokes_allowed(state, pieces, offers, c[g], d[g]))
 
-    def _strokes_allowed(self, state, pieces: _Pieces, offers: _Offers, c: np.ndarray, d: np.ndarray) -> np.ndarray:
+    def _strokes_allowed(
+        self, state: WorldState, pieces: _Pieces, offers: _Offers, c: np.ndarray, d: np.ndarray
+    ) -> np.ndarray:
         """rules._check_push from the base, then the stroke's end free and reached (``_offer``), per push candidate."""
         bx, by = state.base
         dx, dy = self.xs[offers.ci] - bx, self.ys[offers.cj] - by
@@ -587,7 +624,9 @@ class FastPhases:
         return self._stops[end] and move_stop(self.scenario, state.base, end)[1] is None
 
     # ------------------------------------------------------------------ helpers
-    def _window_offers(self, first, centers, headings, targets) -> tuple[_Offers, np.ndarray]:
+    def _window_offers(
+        self, first: ArrayLike, centers: ArrayLike, headings: ArrayLike, targets: ArrayLike
+    ) -> tuple[_Offers, np.ndarray]:
         """The on-lattice poses of each group's window with the first posture reaching its target, and their group.
 
         Group ``g`` is the window of ``headings[g]`` around cell ``centers[g]``, numbered
@@ -726,7 +765,9 @@ def _index(lattice: Lattice, point: tuple[float, float]) -> tuple[int, int]:
     return (min(max(round((point[0] - ox) / res), 0), nx - 1), min(max(round((point[1] - oy) / res), 0), ny - 1))
 
 
-def _hand_offset(h, bx, by, tx, ty) -> tuple[np.ndarray, np.ndarray]:
+def _hand_offset(
+    h: np.ndarray, bx: ArrayLike, by: ArrayLike, tx: ArrayLike, ty: ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
     """``kinematics.hand_offset`` over arrays: robot-frame ``(forward, lateral)`` of the target (metres)."""
     dx, dy = tx - bx, ty - by
     hx, hy = UNIT[h, 0], UNIT[h, 1]
@@ -741,7 +782,7 @@ def _concat(groups: list[_Offers], mode: int) -> _Offers:
     )
 
 
-def _goal_taken(scenario: Scenario, state: WorldState, obj) -> bool:
+def _goal_taken(scenario: Scenario, state: WorldState, obj: DeliveryObject) -> bool:
     """True when another object or a piece of clutter stands on ``obj``'s goal (rules._check_place)."""
     for other in scenario.objects:
         if other.id != obj.id and math.dist(state.objects[other.id][:2], obj.goal) < other.radius + obj.radius - 1e-9:
