@@ -45,6 +45,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.envs.registration import EnvSpec
 
 import fetchcarry_env  # noqa: F401  (registers this project's env ids: recovering and rebuilding a dataset's env)
 from fetchcarry_env.errors import UsageError
@@ -389,8 +390,6 @@ def _check_metadata_fields(file: Path, metadata: dict[str, Any]) -> None:
 
 def _env_spec(file: Path, key: str, text: str) -> Any:
     """The ``EnvSpec`` of the JSON text ``text`` (Minari's own reading of it); :class:`DatasetError` if it is none."""
-    from gymnasium.envs.registration import EnvSpec
-
     text = (  # what Minari removes for gymnasium 1.0 before it reads the spec
         text.replace('"order_enforce": true,', "")
         .replace('"apply_api_compatibility": false,', "")
