@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import reprlib
+import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -31,18 +33,36 @@ class JsonInputError(InputError):
 def read_json(path: str | Path, max_bytes: int) -> Any:
     """The JSON value in the file at ``path``; :class:`JsonInputError` if the file is not sane JSON text.
 
-    The size (bytes) is checked before anything is read. ``OSError`` (a missing or
-    unreadable file) passes through unchanged.
+    Only a regular file is read: it is opened without blocking (a FIFO would otherwise
+    wait for a writer forever) and anything else (a FIFO, a device, a socket, a folder)
+    is a :class:`JsonInputError`. The size (bytes) is checked before anything is read.
+    ``OSError`` (a missing or unreadable file) passes through, always naming the file.
     """
     path = Path(path)
-    size = path.stat().st_size
-    if size > max_bytes:
-        raise JsonInputError(f"the file is {size:,} bytes, more than the {max_bytes:,} a file of this kind may have")
-    with path.open("rb") as stream:
-        raw = stream.read(max_bytes + 1)
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    try:
+        mode = os.fstat(descriptor)
+        if not stat.S_ISREG(mode.st_mode):
+            raise JsonInputError(f"not a regular file ({_kind(mode.st_mode)}): give the path of a JSON file")
+        if mode.st_size > max_bytes:
+            raise JsonInputError(
+                f"the file is {mode.st_size:,} bytes, more than the {max_bytes:,} a file of this kind may have"
+            )
+        with os.fdopen(descriptor, "rb", closefd=False) as stream:
+            raw = stream.read(max_bytes + 1)
+    except OSError as error:  # a read error (EIO from a file under /proc) names no file: name it
+        raise OSError(error.errno, error.strerror or str(error), str(path)) from None
+    finally:
+        os.close(descriptor)
     if len(raw) > max_bytes:  # a special file whose size stat did not report
         raise JsonInputError(f"the file is more than the {max_bytes:,} bytes a file of this kind may have")
     return parse_json(decode_text(raw))
+
+
+def _kind(mode: int) -> str:
+    """What a file that is not a regular file is, in words."""
+    kinds = {stat.S_ISDIR: "a folder", stat.S_ISFIFO: "a FIFO", stat.S_ISSOCK: "a socket", stat.S_ISCHR: "a device"}
+    return next((name for test, name in kinds.items() if test(mode)), "a special file")
 
 
 def read_json_or(path: Path, max_bytes: int, error: Callable[[JsonInputError], Exception]) -> Any:

@@ -51,7 +51,7 @@ class Factory:
 FACTORIES: dict[str, Factory] = {
     EXPERT: Factory("expert.policy", "ExpertPolicy", "env", PLANNING),
     RANDOM: Factory("training.policies.random", "RandomMaskedPolicy", "env"),
-    "random-phases": Factory("training.policies.random_phases", "RandomPhasePolicy", "phases"),
+    "random-phases": Factory("training.policies.random", "RandomPhasePolicy", "phases"),
     "greedy": Factory("training.policies.greedy", "GreedyPolicy", "env"),
     "expert-phases": Factory("training.policies.phase_expert", "PhaseExpert", "phases", PLANNING),
 }

@@ -188,13 +188,23 @@ def test_plan_finds_writes_and_draws_a_valid_plan(capsys, tmp_path):
     assert picture.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_plan_json_summary_and_default_output(capsys, tmp_path, monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    status, out, _ = run(capsys, "plan", EXAMPLE, "--json")
+def test_plan_json_summary_and_output(capsys, tmp_path):
+    output = tmp_path / "push_basic.plan.json"
+    status, out, _ = run(capsys, "plan", EXAMPLE, "--json", "-o", output)
     summary = json.loads(out)
-    default = tmp_path / "push_basic.plan.json"
-    assert status == 0 and summary["found"] and summary["plan_path"] == str(default)
-    assert summary["violations"] == [] and Plan.load(default).to_dict()["phases"] == summary["phases"]
+    assert status == 0 and summary["found"] and summary["plan_path"] == str(output)
+    assert summary["violations"] == [] and Plan.load(output).to_dict()["phases"] == summary["phases"]
+
+
+def test_plan_without_output_writes_no_file(capsys, tmp_path, monkeypatch):
+    """A new user's ``fetchcarry plan SCENARIO`` left a plan file in the current folder; only ``-o`` writes one."""
+    monkeypatch.chdir(tmp_path)
+    status, out, err = run(capsys, "plan", EXAMPLE)
+    assert status == 0, err
+    assert list(tmp_path.iterdir()) == []
+    assert "plan not written (-o PLAN writes it)" in out and " place " in out
+    status, out, _ = run(capsys, "plan", EXAMPLE, "--json")
+    assert status == 0 and json.loads(out)["plan_path"] is None and list(tmp_path.iterdir()) == []
 
 
 def infeasible_scenario(path: Path) -> Path:

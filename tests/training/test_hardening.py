@@ -472,3 +472,50 @@ def test_a_hand_edited_metadata_file_is_exit_2_naming_it(capsys, dataset: str, e
         status, out, err = run(capsys, *argv)
         assert status == 2 and out == "", err
         assert str(metadata_file) in err
+
+
+# ---------------------------------------------------------------------------- round 2, 4. every input file, every flag
+class Hung(Exception):
+    """A command that waited too long (a FIFO opened for reading waits for a writer forever)."""
+
+
+@pytest.fixture
+def no_hang():
+    """Fail a test whose command blocks for more than 30 s, instead of hanging the suite."""
+
+    def hung(signum, frame):
+        raise Hung
+
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(30)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+def fifo_commands(fifo: Path, tmp_path: Path) -> dict[str, tuple]:
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    os.mkfifo(folder / "a.json")
+    return {
+        "plan": ("plan", fifo, "-o", tmp_path / "out.plan.json"),
+        "validate-scenario": ("validate", fifo, ROOT / "tests" / "fuzz" / "push_basic.plan.json"),
+        "validate-plan": ("validate", EXAMPLE, fifo),
+        "rollout": ("rollout", "--scenario", fifo, "--policy", "random"),
+        "benchmark": ("benchmark", "--policies", "random", "--scenarios", folder, "--out", tmp_path / "b",
+                      "--no-progress"),
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize("command", ["plan", "validate-scenario", "validate-plan", "rollout", "benchmark"])
+def test_a_fifo_as_an_input_file_is_exit_2_not_a_hang(capsys, tmp_path: Path, no_hang, command: str) -> None:
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    status, _, err = run(capsys, *fifo_commands(fifo, tmp_path)[command])
+    assert status == 2, err
+    assert "not a regular file (a FIFO)" in err
+
+
+def test_an_unreadable_file_under_proc_is_named(capsys) -> None:
+    status, _, err = run(capsys, "validate", EXAMPLE, "/proc/self/mem")
+    assert status == 2 and "Input/output error: /proc/self/mem" in err, err

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from expert.plans import Plan, PlanFormatError
 from fetchcarry_env.errors import UsageError
+from fetchcarry_env.jsontext import read_json
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.pictures.files import check_picture_path
 
@@ -34,10 +34,8 @@ def load_plan(path: Path) -> Plan:
 def file_format(path: Path) -> str | None:
     """The ``format`` field of a JSON file, or ``None`` when the file is not a readable JSON object with one."""
     try:
-        if path.stat().st_size > MAX_PEEK_BYTES:
-            return None
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
+        data = read_json(path, MAX_PEEK_BYTES)  # a regular file only: a FIFO is not waited on
+    except (OSError, ValueError):  # JsonInputError is a ValueError
         return None
     value = data.get("format") if isinstance(data, dict) else None
     return value if isinstance(value, str) else None

@@ -26,7 +26,6 @@ DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
 MAX_SUMMARY_PHASES = 30  # phases listed in the one-screen summary
 MAX_SUMMARY_VIOLATIONS = 5  # validator messages repeated in the plan summary
 
-PLAN_SUFFIX = ".plan.json"
 PLAN_FORMAT = "fetchcarry-plan/1"
 INTERRUPTED_STATUS = "userinterrupt"  # SCIP's status of a solve stopped by Ctrl-C
 SCENARIO_FORMAT = "fetchcarry-scenario/1"
@@ -35,10 +34,10 @@ PLAN_COMMAND = Command(
     name="plan",
     help="plan a scenario with the MILP expert and write the plan JSON",
     description="Plan SCENARIO (a fetchcarry-scenario/1 file) with the paper's MILP on SCIP, print a "
-    "one-screen summary (status, objective, the phases, timings) and write the plan as "
-    "fetchcarry-plan/1 JSON. The plan is written whatever the outcome: a plan without phases "
-    "records the status (infeasible, time_limit) and the timings. The command also checks the "
-    "plan with the validator and warns on stderr if it breaks the rules of docs/plan-format.md.",
+    "one-screen summary (status, objective, the phases, timings) and, with -o PLAN, write the plan as "
+    "fetchcarry-plan/1 JSON; without -o no file is written. The plan is written whatever the outcome: "
+    "a plan without phases records the status (infeasible, time_limit) and the timings. The command also "
+    "checks the plan with the validator and warns on stderr if it breaks the rules of docs/plan-format.md.",
     epilog="Exit status: 0 a plan was found, 1 no plan (infeasible or time limit), 2 bad input.",
 )
 VALIDATE_COMMAND = Command(
@@ -67,7 +66,8 @@ def _add_plan_options(parser: argparse.ArgumentParser) -> None:
         "-o",
         "--output",
         metavar="PLAN",
-        help=f"where to write the plan JSON (default: <scenario file stem>{PLAN_SUFFIX} in the current directory)",
+        help="write the plan JSON to this file (default: no file is written, the summary shows the phases; "
+        "a command run from a repository or a home folder should leave no file there unasked)",
     )
     parser.add_argument(
         "--time-limit",
@@ -99,8 +99,9 @@ def run_plan(args: argparse.Namespace) -> int:
     """``fetchcarry plan``: 0 a plan was found, 1 none."""
     scenario_path = Path(args.scenario)
     scenario = load_scenario(scenario_path)
-    output = Path(args.output) if args.output else Path.cwd() / (scenario_path.stem + PLAN_SUFFIX)
-    check_writable(output, "plan output")
+    output = Path(args.output) if args.output else None
+    if output is not None:
+        check_writable(output, "plan output")
     plot_path = Path(args.plot) if args.plot else None
     if plot_path is not None:
         check_writable(plot_path, "plot")
@@ -113,7 +114,8 @@ def run_plan(args: argparse.Namespace) -> int:
     )
     if result.status == INTERRUPTED_STATUS:  # a solve cut short by Ctrl-C is never written as a plan
         raise KeyboardInterrupt
-    result.save(output)
+    if output is not None:
+        result.save(output)
     violations = validate_plan(scenario, result) if result.found else []
     if plot_path is not None:
         from expert.plot import plot_plan  # matplotlib only when a picture is asked for
@@ -132,7 +134,9 @@ def run_plan(args: argparse.Namespace) -> int:
     return 0 if result.found else 1
 
 
-def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None, time_limit: float) -> str:
+def _plan_summary_text(
+    scenario_path: Path, plan: Plan, output: Path | None, plot_path: Path | None, time_limit: float
+) -> str:
     objective = "-" if plan.objective is None else f"{plan.objective:.3f}"
     lines = [
         f"scenario   {plan.scenario} ({scenario_path})",
@@ -153,7 +157,7 @@ def _plan_summary_text(scenario_path: Path, plan: Plan, output: Path, plot_path:
     ]
     if plan.phases:
         lines += ["", _phase_table(plan)]
-    lines += ["", f"plan written to {output}"]
+    lines += ["", f"plan written to {output}" if output is not None else "plan not written (-o PLAN writes it)"]
     if plot_path is not None:
         lines.append(f"plot written to {plot_path}")
     return "\n".join(lines)
@@ -208,7 +212,7 @@ def _timings(plan: Plan) -> str:
 
 
 def _plan_summary_json(
-    scenario_path: Path, plan: Plan, output: Path, plot_path: Path | None, violations: list[str]
+    scenario_path: Path, plan: Plan, output: Path | None, plot_path: Path | None, violations: list[str]
 ) -> dict[str, Any]:
     return {
         "scenario": plan.scenario,
@@ -218,7 +222,7 @@ def _plan_summary_json(
         "objective": plan.objective,
         "phases": [phase.to_dict() for phase in plan.phases],
         "stats": plan.stats,
-        "plan_path": str(output),
+        "plan_path": None if output is None else str(output),
         "plot_path": None if plot_path is None else str(plot_path),
         "violations": violations,
     }
