@@ -519,3 +519,32 @@ def test_a_fifo_as_an_input_file_is_exit_2_not_a_hang(capsys, tmp_path: Path, no
 def test_an_unreadable_file_under_proc_is_named(capsys) -> None:
     status, _, err = run(capsys, "validate", EXAMPLE, "/proc/self/mem")
     assert status == 2 and "Input/output error: /proc/self/mem" in err, err
+
+
+SEED_COMMANDS = {
+    "rollout": ("rollout", "--family", "basic", "--policy", "random"),
+    "demo": ("demo",),
+    "generate": ("generate", "--family", "basic", "--policy", "random", "--episodes", "1", "--dataset-id", DATASET_ID),
+    "evaluate-expert": ("evaluate-expert", "--families", "basic", "--episodes", "1"),
+}
+
+
+@pytest.mark.parametrize("value", ["-1", str(2**32), str(2**64), "1.5"])
+@pytest.mark.parametrize("command", sorted(SEED_COMMANDS))
+def test_a_seed_outside_0_to_2_32_is_exit_2(capsys, tmp_path: Path, command: str, value: str) -> None:
+    extra = ("--out", tmp_path / "d.png") if command == "demo" else ()
+    status, _, err = run(capsys, *SEED_COMMANDS[command], *extra, "--seed", value)
+    assert status == 2 and "argument --seed" in err, err
+    assert "internal error" not in err
+
+
+@pytest.mark.parametrize("command", ["generate", "evaluate-expert"])
+def test_seeds_beyond_2_32_for_later_episodes_are_exit_2(capsys, command: str) -> None:
+    argv = [a if a != "1" else "2" for a in SEED_COMMANDS[command]]  # two episodes: seeds N and N + 1
+    status, _, err = run(capsys, *argv, "--seed", str(2**32 - 1))
+    assert status == 2 and "beyond 2**32 - 1" in err, err
+
+
+def test_the_largest_seed_is_taken(capsys) -> None:
+    status, out, err = run(capsys, *SEED_COMMANDS["rollout"], "--seed", str(2**32 - 1))
+    assert status in (0, 1) and f"seed {2**32 - 1}" in out, err

@@ -16,9 +16,10 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
-from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.arguments import non_negative_int, positive_float, positive_int
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
+from training.cli.seeds import check_seed_range, seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
 from training.evaluation.expert import (
@@ -51,7 +52,7 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--scenario", metavar="FILE", help="one fixed scenario (fetchcarry-scenario/1 JSON)")
     source.add_argument("--family", metavar="NAME", help="random scenarios of this family (basic, push, ...)")
-    parser.add_argument("--seed", type=whole_number, default=0, metavar="N", help="reset seed (default 0)")
+    parser.add_argument("--seed", type=seed, default=0, metavar="N", help="reset seed (default 0)")
     if policy and runs:
         parser.add_argument(
             "--policy",
@@ -243,7 +244,7 @@ def _register_demo(commands: argparse._SubParsersAction) -> None:
     )
     parser.add_argument(
         "--seed",
-        type=whole_number,
+        type=seed,
         default=DEFAULT_DEMO_SEED,
         metavar="N",
         help=f"the push-family scenario's seed (default {DEFAULT_DEMO_SEED}: its goal is covered by a block)",
@@ -287,10 +288,10 @@ def _register_evaluate(commands: argparse._SubParsersAction) -> None:
         help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
     )
     parser.add_argument("--episodes", type=positive_int, default=500, metavar="N", help="per family (default 500)")
+    parser.add_argument("--seed", type=seed, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
     parser.add_argument(
-        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
+        "--start", type=non_negative_int, default=0, metavar="K", help="first episode index (default 0)"
     )
-    parser.add_argument("--start", type=whole_number, default=0, metavar="K", help="first episode index (default 0)")
     parser.add_argument("--workers", type=positive_int, default=1, metavar="W", help="parallel workers (default 1)")
     parser.add_argument(
         "--time-limit", type=positive_float, default=10.0, metavar="S", help="seconds per planning call (default 10)"
@@ -311,6 +312,7 @@ def families(text: str) -> tuple[str, ...]:
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
+    check_seed_range(args.seed + args.start, args.episodes)
     try:
         results = evaluate_expert(
             families(args.families),

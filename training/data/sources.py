@@ -22,6 +22,7 @@ from training.resolve import recording_policy
 INTERFACES = tuple(ENV_IDS)  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
+MAX_SEED = 2**32 - 1  # numpy and Gymnasium take seeds 0 .. 2**32 - 1
 PROJECTION = "nearest move candidate"  # what a phases dataset records for an expert move no candidate expresses
 
 
@@ -54,6 +55,8 @@ class EpisodeSource:
             raise UsageError(f"unknown policy {self.policy!r}: choose one of {', '.join(POLICIES)}")
         if self.time_limit <= 0:
             raise UsageError(f"the time limit must be a positive number of seconds, got {self.time_limit}")
+        if not 0 <= self.seed <= MAX_SEED:
+            raise UsageError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {self.seed}")
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
@@ -92,6 +95,12 @@ class GenerationConfig:
     def __post_init__(self) -> None:
         if self.episodes < 1:
             raise UsageError(f"a dataset needs at least 1 episode, got {self.episodes}")
+        last = self.source.seed + self.episodes - 1
+        if last > MAX_SEED:
+            raise UsageError(
+                f"seed {self.source.seed} with {self.episodes} episodes uses seeds up to {last}, beyond 2**32 - 1: "
+                f"give a seed of at most {MAX_SEED - self.episodes + 1}"
+            )
 
     def manifest(self) -> dict[str, Any]:
         """The options that identify the staged episodes (everything but how many there are)."""
