@@ -56,14 +56,33 @@ LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with tw
 _PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional"}
 
 
-def optimality(extra_phases: int) -> str:
-    """What ``optimal`` means for a plan made with ``extra_phases`` (the sentence in ``stats["optimality"]``)."""
+def optimality(extra_phases: int, status: str = "optimal", fewest_proven: bool = False) -> str:
+    """What a plan of ``status`` made with ``extra_phases`` is proven to be (the sentence in ``stats["optimality"]``).
+
+    Only what holds: the claim of optimality for ``optimal``; for ``feasible`` that it is not
+    proven (and, with ``fewest_proven``, that the plan with the fewest phases was proven
+    optimal among those); for a status without a plan, that there is no claim.
+    """
     if extra_phases == 0:
-        return "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)"
-    return (
-        f"optimal for Eq. 1 among all plans of at most N + {extra_phases} phases (N: the fewest that admit a plan), "
-        "each counted over N + extra_phases phases with idle phases at its end"
-    )
+        claim = "optimal for Eq. 1 among the plans with the fewest phases that admit one (the paper's deepening)"
+    else:
+        claim = (
+            f"optimal for Eq. 1 among all plans of at most N + {extra_phases} phases (N: the fewest that admit a "
+            "plan), each counted over N + extra_phases phases with idle phases at its end"
+        )
+    if status == "optimal":
+        return claim
+    if status == "feasible":
+        fewest = (
+            "; the plan with the fewest phases (stats['fewest_phases_objective']) was proven optimal among those"
+            if fewest_proven
+            else ""
+        )
+        return (
+            "not proven optimal: the time ran out first (stats['gap'], when not None, is the proven gap); "
+            f"the planner was looking for the plan {claim}{fewest}"
+        )
+    return f"no plan (status {status}), so no claim of optimality"
 
 
 def plan(
@@ -178,11 +197,12 @@ class _Run:
             lower_bound_s=0.0,
             build_s=0.0,
             solve_s=0.0,
-            optimality=optimality(self.extra_phases),
         )
 
     def finish(self, status: str, phases: tuple = ()) -> Plan:
         self.stats["total_s"] = time.perf_counter() - self.started
+        fewest_proven = "fewest_phases_objective" in self.stats  # set only after an optimal N-phase solve
+        self.stats["optimality"] = optimality(self.extra_phases, status, fewest_proven)
         objective = plan_objective(self.scenario, phases) if phases else None
         return Plan(self.scenario.name, status, objective, tuple(phases), self.stats)
 

@@ -272,3 +272,24 @@ def test_a_feasible_plan_says_its_proven_gap_or_that_it_has_none(gap, says):
     feasible = Plan(found.scenario, "feasible", found.objective, found.phases, {**found.stats, "gap": gap})
     text = _plan_summary_text(EXAMPLE, feasible, Path("plan.json"), None, 10.0)
     assert says in text
+
+
+def test_the_optimality_sentence_says_only_what_holds(capsys, tmp_path):
+    """An infeasible scenario claimed "optimal ... among the plans with the fewest phases"; so did ``feasible``."""
+    import numpy as np
+
+    from expert.planner import optimality, plan
+    from fetchcarry_env.families import get_family
+
+    output = tmp_path / "walled.plan.json"
+    status, out, _ = run(capsys, "plan", infeasible_scenario(tmp_path / "walled.json"), "-o", output,
+                         "--max-phases", "5", "--json")  # fmt: skip
+    stats = json.loads(out)["stats"]
+    assert status == 1 and "optimal for" not in stats["optimality"] and "no claim of optimality" in stats["optimality"]
+    assert Plan.load(output).stats["optimality"] == stats["optimality"]
+    feasible = optimality(0, "feasible")
+    assert feasible.startswith("not proven optimal") and "fewest_phases_objective" not in feasible
+    assert "proven optimal among those" in optimality(2, "feasible", fewest_proven=True)
+    result = plan(get_family("multi-4").sample(np.random.default_rng(1)), time_limit=0.1)  # any status may come
+    assert result.stats["optimality"] == optimality(0, result.status)
+    assert result.stats["optimality"].startswith("optimal for") == (result.status == "optimal")
