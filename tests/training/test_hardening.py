@@ -548,3 +548,59 @@ def test_seeds_beyond_2_32_for_later_episodes_are_exit_2(capsys, command: str) -
 def test_the_largest_seed_is_taken(capsys) -> None:
     status, out, err = run(capsys, *SEED_COMMANDS["rollout"], "--seed", str(2**32 - 1))
     assert status in (0, 1) and f"seed {2**32 - 1}" in out, err
+
+
+@pytest.mark.parametrize("root", ["relative", "tilde"])
+def test_a_relative_or_tilde_datasets_path_is_resolved_once(capsys, monkeypatch, tmp_path: Path, root: str) -> None:
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.setenv("MINARI_DATASETS_PATH", "rel/datasets" if root == "relative" else "~/datasets")
+    expected = tmp_path / "rel" / "datasets" if root == "relative" else tmp_path / "home" / "datasets"
+    status, out, err = generate_random(capsys)
+    assert status == 0, err
+    assert f"written to {expected / DATASET_ID}" in out
+    status, out, err = run(capsys, "dataset", "info", DATASET_ID)
+    assert status == 0 and str(expected / DATASET_ID) in out, err
+
+
+def test_an_empty_datasets_path_is_exit_2(capsys, monkeypatch) -> None:
+    monkeypatch.setenv("MINARI_DATASETS_PATH", "")
+    status, _, err = generate_random(capsys)
+    assert status == 2 and "MINARI_DATASETS_PATH is set but empty" in err
+
+
+H5PY_DISK_FULL = (
+    "Can't synchronously write data (file write failed: time = Tue Dec  1 10:00:00 2026, filename = "
+    "'main_data.hdf5', file descriptor = 7, errno = 28, error message = 'No space left on device', buf = "
+    "0x55d0, total write size = 8192, bytes this sub-write = 8192, bytes actually written = "
+    "18446744073709551615, offset = 0)"
+)
+
+
+def test_a_disk_that_fills_during_the_hdf5_write_is_exit_2_and_keeps_the_episodes(capsys, monkeypatch) -> None:
+    from minari.dataset._storages.hdf5_storage import HDF5Storage
+
+    def full(*args, **kwargs):
+        raise RuntimeError(H5PY_DISK_FULL)
+
+    usage = shutil_module.disk_usage(".")
+    with monkeypatch.context() as patch:
+        patch.setattr(training.data.datasets.shutil, "disk_usage", lambda path: usage._replace(free=10**12))
+        patch.setattr(HDF5Storage, "update_episodes", full)
+        status, _, err = generate_random(capsys)
+    assert status == 2 and "No space left on device" in err, err
+    assert str(Staging(DATASET_ID).path / "assembling") in err
+    assert Staging(DATASET_ID).staged() == {0, 1} and not (Staging(DATASET_ID).path / "assembling").exists()
+    assert not dataset_path(DATASET_ID).exists()
+    status, out, err = generate_random(capsys)
+    assert status == 0 and "2 resumed" in out, err
+
+
+def test_the_space_estimate_counts_hdf5s_cost_per_episode(capsys, monkeypatch) -> None:
+    """2.7 MB free once passed the estimate for a dataset HDF5 then could not hold."""
+    usage = shutil_module.disk_usage(".")
+    with monkeypatch.context() as patch:
+        patch.setattr(training.data.datasets.shutil, "disk_usage", lambda path: usage._replace(free=2_700_000))
+        status, _, err = generate_random(capsys, DATASET_ID, 20)
+    assert status == 2 and "not enough free space" in err, err
+    assert Staging(DATASET_ID).staged() == set(range(20))

@@ -60,8 +60,13 @@ CODE_URL = "https://github.com/fetchcarry/fetchcarry"
 ALGORITHMS = {"expert": "fetchcarry MILP expert (SCIP), ExpertPolicy", "random": "RandomMaskedPolicy"}
 ASSEMBLY_FOLDER = "assembling"  # in the staging folder: the dataset being written
 REPLACED_FOLDER = "replaced"  # in the staging folder: an old dataset between the two renames of a replacement
-SPACE_MARGIN = 1.2  # assembled dataset size / staged files' size (HDF5 holds the same arrays)
-MIN_FREE_BYTES = 1_000_000  # bytes kept free besides the estimate
+# The assembled dataset's size, estimated from the staged files: HDF5 holds the same arrays (1.2 times the staged
+# bytes measured) plus a fixed cost per episode (a group, a dataset per info key and their attributes: up to about
+# 85 kB measured for a phases episode), so short expert episodes take up to 3.5 times their staged bytes.
+SPACE_MARGIN = 1.5  # assembled arrays / staged files' size
+EPISODE_OVERHEAD_BYTES = 128_000  # HDF5's own bytes per episode
+MIN_FREE_BYTES = 16_000_000  # bytes kept free besides the estimate (the file's metadata, other writers)
+_DISK_FULL = ("No space left on device", "errno = 28")  # how h5py's RuntimeError of a failed write says ENOSPC
 _AT_FDCWD = -100  # Linux: paths relative to the current directory
 _RENAME_EXCHANGE = 2  # Linux renameat2 flag: swap the two paths
 REPLAY_TOLERANCE = 1e-5  # observation units (metres): replayed observations must agree this closely
@@ -120,8 +125,10 @@ def assemble(config: GenerationConfig, staging: Staging) -> Path:
     """Write the Minari dataset ``config.dataset_id`` from its staged episodes ``0 .. episodes-1``.
 
     The dataset is built in the staging folder; :func:`publish` moves it into place.
-    Returns the folder it was built in. A write that fails (a full disk) is an
-    ``OSError`` that names that folder.
+    Returns the folder it was built in. A write that fails is an ``OSError`` that
+    names that folder, a full disk (h5py says so with a ``RuntimeError``) a
+    :class:`NoSpaceError`; either way the half-written folder is removed and the
+    staged episodes are kept.
     """
     building = staging.path / ASSEMBLY_FOLDER
     if building.exists():
@@ -130,7 +137,16 @@ def assemble(config: GenerationConfig, staging: Staging) -> Path:
     try:
         _write_dataset(config, staging, building)
     except OSError as error:
+        shutil.rmtree(building, ignore_errors=True)  # the staged episodes stay; the half-written file goes
         raise OSError(error.errno, f"cannot write the dataset ({error.strerror or error})", str(building)) from error
+    except RuntimeError as error:  # h5py reports a failed write (a full disk) as a RuntimeError
+        if not any(words in str(error) for words in _DISK_FULL):
+            raise
+        shutil.rmtree(building, ignore_errors=True)
+        raise NoSpaceError(
+            f"cannot write the dataset (No space left on device): {building} (the staged episodes are kept: "
+            "free some space and run the same command again)"
+        ) from None
     namespace = config.dataset_id.rsplit("/", 1)[0] if "/" in config.dataset_id else None
     if namespace is not None:
         from minari.namespace import create_namespace, list_local_namespaces
@@ -175,9 +191,12 @@ def check_free_space(staging: Staging) -> None:
     """Raise :class:`NoSpaceError` unless the disk of the staging folder can hold the assembled dataset.
 
     The estimate is the staged files' size times :data:`SPACE_MARGIN` (the HDF5 file
-    holds the same arrays, uncompressed, plus the per-episode metadata).
+    holds the same arrays, uncompressed) plus :data:`EPISODE_OVERHEAD_BYTES` per episode
+    and :data:`MIN_FREE_BYTES`. A write that still fails for want of space is caught by
+    :func:`assemble`.
     """
-    needed = int(staging.size_bytes() * SPACE_MARGIN) + MIN_FREE_BYTES
+    episodes = len(staging.staged())
+    needed = int(staging.size_bytes() * SPACE_MARGIN) + EPISODE_OVERHEAD_BYTES * episodes + MIN_FREE_BYTES
     free = shutil.disk_usage(staging.path).free
     if free < needed:
         raise NoSpaceError(

@@ -34,6 +34,7 @@ import numpy as np
 from fetchcarry_env.errors import UsageError
 from training.rollout import EpisodeFigures, EpisodeRecord
 
+DATASETS_ENV = "MINARI_DATASETS_PATH"  # Minari's variable: where local datasets live
 STAGING_FOLDER = ".staging"
 MANIFEST = "manifest.json"
 CORRUPT_FOLDER = "corrupt"  # staged episodes that could not be read, kept for a post-mortem
@@ -42,9 +43,22 @@ _EPISODE_FILE = re.compile(r"^episode_(\d{6,})\.npz$")
 
 
 def datasets_root() -> Path:
-    """Where Minari keeps local datasets (``MINARI_DATASETS_PATH`` or ``~/.minari/datasets``)."""
+    """Where Minari keeps local datasets (``MINARI_DATASETS_PATH`` or ``~/.minari/datasets``), an absolute path.
+
+    A relative ``MINARI_DATASETS_PATH`` (or one starting with ``~``) is resolved against
+    the current folder (the home folder) the first time, and written back to the
+    environment, so that Minari's own calls, later calls and worker processes all use
+    the same folder. An empty one is bad input.
+    """
     from minari.storage.datasets_root_dir import get_dataset_path  # minari (h5py) only when a dataset is used
 
+    raw = os.environ.get(DATASETS_ENV)
+    if raw is not None:
+        if not raw.strip():
+            raise UsageError(f"{DATASETS_ENV} is set but empty: give it a folder, or unset it for ~/.minari/datasets")
+        absolute = os.path.abspath(os.path.expanduser(raw))
+        if absolute != raw:
+            os.environ[DATASETS_ENV] = absolute
     return Path(get_dataset_path())
 
 
