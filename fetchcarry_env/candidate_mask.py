@@ -81,28 +81,49 @@ def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: np.ndarray) -> np.ndarra
     return out
 
 
-def _sweep_hits(
-    px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray, radius: np.ndarray, rect: tuple
-) -> np.ndarray:
-    """True where a disc of ``radius`` sliding ``p`` -> ``q`` touches ``rect`` before the end (1-D arrays).
+def sweep_table(blockers: np.ndarray, radius: float) -> np.ndarray:
+    """``(2 M, 22)``: what the swept-disc test needs of each blocker, for ``radius - CONTACT_SLACK`` then ``radius``.
 
-    geometry._sweep_disc_rect(...) < 1.0, operation for operation: the start inside the
-    rounded rectangle, an entry into one of the two grown rectangles or the four
-    corner circles before ``t = 1``. The two rectangles, and the four circles, go
-    through one array pass each.
+    Per row: the rectangle (4), the disc's ``radius - EPS`` and ``radius ** 2`` (computed as
+    ``radius * radius``), the two grown rectangles' ``min_x`` (2), ``min_y`` (2), ``max_x`` (2),
+    ``max_y`` (2), and the four corners' x (4) and y (4), in the scalar code's order (metres).
     """
-    x0, y0, x1, y1 = rect
+    rows = []
+    for r in (radius - CONTACT_SLACK, radius):
+        x0, y0, x1, y1 = (blockers[:, i] for i in range(4))
+        rows.append(
+            np.stack(
+                [
+                    *(x0, y0, x1, y1, np.full(x0.shape, r - EPS), np.full(x0.shape, r * r)),
+                    *(x0 - r, x0, y0, y0 - r, x1 + r, x1, y1, y1 + r),
+                    *(x0, x1, x1, x0, y0, y0, y1, y1),
+                ],
+                axis=1,
+            )
+        )
+    return np.concatenate(rows).reshape(-1, 22)
+
+
+def _sweep_hits(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """True where the disc of row ``n`` of a :func:`sweep_table` sliding ``p`` -> ``q`` touches its rectangle.
+
+    geometry._sweep_disc_rect(...) < 1.0, operation for operation (1-D arrays, metres):
+    the start inside the rounded rectangle, an entry into one of the two grown
+    rectangles or the four corner circles before ``t = 1``. The two rectangles, and the
+    four circles, go through one array pass each.
+    """
+    x0, y0, x1, y1, limit, r2 = rows[:, :6].T
     hit = _hypot_below(
-        np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), radius - EPS
+        np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), limit
     )
     dx, dy = qx - px, qy - py
-    grown = (np.stack([x0 - radius, x0]), np.stack([y0, y0 - radius]), np.stack([x1 + radius, x1]))
-    valid, t0, t1 = _clip(px, py, dx, dy, (*grown, np.stack([y1, y1 + radius])))  # (2, n)
+    grown = rows[:, 6:8].T, rows[:, 8:10].T, rows[:, 10:12].T, rows[:, 12:14].T  # (2, n) each
+    valid, t0, t1 = _clip(px, py, dx, dy, grown)
     hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).any(axis=0)
-    fx, fy = px - np.stack([x0, x1, x1, x0]), py - np.stack([y0, y0, y1, y1])  # (4, n): from each corner
+    fx, fy = px - rows[:, 14:18].T, py - rows[:, 18:22].T  # (4, n): from each corner
     a = dx * dx + dy * dy
     b = 2 * (fx * dx + fy * dy)
-    disc = b * b - 4 * a * (fx * fx + fy * fy - radius * radius)
+    disc = b * b - 4 * a * (fx * fx + fy * fy - r2)
     real = (a > 1e-18) & (disc > 0)
     root, two_a = np.sqrt(np.where(real, disc, 0.0)), np.where(real, 2 * a, 1.0)
     t_in, t_out = (-b - root) / two_a, (-b + root) / two_a
@@ -110,21 +131,35 @@ def _sweep_hits(
 
 
 def moves_free(
-    start_x: ArrayLike, start_y: ArrayLike, end_x: ArrayLike, end_y: ArrayLike, radius: float, blockers: np.ndarray
+    start_x: ArrayLike,
+    start_y: ArrayLike,
+    end_x: ArrayLike,
+    end_y: ArrayLike,
+    radius: float,
+    blockers: np.ndarray,
+    table: np.ndarray | None = None,
 ) -> np.ndarray:
     """True where ``move_stop`` of a base of ``radius`` from start to end reports no contact (1-D arrays).
 
-    ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y, max_x, max_y`` (metres).
+    ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y,
+    max_x, max_y`` (metres); ``table`` their :func:`sweep_table` (built here if not
+    given). A blocker stops a move when the box around the move overlaps it and the
+    swept discs of ``radius - CONTACT_SLACK`` and of ``radius`` both touch it (one array
+    pass for the two).
     """
     sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
+    table = sweep_table(blockers, radius) if table is None else table
     n, m = np.nonzero(
         _box_overlaps(
             sx[:, None], sy[:, None], ex[:, None], ey[:, None], radius, *(blockers[None, :, i] for i in range(4))
         )
     )
     free = np.ones(sx.shape, dtype=bool)
-    blocked = _pairs_blocked(sx[n], sy[n], ex[n], ey[n], radius, blockers[m], boxes_known=True)
-    free[n[blocked]] = False
+    if n.size:
+        both = np.concatenate((n, n))
+        rows = table[np.concatenate((m, m + blockers.shape[0]))]
+        touch = _sweep_hits(sx[both], sy[both], ex[both], ey[both], rows).reshape(2, -1)
+        free[n[touch.all(axis=0)]] = False
     return free
 
 
@@ -147,33 +182,8 @@ def _box_overlaps(
     )
 
 
-def _pairs_blocked(
-    sx: np.ndarray,
-    sy: np.ndarray,
-    ex: np.ndarray,
-    ey: np.ndarray,
-    radius: float,
-    rects: np.ndarray,
-    boxes_known: bool = False,
-) -> np.ndarray:
-    """Per pair (move ``n``, blocker ``rects[n]``): True where ``move_stop`` says that blocker stops the move.
-
-    The box test, then the swept disc of ``radius - CONTACT_SLACK`` and of ``radius``
-    (both must touch; one array pass for the two) (1-D arrays, metres).
-    """
-    rect = tuple(rects[:, i] for i in range(4))
-    hit = np.arange(sx.size) if boxes_known else np.flatnonzero(_box_overlaps(sx, sy, ex, ey, radius, *rect))
-    out = np.zeros(sx.size, dtype=bool)
-    if hit.size:
-        two = np.r_[hit, hit]
-        radii = np.repeat([radius - CONTACT_SLACK, radius], hit.size)
-        touch = _sweep_hits(sx[two], sy[two], ex[two], ey[two], radii, tuple(v[two] for v in rect)).reshape(2, -1)
-        out[hit[touch.all(axis=0)]] = True
-    return out
-
-
 def _standing_blocked(px: np.ndarray, py: np.ndarray, radius: float, rects: np.ndarray) -> np.ndarray:
-    """``_pairs_blocked`` of zero-length moves (``move_stop(p, p)``), per pair (point ``n``, ``rects[n]``).
+    """``moves_free``'s test of zero-length moves (``move_stop(p, p)``), per pair (point ``n``, ``rects[n]``).
 
     With ``q = p`` the sweep reduces to: the start inside the rounded rectangle, or
     inside one of the two closed grown rectangles (Liang-Barsky with zero denominators
@@ -285,6 +295,7 @@ class FastPhases:
         self.fits_x = (self.xs >= (area.min_x - margin) - 1e-9) & (self.xs <= (area.max_x + margin) + 1e-9)
         self.fits_y = (self.ys >= (area.min_y - margin) - 1e-9) & (self.ys <= (area.max_y + margin) + 1e-9)
         self.blockers = _rects(rect for _, rect in base_blockers(scenario))
+        self.sweeps = sweep_table(self.blockers, radius)
         self.obstacles = _rects(o.rect for o in scenario.obstacles)
         postures = scenario.robot.postures
         self.reach = np.array(
@@ -338,11 +349,13 @@ class FastPhases:
 
     def _free_from(self, base: tuple[float, float], groups: list[_Offers]) -> list[np.ndarray]:
         """Per group, True where the base goes from ``base`` to the candidate's end cell without a contact."""
-        cells = np.concatenate([g.ci * self.lattice.shape[1] + g.cj for g in groups])
-        unique, inverse = np.unique(cells, return_inverse=True)
-        ui, uj = np.divmod(unique, self.lattice.shape[1])
-        free = moves_free(base[0], base[1], self.xs[ui], self.ys[uj], self.radius, self.blockers)[inverse]
-        return np.split(free, np.cumsum([g.index.size for g in groups])[:-1])
+        ci, cj = np.concatenate([g.ci for g in groups]), np.concatenate([g.cj for g in groups])
+        free = moves_free(base[0], base[1], self.xs[ci], self.ys[cj], self.radius, self.blockers, self.sweeps)
+        out, start = [], 0
+        for g in groups:
+            out.append(free[start : start + g.index.size])
+            start += g.index.size
+        return out
 
     # ------------------------------------------------------------------ what the items decide
     def _items_of(self, state: WorldState) -> _Items:
@@ -603,6 +616,7 @@ class FastPhases:
                 np.r_[y, y],
                 self.radius,
                 self.blockers,
+                self.sweeps,
             )
             ok[ends] = free[: x.size] & free[x.size :]  # stands free at the end, and gets there
         keep[sel] = ok
