@@ -21,6 +21,7 @@ from cli_run import run
 from gymnasium.envs.registration import EnvSpec
 
 import expert.planner
+import training.cli.exits
 import training.cli.planning
 import training.data.datasets
 import training.data.generate
@@ -604,3 +605,21 @@ def test_the_space_estimate_counts_hdf5s_cost_per_episode(capsys, monkeypatch) -
         status, _, err = generate_random(capsys, DATASET_ID, 20)
     assert status == 2 and "not enough free space" in err, err
     assert Staging(DATASET_ID).staged() == set(range(20))
+
+
+@pytest.mark.parametrize("blocked", ["file-in-place", "temp-under-a-file"])
+def test_an_internal_error_is_exit_3_when_no_report_can_be_written(capsys, monkeypatch, tmp_path: Path, blocked):
+    def broken(*args, **kwargs):
+        raise RuntimeError("a bug")
+
+    if blocked == "file-in-place":
+        (tmp_path / training.cli.exits.REPORT_FOLDER).write_text("a file where the report folder goes")
+        temp = tmp_path
+    else:  # an unusable TMPDIR (root writes through permissions: a file in its path stops everyone)
+        (tmp_path / "afile").write_text("")
+        temp = tmp_path / "afile" / "tmp"
+    monkeypatch.setattr(training.cli.exits.tempfile, "gettempdir", lambda: str(temp))
+    monkeypatch.setattr(training.cli.planning, "load_plan", broken)
+    status, _, err = run(capsys, "validate", EXAMPLE, EXAMPLE)
+    assert status == 3 and "internal error: RuntimeError: a bug" in err
+    assert "no full report could be written" in err and err.count("\n") == 2

@@ -6,7 +6,9 @@
   file, a full disk). Nothing else: a ``ValueError`` that is not an ``InputError`` is a bug.
 - 130, Ctrl-C: ``KeyboardInterrupt`` wherever it arrives.
 - 3, an unexpected internal error: one line naming the error and the path of a full
-  report (the traceback) written under the temporary folder.
+  report (the traceback) written under the temporary folder; when the report cannot be
+  written (no temporary folder, a file in the report folder's place), a line says so and
+  the status is still 3.
 - A closed output pipe (``fetchcarry dataset info ID | head``) ends quietly, the way
   the Python documentation recommends: stdout is pointed at ``/dev/null`` so that the
   interpreter's final flush does not fail again.
@@ -56,7 +58,11 @@ def run_command(handler: Callable[[argparse.Namespace], int | None], args: argpa
         say(describe_os_error(error))
     except Exception as error:  # every other error is a bug: report it, exit 3
         say(f"internal error: {type(error).__name__}: {error}")
-        say(f"the full report is in {write_report(error, args)}")
+        try:
+            say(f"the full report is in {write_report(error, args)}")
+        except Exception as problem:  # a report that cannot be written does not change the status
+            reason = describe_os_error(problem) if isinstance(problem, OSError) else f"{type(problem).__name__}"
+            say(f"no full report could be written ({reason})")
         return INTERNAL_ERROR
     return BAD_INPUT
 
