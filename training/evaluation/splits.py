@@ -31,13 +31,14 @@ entry here; an existing version never changes.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from fetchcarry_env.families import EXTENT, HELD_OUT_FAMILIES, Family, draw_push, get_family
+from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.errors import BenchmarkError
 
@@ -139,12 +140,21 @@ def split_scenarios(split: Split | str, episodes: int | None = None) -> list[Eva
     return out
 
 
-def folder_scenarios(folder: str | Path, episodes: int | None = None) -> list[EvalScenario]:
+def extent_text(rect: Rect) -> str:
+    """``rect`` in words and metres: ``x from -1 to 6 m, y from -1 to 6 m``."""
+    return f"x from {rect.min_x:g} to {rect.max_x:g} m, y from {rect.min_y:g} to {rect.max_y:g} m"
+
+
+def folder_scenarios(
+    folder: str | Path, episodes: int | None = None, learned: Sequence[str] = ()
+) -> list[EvalScenario]:
     """The scenario files (``*.json``, in name order) of ``folder``, the first ``episodes`` of them.
 
     Every file must be a valid scenario whose area lies inside the families' extent
-    (``EXTENT``, the floor a trained policy's lattice covers); :class:`BenchmarkError`
-    names every file that is not.
+    (``EXTENT``, the floor the benchmark's action lattice covers, for every policy);
+    :class:`BenchmarkError` names every file that is not. ``learned`` names the learned
+    policies of the run: the message says that they were trained on that extent (the
+    expert and random policies were trained on nothing).
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -161,9 +171,17 @@ def folder_scenarios(folder: str | Path, episodes: int | None = None) -> list[Ev
             problems.append(f"{path.name}: {error}")
             continue
         if not EXTENT.contains_rect(scenario.area):
-            problems.append(f"{path.name}: its area {scenario.area} does not fit inside the trained extent {EXTENT}")
+            problems.append(f"{path.name}: its area ({extent_text(scenario.area)}) {_outside(learned)}")
             continue
         out.append(EvalScenario(index, f"scenarios:{folder.name}", path.name, EVAL_SEED_BASE + index, scenario))
     if problems:
         raise BenchmarkError("unusable scenario files:\n" + "\n".join(problems))
     return out
+
+
+def _outside(learned: Sequence[str]) -> str:
+    """Why an area outside ``EXTENT`` is refused: the floor every policy acts on, and what was trained on it."""
+    text = f"does not fit inside the families' extent ({extent_text(EXTENT)}), the floor every policy acts on"
+    if learned:
+        text += f"; {', '.join(learned)} {'was' if len(learned) == 1 else 'were'} trained on that extent"
+    return text
