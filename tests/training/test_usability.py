@@ -88,3 +88,26 @@ def test_scenarios_outside_the_extent_are_refused_in_metres(capsys, tmp_path: Pa
     assert "Rect(" not in err and "trained" not in err
     with pytest.raises(ValueError, match="bc-basic was trained on that extent"):
         folder_scenarios(folder, learned=["bc-basic"])
+
+
+def _commands(parser, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
+    """Every (sub)command of ``parser`` as the words that name it."""
+    import argparse
+
+    out = [prefix]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                out += _commands(sub, (*prefix, name))
+    return out
+
+
+def test_no_help_text_shows_an_escaped_percent(capsys) -> None:
+    """``bench anytime --help`` printed "within 5 %% of": a %-escape in a text argparse never formats."""
+    from training.cli import build_parser
+
+    commands = _commands(build_parser())
+    assert ("bench", "anytime") in commands
+    for command in commands:
+        status, out, _ = run(capsys, *command, "--help")
+        assert status == 0 and "%%" not in out, command

@@ -65,7 +65,7 @@ ANYTIME_COMMAND = Command(
     description="Plan the scale cases of bench planner (4, 5 and 6 objects, every goal covered with 3; "
     "seed 2024) at time limits of 0.1 s and 1 s and once at 30 s as the reference, check every plan with "
     "the validator, and print per case and limit: valid plans, optimal ones, plans with the reference's "
-    "phases, how many lie within 5 %% of a proven optimum, how far each one's Eq. 1 lies above the "
+    "phases, how many lie within 5 % of a proven optimum, how far each one's Eq. 1 lies above the "
     "reference and the gaps the planner proved. Takes several minutes.",
 )
 PUSH_COMMAND = Command(
