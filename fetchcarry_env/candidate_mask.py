@@ -45,6 +45,7 @@ REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance (the rules use th
 ARM_TOL = 1e-6  # metres: arm_line_clear's tolerance
 GUARD = 1e-12  # metres: a hypot this close to its threshold is redone with math.hypot
 UNIT = np.array([heading_vector(h) for h in HEADINGS], dtype=np.int64)  # (4, 2): heading index -> unit vector
+_FIELDS = ("index", "ci", "cj", "heading", "posture")  # an _Offers' arrays
 PUSH_HEADING = np.array([[HEADINGS.index(h) for h in push_headings(d)] for d in HEADINGS], dtype=np.int64)  # (4, 3)
 
 
@@ -326,36 +327,30 @@ class FastPhases:
     # ------------------------------------------------------------------ the table
     def table(self, state: WorldState) -> PhaseTable:
         """Which candidates are allowed in ``state`` and their env actions: :func:`enumerate_phases`' answer."""
-        layout = self.layout
         items = self._items_of(state)
-        heading = HEADINGS.index(state.heading)
-        moves = self._moves(state, items.approaches, heading)
-        lattice_ends = [items.picks, items.places, moves]
-        free = self._free_from(state.base, lattice_ends)
-        groups = [offers.take(ok) for offers, ok in zip(lattice_ends, free, strict=True)]
-        _, first = np.unique(groups[2].ci * self.lattice.shape[1] + groups[2].cj, return_index=True)
-        groups[2] = groups[2].take(np.sort(first))  # one move candidate per env action: the first allowed
-        groups.append(self._pushes(state, items.pieces))
-        mask = np.zeros(layout.size, dtype=bool)
-        actions = np.zeros((layout.size, 5), dtype=np.int64)
-        index = np.concatenate([g.index for g in groups])
-        mask[index] = True
-        actions[index] = np.stack(
-            [np.concatenate([getattr(g, f) for g in groups]) for f in ("ci", "cj", "heading", "posture")]
-            + [np.concatenate([np.full(g.index.size, g.mode) for g in groups])],
-            axis=1,
-        )
+        moves = self._moves(state, items.approaches, HEADINGS.index(state.heading))
+        groups = [items.picks, items.places, moves]  # every candidate whose end is a lattice point, moves last
+        index, ci, cj, heading, posture = (np.concatenate([getattr(g, f) for g in groups]) for f in _FIELDS)
+        bx, by = state.base
+        keep = moves_free(bx, by, self.xs[ci], self.ys[cj], self.radius, self.blockers, self.sweeps)
+        start = index.size - moves.index.size
+        allowed = np.flatnonzero(keep[start:]) + start
+        _, first = np.unique(ci[allowed] * self.lattice.shape[1] + cj[allowed], return_index=True)
+        keep[allowed] = False
+        keep[allowed[first]] = True  # one move candidate per env action: the first allowed
+        mode = np.repeat([g.mode for g in groups], [g.index.size for g in groups])
+        mask = np.zeros(self.layout.size, dtype=bool)
+        actions = np.zeros((self.layout.size, 5), dtype=np.int64)
+        rows = np.flatnonzero(keep)
+        mask[index[rows]] = True
+        actions[index[rows]] = np.stack([ci[rows], cj[rows], heading[rows], posture[rows], mode[rows]], axis=1)
+        pushes = self._pushes(state, items.pieces)
+        if pushes.index.size:
+            mask[pushes.index] = True
+            actions[pushes.index] = np.stack(
+                [pushes.ci, pushes.cj, pushes.heading, pushes.posture, np.full(pushes.index.size, pushes.mode)], axis=1
+            )
         return PhaseTable(mask, actions)
-
-    def _free_from(self, base: tuple[float, float], groups: list[_Offers]) -> list[np.ndarray]:
-        """Per group, True where the base goes from ``base`` to the candidate's end cell without a contact."""
-        ci, cj = np.concatenate([g.ci for g in groups]), np.concatenate([g.cj for g in groups])
-        free = moves_free(base[0], base[1], self.xs[ci], self.ys[cj], self.radius, self.blockers, self.sweeps)
-        out, start = [], 0
-        for g in groups:
-            out.append(free[start : start + g.index.size])
-            start += g.index.size
-        return out
 
     # ------------------------------------------------------------------ what the items decide
     def _items_of(self, state: WorldState) -> _Items:
