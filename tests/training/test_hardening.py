@@ -623,3 +623,20 @@ def test_an_internal_error_is_exit_3_when_no_report_can_be_written(capsys, monke
     status, _, err = run(capsys, "validate", EXAMPLE, EXAMPLE)
     assert status == 3 and "internal error: RuntimeError: a bug" in err
     assert "no full report could be written" in err and err.count("\n") == 2
+
+
+BROKEN_TIMINGS = ["[]", '{"stages": []}', '{"runs": 5}', '{"runs": {"a": {"wall": "x"}}}', "{not json", "\x00"]
+
+
+@pytest.mark.parametrize("content", BROKEN_TIMINGS)
+def test_a_broken_timings_file_of_reproduce_is_exit_2_naming_it(capsys, tmp_path: Path, content: str) -> None:
+    from dataclasses import asdict
+
+    from training.reproduce.budgets import SMOKE
+
+    out = tmp_path / "repro"
+    out.mkdir()
+    (out / "reproduce.json").write_text(json.dumps({"budget": asdict(SMOKE), "seeds": 1}))
+    (out / "timings.json").write_text(content)
+    status, _, err = run(capsys, "reproduce", "--out", out, "--budget", "smoke", "--seeds", "1", "--no-progress")
+    assert status == 2 and str(out / "timings.json") in err, err

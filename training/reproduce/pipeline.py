@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.errors import InputError
+from fetchcarry_env.jsontext import JsonInputError, read_json
 from training.data.generate import generate
 from training.data.sources import EpisodeSource, GenerationConfig
 from training.evaluation.results import RESULTS, read_results, write_results
@@ -64,6 +65,7 @@ from training.resolve import available
 
 DATASET_ID = "fetchcarry/training-phases-v0"
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
+MAX_TIMINGS_BYTES = 10_000_000  # timings.json: seconds per stage and run
 WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
 MINARI_ENV = "MINARI_DATASETS_PATH"
 
@@ -155,9 +157,17 @@ class Timings:
     def __init__(self, out: Path) -> None:
         self.file = out / TIMINGS_FILE
         try:
-            self.data: dict[str, Any] = json.loads(self.file.read_text())
-        except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
-            self.data = {}
+            data = read_json(self.file, MAX_TIMINGS_BYTES)
+        except FileNotFoundError:
+            data = {}
+        except JsonInputError as error:
+            raise ReproduceError(f"{self.file}: {error} (delete it to start the timings again)") from None
+        if not _is_timings(data):
+            raise ReproduceError(
+                f"{self.file} is not a timings file (stages and runs, each with wall and cpu seconds): "
+                "delete it to start the timings again"
+            )
+        self.data: dict[str, Any] = data
         self.data.setdefault("stages", {})
         self.data.setdefault("runs", {})
 
@@ -173,6 +183,21 @@ class Timings:
         started, cpu = time.perf_counter(), cpu_seconds()
         yield
         self.add("stages", name, time.perf_counter() - started, cpu_seconds() - cpu)
+
+
+def _is_timings(data: Any) -> bool:
+    """Whether ``data`` is what :class:`Timings` writes: ``{"stages"|"runs": {name: {"wall": s, "cpu": s}}}``."""
+    if not isinstance(data, dict):
+        return False
+    groups = [data.get(group, {}) for group in ("stages", "runs")]
+    entries = [entry for group in groups if isinstance(group, dict) for entry in group.values()]
+    return all(isinstance(group, dict) for group in groups) and all(
+        isinstance(entry, dict) and all(_is_seconds(entry.get(k)) for k in ("wall", "cpu")) for entry in entries
+    )
+
+
+def _is_seconds(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def cpu_seconds() -> float:
