@@ -21,6 +21,7 @@ from cli_run import run
 from gymnasium.envs.registration import EnvSpec
 
 import expert.planner
+import training.cli.benchmark
 import training.cli.exits
 import training.cli.planning
 import training.data.datasets
@@ -640,3 +641,14 @@ def test_a_broken_timings_file_of_reproduce_is_exit_2_naming_it(capsys, tmp_path
     (out / "timings.json").write_text(content)
     status, _, err = run(capsys, "reproduce", "--out", out, "--budget", "smoke", "--seeds", "1", "--no-progress")
     assert status == 2 and str(out / "timings.json") in err, err
+
+
+def test_ctrl_c_before_the_first_benchmark_episode_says_nothing_finished(capsys, monkeypatch, tmp_path: Path) -> None:
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(training.cli.benchmark, "run_benchmark", interrupted)
+    out = tmp_path / "bench"
+    status, _, err = run(capsys, "benchmark", "--policies", "random", "--split", "iid", "--out", out, "--no-progress")
+    assert status == 130 and "before any episode finished: nothing was written" in err, err
+    assert "the finished episodes are in" not in err

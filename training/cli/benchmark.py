@@ -13,6 +13,7 @@ import json
 import math
 import sys
 from dataclasses import asdict
+from pathlib import Path
 
 from training.cli.arguments import add_worker_options, positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
@@ -98,7 +99,11 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
         )
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
-        say(f"interrupted: the finished episodes are in {args.out}/{RESULTS}; add --resume to finish them")
+        results = Path(args.out) / RESULTS
+        if results.is_file():
+            say(f"interrupted: the finished episodes are in {results}; add --resume to finish them")
+        else:
+            say(f"interrupted before any episode finished: nothing was written to {results}")
         return INTERRUPTED
     if args.json:
         print(json.dumps([_json_row(asdict(row)) for row in report.rows], indent=1))
