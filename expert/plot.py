@@ -5,7 +5,9 @@ where it was pushed to, objects and their goals), then the plan: every base move
 an arrow (travel with an empty hand, carrying, push strokes), the base disc and its
 heading at every phase with the phase number, the arm line of every pick and place,
 and a list of the steps beside the map. The title carries the status and the
-objective. Headless (Agg); see :mod:`fetchcarry_env.drawing` for the shared pieces.
+objective. :func:`plot_scenario` draws a scenario alone as it starts, in the same
+layout (what it holds beside the map, a close-up of the goal tables), without
+planning. Headless (Agg); see :mod:`fetchcarry_env.drawing` for the shared pieces.
 """
 
 from __future__ import annotations
@@ -89,10 +91,10 @@ def _draw_plan(axes: Axes, scenario: Scenario, plan: Plan, *, label_merge_m: flo
     drawing.number_points(axes, [p.base for p in phases], label_merge_m, LABEL_OFFSET * scenario.robot.radius)
 
 
-def _close_up_view(scenario: Scenario, plan: Plan) -> Rect:
+def _close_up_view(scenario: Scenario, plan: Plan | None) -> Rect:
     """The region around the goal tables and the bases of every place and push (and where pushes start)."""
     boxes = [t.rect for obj in scenario.objects if (t := scenario.table_under(obj.goal, obj.radius)) is not None]
-    for k, phase in enumerate(plan.phases):
+    for k, phase in enumerate(plan.phases if plan is not None else ()):
         if phase.action in ("place", "push"):
             boxes.append(Rect.around(phase.base, 0.0, 0.0))
             if phase.action == "push":
@@ -215,3 +217,84 @@ def _list_steps(axes: Axes, plan: Plan) -> None:
     ]
     rows += phase_rows(plan, _step_row, MAX_LISTED_STEPS, "   ... and {} more phases")
     axes.text(0.0, 1.0, "\n".join(rows), va="top", ha="left", family="monospace", fontsize=7, transform=axes.transAxes)
+
+
+def plot_scenario(scenario: Scenario, path: str | Path, *, width_in: float = 7.0, dpi: int = 120) -> Path:
+    """Draw ``scenario`` from above as it starts and save it (PNG, SVG, PDF: by the suffix of ``path``); no plan.
+
+    Left: the whole area (tables, obstacles, clutter, objects, goals, the robot, each
+    labelled). Right: what the scenario holds, and a close-up of the goal tables, where a
+    goal under clutter shows (the goals are drawn above the clutter). Returns the path written.
+    """
+    path = Path(path)
+    height_in = drawing.map_height_in(scenario, width_in) + 1.1  # title, axis labels and the legend
+    figure = Figure(figsize=(width_in + SIDE_WIDTH_IN, height_in), layout="constrained")
+    FigureCanvasAgg(figure)
+    facts = _scenario_facts(scenario)
+    facts_in = min(STEP_ROW_IN * (len(facts) + 1) + 0.2, height_in - MIN_CLOSE_UP_IN)
+    grid = figure.add_gridspec(
+        2, 2, width_ratios=[width_in, SIDE_WIDTH_IN], height_ratios=[facts_in, height_in - facts_in]
+    )
+    map_axes = figure.add_subplot(grid[:, 0])
+    facts_axes = figure.add_subplot(grid[0, 1])
+    close_axes = figure.add_subplot(grid[1, 1])
+    close_axes.set_anchor("N")
+    drawing.frame_map(map_axes, scenario.area.inflate(drawing.MARGIN))
+    close_view = _close_up_view(scenario, None)
+    drawing.frame_map(close_axes, close_view)
+    for axes in (map_axes, close_axes):
+        drawing.draw_scenario(axes, scenario, show_clutter=False)
+        for item in scenario.clutter:  # labelled above, so that the label does not hide a goal under it
+            drawing.draw_clutter(axes, item, item.rect.center, label=False)
+            axes.text(item.rect.center[0], item.rect.max_y + 0.02, item.id, ha="center", va="bottom", fontsize=7,
+                      color=drawing.PALETTE.clutter_edge, weight="bold", zorder=drawing.Z_TEXT, clip_on=True,
+                      path_effects=drawing.LABEL_HALO)  # fmt: skip
+    map_axes.set_title(f"{scenario.name}: the scenario as it starts (no plan)", fontsize=10)
+    close_axes.set_title("close-up: the goal tables", fontsize=9)
+    facts_axes.set_axis_off()
+    facts_axes.text(0.0, 1.0, "\n".join(facts), va="top", ha="left", family="monospace", fontsize=7,
+                    transform=facts_axes.transAxes)  # fmt: skip
+    figure.legend(handles=_scenario_legend_handles(scenario), loc="outside lower center", ncol=5, fontsize=7,
+                  frameon=False)  # fmt: skip
+    figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
+    drawing.separate_labels(map_axes)
+    drawing.separate_labels(close_axes)
+    figure.savefig(path, dpi=dpi)
+    return path
+
+
+def _scenario_facts(scenario: Scenario) -> list[str]:
+    """The text beside a scenario's map: the area, the robot, and every object with its tables."""
+    area = scenario.area
+    robot = scenario.robot
+    rows = [
+        f"area      x {area.min_x:g} to {area.max_x:g} m, y {area.min_y:g} to {area.max_y:g} m",
+        f"robot     at ({robot.start[0]:g}, {robot.start[1]:g}), heading {robot.heading}, radius {robot.radius:g} m",
+        f"holds     {len(scenario.tables)} table(s), {len(scenario.obstacles)} obstacle(s), "
+        f"{len(scenario.clutter)} clutter",
+        "",
+        f"{'object':<10} {'start':<14} {'goal':<14} goal table",
+    ]
+    for obj in scenario.objects[:MAX_LISTED_STEPS]:
+        table = scenario.table_under(obj.goal, obj.radius)
+        start, goal = f"{obj.start[0]:.2f}, {obj.start[1]:.2f}", f"{obj.goal[0]:.2f}, {obj.goal[1]:.2f}"
+        rows.append(f"{obj.id[:10]:<10} {start:<14} {goal:<14} {table.id if table else '-'}")
+    if len(scenario.objects) > MAX_LISTED_STEPS:
+        rows.append(f"... and {len(scenario.objects) - MAX_LISTED_STEPS} more objects")
+    return rows
+
+
+def _scenario_legend_handles(scenario: Scenario) -> list:
+    """Legend entries of a scenario drawn as it starts."""
+    palette = drawing.PALETTE
+    handles = [Patch(facecolor=palette.robot, edgecolor=palette.robot_edge, alpha=0.8, label="robot start, heading")]
+    for obj in scenario.objects[:6]:
+        colour = drawing.object_colour(scenario, obj.id)
+        handles.append(Line2D([], [], color=colour, marker="o", linestyle="--", label=f"{obj.id}: start, goal ring"))
+    handles.append(Patch(facecolor=palette.goal, alpha=0.6, label="goal"))
+    handles.append(Patch(facecolor=palette.table, edgecolor=palette.table_edge, label="table"))
+    if scenario.obstacles:
+        handles.append(Patch(facecolor=palette.obstacle, edgecolor=palette.wall, hatch="//", label="obstacle"))
+    if scenario.clutter:
+        handles.append(Patch(facecolor=palette.clutter, edgecolor=palette.clutter_edge, label="clutter"))
+    return handles

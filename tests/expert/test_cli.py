@@ -128,7 +128,8 @@ def test_validate_a_directory_is_exit_2(capsys, tmp_path, plan_file):
     "argv",
     [
         ("validate", EXAMPLE, "x.json", "--strict"),
-        ("validate", EXAMPLE),
+        ("validate",),  # validate SCENARIO alone checks the scenario (below)
+        ("validate", EXAMPLE, "x.json", "y.json"),
         ("plan", EXAMPLE, "--time-limit", "soon"),
         ("plan", EXAMPLE, "--time-limit", "-1"),
         ("plan", EXAMPLE, "--max-phases", "0"),
@@ -293,3 +294,33 @@ def test_the_optimality_sentence_says_only_what_holds(capsys, tmp_path):
     result = plan(get_family("multi-4").sample(np.random.default_rng(1)), time_limit=0.1)  # any status may come
     assert result.stats["optimality"] == optimality(0, result.status)
     assert result.stats["optimality"].startswith("optimal for") == (result.status == "optimal")
+
+
+# ---------------------------------------------------------------------- validate SCENARIO (no plan)
+def test_validate_a_scenario_alone_without_planning(capsys, tmp_path, bad_inputs, monkeypatch):
+    """No command checked a scenario alone or drew it without planning: ``validate SCENARIO [--plot PNG]``."""
+    import expert.planner
+
+    monkeypatch.setattr(expert.planner, "plan", lambda *a, **k: pytest.fail("validate SCENARIO must not plan"))
+    picture = tmp_path / "scenario.png"
+    status, out, err = run(capsys, "validate", EXAMPLE, "--plot", picture)
+    assert status == 0, err
+    assert "valid scenario basic-area3-07 (1 object(s), 2 table(s)" in out and f"plot written to {picture}" in out
+    assert picture.read_bytes()[:4] == b"\x89PNG"
+    status, out, err = run(capsys, "validate", bad_inputs["invalid"], "--json", "--plot", tmp_path / "bad.png")
+    report = json.loads(out)
+    assert status == 1 and not report["valid"] and len(report["violations"]) == 2, err
+    assert any(v.startswith("rule 1 (unique ids)") for v in report["violations"]) and "not drawn" in err
+    assert not (tmp_path / "bad.png").exists()
+    for which in ("missing", "broken", "binary"):
+        assert run(capsys, "validate", bad_inputs[which])[0] == 2, which
+    status, _, err = run(capsys, "validate", Path(__file__).parents[1] / "fuzz" / "push_basic.plan.json")
+    assert status == 2 and "is a plan" in err
+    status, _, err = run(capsys, "validate", EXAMPLE, "--plot", tmp_path / "scenario.xyz")
+    assert status == 2 and "cannot draw into" in err
+
+
+def test_validate_with_a_plan_can_draw_it(capsys, tmp_path, plan_file):
+    picture = tmp_path / "plan.png"
+    status, out, _ = run(capsys, "validate", EXAMPLE, plan_file, "--plot", picture)
+    assert status == 0 and f"{plan_file}: valid for {EXAMPLE}" in out and picture.read_bytes()[:4] == b"\x89PNG"

@@ -1,7 +1,8 @@
 """The planner's commands: ``fetchcarry plan`` and ``fetchcarry validate``.
 
 Exit statuses: ``plan`` 0 when a plan was found and 1 when none (infeasible, time
-limit); ``validate`` 0 for a valid plan and 1 for an invalid one; 2 for bad input
+limit); ``validate`` 0 for a valid plan (or, given no plan, a valid scenario) and 1 for
+an invalid one; 2 for bad input
 (raised here as ``UsageError``, ``ScenarioError`` or ``PlanFormatError`` and turned
 into one short message by :func:`training.cli.main`).
 """
@@ -17,8 +18,16 @@ from typing import Any
 from expert.plans import Phase, Plan, phase_rows
 from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
+from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
-from training.cli.files import check_plot_format, check_writable, file_format, load_plan, load_scenario
+from training.cli.files import (
+    check_plot_format,
+    check_readable,
+    check_writable,
+    file_format,
+    load_plan,
+    load_scenario,
+)
 from training.cli.options import Command
 from training.cli.text import echo
 
@@ -42,14 +51,19 @@ PLAN_COMMAND = Command(
 )
 VALIDATE_COMMAND = Command(
     name="validate",
-    help="check a plan against the rules of docs/plan-format.md and list every violation",
-    description="Check PLAN (fetchcarry-plan/1) for SCENARIO against the rules of docs/plan-format.md "
+    help="check a scenario, or a plan for it, against the format's rules and list every violation",
+    description="Without PLAN: check SCENARIO alone against the rules of docs/scenario-format.md (its "
+    "fields, unique ids, rectangles, the robot's start, objects and goals on tables, no overlaps, "
+    "numbers and counts), without planning, and list every violation; --plot draws it from above. "
+    "With PLAN (fetchcarry-plan/1): check the plan for SCENARIO against the rules of docs/plan-format.md "
     "(area and clearance of the base, holding, objects that stay, reach and arm line, pushes, "
     "the goal at the end) and docs/design.md's execution rules (a place delivers; a push needs "
     "a forward or lateral stroke, the contact within reach and room for the hand). Every violation is "
-    "listed, one line each, naming the rule, the phase and the ids.",
-    epilog="Exit status: 0 valid, 1 invalid, 2 bad input (a missing file, broken JSON, a scenario "
-    "that breaks the rules of docs/scenario-format.md, a plan file that is not fetchcarry-plan/1).",
+    "listed, one line each, naming the rule, the phase and the ids; --plot draws the plan.",
+    epilog="Exit status: 0 valid, 1 invalid (without PLAN: the scenario breaks the rules of "
+    "docs/scenario-format.md), 2 bad input (a missing file, broken JSON, a file that is not "
+    "fetchcarry-scenario/1; with PLAN, a scenario that breaks the rules, a plan file that is not "
+    "fetchcarry-plan/1).",
 )
 
 
@@ -231,7 +245,12 @@ def _plan_summary_json(
 # ---------------------------------------------------------------------- validate
 def _add_validate_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scenario", metavar="SCENARIO", help="scenario file (JSON, fetchcarry-scenario/1)")
-    parser.add_argument("plan", metavar="PLAN", help="plan file (JSON, fetchcarry-plan/1)")
+    parser.add_argument(
+        "plan", metavar="PLAN", nargs="?", help="plan file (JSON, fetchcarry-plan/1); without it the scenario alone"
+    )
+    parser.add_argument(
+        "--plot", metavar="PNG", help="also draw the scenario (or, with PLAN, the plan) from above into this image file"
+    )
     parser.add_argument(
         "--json", action="store_true", help='print {"valid": ..., "violations": [...]} as JSON instead of text'
     )
@@ -239,10 +258,17 @@ def _add_validate_options(parser: argparse.ArgumentParser) -> None:
 
 def run_validate(args: argparse.Namespace) -> int:
     """``fetchcarry validate``: 0 valid, 1 invalid."""
+    plot_path = _plot_path(args.plot)
+    if args.plan is None:
+        return _validate_scenario(Path(args.scenario), plot_path, args.json)
     _check_not_swapped(Path(args.scenario), Path(args.plan))
     scenario = load_scenario(Path(args.scenario))
     plan = load_plan(Path(args.plan))
     violations = validate_plan(scenario, plan)
+    if plot_path is not None:
+        from expert.plot import plot_plan  # matplotlib only when a picture is asked for
+
+        plot_plan(scenario, plan, plot_path)
     if args.json:
         report = {"scenario": args.scenario, "plan": args.plan, "valid": not violations, "violations": violations}
         print(json.dumps(report, indent=2))
@@ -252,7 +278,72 @@ def run_validate(args: argparse.Namespace) -> int:
     else:
         steps = len(plan.phases) - 1
         echo(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
+    if plot_path is not None and not args.json:
+        echo(f"plot written to {plot_path}")
     return 1 if violations else 0
+
+
+def _plot_path(plot: str | None) -> Path | None:
+    """The picture to draw (checked before anything is read), or ``None`` when none is asked for."""
+    if plot is None:
+        return None
+    path = Path(plot)
+    check_writable(path, "plot")
+    check_plot_format(path)
+    return path
+
+
+def _validate_scenario(path: Path, plot_path: Path | None, as_json: bool) -> int:
+    """``fetchcarry validate SCENARIO``: the scenario's rules alone; 0 valid, 1 invalid.
+
+    A file that is not a JSON object declaring ``fetchcarry-scenario/1`` (a missing file,
+    broken JSON, a plan) is bad input; a file that declares it and breaks the format's rules
+    (a field, an id, an overlap) is an invalid scenario.
+    """
+    check_readable(path, "scenario file")
+    declared = file_format(path)
+    if declared == PLAN_FORMAT:
+        raise UsageError(
+            f"{path} is a plan ({PLAN_FORMAT}), not a scenario; give its scenario first: "
+            "fetchcarry validate SCENARIO PLAN"
+        )
+    try:
+        scenario = load_scenario(path)
+    except ScenarioError as error:
+        if declared != SCENARIO_FORMAT:
+            raise  # not a scenario file at all (not JSON, no or another format): bad input
+        violations = error.violations
+    else:
+        violations = []
+    if as_json:
+        print(json.dumps({"scenario": str(path), "valid": not violations, "violations": violations}, indent=2))
+    elif violations:
+        echo(f"{path}: INVALID scenario: {len(violations)} violation(s) of docs/scenario-format.md")
+        echo("\n".join(f"  - {v}" for v in violations))
+    else:
+        echo(f"{path}: valid scenario {scenario.name} ({_counts(scenario)})")
+    if violations:
+        if plot_path is not None:
+            echo(f"fetchcarry: not drawn: {path} is not a valid scenario", file=sys.stderr)
+        return 1
+    if plot_path is not None:
+        from expert.plot import plot_scenario  # matplotlib only when a picture is asked for
+
+        plot_scenario(scenario, plot_path)
+        if not as_json:
+            echo(f"plot written to {plot_path}")
+    return 0
+
+
+def _counts(scenario: Scenario) -> str:
+    """What ``scenario`` holds, in words: ``1 object(s), 2 table(s), 1 obstacle(s), 3 clutter``."""
+    groups = (
+        ("object(s)", scenario.objects),
+        ("table(s)", scenario.tables),
+        ("obstacle(s)", scenario.obstacles),
+        ("clutter", scenario.clutter),
+    )
+    return ", ".join(f"{len(items)} {name}" for name, items in groups)
 
 
 def _check_not_swapped(scenario_path: Path, plan_path: Path) -> None:
