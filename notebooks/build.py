@@ -93,7 +93,13 @@ PLANNER = [
         "    print(k, phase.action.ljust(5), phase.base, phase.heading, phase.target, phase.posture)\n"
         "print('violations:', validate_plan(scenario, result))"
     ),
-    new_code_cell('plot_plan(scenario, result, "plan.png")\nImage("plan.png")'),
+    new_code_cell(
+        "import tempfile\n"
+        "from pathlib import Path\n\n"
+        "picture = Path(tempfile.mkdtemp()) / 'plan.png'  # not into the notebooks folder\n"
+        "plot_plan(scenario, result, picture)\n"
+        "Image(str(picture))"
+    ),
     new_markdown_cell(
         "## How fast, on every family\n\n"
         "Times are the whole call, model building included, in this process (importing pyscipopt "
