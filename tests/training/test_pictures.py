@@ -116,3 +116,16 @@ def test_the_gif_is_large_and_captions_every_state(record, tmp_path: Path) -> No
             image.seek(k)
             band = np.asarray(image.convert("RGB"))[: 2 * CAPTION_PX]
             assert (band < 100).any() and (band > 200).mean() > 0.8  # dark text on a white band
+
+
+def test_ppo_curves_with_one_point_per_run_show_the_points(tmp_path: Path) -> None:
+    """A smoke run's metrics.csv has one row: drawn as a line without markers, the four panels were empty."""
+    from training.pictures.benchmark import plot_ppo_curves
+
+    runs = [[{"steps": 2048.0, "seconds": 12.0 + s, "success": 0.25 * s, "return": s - 3.0}] for s in (1, 2)]
+    picture = np.asarray(Image.open(plot_ppo_curves([("ppo-phases", runs)], tmp_path / "ppo.png")).convert("RGB"))
+    blue = np.array(colors.to_rgb("C0")) * 255  # the first baseline's colour (drawn at alpha 0.8)
+    near = np.abs(picture.astype(float) - blue).max(axis=2) < 60
+    height, width = near.shape
+    panels = [near[: height // 2, width // 2 :], near[height // 2 :, : width // 2], near[height // 2 :, width // 2 :]]
+    assert all(panel.sum() > 20 for panel in panels)  # the top-left panel holds the legend's sample line too

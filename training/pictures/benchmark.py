@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from training.evaluation.metrics import Row
 
 DPI = 100  # dots per inch of every plot
+MARKER_SIZE = 4  # points: every curve marks its points, so a run with one row shows as a dot, not as nothing
 
 
 def pyplot() -> Any:
@@ -100,7 +101,7 @@ def plot_learning_curve(
     figure, axes = plt.subplots(1, len(keys), figsize=(4 * len(keys), 3.2), squeeze=False)
     xs = [float(r[x_key]) for r in rows]
     for axis, key in zip(axes[0], keys, strict=True):
-        axis.plot(xs, [float(r[key]) for r in rows])
+        axis.plot(xs, [float(r[key]) for r in rows], marker="o", markersize=MARKER_SIZE)  # one row shows too
         axis.set_xlabel(x_key)
         axis.set_ylabel(key)
     figure.suptitle(Path(run_dir).name)
@@ -152,8 +153,8 @@ def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]
 
     ``curves`` holds, per baseline, its label and the ``metrics.csv`` rows of each of its
     runs (``steps``, ``seconds``, ``success``, ``return``; an empty list for a run without
-    metrics). One colour per baseline, one line per run; the legend names a baseline by
-    its first run's line.
+    metrics). One colour per baseline, one line per run, each point marked (a run with
+    one row, as a smoke run has, is a dot); the legend names a baseline by its first run's line.
     """
     plt = pyplot()
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)
@@ -164,8 +165,15 @@ def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]
                 continue
             for r, key in enumerate(("success", "return")):
                 for c, x in enumerate(("steps", "seconds")):
-                    axes[r][c].plot([row[x] for row in rows], [row[key] for row in rows], color=colours[k % 10],
-                                    alpha=0.8, label=label if j == 0 else None)  # fmt: skip
+                    axes[r][c].plot(
+                        [row[x] for row in rows],
+                        [row[key] for row in rows],
+                        color=colours[k % 10],
+                        alpha=0.8,
+                        marker="o",
+                        markersize=MARKER_SIZE,
+                        label=label if j == 0 else None,
+                    )  # fmt: skip  (markers: one row shows too)
     for r, key in enumerate(("training success (episodes of the rollout)", "return (learning reward)")):
         for c, x in enumerate(("env steps", "wall-clock seconds")):
             axes[r][c].set_xlabel(x)
