@@ -111,3 +111,29 @@ def test_no_help_text_shows_an_escaped_percent(capsys) -> None:
     for command in commands:
         status, out, _ = run(capsys, *command, "--help")
         assert status == 0 and "%%" not in out, command
+
+
+def test_the_readme_says_which_mask_env_unwrapped_gives() -> None:
+    """``env.unwrapped.action_masks()`` of the phases env has 294 entries, not 4,080: the README says so, truly."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers the envs)
+
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    env = gym.make("FetchCarryPushPhases-v0", family="basic")
+    try:
+        env.reset(seed=0)
+        inner, outer = env.unwrapped.action_masks().shape[0], env.get_wrapper_attr("action_masks")().shape[0]
+        assert f"`env.unwrapped.action_masks()` has {inner} entries" in readme and f"not {outer:,}" in readme
+        with pytest.raises(AttributeError):
+            env.action_masks()
+        assert "`env.action_masks()` on what `gym.make` returns is an `AttributeError`" in readme
+    finally:
+        env.close()
+
+
+def test_the_readme_says_how_to_get_the_cpu_build_of_torch_elsewhere() -> None:
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    installing = readme.split("## Installing", 1)[1].split("## ", 1)[0]
+    assert "pip install torch==2.13.0 --index-url https://download.pytorch.org/whl/cpu" in installing
+    assert "A CUDA build works too" in installing
