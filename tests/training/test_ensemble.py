@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 
-from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observation import FIELDS, Capacity
 from tests.cli_run import run
 from training import load_policy
 from training.learners.bc import BCConfig, record_demonstrations, train_bc
@@ -75,10 +75,12 @@ def test_bad_members_are_refused(members: list[Path], tmp_path: Path):
     shutil.copytree(members[1], other)
     config = json.loads((other / "config.json").read_text())
     config["capacity"]["objects"] += 1
+    config["features"] += len(FIELDS["object"])  # a consistent config of another capacity
     (other / "config.json").write_text(json.dumps(config))
     with pytest.raises(ValueError, match="another capacity"):
         make_ensemble([members[0], other], tmp_path / "mixed")
     config["capacity"]["objects"] -= 1
+    config["features"] -= len(FIELDS["object"])
     config["complete"] = False
     (other / "config.json").write_text(json.dumps(config))
     with pytest.raises(ValueError, match="not a finished run"):

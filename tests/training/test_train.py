@@ -210,6 +210,52 @@ def test_weights_that_do_not_fit_are_a_value_error(phases_dataset: str, tmp_path
         training.load_policy(tmp_path / "run")
 
 
+def _unfinished(phases_dataset: str, folder: Path) -> dict:
+    """A finished bc run made unfinished again (no model.pt, not complete): its checkpoint, to edit."""
+    assert _bc(phases_dataset, folder) == 0
+    config = json.loads((folder / runs.CONFIG_FILE).read_text())
+    (folder / runs.CONFIG_FILE).write_text(json.dumps({**config, "complete": False}))
+    (folder / runs.WEIGHTS_FILE).unlink()
+    return torch.load(folder / runs.CHECKPOINT_FILE, weights_only=True)
+
+
+@pytest.mark.parametrize("epoch", [10**6, 4, -1, "3", 2.5])
+def test_resume_refuses_a_checkpoint_beyond_the_runs_epochs(phases_dataset: str, tmp_path: Path, capsys, epoch):
+    checkpoint = _unfinished(phases_dataset, tmp_path / "run")
+    torch.save({**checkpoint, "epoch": epoch}, tmp_path / "run" / runs.CHECKPOINT_FILE)
+    capsys.readouterr()
+    assert _bc(phases_dataset, tmp_path / "run", "--resume") == 2  # before: 0, complete with no training
+    assert str(tmp_path / "run" / runs.CHECKPOINT_FILE) in capsys.readouterr().err
+    assert not (tmp_path / "run" / runs.WEIGHTS_FILE).exists()
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_resume_and_load_refuse_weights_that_are_not_finite(phases_dataset: str, tmp_path: Path, capsys, bad):
+    checkpoint = _unfinished(phases_dataset, tmp_path / "run")
+    network = {k: torch.full_like(v, bad) if v.is_floating_point() else v for k, v in checkpoint["network"].items()}
+    torch.save({**checkpoint, "network": network}, tmp_path / "run" / runs.CHECKPOINT_FILE)
+    capsys.readouterr()
+    assert _bc(phases_dataset, tmp_path / "run", "--resume") == 2
+    assert "not all finite" in capsys.readouterr().err
+    assert _bc(phases_dataset, tmp_path / "done") == 0
+    weights = _weights(tmp_path / "done")
+    torch.save({k: torch.full_like(v, bad) for k, v in weights.items()}, tmp_path / "done" / runs.WEIGHTS_FILE)
+    with pytest.raises(runs.RunFolderError, match="not all finite"):  # before: it loaded and "delivered"
+        training.load_policy(tmp_path / "done")
+
+
+def test_a_failed_ppo_init_leaves_no_run_folder_behind(phases_dataset: str, tmp_path: Path, capsys) -> None:
+    assert _bc(phases_dataset, tmp_path / "bc") == 0
+    (tmp_path / "bc" / runs.WEIGHTS_FILE).write_bytes(b"not a zip of tensors")
+    args = ["train", "ppo", "--family", "basic", "--steps", "32", "--n-steps", "32", "--init", str(tmp_path / "bc"),
+            "--out", str(tmp_path / "ppo"), "--no-progress"]  # fmt: skip
+    capsys.readouterr()
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert str(tmp_path / "bc" / runs.WEIGHTS_FILE) in err and "weights_only" not in err
+    assert not (tmp_path / "ppo" / runs.CONFIG_FILE).exists()  # before: the retry said "already holds a run"
+
+
 # ---------------------------------------------------------------------------- dagger
 TINY_DAGGER = DaggerOptions(demonstrations=2, iterations=1, episodes_per_iteration=2, eval_episodes=2, epochs=2)
 TINY_NET = BCConfig(hidden=16, seed=3)

@@ -97,6 +97,21 @@ class BCPolicy(MaskedPolicy):
         self.returns.reset()
         self.last = None
 
+    def env_masks(self) -> np.ndarray:
+        """The masks of the env the policy was loaded with; a ``ValueError`` saying how to give them if none.
+
+        ``predict`` never sees the env a caller steps (stable-baselines3's
+        ``evaluate_policy(policy, env)`` gives it observations only), and the masks are
+        not a function of the observation the policy could compute exactly, so the
+        policy needs that env: ``load_policy(run, env)``.
+        """
+        if self.env is None:
+            raise ValueError(
+                "no action masks: give predict(..., action_masks=...), or load the policy with its env, "
+                "load_policy(run, env), so that it asks the env (as stable-baselines3's evaluate_policy needs)"
+            )
+        return super().env_masks()
+
     def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
         """The best-scoring allowed candidate (sampled from the scores' softmax unless ``deterministic``)."""
         flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, np.float32)

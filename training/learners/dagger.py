@@ -178,6 +178,34 @@ def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float
     return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
 
 
+def _resumed(
+    folder: Path,
+    checkpoint: dict[str, Any],
+    iterations: int,
+    config: BCConfig,
+    capacity: Capacity,
+    sizes: tuple[int, int],
+) -> tuple[Demonstrations, list[dict[str, Any]], Any]:
+    """The labelled states, rows and network of a checked DAgger checkpoint; RunFolderError if they do not fit."""
+    file = folder / runs.CHECKPOINT_FILE
+    rows = [dict(r) for r in checkpoint["metrics"]]
+    if len(rows) > iterations:
+        raise runs.RunFolderError(f"{file}: {len(rows):,} iterations done, more than this run's {iterations}")
+    candidates, features = sizes
+    arrays = [checkpoint.get(key) for key in ("observations", "masks", "labels")]
+    shapes = [(features,), (candidates,), ()]
+    if not all(isinstance(a, torch.Tensor) and a.ndim == 1 + len(s) and tuple(a.shape[1:]) == s
+               for a, s in zip(arrays, shapes, strict=True)) or len({len(a) for a in arrays}) != 1:  # fmt: skip
+        raise runs.RunFolderError(f"{file}: its labelled states do not fit this run ({candidates} candidates)")
+    aggregate = Demonstrations(arrays[0].numpy(), arrays[1].numpy().astype(bool), arrays[2].numpy())
+    network = build_network(config, capacity, candidates, torch.zeros(1, features))
+    try:
+        network.load_state_dict(checkpoint.get("network"))
+    except (RuntimeError, TypeError, AttributeError, KeyError) as error:
+        raise runs.RunFolderError(f"{file}: its network does not fit this run ({type(error).__name__})") from None
+    return aggregate, rows, network
+
+
 def train_dagger(
     family: str,
     options: DaggerOptions,
@@ -206,18 +234,15 @@ def train_dagger(
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
+    total = options.demonstrations + options.iterations * options.episodes_per_iteration
     if checkpoint is not None:
-        aggregate = Demonstrations(checkpoint["observations"].numpy(), checkpoint["masks"].numpy(),
-                                   checkpoint["labels"].numpy())  # fmt: skip
-        rows = [dict(r) for r in checkpoint["metrics"]]
-        episodes_done = int(checkpoint["episodes"])
-        network = build_network(config, capacity, candidates, torch.zeros(1, features))
-        network.load_state_dict(checkpoint["network"])
+        episodes_done = runs.checkpoint_counter(folder, checkpoint, "episodes", total)
+        aggregate, rows, network = _resumed(folder, checkpoint, options.iterations + 1, config, capacity,
+                                            (candidates, features))  # fmt: skip
     else:
         aggregate = Demonstrations(np.zeros((0, features), np.float32), np.zeros((0, candidates), bool),
                                    np.zeros(0, np.int64))  # fmt: skip
         rows, episodes_done, network = [], 0, None
-    total = options.demonstrations + options.iterations * options.episodes_per_iteration
     started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
     with tqdm(total=total, initial=episodes_done, desc=f"dagger {folder.name}", unit="episode",
               disable=not progress) as bar:  # fmt: skip

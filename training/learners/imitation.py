@@ -16,6 +16,7 @@ the BC network (every built-in kind: the ``load`` of their learners).
 
 from __future__ import annotations
 
+import os
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,7 @@ import torch
 from tqdm import tqdm
 
 from fetchcarry_env.errors import InputError
+from fetchcarry_env.jsontext import describe
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
@@ -102,7 +104,7 @@ def train_bc_run(
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.load_policy(folder)
-    done = int(checkpoint["epoch"]) if checkpoint else 0
+    done = runs.checkpoint_counter(folder, checkpoint, "epoch", config.epochs) if checkpoint else 0
     with tqdm(total=config.epochs, initial=done, desc=f"bc {folder.name}", unit="epoch", disable=not progress) as bar:
 
         def on_epoch(row: dict[str, Any]) -> None:
@@ -136,18 +138,44 @@ def load_network_policy(path: str | Path, env: Any = None) -> Any:
     capacity = Capacity(**saved["capacity"])
     ensemble = saved["kind"] == "ensemble"
     configs = [runs.network_config(member) for member in saved["options"]["members"]] if ensemble else [config]
-    built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
+    try:
+        built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
+    except ValueError as error:  # e.g. the set encoder for another number of candidates than its layout's
+        raise runs.RunFolderError(f"{path / runs.CONFIG_FILE}: {error}") from None
     network = Ensemble(built) if ensemble else built[0]
     weights = path / runs.WEIGHTS_FILE
-    if not weights.is_file():
+    if not os.path.lexists(weights):
         raise runs.RunFolderError(f"{path} has no {runs.WEIGHTS_FILE} (an unfinished run: resume it first)")
-    try:
-        state = torch.load(weights, weights_only=True, map_location="cpu")
-        network.load_state_dict(state)
-    except (RuntimeError, KeyError, TypeError, EOFError, OSError) as error:
-        raise runs.RunFolderError(f"{weights} does not fit the network its config.json describes: {error}") from None
+    load_weights(network, weights)
     policy = BCPolicy(network, config, capacity, env)
     with torch.inference_mode():
         # Trace it now, so that the first decision is not slower.
         policy.candidate_scores(torch.zeros(1, saved["features"]), torch.arange(saved["candidates"]))
     return policy
+
+
+def load_weights(network: torch.nn.Module, weights: Path) -> dict[str, torch.Tensor]:
+    """Load ``weights`` (a run's ``model.pt``) into ``network`` and return its tensors; :class:`RunFolderError` else.
+
+    The file must be a regular file of at most twice the network's own size (plus 1 MB)
+    holding exactly its tensors (names and shapes); every weight must be a finite number
+    once loaded (a NaN or an infinity, or a float64 beyond float32's range, is refused).
+    """
+    size = sum(t.numel() * t.element_size() for t in network.state_dict().values())
+    state = runs.read_tensors(weights, 2 * size + 2**20)
+    named = isinstance(state, dict) and all(isinstance(k, str) and torch.is_tensor(v) for k, v in state.items())
+    if not named:
+        raise runs.RunFolderError(f"{weights} does not hold a network's weights (named tensors)")
+    expected = network.state_dict()
+    missing, unexpected = sorted(set(expected) - set(state)), sorted(set(state) - set(expected))
+    if missing or unexpected:
+        names = ", ".join(describe(name) for name in (missing or unexpected)[:3])
+        counts = f"{len(missing)} tensors missing, {len(unexpected)} unexpected ({names} ...)"
+        raise runs.RunFolderError(f"{weights} does not fit the network its config.json describes: {counts}")
+    try:
+        network.load_state_dict(state)
+    except (RuntimeError, KeyError, TypeError, ValueError) as error:
+        first = (str(error).splitlines() or [""])[0][:300]
+        raise runs.RunFolderError(f"{weights} does not fit the network its config.json describes: {first}") from None
+    runs.check_finite(weights, dict(network.state_dict()))
+    return state

@@ -143,6 +143,15 @@ def save_ppo_checkpoint(folder: Path, model: Any, rows: list[dict[str, Any]]) ->
                                   "steps": int(model.num_timesteps), "metrics": rows})  # fmt: skip
 
 
+def _init_weights(init: Path, config: BCConfig, capacity: Capacity, candidates: int,
+                  features: int) -> dict[str, torch.Tensor]:  # fmt: skip
+    """The tensors of ``init``'s ``model.pt``, checked to fit the actor ``config`` builds (RunFolderError else)."""
+    from training.learners.imitation import load_weights
+
+    probe = build_network(config, capacity, candidates, torch.zeros(1, features))
+    return load_weights(probe, init / runs.WEIGHTS_FILE)  # refuses what is not the network's finite tensors
+
+
 def train_ppo(
     family: str, options: PPOOptions, out: str | Path, *, resume: bool = False, progress: bool = True
 ) -> list[dict[str, Any]]:
@@ -175,6 +184,10 @@ def train_ppo(
     features = int(env.observation_space.shape[0])
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
         raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
+    # The init run's weights are read and checked before the run folder is made: a bad one leaves nothing behind.
+    init_weights = None
+    if options.init is not None:
+        init_weights = _init_weights(Path(options.init), config, capacity, candidates, features)
     run_options = {"family": family, **asdict(options)}
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
                              {"init": options.init, "steps": options.steps})  # fmt: skip
@@ -201,13 +214,18 @@ def train_ppo(
     model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes an empty folder in /tmp per run
     rows: list[dict[str, Any]] = []
     if checkpoint is not None:
-        model.policy.load_state_dict(checkpoint["policy"])
-        model.policy.optimizer.load_state_dict(checkpoint["optimizer"])
-        model.num_timesteps = int(checkpoint["steps"])
+        steps = runs.checkpoint_counter(folder, checkpoint, "steps", options.steps + options.n_steps)
+        try:
+            model.policy.load_state_dict(checkpoint["policy"])
+            model.policy.optimizer.load_state_dict(checkpoint["optimizer"])
+        except (RuntimeError, TypeError, ValueError, KeyError, AttributeError) as error:
+            env.close()
+            file = folder / runs.CHECKPOINT_FILE
+            raise RunFolderError(f"{file}: it does not fit this run ({type(error).__name__})") from None
+        model.num_timesteps = steps
         rows = [dict(r) for r in checkpoint["metrics"]]
-    elif options.init is not None:
-        weights = torch.load(Path(options.init) / runs.WEIGHTS_FILE, weights_only=True, map_location="cpu")
-        model.policy.action_net.load_state_dict(weights)
+    elif init_weights is not None:
+        model.policy.action_net.load_state_dict(init_weights)
     done = model.num_timesteps
     started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
     try:

@@ -23,6 +23,18 @@ in ``options.members``, and acts on the mean of their log-probabilities. Loading
 ``torch.load(..., weights_only=True)`` tensors only: nothing in a run folder runs code.
 A ``config.json`` with an unknown key, a missing key, a bad kind or a value of the
 wrong type is a :class:`RunFolderError` (the user's bad input).
+
+A run folder is data a stranger may have written, so what it says is bounded before
+anything acts on it: ``config.json`` is read as a regular file of at most
+:data:`MAX_CONFIG_BYTES` (:func:`fetchcarry_env.jsontext.read_json`: no FIFO, device or
+deep nesting); its capacity within the scenario format's counts
+(:data:`fetchcarry_env.scenario.MAX_COUNTS`, :data:`MAX_POSTURES`), its ``features``
+the observation's length for that capacity, its network within :data:`MAX_HIDDEN`
+units, :data:`MAX_CANDIDATES` scores and :data:`MAX_PARAMETERS` weights. ``model.pt``
+and ``checkpoint.pt`` are read as regular files of bounded size (:func:`read_tensors`);
+weights that are not finite (NaN, infinities) are refused, on load and on resume, and a
+checkpoint's counter must lie within the run's budget (:func:`checkpoint_counter`).
+Every refusal is a :class:`RunFolderError` naming the file.
 """
 
 from __future__ import annotations
@@ -31,6 +43,8 @@ import csv
 import json
 import math
 import os
+import pickle
+import stat
 import tempfile
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -39,7 +53,9 @@ from typing import Any
 import torch
 
 from fetchcarry_env.errors import InputError
-from fetchcarry_env.observation import Capacity
+from fetchcarry_env.jsontext import JsonInputError, describe, read_json
+from fetchcarry_env.observation import Capacity, observation_size
+from fetchcarry_env.scenario import MAX_COUNTS
 from training.learners import registry
 from training.learners.options import BCConfig
 
@@ -48,6 +64,15 @@ INTERFACE = "phases"
 ENV_ID = "FetchCarryPushPhases-v0"
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
 OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete")
+
+MAX_CONFIG_BYTES = 4 * 2**20  # a config.json is a few kB (an ensemble's some 10 kB)
+MAX_POSTURES = 64  # a capacity's posture slots (the env's default has 4)
+MAX_HIDDEN = 4096  # units per hidden layer (the published runs have 256)
+MAX_CANDIDATES = 2**18  # scores (4,080 by default; 130,560 at the scenario format's largest counts)
+MAX_PARAMETERS = 100_000_000  # weights of one run's networks (400 MB; a published flat MLP has 1.2 million)
+MAX_MEMBERS = 64  # runs in an ensemble
+MAX_CHECKPOINT_BYTES = 4 * 2**30  # a checkpoint.pt (a DAgger run's holds its labelled states)
+SEEDS = (-(2**63), 2**64 - 1)  # the seeds torch.Generator.manual_seed takes
 
 
 class RunFolderError(InputError):
@@ -63,11 +88,13 @@ def read_saved(path: str | Path) -> dict[str, Any]:
     """The JSON object in run folder ``path``'s ``config.json`` (any kind, unchecked); :class:`RunFolderError` else."""
     file = Path(path) / CONFIG_FILE
     try:
-        saved = json.loads(file.read_text())
+        saved = read_json(file, MAX_CONFIG_BYTES)
     except FileNotFoundError:
         raise RunFolderError(f"{path} is not a run folder: no {CONFIG_FILE}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise RunFolderError(f"{file} is not valid JSON: {error}") from None
+    except JsonInputError as error:
+        raise RunFolderError(f"{file}: {error}") from None
+    except OSError as error:
+        raise RunFolderError(f"{file} cannot be read: {error.strerror or error}") from None
     if not isinstance(saved, dict):
         raise RunFolderError(f"{file} does not hold a run's configuration (a JSON object)")
     return saved
@@ -88,19 +115,78 @@ def read_config(path: str | Path) -> dict[str, Any]:
         raise RunFolderError(f"{file}: kind must be one of {', '.join(kinds)}, got {saved['kind']!r}")
     if saved.get("interface", INTERFACE) != INTERFACE:
         raise RunFolderError(f"{file}: interface must be {INTERFACE!r}, got {saved['interface']!r}")
-    _check_fields(file, "config", saved["config"], BCConfig)
+    configs = {"config": saved["config"]}
     if saved["kind"] == "ensemble":
         options = saved.get("options")
         members = options.get("members") if isinstance(options, dict) else None
         if not isinstance(members, list) or len(members) < 2 or not all(isinstance(m, dict) for m in members):
             raise RunFolderError(f"{file}: options.members must list at least two members (JSON objects)")
-        for k, member in enumerate(members):
-            _check_fields(file, f"options.members[{k}].config", member.get("config"), BCConfig)
+        if len(members) > MAX_MEMBERS:
+            raise RunFolderError(f"{file}: options.members lists {len(members):,} runs, more than {MAX_MEMBERS}")
+        configs.update({f"options.members[{k}].config": member.get("config") for k, member in enumerate(members)})
+    for key, config in configs.items():
+        _check_fields(file, key, config, BCConfig)
+        _check_network_config(file, key, config)
     _check_fields(file, "capacity", saved["capacity"], Capacity)
+    _check_capacity(file, saved["capacity"])
     for key in ("candidates", "features"):
         if not isinstance(saved[key], int) or isinstance(saved[key], bool) or saved[key] < 1:
-            raise RunFolderError(f"{file}: {key} must be a positive integer, got {saved[key]!r}")
+            raise RunFolderError(f"{file}: {key} must be a positive integer, got {describe(saved[key])}")
+    if saved["candidates"] > MAX_CANDIDATES:
+        raise RunFolderError(f"{file}: candidates {saved['candidates']:,} is more than the {MAX_CANDIDATES:,} "
+                             "a run's network may score")  # fmt: skip
+    size = observation_size(Capacity(**saved["capacity"]))
+    if saved["features"] != size:
+        raise RunFolderError(f"{file}: features must be the observation's length for its capacity ({size}), "
+                             f"got {saved['features']:,}")  # fmt: skip
+    weights = sum(network_parameters(saved, config) for config in configs.values())
+    if weights > MAX_PARAMETERS:
+        raise RunFolderError(f"{file}: its networks would hold {weights:,} weights, more than {MAX_PARAMETERS:,}")
     return saved
+
+
+def _check_network_config(file: Path, key: str, config: dict[str, Any]) -> None:
+    """Bounds on a (type-checked) network config: hidden units, the seed, finite numbers, BCConfig's own checks."""
+    hidden, seed = config.get("hidden", 1), config.get("seed", 0)
+    if not 1 <= hidden <= MAX_HIDDEN:
+        raise RunFolderError(f"{file}: {key}.hidden must be from 1 to {MAX_HIDDEN}, got {describe(hidden)}")
+    if not SEEDS[0] <= seed <= SEEDS[1]:
+        raise RunFolderError(f"{file}: {key}.seed {describe(seed)} is out of range")
+    for name, value in config.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            raise RunFolderError(f"{file}: {key}.{name} must be a finite number, got {value!r}")
+    try:
+        BCConfig(**{**LEGACY_CONFIG, **config})
+    except InputError as error:
+        raise RunFolderError(f"{file}: {key}: {error}") from None
+
+
+def _check_capacity(file: Path, capacity: dict[str, int]) -> None:
+    """Each of a (type-checked) capacity's counts within what a scenario may hold."""
+    highs = {**MAX_COUNTS, "postures": MAX_POSTURES}
+    for name, value in capacity.items():
+        low = 1 if name == "postures" else 0
+        if not low <= value <= highs[name]:
+            raise RunFolderError(f"{file}: capacity.{name} must be from {low} to {highs[name]}, got {describe(value)}")
+
+
+def network_parameters(saved: dict[str, Any], config: dict[str, Any]) -> int:
+    """An upper bound on the weights of the network ``config`` (a checked config's) builds for ``saved``'s sizes.
+
+    The flat MLP's three layers (with the relative features appended to its input); the
+    set encoder's token width is at most 128, whatever ``hidden`` says, so only the
+    scores of its candidates grow with the run (counted once per candidate and unit).
+    """
+    hidden, candidates = config.get("hidden", BCConfig().hidden), saved["candidates"]
+    if config.get("encoder", "mlp") != "mlp":
+        width = min(hidden, 128)
+        return 64 * width * width + candidates * width
+    capacity = Capacity(**saved["capacity"])
+    inputs = saved["features"]
+    if config.get("relative", LEGACY_CONFIG["relative"]):
+        rects = capacity.clutter + capacity.tables + capacity.obstacles
+        inputs += 6 * capacity.objects + 4 * rects + 2 * capacity.clutter * capacity.objects
+    return 2 * inputs + inputs * hidden + hidden * hidden + (hidden + 1) * (candidates + 2)
 
 
 def _check_fields(file: Path, key: str, value: Any, cls: type) -> None:
@@ -114,7 +200,7 @@ def _check_fields(file: Path, key: str, value: Any, cls: type) -> None:
         expected = type(getattr(cls(), name))
         plain = isinstance(item, expected) or (expected is float and isinstance(item, int))
         if not plain or isinstance(item, bool) != (expected is bool):
-            raise RunFolderError(f"{file}: {key}.{name} must be a {expected.__name__}, got {item!r}")
+            raise RunFolderError(f"{file}: {key}.{name} must be a {expected.__name__}, got {describe(item)}")
 
 
 LEGACY_CONFIG: dict[str, Any] = {"relative": False, "push_scores": False, "avoid_repeats": False,
@@ -138,7 +224,9 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
     ``load(path, env)`` loads it; the built-in kinds load with
     :func:`training.learners.imitation.load_network_policy`. ``env`` (a
     ``FetchCarryPushPhases-v0`` env) lets ``predict`` ask it for the masks when none are
-    given. Raises :class:`RunFolderError` (bad input) for anything that is not a loadable run folder.
+    given: stable-baselines3's ``evaluate_policy(policy, env)`` gives none, so load the
+    policy with that env. Raises :class:`RunFolderError` (bad input, a ``ValueError``) for
+    anything that is not a loadable run folder, and nothing else.
     """
     kind = read_saved(path).get("kind")
     if not (isinstance(kind, str) and kind in registry.kinds()):
@@ -190,14 +278,94 @@ def save_checkpoint(out: Path, state: dict[str, Any]) -> None:
 
 
 def load_checkpoint(out: Path) -> dict[str, Any] | None:
-    """The state in ``checkpoint.pt``, or None if there is none (``weights_only``: it runs no code)."""
+    """The state in ``checkpoint.pt``, or None if there is none (``weights_only``: it runs no code).
+
+    :class:`RunFolderError` unless it is a regular file of at most :data:`MAX_CHECKPOINT_BYTES`
+    holding a dict of tensors whose floating-point values are all finite.
+    """
     file = out / CHECKPOINT_FILE
-    if not file.is_file():
+    if not os.path.lexists(file):
         return None
+    state = read_tensors(file, MAX_CHECKPOINT_BYTES)
+    if not isinstance(state, dict):
+        raise RunFolderError(f"{file} does not hold a training checkpoint (a dict of its state)")
     try:
-        return torch.load(file, weights_only=True, map_location="cpu")
-    except (RuntimeError, EOFError, OSError, ValueError) as error:
-        raise RunFolderError(f"{file} cannot be read: {error}") from None
+        check_finite(file, state)
+    except RecursionError:
+        raise RunFolderError(f"{file} does not hold a training checkpoint: nested too deeply") from None
+    return state
+
+
+def checkpoint_counter(out: Path, checkpoint: dict[str, Any], key: str, high: int) -> int:
+    """``checkpoint[key]`` (epochs, env steps, episodes done), an integer from 0 to ``high`` (the run's budget).
+
+    A checkpoint that says more was done than the run's options ask for (or less than
+    nothing) would mark the run complete untrained: :class:`RunFolderError`. So is a
+    checkpoint without the counter, or whose ``metrics`` are not a list of rows.
+    """
+    file = out / CHECKPOINT_FILE
+    value = checkpoint.get(key)
+    if isinstance(value, torch.Tensor) and value.numel() == 1 and not value.is_floating_point():
+        value = int(value)
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise RunFolderError(f"{file}: {key} must be an integer, got {describe(value)}")
+    if not 0 <= value <= high:
+        raise RunFolderError(f"{file}: {key} {value:,} is not from 0 to {high:,} (this run's budget): "
+                             "train into a new folder")  # fmt: skip
+    rows = checkpoint.get("metrics")
+    if not isinstance(rows, list) or not all(isinstance(row, dict) for row in rows):
+        raise RunFolderError(f"{file}: metrics must be a list of rows")
+    return value
+
+
+def read_tensors(file: Path, max_bytes: int) -> Any:
+    """What ``torch.save`` wrote to ``file``, read with ``weights_only`` (tensors, numbers, strings, lists, dicts).
+
+    Only a regular file of at most ``max_bytes`` is read (opened without blocking, its
+    kind and size checked on the open file: no FIFO, device or symbolic link swapped in
+    between). Anything that is not such a file of tensors (random bytes, a text file, a
+    pickle of other objects, which is not loaded) is a :class:`RunFolderError`; its
+    message never suggests loading it otherwise.
+    """
+    try:
+        descriptor = os.open(file, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as error:
+        raise RunFolderError(f"{file} cannot be read: {error.strerror or error}") from None
+    with os.fdopen(descriptor, "rb") as stream:
+        mode = os.fstat(descriptor)
+        if not stat.S_ISREG(mode.st_mode):
+            raise RunFolderError(f"{file} is not a regular file: a run folder holds files torch.save wrote")
+        if mode.st_size > max_bytes:
+            raise RunFolderError(f"{file} is {mode.st_size:,} bytes, more than the {max_bytes:,} it may have")
+        try:
+            return torch.load(stream, weights_only=True, map_location="cpu")
+        except pickle.UnpicklingError:
+            raise RunFolderError(
+                f"{file} is not a file of tensors that torch.save wrote: it is not loaded (nothing in a run folder "
+                "runs code)"
+            ) from None
+        except Exception as error:  # a stranger's bytes: any failure of the reader is bad input
+            raise RunFolderError(f"{file} is not a file of tensors that torch.save wrote ({_short(error)})") from None
+
+
+def _short(error: BaseException) -> str:
+    """The error's type and the first line of its message, cut short."""
+    first = (str(error).splitlines() or [""])[0][:160]
+    return f"{type(error).__name__}: {first}" if first else type(error).__name__
+
+
+def check_finite(file: Path, value: Any, where: str = "") -> None:
+    """:class:`RunFolderError` if a floating-point tensor in ``value`` (dicts, lists of them) holds NaN or infinity."""
+    if isinstance(value, torch.Tensor):
+        if value.is_floating_point() and not bool(torch.isfinite(value).all()):
+            shown = describe(where) if where else "it holds"
+            raise RunFolderError(f"{file}: the weights {shown} are not all finite numbers (NaN or inf)")
+    elif isinstance(value, dict):
+        for key, item in value.items():
+            check_finite(file, item, f"{where}.{key}" if where else str(key))
+    elif isinstance(value, list | tuple):
+        for k, item in enumerate(value):
+            check_finite(file, item, f"{where}[{k}]")
 
 
 def save_weights(out: Path, network: torch.nn.Module) -> None:
