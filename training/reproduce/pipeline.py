@@ -141,6 +141,14 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
         if json.loads(json.dumps(settings["budget"])) != saved_budget:
             name = saved_budget.get("name") if isinstance(saved_budget, dict) else "?"
             raise ReproduceError(f"{out} holds a reproduction with another budget ({name}): use another folder")
+        saved_seeds = saved.get("seeds", seeds)  # a folder without the field: not known, so not refused
+        if saved_seeds != seeds:  # the ensemble, the benchmark and the table were made for those seeds
+            sane = isinstance(saved_seeds, int) and 1 <= saved_seeds <= 10**6
+            again = f"run it with --seeds {saved_seeds}, or" if sane else f"delete its {SETTINGS_FILE}, or"
+            raise ReproduceError(
+                f"{out} holds a reproduction of {saved_seeds if sane else 'other'} training seeds, not {seeds}: "
+                f"{again} use another folder"
+            )
     elif out.exists() and any(out.iterdir()):
         raise ReproduceError(f"{out} exists and is not an empty folder or a reproduction folder")
     out.mkdir(parents=True, exist_ok=True)
