@@ -105,6 +105,7 @@ MUTANTS: dict[str, tuple[Callable[[Path], None], str]] = {
     "model random": (lambda f: (f / runs.WEIGHTS_FILE).write_bytes(os.urandom(4096)), runs.WEIGHTS_FILE),
     "model /etc/passwd": (_replace(runs.WEIGHTS_FILE, lambda p: p.symlink_to("/etc/passwd")), runs.WEIGHTS_FILE),
     "model FIFO": (_replace(runs.WEIGHTS_FILE, os.mkfifo), runs.WEIGHTS_FILE),
+    "model folder": (_replace(runs.WEIGHTS_FILE, Path.mkdir), runs.WEIGHTS_FILE),  # found by the fuzz suite
     "model pickle": (lambda f: (f / runs.WEIGHTS_FILE).write_bytes(pickle.dumps(Path("x"))), runs.WEIGHTS_FILE),
     "model empty": (lambda f: (f / runs.WEIGHTS_FILE).write_bytes(b""), runs.WEIGHTS_FILE),
     "model {}": (_weights(lambda s: {}), runs.WEIGHTS_FILE),
@@ -160,3 +161,19 @@ def test_stable_baselines3_evaluate_policy_runs_a_policy_loaded_with_its_env(tra
     finally:
         env.close()
     assert mean == mean and spread >= 0  # a number: two episodes ran
+
+
+def test_a_reproduction_folder_refuses_another_number_of_seeds(tmp_path: Path) -> None:
+    from training.reproduce import SMOKE
+    from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings
+
+    out = tmp_path / "table"
+    check_settings(out, 2, SMOKE)
+    check_settings(out, 2, SMOKE)  # the same seeds: it continues
+    with pytest.raises(ReproduceError, match="of 2 training seeds, not 3: run it with --seeds 2"):
+        check_settings(out, 3, SMOKE)  # before: accepted; the summary said three seeds, the ensemble held two
+    assert json.loads((out / SETTINGS_FILE).read_text())["seeds"] == 2
+    saved = json.loads((out / SETTINGS_FILE).read_text())
+    del saved["seeds"]  # a folder whose settings do not say: not refused
+    (out / SETTINGS_FILE).write_text(json.dumps(saved))
+    check_settings(out, 3, SMOKE)

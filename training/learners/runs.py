@@ -331,12 +331,13 @@ def read_tensors(file: Path, max_bytes: int) -> Any:
         descriptor = os.open(file, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
     except OSError as error:
         raise RunFolderError(f"{file} cannot be read: {error.strerror or error}") from None
-    with os.fdopen(descriptor, "rb") as stream:
-        mode = os.fstat(descriptor)
+    mode = os.fstat(descriptor)
+    if not stat.S_ISREG(mode.st_mode) or mode.st_size > max_bytes:
+        os.close(descriptor)
         if not stat.S_ISREG(mode.st_mode):
             raise RunFolderError(f"{file} is not a regular file: a run folder holds files torch.save wrote")
-        if mode.st_size > max_bytes:
-            raise RunFolderError(f"{file} is {mode.st_size:,} bytes, more than the {max_bytes:,} it may have")
+        raise RunFolderError(f"{file} is {mode.st_size:,} bytes, more than the {max_bytes:,} it may have")
+    with os.fdopen(descriptor, "rb") as stream:
         try:
             return torch.load(stream, weights_only=True, map_location="cpu")
         except pickle.UnpicklingError:
