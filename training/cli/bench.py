@@ -17,10 +17,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from fetchcarry_env.errors import UsageError
-from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.arguments import positive_float, positive_int
 from training.cli.episodes import families
 from training.cli.files import check_readable, check_writable
 from training.cli.options import Command
+from training.cli.seeds import seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
 from training.speed import anytime as anytime_speed
@@ -107,9 +108,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 def _add_seed(parser: argparse.ArgumentParser, default: int, meaning: str) -> None:
     """``--seed S``: ``meaning``, and its default."""
-    parser.add_argument(
-        "--seed", type=whole_number, default=default, metavar="S", help=f"{meaning} (default {default})"
-    )
+    parser.add_argument("--seed", type=seed, default=default, metavar="S", help=f"{meaning} (default {default})")
 
 
 # ---------------------------------------------------------------------------- bench env
@@ -412,9 +411,7 @@ def _register_generate(bench: argparse._SubParsersAction) -> None:
         metavar="A,B",
         help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
     )
-    parser.add_argument(
-        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
-    )
+    parser.add_argument("--seed", type=seed, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
     parser.add_argument(
         "--policy", choices=("expert", "random"), default="expert", help="the MILP expert (default) or random"
     )

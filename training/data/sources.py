@@ -15,14 +15,13 @@ from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
 from training.envs import INTERFACES as ENV_IDS
-from training.envs import make_env
+from training.envs import MAX_SEED, make_env
 from training.policies.protocol import Policy
 from training.resolve import recording_policy
 
 INTERFACES = tuple(ENV_IDS)  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
-MAX_SEED = 2**32 - 1  # numpy and Gymnasium take seeds 0 .. 2**32 - 1
 PROJECTION = "nearest move candidate"  # what a phases dataset records for an expert move no candidate expresses
 
 

@@ -16,6 +16,7 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
+from training.envs import MAX_SEED
 
 HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
 
@@ -58,7 +59,18 @@ def nested(*, omit: tuple[str, ...] = ()) -> dict[str, Any]:
 
 def seed_option() -> Any:
     """The ``seed`` field of every learner (``--seed``): the run's weights depend on it alone, on CPU."""
-    return option(0, "training seed (default {default})")
+    return option(0, "training seed, 0 to 2**32 - 1 (default {default})", metavar="N", parse=read_seed)
+
+
+def read_seed(text: str) -> int:
+    """A training seed from the command line: a whole number from 0 to 2**32 - 1 (what numpy and torch take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise InputError(f"expected a whole number, got {text[:40]!r}") from None
+    if not 0 <= value <= MAX_SEED:
+        raise InputError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {text[:40]}")
+    return value
 
 
 def check_family(name: str) -> None:
