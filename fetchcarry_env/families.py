@@ -622,6 +622,8 @@ FAMILIES: dict[str, Family] = {
 HELD_OUT_FAMILIES: tuple[str, ...] = ("turned-room", "turned-corridor")
 """Families whose layouts no training family draws (for the benchmark's ``layouts-v0`` split)."""
 UNSEEN_LAYOUT_FAMILIES: tuple[str, ...] = ("unseen-layouts",)
+TRAINING_PREFIXES: tuple[str, ...] = ("basic", "push", "corridor", "multi", "turned-")
+"""How the names of the training families' scenarios (and the turned ones) begin."""
 """Topologies no training family draws, not even turned (for a new version of the ``layouts`` split)."""
 FAMILY_NAMES: tuple[str, ...] = tuple(FAMILIES)
 DEFAULT_FAMILY = "push"
