@@ -117,8 +117,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     | ``achieved_goal`` | 3 per object | each object's centre ``x, y, z`` (m); a held one is lifted 5 cm |
     | ``desired_goal`` | 3 per object | each goal's centre ``x, y, z`` (m), the object standing there |
 
-    The capacity (default 4 objects, 8 clutter, 6 tables, 12 obstacles, 4 postures)
-    fixes the sizes; every bound is +-200 m, which holds every valid world: coordinates
+    The capacity fixes the sizes (``Capacity()``: 4 objects, 8 clutter, 6 tables, 12
+    obstacles, 4 postures; by default the family's, which holds every scenario it draws:
+    see ``capacity`` below); every bound is +-200 m, which holds every valid world: coordinates
     lie within 100 m of the origin (scenario rule 6) and a held object rides at the hand,
     up to a posture's reach (at most 100 m) from the base and 5 cm above its table.
 

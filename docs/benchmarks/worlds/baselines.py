@@ -39,4 +39,5 @@ def main(episodes: int, families: tuple[str, ...] = FAMILIES) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 24, tuple(sys.argv[2].split(",")) if len(sys.argv) > 2 else FAMILIES)
+    chosen = tuple(sys.argv[2].split(",")) if len(sys.argv) > 2 else FAMILIES
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 24, chosen)
