@@ -550,8 +550,20 @@ def draw_turned_corridor(rng: np.random.Generator) -> Scenario:
 def _family_per_value(
     name: str, description: str, draw: Callable[[np.random.Generator, T], Scenario], values: Iterable[T]
 ) -> list[Family]:
-    """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument."""
-    return [Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v)) for v in values]
+    """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument.
+
+    An integer value is the scenarios' object count: the family's capacity holds that many objects.
+    """
+    return [
+        Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v), capacity=_holding(v))
+        for v in values
+    ]
+
+
+def _holding(value: object) -> Capacity:
+    """The default capacity, with room for ``value`` objects when it is an object count."""
+    objects = value if isinstance(value, int) else 0
+    return Capacity(objects=max(Capacity().objects, objects))
 
 
 def draw_mixed(rng: np.random.Generator) -> Scenario:
