@@ -216,11 +216,10 @@ def train_ppo(
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
     torch.manual_seed(options.seed)
-    actor = {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
-             "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+    actor = actor_spec(family, config, capacity, candidates, features)
     env = make_vec_env(family, options.envs)
     try:
-        model = _make_model(env, options, actor)
+        model = make_model(env, options, actor)
         rows = _restore(model, folder, checkpoint, options, init_weights)
         done = model.num_timesteps
         started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
@@ -236,7 +235,13 @@ def train_ppo(
     return rows
 
 
-def _make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
+def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
+    """How :class:`CandidateActorCritic` builds its actor: the network's settings and its input scale (``family``'s)."""
+    return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
+            "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+
+
+def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
     """MaskablePPO with the candidate actor-critic on ``env`` (a rollout: ``options.n_steps`` over all envs)."""
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.logger import Logger
