@@ -18,6 +18,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
 from training.envs import MAX_SEED
 
+MAX_ENVS = 64  # vector envs of a PPO run (one process each beyond the first)
 HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
 
 EPOCHS_HELP = "epochs (per iteration for dagger; default {default})"
@@ -123,8 +124,8 @@ class BCConfig:
 class PPOOptions:
     """A PPO run's budget and settings (the defaults are the published budget)."""
 
-    steps: int = option(20_000, "env steps in total (default {default})", positive=True)
-    n_steps: int = option(256, "env steps per rollout (default {default})", positive=True)
+    steps: int = option(20_000, "env steps in total, over all envs (default {default})", positive=True)
+    n_steps: int = option(256, "env steps per rollout, over all envs (default {default})", positive=True)
     batch_size: int = 64
     n_epochs: int = 10
     learning_rate: float = option(3e-4, STEP_SIZE_HELP, metavar="LR", positive=True)
@@ -135,10 +136,18 @@ class PPOOptions:
     hidden: int = option(256, HIDDEN_HELP, positive=True)
     seed: int = seed_option()
     init: str | None = option(None, "a bc or dagger run folder whose network starts the actor", metavar="RUN_DIR")
+    envs: int = option(
+        1,
+        "envs stepped side by side (default {default}; more than 1: one worker process each, env i's first "
+        f"episode from seed --seed + i; at most {MAX_ENVS})",
+        positive=True,
+    )
 
     def __post_init__(self) -> None:
         if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
             raise InputError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
+        if not 1 <= self.envs <= min(MAX_ENVS, self.n_steps):
+            raise InputError(f"envs must be from 1 to {MAX_ENVS} and at most n_steps, got {self.envs}")
         if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
             raise InputError("learning_rate must be positive and gamma in (0, 1]")
         BCConfig(encoder=self.encoder, hidden=self.hidden)
