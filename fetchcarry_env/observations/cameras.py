@@ -29,7 +29,7 @@ import numpy as np
 from fetchcarry_env.geometry import Rect, heading_vector
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.sim import Simulation
-from fetchcarry_env.sim.client import QuietClient, pybullet
+from fetchcarry_env.sim.client import QuietClient, pybullet, silenced_file_descriptors
 
 CAMERA_NAMES: tuple[str, ...] = ("head", "overhead")
 RENDERERS: tuple[str, ...] = ("tiny", "egl")
@@ -69,7 +69,7 @@ class Cameras:
     def draw(self, sim: Simulation, state: WorldState) -> dict[str, np.ndarray]:
         """``{"head": image, "overhead": image}`` of the world at ``state`` (uint8, :attr:`shape`)."""
         client = sim.client
-        renderer = self._renderer(client)
+        renderer = self._renderer(sim, state)
         return {
             "head": self._image(client, renderer, *self._head(state)),
             "overhead": self._image(client, renderer, *self._overhead()),
@@ -127,16 +127,24 @@ class Cameras:
         image[3] = np.rint(scaled * 255.0).astype(np.uint8)
         return image
 
-    def _renderer(self, client: QuietClient) -> int:
-        """The renderer constant; loads the EGL plugin into ``client`` once when asked for."""
+    def _renderer(self, sim: Simulation, state: WorldState) -> int:
+        """The renderer constant; loads the EGL plugin into the simulation's client once when asked for.
+
+        The plugin draws only bodies made after it loaded: the simulation rebuilds its bodies
+        where they are (exactly, as a copied env does).
+        """
         if self.renderer == "tiny":
             return pybullet.ER_TINY_RENDERER
+        client = sim.client
         if self._egl.get("client") == id(client):
             return pybullet.ER_BULLET_HARDWARE_OPENGL if self._egl["loaded"] else pybullet.ER_TINY_RENDERER
-        loaded = _load_egl(client)
-        if not loaded:
+        with silenced_file_descriptors(1, 2):  # the plugin prints its OpenGL version on stdout
+            loaded = _load_egl(client)
+        if loaded:
+            sim.rebuild(state)
+        else:
             warnings.warn("PyBullet's EGL plugin did not load: drawing with the tiny renderer", stacklevel=3)
-        self._egl.update(client=id(client), loaded=loaded)
+        self._egl.update(client=id(sim.client), loaded=loaded)
         return pybullet.ER_BULLET_HARDWARE_OPENGL if loaded else pybullet.ER_TINY_RENDERER
 
 
