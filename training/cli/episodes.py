@@ -16,6 +16,7 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
+from fetchcarry_env.observations import OBS_MODES
 from training.cli.arguments import non_negative_int, positive_float, positive_int
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
@@ -75,6 +76,18 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
         metavar="S",
         help="seconds per planning call of the expert (default 10)",
     )
+    add_obs_mode_argument(parser)
+
+
+def add_obs_mode_argument(parser: argparse.ArgumentParser, meaning: str = "the env's observation") -> None:
+    """``--obs-mode``: ``state`` (default), ``topdown`` or ``rgbd`` (docs/observations.md)."""
+    parser.add_argument(
+        "--obs-mode",
+        choices=OBS_MODES,
+        default="state",
+        help=f"{meaning}: state (the geometry vector, default), topdown (plus a semantic map drawn from the "
+        "geometry) or rgbd (plus head and overhead RGB-D camera images)",
+    )
 
 
 def episode_source(args: argparse.Namespace, policy: str | None = None) -> EpisodeSource:
@@ -90,6 +103,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
         policy=policy,
         time_limit=args.time_limit,
         interface=getattr(args, "interface", "env"),
+        obs_mode=getattr(args, "obs_mode", "state"),
     )
 
 
