@@ -27,7 +27,24 @@ OBS_MODES: tuple[str, ...] = ("state", "topdown", "rgbd")
 IMAGE_KEYS: dict[str, tuple[str, ...]] = {"state": (), "topdown": ("topdown",), "rgbd": ("head_rgbd", "overhead_rgbd")}
 """The image keys each mode adds to the goal-env keys (``observation``, ``achieved_goal``, ``desired_goal``)."""
 
-__all__ = ["CHANNELS", "FRAMES", "IMAGE_KEYS", "OBS_MODES", "ImageObservations", "image_space"]
+__all__ = ["CHANNELS", "FRAMES", "IMAGE_KEYS", "OBS_MODES", "ImageObservations", "image_options", "image_space"]
+
+
+def image_options(obs_mode: str, values: int) -> dict[str, Any]:
+    """The env options whose images of ``obs_mode``, flattened and concatenated, hold ``values`` numbers.
+
+    ``{}`` for ``state``; ``{"obs_mode": "topdown", "topdown_size": S}`` for ``7 * S * S``
+    values; ``{"obs_mode": "rgbd", "camera_size": C}`` for ``2 * 4 * C * C``. How a learned
+    network's input size tells the env to make (the map's frame is the default, ``world``).
+    ``ValueError`` when the count fits no square image.
+    """
+    if obs_mode == "state":
+        return {}
+    channels = {"topdown": len(CHANNELS), "rgbd": 8}.get(obs_mode)
+    side = int(round((values / channels) ** 0.5)) if channels else 0
+    if not channels or channels * side * side != values:
+        raise ValueError(f"{values} values are no square images of obs_mode {obs_mode!r}")
+    return {"obs_mode": obs_mode, ("topdown_size" if obs_mode == "topdown" else "camera_size"): side}
 
 
 def image_space(shape: tuple[int, ...]) -> spaces.Box:

@@ -31,6 +31,7 @@ from training.evaluation.expert import (
     results_table,
 )
 from training.pictures.files import render_size
+from training.resolve import resolve
 from training.rollout import run_episode
 
 DEFAULT_DEMO_PICTURE = "episode.png"
@@ -167,14 +168,15 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
 
 def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
-    if run is not None:
-        source = replace(source, interface="phases")
-
+    options: dict[str, Any] = {}
+    if run is not None:  # the run's network sees its own obs_mode
+        options = dict(_run_spec_options(run))
+        source = replace(source, interface="phases", obs_mode=options.pop("obs_mode", source.obs_mode))
     if picture is None:
-        env = source.build_env()
+        env = source.build_env(**options)
     else:
         size = render_size(picture)
-        env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1])
+        env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1], **options)
     try:
         policy = source.build_policy(env) if run is None else _load_run(run, env)
         record = run_episode(env, policy, source.seed, render=picture is not None)
@@ -185,6 +187,13 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
 
         save_episode_picture(record, picture)
     return record
+
+
+def _run_spec_options(run: Path) -> dict[str, Any]:
+    """The image options of run folder ``run``'s env (``obs_mode`` and the image size; none for the state)."""
+    options = dict(resolve(str(run)).env_options)
+    options.pop("capacity", None)
+    return options
 
 
 def _load_run(run: Path, env: Any) -> Any:
