@@ -10,6 +10,7 @@ SB3's ``MultiInputPolicy`` gives each a NatureCNN. ``docs/observations.md`` has 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,7 +42,7 @@ def image_options(obs_mode: str, values: int) -> dict[str, Any]:
     if obs_mode == "state":
         return {}
     channels = {"topdown": len(CHANNELS), "rgbd": 8}.get(obs_mode)
-    side = int(round((values / channels) ** 0.5)) if channels else 0
+    side = math.isqrt(values // channels) if channels else 0
     if not channels or channels * side * side != values:
         raise ValueError(f"{values} values are no square images of obs_mode {obs_mode!r}")
     return {"obs_mode": obs_mode, ("topdown_size" if obs_mode == "topdown" else "camera_size"): side}

@@ -207,6 +207,8 @@ class DaggerRun:
 
     def __post_init__(self) -> None:
         check_family(self.family)
+        if self.config.obs_mode != "state":
+            raise InputError("dagger labels the state only (obs_mode state); train bc learns from topdown or rgbd")
 
 
 @dataclass(frozen=True)
