@@ -135,14 +135,15 @@ class Capacity:
         values = asdict(base if base is not None else cls())
         for part in (p.strip() for p in text.split(",")):
             key, sep, value = part.partition("=")
-            if not sep or key.strip() not in values or not value.strip().isdigit():
+            digits = value.strip()
+            if not sep or key.strip() not in values or not (digits.isascii() and digits.isdigit() and len(digits) <= 6):
                 raise CapacityError(
-                    f"capacity {text!r}: give comma-separated KEY=N with KEY one of {', '.join(values)}, "
+                    f"capacity {text[:80]!r}: give comma-separated KEY=N with KEY one of {', '.join(values)}, "
                     "e.g. objects=8,clutter=12"
                 )
             values[key.strip()] = int(value)
         if any(v > CAPACITY_LIMITS[k] for k, v in values.items()):
-            raise CapacityError(f"capacity {text!r}: at most {CAPACITY_LIMITS} (what a scenario may hold)")
+            raise CapacityError(f"capacity {text[:80]!r}: at most {CAPACITY_LIMITS} (what a scenario may hold)")
         return cls(**values)
 
 

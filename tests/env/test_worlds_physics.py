@@ -102,3 +102,10 @@ def test_capacity_as_text_or_mapping_and_bad_values():
     for text in ("objects", "objects=-1", "cups=3", "objects=1e9", "postures=0"):
         with pytest.raises(CapacityError):
             Capacity.parse(text)
+
+
+def test_a_capacity_text_is_bounded_and_plain():
+    for text in ("objects=²", "objects=" + "9" * 5000, "objects=1234567"):
+        with pytest.raises(CapacityError) as error:
+            Capacity.parse(text)
+        assert len(str(error.value)) < 400

@@ -48,8 +48,9 @@ import numpy as np
 from gymnasium.envs.registration import EnvSpec
 
 import fetchcarry_env  # noqa: F401  (registers this project's env ids: recovering and rebuilding a dataset's env)
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError, UsageError
 from fetchcarry_env.jsontext import JsonInputError, describe, parse_json, read_json
+from fetchcarry_env.observation import Capacity
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.policies.phase_expert import PROJECTED_INFO
@@ -91,6 +92,7 @@ TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.
     "topdown_span": (int, float),
     "camera_size": (int,),
     "renderer": (str,),
+    "capacity": (str,),  # fetchcarry generate --capacity: "objects=8,..." (only a text Capacity.parse takes)
 }
 
 
@@ -594,6 +596,17 @@ def replay(dataset_id: str, episode: int, tolerance: float = REPLAY_TOLERANCE) -
     )
 
 
+def _trusted_value(key: str, value: Any) -> bool:
+    """A capacity is a text :meth:`Capacity.parse` takes (bounded counts); other values need no more check here."""
+    if key != "capacity":
+        return True
+    try:
+        Capacity.parse(value)
+    except InputError:
+        return False
+    return True
+
+
 def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
     """The env id and ``gym.make`` keyword arguments of a dataset's env spec, if it is one of this project's envs.
 
@@ -613,7 +626,12 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
     kwargs = dict(spec.kwargs or {})
     for key, value in kwargs.items():
         allowed = TRUSTED_ENV_KWARGS.get(key)
-        if allowed is None or isinstance(value, bool) or not isinstance(value, allowed):
+        if (
+            allowed is None
+            or isinstance(value, bool)
+            or not isinstance(value, allowed)
+            or not _trusted_value(key, value)
+        ):
             raise UnknownEnvError(
                 f"dataset {dataset_id!r} names an unknown env: {spec.id} does not take {key}={value!r:.60} "
                 f"from a dataset (allowed: {', '.join(TRUSTED_ENV_KWARGS)})"
