@@ -551,6 +551,10 @@ def _register_ppo(bench: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--steps", type=positive_int, default=4096, metavar="N", help="env steps per figure (default 4096)"
     )
+    parser.add_argument(
+        "--n-steps", type=positive_int, default=256, metavar="N",
+        help="env steps per rollout, over all envs (default 256, the published budget's)",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(handler=run_bench_ppo)
 
@@ -568,18 +572,25 @@ def _env_counts(text: str) -> list[int]:
 
 def run_bench_ppo(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Time MaskablePPO with each number of envs and print steps per second (or JSON)."""
-    from training.learners.options import check_family
+    from training.learners.options import PPOOptions, check_family
     from training.speed import ppo as ppo_speed
 
     out = out if out is not None else sys.stdout
     check_family(args.family)
     counts = _env_counts(args.envs)
     started = _load()
-    results = [ppo_speed.ppo_speed(args.family, n, args.steps) for n in counts]
+    if max(counts) > args.n_steps:
+        raise UsageError(f"--envs: at most --n-steps ({args.n_steps}) envs")
+    options = PPOOptions(n_steps=args.n_steps, batch_size=min(PPOOptions.batch_size, args.n_steps))
+    results = [ppo_speed.ppo_speed(args.family, n, args.steps, options) for n in counts]
     if args.json:
         echo(json.dumps({"load_start": started, "results": [ppo_speed.as_row(r) for r in results]}, indent=2), out)
         return 0
-    print(f"MaskablePPO on {args.family}, {args.steps} env steps per figure (load at the start {started})", file=out)
+    print(
+        f"MaskablePPO on {args.family}, {args.steps} env steps per figure, rollouts of {args.n_steps} "
+        f"(load at the start {started})",
+        file=out,
+    )
     print(f"{'envs':>4} {'steps':>6} {'seconds':>8} {'steps/s':>8} {'rollout steps/s':>16} {'load':>5}", file=out)
     for r in results:
         print(
