@@ -87,18 +87,3 @@ def test_ppo_on_two_envs_resumes_after_ctrl_c(tmp_path: Path, monkeypatch: pytes
 def test_impossible_env_counts_are_bad_input(envs: int) -> None:
     with pytest.raises(InputError, match="envs"):
         PPOOptions(n_steps=32, envs=envs)
-
-
-def test_bench_ppo_prints_steps_per_second_per_env_count(capsys: pytest.CaptureFixture) -> None:
-    assert main(["bench", "ppo", "--steps", "16", "--n-steps", "16", "--envs", "1,2", "--json"]) == 0
-    report = json.loads(capsys.readouterr().out)
-    rows = report["results"]
-    assert [row["envs"] for row in rows] == [1, 2]
-    assert all(row["steps"] >= 16 and row["steps_per_s"] > 0 for row in rows)
-    assert all(0 < row["rollout_seconds"] <= row["seconds"] for row in rows)
-
-
-@pytest.mark.parametrize("envs", ["0", "1,x", "", "65"])
-def test_bench_ppo_refuses_impossible_env_counts(envs: str, capsys: pytest.CaptureFixture) -> None:
-    assert main(["bench", "ppo", "--envs", envs]) == 2
-    assert "--envs" in capsys.readouterr().err

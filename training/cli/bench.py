@@ -477,6 +477,10 @@ def _register_phases(bench: argparse._SubParsersAction) -> None:
         "--steps", type=positive_int, default=1000, metavar="N", help="steps per speed figure (default 1000)"
     )
     parser.add_argument("--speed-only", action="store_true", help="only the speed table (no expert episodes)")
+    parser.add_argument(
+        "--split", action="store_true",
+        help="also where each walk's time goes: resets, mask and step (phase env), resets, policy and step (plain)",
+    )  # fmt: skip
     parser.set_defaults(handler=run_bench_phases)
 
 
@@ -511,8 +515,33 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
             f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
             file=out,
         )
+    if args.split:
+        _print_split(names, args.steps, out)
     print(f"load at the end {_load()}", file=out)
     return 0
+
+
+def _print_split(names: tuple[str, ...], steps: int, out: TextIO) -> None:
+    """Milliseconds per ``steps`` steps from seed 0, by part, of the phase env's walk and the plain env's."""
+    from training.speed import phases as phases_speed
+
+    print(f"\nwhere the time goes (ms per {steps} steps from seed 0; sample: ms per scenario drawn)", file=out)
+    print(
+        f"{'family':10} {'resets':>6} {'reset':>6} {'mask':>6} {'step':>6} {'total':>6}   "
+        f"{'resets':>6} {'reset':>6} {'policy':>6} {'step':>6} {'total':>6}  {'sample':>6}",
+        file=out,
+    )
+    for family in names:
+        split = phases_speed.time_split(family, steps)
+        p, q = split["phases"], split["plain"]
+        p_total = p["reset"] + p["mask"] + p["step"]
+        q_total = q["reset"] + q["policy"] + q["step"]
+        print(
+            f"{family:10} {p['resets']:6.0f} {p['reset']:6.0f} {p['mask']:6.0f} {p['step']:6.0f} {p_total:6.0f}   "
+            f"{q['resets']:6.0f} {q['reset']:6.0f} {q['policy']:6.0f} {q['step']:6.0f} {q_total:6.0f}  "
+            f"{split['sample_ms']:6.1f}",
+            file=out,
+        )
 
 
 def _print_expressibility(names: tuple[str, ...], episodes: int, out: TextIO) -> None:
