@@ -24,10 +24,12 @@ from training.cli.files import check_readable, check_writable
 from training.cli.options import Command
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
+from training.learners.options import PPOOptions, check_family
 from training.speed import anytime as anytime_speed
 from training.speed import env as env_speed
 from training.speed import generate as generate_speed
 from training.speed import planner as planner_speed
+from training.speed import ppo as ppo_speed
 from training.speed import push as push_speed
 
 ENV_DESCRIPTION = (
@@ -601,9 +603,6 @@ def _env_counts(text: str) -> list[int]:
 
 def run_bench_ppo(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Time MaskablePPO with each number of envs and print steps per second (or JSON)."""
-    from training.learners.options import PPOOptions, check_family
-    from training.speed import ppo as ppo_speed
-
     out = out if out is not None else sys.stdout
     check_family(args.family)
     counts = _env_counts(args.envs)

@@ -25,6 +25,7 @@ is complete but not bit-identical to an uninterrupted one).
 
 from __future__ import annotations
 
+import multiprocessing
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -68,8 +69,6 @@ def make_vec_env(family: str, envs: int) -> Any:
     Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
     platform has no fork, SB3's default start method is used.
     """
-    import multiprocessing
-
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     makers = [lambda: make_training_env(family)] * envs

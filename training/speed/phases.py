@@ -18,6 +18,7 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the ids)
 from expert import ExpertPolicy
+from fetchcarry_env.families import get_family
 from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name
 from training.policies.random import RandomMaskedPolicy
 
@@ -102,8 +103,6 @@ def time_split(family: str, steps: int, seed: int = 0) -> dict[str, Any]:
     family (``Family.sample``, which checks that its targets are reachable), the part of
     a reset that the env does before building its PyBullet world.
     """
-    from fetchcarry_env.families import get_family
-
     phases = {"resets": 1.0, "reset": 0.0, "mask": 0.0, "step": 0.0}
     env = gym.make("FetchCarryPushPhases-v0", family=family)
     rng = np.random.default_rng(seed)
