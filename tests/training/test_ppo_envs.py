@@ -87,3 +87,17 @@ def test_ppo_on_two_envs_resumes_after_ctrl_c(tmp_path: Path, monkeypatch: pytes
 def test_impossible_env_counts_are_bad_input(envs: int) -> None:
     with pytest.raises(InputError, match="envs"):
         PPOOptions(n_steps=32, envs=envs)
+
+
+def test_a_run_folder_from_before_envs_resumes_with_one_env(tmp_path: Path) -> None:
+    """A config.json whose options lack ``envs`` (written before the option existed) is a one-env run."""
+    options = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32)
+    train_ppo("basic", PPOOptions(**{**options.__dict__, "steps": 32}), tmp_path / "run", progress=False)
+    config = runs.read_saved(tmp_path / "run")
+    del config["options"]["envs"]
+    config["options"]["steps"], config["data"]["steps"], config["complete"] = 64, 64, False
+    (tmp_path / "run" / runs.CONFIG_FILE).write_text(json.dumps(config))
+    rows = train_ppo("basic", options, tmp_path / "run", resume=True, progress=False)
+    assert [row["steps"] for row in rows] == [32, 64]
+    with pytest.raises(runs.RunFolderError, match="other options"):
+        train_ppo("basic", PPOOptions(**{**options.__dict__, "envs": 2}), tmp_path / "run", resume=True)

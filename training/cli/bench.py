@@ -25,10 +25,12 @@ from training.cli.options import Command
 from training.cli.seeds import seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
+from training.learners.options import PPOOptions, check_family
 from training.speed import anytime as anytime_speed
 from training.speed import env as env_speed
 from training.speed import generate as generate_speed
 from training.speed import planner as planner_speed
+from training.speed import ppo as ppo_speed
 from training.speed import push as push_speed
 
 ENV_DESCRIPTION = (
@@ -482,6 +484,10 @@ def _register_phases(bench: argparse._SubParsersAction) -> None:
         "--steps", type=positive_int, default=1000, metavar="N", help="steps per speed figure (default 1000)"
     )
     parser.add_argument("--speed-only", action="store_true", help="only the speed table (no expert episodes)")
+    parser.add_argument(
+        "--split", action="store_true",
+        help="also where each walk's time goes: resets, mask and step (phase env), resets, policy and step (plain)",
+    )  # fmt: skip
     parser.set_defaults(handler=run_bench_phases)
 
 
@@ -516,8 +522,33 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
             f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
             file=out,
         )
+    if args.split:
+        _print_split(names, args.steps, out)
     print(f"load at the end {_load()}", file=out)
     return 0
+
+
+def _print_split(names: tuple[str, ...], steps: int, out: TextIO) -> None:
+    """Milliseconds per ``steps`` steps from seed 0, by part, of the phase env's walk and the plain env's."""
+    from training.speed import phases as phases_speed
+
+    print(f"\nwhere the time goes (ms per {steps} steps from seed 0; sample: ms per scenario drawn)", file=out)
+    print(
+        f"{'family':10} {'resets':>6} {'reset':>6} {'mask':>6} {'step':>6} {'total':>6}   "
+        f"{'resets':>6} {'reset':>6} {'policy':>6} {'step':>6} {'total':>6}  {'sample':>6}",
+        file=out,
+    )
+    for family in names:
+        split = phases_speed.time_split(family, steps)
+        p, q = split["phases"], split["plain"]
+        p_total = p["reset"] + p["mask"] + p["step"]
+        q_total = q["reset"] + q["policy"] + q["step"]
+        print(
+            f"{family:10} {p['resets']:6.0f} {p['reset']:6.0f} {p['mask']:6.0f} {p['step']:6.0f} {p_total:6.0f}   "
+            f"{q['resets']:6.0f} {q['reset']:6.0f} {q['policy']:6.0f} {q['step']:6.0f} {q_total:6.0f}  "
+            f"{split['sample_ms']:6.1f}",
+            file=out,
+        )
 
 
 def _print_expressibility(names: tuple[str, ...], episodes: int, out: TextIO) -> None:
@@ -556,6 +587,10 @@ def _register_ppo(bench: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--steps", type=positive_int, default=4096, metavar="N", help="env steps per figure (default 4096)"
     )
+    parser.add_argument(
+        "--n-steps", type=positive_int, default=256, metavar="N",
+        help="env steps per rollout, over all envs (default 256, the published budget's)",
+    )  # fmt: skip
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(handler=run_bench_ppo)
 
@@ -573,18 +608,22 @@ def _env_counts(text: str) -> list[int]:
 
 def run_bench_ppo(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Time MaskablePPO with each number of envs and print steps per second (or JSON)."""
-    from training.learners.options import check_family
-    from training.speed import ppo as ppo_speed
-
     out = out if out is not None else sys.stdout
     check_family(args.family)
     counts = _env_counts(args.envs)
     started = _load()
-    results = [ppo_speed.ppo_speed(args.family, n, args.steps) for n in counts]
+    if max(counts) > args.n_steps:
+        raise UsageError(f"--envs: at most --n-steps ({args.n_steps}) envs")
+    options = PPOOptions(n_steps=args.n_steps, batch_size=min(PPOOptions.batch_size, args.n_steps))
+    results = [ppo_speed.ppo_speed(args.family, n, args.steps, options) for n in counts]
     if args.json:
         echo(json.dumps({"load_start": started, "results": [ppo_speed.as_row(r) for r in results]}, indent=2), out)
         return 0
-    print(f"MaskablePPO on {args.family}, {args.steps} env steps per figure (load at the start {started})", file=out)
+    print(
+        f"MaskablePPO on {args.family}, {args.steps} env steps per figure, rollouts of {args.n_steps} "
+        f"(load at the start {started})",
+        file=out,
+    )
     print(f"{'envs':>4} {'steps':>6} {'seconds':>8} {'steps/s':>8} {'rollout steps/s':>16} {'load':>5}", file=out)
     for r in results:
         print(

@@ -25,6 +25,7 @@ is complete but not bit-identical to an uninterrupted one).
 
 from __future__ import annotations
 
+import multiprocessing
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -68,8 +69,6 @@ def make_vec_env(family: str, envs: int) -> Any:
     Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
     platform has no fork, SB3's default start method is used.
     """
-    import multiprocessing
-
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     makers = [lambda: make_training_env(family)] * envs
@@ -210,6 +209,8 @@ def train_ppo(
     if options.init is not None:
         init_weights = _init_weights(Path(options.init), config, capacity, candidates, features)
     run_options = {"family": family, **asdict(options)}
+    if resume and options.envs == 1 and _saved_without_envs(Path(out)):
+        del run_options["envs"]  # a run folder from before --envs existed: it ran one env
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
                              {"init": options.init, "steps": options.steps})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
@@ -233,6 +234,14 @@ def train_ppo(
     finally:
         env.close()
     return rows
+
+
+def _saved_without_envs(out: Path) -> bool:
+    """True when ``out`` holds a run whose options do not say how many envs it ran (it ran one)."""
+    if not (out / runs.CONFIG_FILE).is_file():
+        return False
+    options = runs.read_saved(out).get("options")
+    return isinstance(options, dict) and "envs" not in options
 
 
 def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:

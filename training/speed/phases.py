@@ -18,6 +18,7 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the ids)
 from expert import ExpertPolicy
+from fetchcarry_env.families import get_family
 from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name
 from training.policies.random import RandomMaskedPolicy
 
@@ -91,3 +92,61 @@ def speed(family: str, steps: int, seed: int = 0) -> dict[str, float]:
     rates["plain_steps_per_s"] = steps / (time.perf_counter() - start)
     plain.close()
     return rates
+
+
+def time_split(family: str, steps: int, seed: int = 0) -> dict[str, Any]:
+    """Where the time of :func:`speed`'s two walks goes: milliseconds per ``steps`` steps, by part.
+
+    The phase env: ``resets`` (count), ``reset``, ``mask`` (``action_masks()``), ``step``
+    (choosing a candidate and stepping); the plain env: ``resets``, ``reset``, ``policy``,
+    ``step``. ``sample_ms``: the mean milliseconds of drawing one scenario of the
+    family (``Family.sample``, which checks that its targets are reachable), the part of
+    a reset that the env does before building its PyBullet world.
+    """
+    phases = {"resets": 1.0, "reset": 0.0, "mask": 0.0, "step": 0.0}
+    env = gym.make("FetchCarryPushPhases-v0", family=family)
+    rng = np.random.default_rng(seed)
+    clock = time.perf_counter()
+    env.reset(seed=seed)
+    phases["reset"] += time.perf_counter() - clock
+    masks = env.get_wrapper_attr("action_masks")
+    for _ in range(steps):
+        t0 = time.perf_counter()
+        mask = masks()
+        t1 = time.perf_counter()
+        _obs, _r, terminated, truncated, _info = env.step(int(rng.choice(np.flatnonzero(mask))))
+        t2 = time.perf_counter()
+        phases["mask"] += t1 - t0
+        phases["step"] += t2 - t1
+        if terminated or truncated:
+            env.reset()
+            phases["reset"] += time.perf_counter() - t2
+            phases["resets"] += 1
+    env.close()
+    plain_env = gym.make("FetchCarryPush-v0", family=family)
+    policy = RandomMaskedPolicy(plain_env, seed=seed)
+    plain = {"resets": 1.0, "reset": 0.0, "policy": 0.0, "step": 0.0}
+    clock = time.perf_counter()
+    observation, _ = plain_env.reset(seed=seed)
+    plain["reset"] += time.perf_counter() - clock
+    for _ in range(steps):
+        t0 = time.perf_counter()
+        action, _ = policy.predict(observation)
+        t1 = time.perf_counter()
+        observation, _r, terminated, truncated, _info = plain_env.step(action)
+        t2 = time.perf_counter()
+        plain["policy"] += t1 - t0
+        plain["step"] += t2 - t1
+        if terminated or truncated:
+            observation, _ = plain_env.reset()
+            plain["reset"] += time.perf_counter() - t2
+            plain["resets"] += 1
+    plain_env.close()
+    draws = np.random.default_rng(seed)
+    clock = time.perf_counter()
+    for _ in range(int(phases["resets"])):
+        get_family(family).sample(draws)
+    sample_ms = 1e3 * (time.perf_counter() - clock) / phases["resets"]
+    in_ms = {key: value if key == "resets" else 1e3 * value for key, value in phases.items()}
+    plain_ms = {key: value if key == "resets" else 1e3 * value for key, value in plain.items()}
+    return {"phases": in_ms, "plain": plain_ms, "sample_ms": sample_ms}
