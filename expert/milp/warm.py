@@ -1,4 +1,4 @@
-"""Warm starts: a known plan handed to SCIP as a first solution (``createSol`` / ``addSol``).
+"""Warm starts: a known plan handed to SCIP as a first solution (``createSol``, ``checkSol``, ``addSol``).
 
 A plan found earlier (the fewest-phases plan when :func:`expert.planner.plan` solves
 again with extra phases, or any plan of at most ``N`` phases) is written as values of
@@ -92,7 +92,14 @@ def _set_regions(milp: Milp, values: _Values) -> bool:
 
 
 def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
-    """Give SCIP the plan ``steps`` as a first solution; True when SCIP accepted it as feasible."""
+    """Give SCIP the plan ``steps`` as a first solution; True only when it is feasible in this model.
+
+    The solution is checked against every constraint, bound and integrality
+    (``checkSol``) before it is added: ``addSol`` alone is no such check (in the problem
+    stage SCIP returns True for an infeasible solution too), and :func:`expert.milp.
+    conditional.fix_above` relies on the answer to fix options to 0. An infeasible
+    solution is not added.
+    """
     values = solution_values(milp, steps)
     if values is None:
         return False
@@ -102,6 +109,9 @@ def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     solution = model.createSol()
     for var, value in values.items():
         model.setSolVal(solution, var, value)
+    if not model.checkSol(solution, printreason=False, completely=True):
+        model.freeSol(solution)
+        return False
     return bool(model.addSol(solution, free=True))
 
 
