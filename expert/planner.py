@@ -241,6 +241,10 @@ class _Run:
         if not problem.deliver:
             stats["phases_tried"].append(1)
             return self.finish("optimal", phases_of(problem, []))
+        reason = self.unreachable(problem)  # before any MILP: a few milliseconds at any size
+        if reason is not None:
+            stats["reason"] = reason
+            return self.finish("infeasible")
         many = holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0)
         if many and deadline.left() < FIRST_PLAN_BELOW_S:
             self.first_plan(problem, lattice)
@@ -290,11 +294,6 @@ class _Run:
             outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
             if outcome == "infeasible":
                 fewer_infeasible = True
-                if n_phases == first:
-                    reason = self.unreachable(problem)
-                    if reason is not None:
-                        stats["reason"] = reason
-                        return self.finish("infeasible")
                 continue
             if outcome == "time_limit":
                 return self.out_of_time()
