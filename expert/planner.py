@@ -15,7 +15,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 import time
+from pathlib import Path
 from typing import Any
 
 import pyscipopt
@@ -37,6 +39,7 @@ from expert.milp.collision import Infeasible
 from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
+from expert.milp.export import export_model
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
@@ -93,6 +96,7 @@ def plan(
     lattice: Lattice | None = None,
     holding: str | None = None,
     extra_phases: int = 0,
+    export_models: str | os.PathLike | None = None,
     **solver_options: Any,
 ) -> Plan:
     """Plan ``scenario`` (optimal for the fewest phases that admit a plan); never raises for "no plan".
@@ -111,6 +115,9 @@ def plan(
             followed by idle phases (no move, no action), which are dropped from the
             answer. ``optimal`` then means optimal among all plans of at most ``N + k``
             phases, compared by Eq. 1 over ``N + k`` phases (``stats["optimality"]``).
+        export_models: an existing folder: every MILP solved is written there as MPS with
+            a JSON of its variables' meanings and its optimum (:mod:`expert.milp.export`);
+            ``stats["solves"][i]["exported"]`` names the file.
         **solver_options: ``integral`` (bool, default True: integer lattice bases),
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
@@ -144,6 +151,7 @@ def plan(
     options = _Options.parse(solver_options, extra_phases)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
     run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
+    run.export_dir = None if export_models is None else Path(export_models)
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
     except TimeUp:
@@ -188,6 +196,7 @@ class _Run:
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[SolvedPhase] | None = None  # the decoupled plan as MILP steps, for warm starts
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
+    export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -442,6 +451,9 @@ class _Run:
             raise KeyboardInterrupt("planning interrupted during the SCIP solve")
         record.update(status=status, solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
         stats["solve_s"] += record["solve_s"]
+        if self.export_dir is not None:
+            mps, _ = export_model(milp, self.export_dir, {**record, "solver": solver_name()})
+            record["exported"] = mps.name
         if status in ("infeasible", "inforunbd"):
             return "infeasible"
         if model.getNSols() == 0:

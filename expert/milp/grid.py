@@ -53,7 +53,11 @@ class HalfPlane:
 
 @dataclass(frozen=True)
 class DiagonalPlane:
-    """``su * i + sv * j >= bound`` (``su``, ``sv`` in {-1, +1}), in lattice indices: a cut corner of an octagon."""
+    """``su * i + sv * j >= bound`` (``su``, ``sv`` non-zero whole numbers), in lattice indices: a cut corner.
+
+    ``(1, 1)``-type planes are the octagon's 45-degree cuts; other directions (``(2, 1)``,
+    ``(1, 2)``, ...) are further tangents of the rounded corner (:data:`CORNER_DIRECTIONS`).
+    """
 
     su: int
     sv: int
@@ -61,9 +65,14 @@ class DiagonalPlane:
 
     def value_range(self, box: IndexBox) -> tuple[int, int]:
         """The least and the largest ``su * i + sv * j`` over the (non-empty) ``box``."""
-        i_lo, i_hi = (box.i_lo, box.i_hi) if self.su > 0 else (-box.i_hi, -box.i_lo)
-        j_lo, j_hi = (box.j_lo, box.j_hi) if self.sv > 0 else (-box.j_hi, -box.j_lo)
+        i_lo, i_hi = sorted((self.su * box.i_lo, self.su * box.i_hi))
+        j_lo, j_hi = sorted((self.sv * box.j_lo, self.sv * box.j_hi))
         return i_lo + j_lo, i_hi + j_hi
+
+    @property
+    def octilinear(self) -> bool:
+        """Whether the plane is one of the octagon's 45-degree cuts (``|su| = |sv| = 1``)."""
+        return abs(self.su) == 1 and abs(self.sv) == 1
 
     def holds_at(self, i: float, j: float) -> bool:
         return self.su * i + self.sv * j >= self.bound
@@ -108,15 +117,15 @@ class IndexBox:
             # su * i >= bound - sv * j: the loosest j gives the bounding box's limit on i, and vice versa.
             j_best = max(plane.sv * j_lo, plane.sv * j_hi)
             i_best = max(plane.su * i_lo, plane.su * i_hi)
-            i_need, j_need = plane.bound - j_best, plane.bound - i_best
+            i_need, j_need = plane.bound - j_best, plane.bound - i_best  # su * i >= i_need, sv * j >= j_need
             if plane.su > 0:
-                i_lo = max(i_lo, i_need)
+                i_lo = max(i_lo, -(-i_need // plane.su))
             else:
-                i_hi = min(i_hi, -i_need)
+                i_hi = min(i_hi, i_need // plane.su)
             if plane.sv > 0:
-                j_lo = max(j_lo, j_need)
+                j_lo = max(j_lo, -(-j_need // plane.sv))
             else:
-                j_hi = min(j_hi, -j_need)
+                j_hi = min(j_hi, j_need // plane.sv)
             return IndexBox(i_lo, i_hi, j_lo, j_hi)
         if plane.axis == 0:
             i_lo, i_hi = (i_lo, min(i_hi, plane.bound)) if plane.upper else (max(i_lo, plane.bound), i_hi)
@@ -218,8 +227,9 @@ class Grid:
     def rhs(self, plane: Plane) -> float:
         """Right-hand side of the MILP row for ``plane`` (a diagonal plane reads ``su u + sv v >= rhs``)."""
         if isinstance(plane, DiagonalPlane):
-            # Continuous u, v each move by less than 1/2 when snapped, so su u + sv v by less than 1.
-            return float(plane.bound) if self.integral else plane.bound + 1.0 - 2 * EPS_CELL
+            # Continuous u, v each move by less than 1/2 when snapped: su u + sv v by less than (|su| + |sv|) / 2.
+            weight = abs(plane.su) + abs(plane.sv)
+            return float(plane.bound) if self.integral else plane.bound + weight * (0.5 - EPS_CELL)
         return self.upper(plane.bound) if plane.upper else self.lower(plane.bound)
 
     def diagonal_at_least(self, su: int, sv: int, value: float) -> DiagonalPlane:
@@ -231,7 +241,8 @@ class Grid:
     def plane_value_range(self, plane: DiagonalPlane) -> tuple[float, float]:
         """The least and largest ``su u + sv v`` (index units) of MILP base variables over the domain."""
         lo, hi = plane.value_range(self.domain)
-        return (float(lo), float(hi)) if self.integral else (lo - 1.0, hi + 1.0)
+        slack = (abs(plane.su) + abs(plane.sv)) / 2
+        return (float(lo), float(hi)) if self.integral else (lo - slack, hi + slack)
 
     def var_bounds(self, axis: int) -> tuple[float, float]:
         """Bounds (index units) of a base coordinate variable: the domain on ``axis``."""
@@ -253,23 +264,35 @@ def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]
 
 
 SQRT2 = math.sqrt(2.0)
-CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # (su, sv) of the octagon's cut corners: NE, NW, SW, SE
+CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # outward signs of the corners: NE, NW, SW, SE
+CORNER_DIRECTIONS: tuple[tuple[int, int], ...] = ((1, 1),)
+"""Normals ``(a, b)`` (whole numbers > 0, NE quadrant) of the tangents cut at every corner of a grown rectangle.
+
+``((1, 1),)`` is the octagon; ``((2, 1), (1, 1), (1, 2))`` a 16-gon, and so on
+(``docs/formulation.md``, "Collision model", measures the choices). Mirrored to each corner.
+"""
+
+
+def corner_normals() -> list[tuple[int, int]]:
+    """The normals ``(su * a, sv * b)`` of the corner tangents, per corner (NE, NW, SW, SE), as in move_regions."""
+    return [(su * a, sv * b) for su, sv in CORNERS for a, b in CORNER_DIRECTIONS]
 
 
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
-    """The eight regions of Eq. 18 in our tighter model: outside the octagon around ``rect`` grown by ``radius``.
+    """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
 
     The first four are :func:`base_regions` (the sides of the grown rectangle); the
-    last four cut its corners (NE, NW, SW, SE): ``su x + sv y >= su cx + sv cy + radius
-    sqrt(2)`` at corner ``(cx, cy)``, the tangent to the corner's quarter circle at 45
-    degrees. The octagon holds the rectangle's disc-swept shape (every point outside it
-    is ``radius`` or more from ``rect``) and touches it on all eight sides.
+    others cut its corners (NE, NW, SW, SE), one per normal of :data:`CORNER_DIRECTIONS`:
+    ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
+    the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
+    cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
+    outside it is ``radius`` or more from ``rect``) and touches it on every side.
     """
     out: list[Plane] = list(base_regions(grid, rect, radius))
-    for su, sv in CORNERS:
-        cx = rect.max_x if su > 0 else rect.min_x
-        cy = rect.max_y if sv > 0 else rect.min_y
-        out.append(grid.diagonal_at_least(su, sv, su * cx + sv * cy + radius * SQRT2))
+    for a, b in corner_normals():
+        cx = rect.max_x if a > 0 else rect.min_x
+        cy = rect.max_y if b > 0 else rect.min_y
+        out.append(grid.diagonal_at_least(a, b, a * cx + b * cy + radius * math.hypot(a, b)))
     return tuple(out)
 
 
@@ -277,10 +300,10 @@ def point_in_move_region(point: Point, rect: Rect, radius: float, region: int) -
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
     if region < 4:
         return point_in_region(point, rect, radius, region)
-    su, sv = CORNERS[region - 4]
-    cx = rect.max_x if su > 0 else rect.min_x
-    cy = rect.max_y if sv > 0 else rect.min_y
-    return su * point[0] + sv * point[1] >= su * cx + sv * cy + radius * SQRT2 - GEOM_TOL
+    a, b = corner_normals()[region - 4]
+    cx = rect.max_x if a > 0 else rect.min_x
+    cy = rect.max_y if b > 0 else rect.min_y
+    return a * point[0] + b * point[1] >= a * cx + b * cy + radius * math.hypot(a, b) - GEOM_TOL
 
 
 def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:

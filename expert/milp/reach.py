@@ -8,10 +8,16 @@ octilinear convex set (edges along the axes and the diagonals, at whole lattice
 values); the lattice points of such a set are 8-connected (per column they form an
 interval whose ends move by at most one cell from column to column). Hence the points
 reachable by any sequence of moves lie in the 8-connected components of the points
-one move from the start. Options outside them can never be used; if an action loses all its options,
-the problem is infeasible for every number of phases. The planner runs this before any
-MILP (a few milliseconds: array operations over the lattice), so an object or goal that
-no pose reaches is reported at once whatever the number of objects.
+one move from the start. With corner cuts other than 45 degrees
+(:data:`expert.milp.grid.CORNER_DIRECTIONS` beyond ``(1, 1)``) the lattice points of
+such a set need not be 8-connected; each such plane ``a i + b j >= c`` is then relaxed
+to ``>= c - floor((|a| + |b|) / 2)``, which holds every lattice point whose cell the
+move's segment crosses (within half a cell of a point of the segment), an 8-connected
+chain, so the components still hold every reachable point. Options outside them can
+never be used; if an action loses all its options, the problem is infeasible for every
+number of phases. The planner runs this before any MILP (a few milliseconds: array
+operations over the lattice), so an object or goal that no pose reaches is reported at
+once whatever the number of objects.
 
 The reason names the action and the narrowest gap on the widest way there
 (:func:`narrowest_gap`): over every 8-connected lattice path from the start's
@@ -62,8 +68,9 @@ def free_and_seed(problem: Problem, deadline: Deadline = NEVER) -> tuple[np.ndar
         inside_any = np.zeros_like(free)
         with_start = np.zeros_like(free)
         for n, plane in enumerate(move_regions(grid, rect, radius)):
-            if isinstance(plane, DiagonalPlane):
-                member = plane.su * ii + plane.sv * jj >= plane.bound
+            if isinstance(plane, DiagonalPlane):  # a cut other than 45 degrees: relaxed by half a cell (module doc)
+                slack = 0 if plane.octilinear else (abs(plane.su) + abs(plane.sv)) // 2
+                member = plane.su * ii + plane.sv * jj >= plane.bound - slack
             else:
                 index = ii if plane.axis == 0 else jj
                 member = np.broadcast_to(index <= plane.bound if plane.upper else index >= plane.bound, free.shape)

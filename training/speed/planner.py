@@ -14,7 +14,9 @@ Units: seconds.
 
 from __future__ import annotations
 
+import argparse
 import itertools
+import json
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -228,9 +230,6 @@ def _travel(phases) -> float:
 
 def main(argv: Sequence[str] | None = None) -> None:
     """``python -m training.speed.planner extra-phases [--out FILE]``: the table of ``docs/benchmarks/planner.md``."""
-    import argparse
-    import json
-
     parser = argparse.ArgumentParser(prog="python -m training.speed.planner", description=main.__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     extra = sub.add_parser("extra-phases", help="extra_phases=1 against 0 on the 30 multi-object scenarios")
