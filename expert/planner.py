@@ -40,6 +40,7 @@ from expert.milp.conditional import Conditional, add_conditional_cuts, condition
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
 from expert.milp.export import export_model
+from expert.milp.grid import MAX_CORNER_DETAIL
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
@@ -56,7 +57,7 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail"}
 
 
 def optimality(extra_phases: int, status: str = "optimal", fewest_proven: bool = False) -> str:
@@ -125,6 +126,9 @@ def plan(
             ``conditional`` (bool, default True: Eq. 1's lower bound per action, pose box and
             phase as cuts, and the options that cannot beat the warm start fixed to 0,
             :mod:`expert.milp.conditional`),
+            ``corner_detail`` (int 1-6, default 1: the octagon; higher adds tangents of the
+            rounded corners to Eq. 18, :func:`expert.milp.grid.corner_directions`: closer to the
+            exact swept-disc rule, slower; ``docs/formulation.md``, "Collision model"),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
@@ -152,6 +156,7 @@ def plan(
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
     run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
     run.export_dir = None if export_models is None else Path(export_models)
+    run.corner_detail = options.corner_detail
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
     except TimeUp:
@@ -167,6 +172,7 @@ class _Options:
     fewest_cuts: bool
     conditional: bool
     settings: SolverSettings
+    corner_detail: int = 1
 
     @classmethod
     def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
@@ -177,8 +183,11 @@ class _Options:
         if not isinstance(extra_phases, int) or extra_phases < 0:
             raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
         options = dict(solver_options)
+        detail = options.pop("corner_detail", 1)
+        if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
+            raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
-        return cls(*own, SolverSettings(**options))
+        return cls(*own, SolverSettings(**options), detail)
 
 
 @dataclasses.dataclass
@@ -197,6 +206,7 @@ class _Run:
     warm: list[SolvedPhase] | None = None  # the decoupled plan as MILP steps, for warm starts
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
     export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
+    corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -240,7 +250,14 @@ class _Run:
         self, lattice: Lattice, holding: str | None, integral: bool, use_bound: bool, max_phases: int | None
     ) -> Plan:
         stats, deadline = self.stats, self.deadline
-        problem = prepare(self.scenario, lattice, holding=holding, integral=integral, deadline=deadline)
+        problem = prepare(
+            self.scenario,
+            lattice,
+            holding=holding,
+            integral=integral,
+            deadline=deadline,
+            corner_detail=self.corner_detail,
+        )
         stats["prepare_s"] = time.perf_counter() - self.started
         stats["options"] = len(problem.options)
         deadline.check()

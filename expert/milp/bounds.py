@@ -101,7 +101,9 @@ class Connectivity:
             planes = move_regions(problem.grid, rect, radius)
             if any(self.domain.inside(p) for p in planes):
                 continue  # the rectangle lies outside the domain: no move can hit it
-            at_start = tuple(n for n in range(len(planes)) if point_in_move_region(self.start, rect, radius, n))
+            at_start = tuple(
+                n for n in range(len(planes)) if point_in_move_region(problem.grid, self.start, rect, radius, n)
+            )
             self.blockers.append((planes, at_start))
         self._memo: dict = {}
 

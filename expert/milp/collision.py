@@ -68,7 +68,7 @@ def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
         usable = [n for n, plane in enumerate(planes) if domain.meets(plane)]
         if any(domain.inside(planes[n]) for n in usable):
             continue
-        at_start = [n for n in usable if point_in_move_region(start, rect, radius, n)]
+        at_start = [n for n in usable if point_in_move_region(grid, start, rect, radius, n)]
         for k in range(1, milp.n_phases):
             ends = (k - 1, k) if k > 1 else (k,)
             regions = [n for n in (at_start if k == 1 else usable) if _possible(milp, planes[n], ends)]

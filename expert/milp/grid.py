@@ -56,7 +56,7 @@ class DiagonalPlane:
     """``su * i + sv * j >= bound`` (``su``, ``sv`` non-zero whole numbers), in lattice indices: a cut corner.
 
     ``(1, 1)``-type planes are the octagon's 45-degree cuts; other directions (``(2, 1)``,
-    ``(1, 2)``, ...) are further tangents of the rounded corner (:data:`CORNER_DIRECTIONS`).
+    ``(1, 2)``, ...) are further tangents of the rounded corner (:func:`corner_directions`).
     """
 
     su: int
@@ -165,9 +165,12 @@ class Grid:
     lattice: Lattice
     domain: IndexBox
     integral: bool = True
+    corner_detail: int = 1  # the corner tangents of Eq. 18: corner_directions(corner_detail)
 
     @classmethod
-    def for_area(cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True) -> Grid:
+    def for_area(
+        cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True, corner_detail: int = 1
+    ) -> Grid:
         """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
         probe = cls(lattice, IndexBox(0, -1, 0, -1), integral)
         inner = area.inflate(-radius)
@@ -177,7 +180,7 @@ class Grid:
             max(0, probe.index_at_least(1, inner.min_y)),
             min(lattice.shape[1] - 1, probe.index_at_most(1, inner.max_y)),
         )
-        return cls(lattice, domain, integral)
+        return cls(lattice, domain, integral, corner_detail)
 
     @property
     def resolution(self) -> float:
@@ -265,42 +268,48 @@ def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]
 
 SQRT2 = math.sqrt(2.0)
 CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # outward signs of the corners: NE, NW, SW, SE
-CORNER_DIRECTIONS: tuple[tuple[int, int], ...] = ((1, 1),)
-"""Normals ``(a, b)`` (whole numbers > 0, NE quadrant) of the tangents cut at every corner of a grown rectangle.
-
-``((1, 1),)`` is the octagon; ``((2, 1), (1, 1), (1, 2))`` a 16-gon, and so on
-(``docs/formulation.md``, "Collision model", measures the choices). Mirrored to each corner.
-"""
+MAX_CORNER_DETAIL = 6  # the largest corner_detail accepted (11 tangents a corner at 4; 6 gives 23)
 
 
-def corner_normals() -> list[tuple[int, int]]:
+def corner_directions(detail: int) -> tuple[tuple[int, int], ...]:
+    """Normals ``(a, b)`` (NE quadrant) of the tangents cut at every corner: coprime ``1 <= a, b <= detail``.
+
+    ``detail = 1`` gives ``(1, 1)`` alone, the octagon; 2 adds ``(2, 1), (1, 2)`` (a 16-gon),
+    3 a 32-gon, 4 a 48-gon (``docs/formulation.md``, "Collision model", measures them).
+    Ordered by angle. Mirrored to each corner.
+    """
+    pairs = {(a, b) for a in range(1, detail + 1) for b in range(1, detail + 1) if math.gcd(a, b) == 1}
+    return tuple(sorted(pairs, key=lambda p: math.atan2(p[1], p[0])))
+
+
+def corner_normals(detail: int) -> list[tuple[int, int]]:
     """The normals ``(su * a, sv * b)`` of the corner tangents, per corner (NE, NW, SW, SE), as in move_regions."""
-    return [(su * a, sv * b) for su, sv in CORNERS for a, b in CORNER_DIRECTIONS]
+    return [(su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail)]
 
 
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
     """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
 
     The first four are :func:`base_regions` (the sides of the grown rectangle); the
-    others cut its corners (NE, NW, SW, SE), one per normal of :data:`CORNER_DIRECTIONS`:
+    others cut its corners (NE, NW, SW, SE), one per normal of :func:`corner_directions` (``grid.corner_detail``):
     ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
     the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
     cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
     outside it is ``radius`` or more from ``rect``) and touches it on every side.
     """
     out: list[Plane] = list(base_regions(grid, rect, radius))
-    for a, b in corner_normals():
+    for a, b in corner_normals(grid.corner_detail):
         cx = rect.max_x if a > 0 else rect.min_x
         cy = rect.max_y if b > 0 else rect.min_y
         out.append(grid.diagonal_at_least(a, b, a * cx + b * cy + radius * math.hypot(a, b)))
     return tuple(out)
 
 
-def point_in_move_region(point: Point, rect: Rect, radius: float, region: int) -> bool:
+def point_in_move_region(grid: Grid, point: Point, rect: Rect, radius: float, region: int) -> bool:
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
     if region < 4:
         return point_in_region(point, rect, radius, region)
-    a, b = corner_normals()[region - 4]
+    a, b = corner_normals(grid.corner_detail)[region - 4]
     cx = rect.max_x if a > 0 else rect.min_x
     cy = rect.max_y if b > 0 else rect.min_y
     return a * point[0] + b * point[1] >= a * cx + b * cy + radius * math.hypot(a, b) - GEOM_TOL

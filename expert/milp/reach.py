@@ -9,7 +9,7 @@ values); the lattice points of such a set are 8-connected (per column they form 
 interval whose ends move by at most one cell from column to column). Hence the points
 reachable by any sequence of moves lie in the 8-connected components of the points
 one move from the start. With corner cuts other than 45 degrees
-(:data:`expert.milp.grid.CORNER_DIRECTIONS` beyond ``(1, 1)``) the lattice points of
+(``corner_detail`` above 1, :func:`expert.milp.grid.corner_directions`) the lattice points of
 such a set need not be 8-connected; each such plane ``a i + b j >= c`` is then relaxed
 to ``>= c - floor((|a| + |b|) / 2)``, which holds every lattice point whose cell the
 move's segment crosses (within half a cell of a point of the segment), an 8-connected
@@ -75,7 +75,7 @@ def free_and_seed(problem: Problem, deadline: Deadline = NEVER) -> tuple[np.ndar
                 index = ii if plane.axis == 0 else jj
                 member = np.broadcast_to(index <= plane.bound if plane.upper else index >= plane.bound, free.shape)
             inside_any |= member
-            if point_in_move_region(scenario.robot.start, rect, radius, n):
+            if point_in_move_region(grid, scenario.robot.start, rect, radius, n):
                 with_start |= member
         free &= inside_any
         seed &= with_start

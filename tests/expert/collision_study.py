@@ -6,8 +6,9 @@ Run from the project root (it prints one line per scenario and a summary per cho
 
 Each single-object scenario is solved by the exhaustive search of the exact rule
 (``lattice_search.search``, on a 0.1 m lattice) and by the planner on the same lattice
-with each set of corner tangents (:data:`expert.milp.grid.CORNER_DIRECTIONS`): the
-octagon, a 16-gon, a 32-gon and a 48-gon. Scenarios: 3 x 3 m rooms with random walls
+with each set of corner tangents (``plan(..., corner_detail=d)``,
+:func:`expert.milp.grid.corner_directions`): the octagon (1), a 16-gon (2), a 32-gon (3)
+and a 48-gon (4). Scenarios: 3 x 3 m rooms with random walls
 (``test_lattice_search.random_room``), L-shaped corridors and diagonal gaps between two
 walls' corners drawn on purpose (below). Units: metres and seconds.
 """
@@ -25,19 +26,13 @@ import numpy as np
 from lattice_search import search
 from test_lattice_search import RESOLUTION, random_room
 
-import expert.milp.grid as grid
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
 
-CHOICES = {
-    "octagon": ((1, 1),),
-    "16-gon": ((2, 1), (1, 1), (1, 2)),
-    "32-gon": ((3, 1), (2, 1), (3, 2), (1, 1), (2, 3), (1, 2), (1, 3)),
-    "48-gon": ((4, 1), (3, 1), (2, 1), (3, 2), (4, 3), (1, 1), (3, 4), (2, 3), (1, 2), (1, 3), (1, 4)),
-}
+CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}  # name: corner_detail
 ROOM = Rect(0.0, 0.0, 3.0, 3.0)
 
 
@@ -91,9 +86,8 @@ def run(scenario: Scenario) -> dict:
     t0 = time.perf_counter()
     exact = search(scenario, lattice, max_phases=8)
     row = {"scenario": scenario.name, "exact": [exact.phases, exact.objective], "search_s": time.perf_counter() - t0}
-    for name, directions in CHOICES.items():
-        grid.CORNER_DIRECTIONS = directions
-        result = plan(scenario, lattice=lattice, time_limit=60.0)
+    for name, detail in CHOICES.items():
+        result = plan(scenario, lattice=lattice, time_limit=60.0, corner_detail=detail)
         valid = not result.found or validate_plan(scenario, result) == []
         row[name] = {
             "status": result.status,
@@ -102,7 +96,6 @@ def run(scenario: Scenario) -> dict:
             "total_s": result.stats["total_s"],
             "valid": valid,
         }
-    grid.CORNER_DIRECTIONS = CHOICES["octagon"]
     return row
 
 

@@ -223,6 +223,35 @@ def extra_phases_rows(seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME
     return rows
 
 
+CORNER_CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}
+"""Corner tangents compared by :func:`corner_rows`: name -> ``plan(..., corner_detail=...)``."""
+
+
+def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
+    """Each benchmark scenario (``cases(scale)`` up to three objects) planned with every choice of corner tangents.
+
+    Interleaved per scenario, so the load moves all choices alike. Times in seconds.
+    """
+    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
+    rows = []
+    for case in chosen:
+        rng = np.random.default_rng(seed)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict[str, Any] = {"group": case.group, "case": case.name}
+            for name, detail in CORNER_CHOICES.items():
+                result = expert.plan(scenario, time_limit=time_limit, corner_detail=detail)
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "valid": not result.found or validate_plan(scenario, result) == [],
+                }
+            rows.append(row)
+    return rows
+
+
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -235,7 +264,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     extra = sub.add_parser("extra-phases", help="extra_phases=1 against 0 on the 30 multi-object scenarios")
     extra.add_argument("--seed", type=int, default=DEFAULT_SEED)
     extra.add_argument("--out", help="write the rows as JSON here")
+    corners = sub.add_parser("corners", help="octagon against finer corner tangents on the benchmark's cases")
+    corners.add_argument("--scale", type=float, default=0.25, help="scenarios per case, times the benchmark's")
+    corners.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
+    if args.command == "corners":
+        _print_corners(corner_rows(args.scale), args.out)
+        return
     rows = extra_phases_rows(args.seed)
     for row in rows:
         print(
@@ -247,6 +282,31 @@ def main(argv: Sequence[str] | None = None) -> None:
     print(f"{len(changed)} of {len(rows)} improved: " + ", ".join(f"{r['group']} {r['gain']:.2f}" for r in changed))
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_corners(rows: list[dict], out: str | None) -> None:
+    """Per group: the median time of each choice, its ratio to the octagon's, and the plans that changed."""
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        base = statistics.median(r["octagon"]["total_s"] for r in mine)
+        cells = []
+        for name in CORNER_CHOICES:
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            better = sum(
+                r[name]["phases"] < r["octagon"]["phases"]
+                or (
+                    r[name]["phases"] == r["octagon"]["phases"]
+                    and (r[name]["objective"] or 0) < (r["octagon"]["objective"] or 0) - 1e-6
+                )
+                for r in mine
+            )
+            worst = max(r[name]["total_s"] for r in mine)
+            cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
+        print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
+    print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
 
 
