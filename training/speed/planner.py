@@ -27,7 +27,7 @@ import numpy as np
 import expert  # the planner (and its solver) load at the first expert.plan call
 from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
-from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, get_family
+from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, draw_paper_covered, draw_paper_multi, get_family
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
 DEFAULT_SEED = 2024
@@ -252,6 +252,39 @@ def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFA
     return rows
 
 
+SCALE_SEED = 7000  # scale_rows' own seeds: not the benchmark's 2024, not the families' tests'
+
+
+def scale_rows(objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float) -> list[dict]:
+    """``count`` scenarios per size, drawn here: ``draw_paper_multi`` with ``objects`` and ``draw_paper_covered``
+    (every goal covered) with ``covered`` objects, scenario ``n`` from ``default_rng(SCALE_SEED + n)``.
+
+    One in-process :func:`expert.plan` call each; times in seconds.
+    """
+    rows = []
+    for kind, sizes, draw in (("multi", objects, draw_paper_multi), ("covered", covered, draw_paper_covered)):
+        for size in sizes:
+            for n in range(count):
+                scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+                result = expert.plan(scenario, time_limit=time_limit)
+                rows.append(
+                    {
+                        "kind": kind,
+                        "objects": size,
+                        "seed": SCALE_SEED + n,
+                        "status": result.status,
+                        "gap": result.stats.get("gap"),
+                        "phases": len(result.phases),
+                        "total_s": result.stats["total_s"],
+                        "valid": not result.found or validate_plan(scenario, result) == [],
+                    }
+                )
+                print(
+                    f"{kind} {size} seed {SCALE_SEED + n}: {result.status} {result.stats['total_s']:.2f} s", flush=True
+                )
+    return rows
+
+
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -267,7 +300,16 @@ def main(argv: Sequence[str] | None = None) -> None:
     corners = sub.add_parser("corners", help="octagon against finer corner tangents on the benchmark's cases")
     corners.add_argument("--scale", type=float, default=0.25, help="scenarios per case, times the benchmark's")
     corners.add_argument("--out", help="write the rows as JSON here")
+    scale = sub.add_parser("scale", help="8-10 objects and covered goals, seeded here, proven optimal or not")
+    scale.add_argument("--objects", type=int, nargs="*", default=[8, 10])
+    scale.add_argument("--covered", type=int, nargs="*", default=[3, 4])
+    scale.add_argument("--count", type=int, default=4, help="scenarios per size")
+    scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    scale.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
+    if args.command == "scale":
+        _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit), args.out)
+        return
     if args.command == "corners":
         _print_corners(corner_rows(args.scale), args.out)
         return
@@ -305,6 +347,22 @@ def _print_corners(rows: list[dict], out: str | None) -> None:
             cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
         print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
     print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_scale(rows: list[dict], out: str | None) -> None:
+    """Per kind and size: median and p95 of the time, how many were proven optimal."""
+    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
+        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+        times = [r["total_s"] for r in mine]
+        optimal = sum(r["status"] == "optimal" for r in mine)
+        print(
+            f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  median {statistics.median(times):.2f} s  "
+            f"p95 {float(np.percentile(times, 95)):.2f} s  proven optimal {optimal}/{len(mine)}  "
+            f"invalid {sum(not r['valid'] for r in mine)}"
+        )
     if out:
         with open(out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
