@@ -255,18 +255,20 @@ def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFA
 SCALE_SEED = 7000  # scale_rows' own seeds: not the benchmark's 2024, not the families' tests'
 
 
-def scale_rows(objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float) -> list[dict]:
+def scale_rows(
+    objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float, options: dict | None = None
+) -> list[dict]:
     """``count`` scenarios per size, drawn here: ``draw_paper_multi`` with ``objects`` and ``draw_paper_covered``
     (every goal covered) with ``covered`` objects, scenario ``n`` from ``default_rng(SCALE_SEED + n)``.
 
-    One in-process :func:`expert.plan` call each; times in seconds.
+    One in-process :func:`expert.plan` call each (with ``options``); times in seconds.
     """
     rows = []
     for kind, sizes, draw in (("multi", objects, draw_paper_multi), ("covered", covered, draw_paper_covered)):
         for size in sizes:
             for n in range(count):
                 scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
-                result = expert.plan(scenario, time_limit=time_limit)
+                result = expert.plan(scenario, time_limit=time_limit, **(options or {}))
                 rows.append(
                     {
                         "kind": kind,
@@ -305,10 +307,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     scale.add_argument("--covered", type=int, nargs="*", default=[3, 4])
     scale.add_argument("--count", type=int, default=4, help="scenarios per size")
     scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    scale.add_argument("--options", type=json.loads, default=None, help="plan() options as a JSON object")
     scale.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
     if args.command == "scale":
-        _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit), args.out)
+        _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit, args.options), args.out)
         return
     if args.command == "corners":
         _print_corners(corner_rows(args.scale), args.out)
