@@ -44,7 +44,7 @@ from expert.milp.grid import MAX_CORNER_DETAIL
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
-from expert.milp.warm import add_warm_start
+from expert.milp.warm import add_branching_hint, add_warm_start
 from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
@@ -57,7 +57,7 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail", "guide_branching"}
 
 
 def optimality(extra_phases: int, status: str = "optimal", fewest_proven: bool = False) -> str:
@@ -98,6 +98,7 @@ def plan(
     holding: str | None = None,
     extra_phases: int = 0,
     export_models: str | os.PathLike | None = None,
+    guide: Plan | None = None,
     **solver_options: Any,
 ) -> Plan:
     """Plan ``scenario`` (optimal for the fewest phases that admit a plan); never raises for "no plan".
@@ -119,6 +120,13 @@ def plan(
         export_models: an existing folder: every MILP solved is written there as MPS with
             a JSON of its variables' meanings and its optimum (:mod:`expert.milp.export`);
             ``stats["solves"][i]["exported"]`` names the file.
+        guide: a plan for this scenario from elsewhere (a learned policy's rollout, an
+            earlier answer): SCIP's warm start in every model whose phases it fits (checked
+            feasible first, so the options it beats are fixed as for the decoupled plan)
+            and, with the solver option ``guide_branching=True``, a branching hint (its
+            option binaries branched on first). Only the search changes: the answer and
+            its proof are the same with any guide or none.
+            ``stats["guide"]`` says whether it mapped onto the lattice and the options.
         **solver_options: ``integral`` (bool, default True: integer lattice bases),
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
@@ -129,6 +137,7 @@ def plan(
             ``corner_detail`` (int 1-6, default 1: the octagon; higher adds tangents of the
             rounded corners to Eq. 18, :func:`expert.milp.grid.corner_directions`: closer to the
             exact swept-disc rule, slower; ``docs/formulation.md``, "Collision model"),
+            ``guide_branching`` (bool, default False: see ``guide``),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
@@ -157,6 +166,7 @@ def plan(
     run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
     run.export_dir = None if export_models is None else Path(export_models)
     run.corner_detail = options.corner_detail
+    run.guide_plan, run.guide_branching = guide, options.guide_branching
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
     except TimeUp:
@@ -173,6 +183,7 @@ class _Options:
     conditional: bool
     settings: SolverSettings
     corner_detail: int = 1
+    guide_branching: bool = False
 
     @classmethod
     def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
@@ -184,10 +195,11 @@ class _Options:
             raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
         options = dict(solver_options)
         detail = options.pop("corner_detail", 1)
+        guide_branching = bool(options.pop("guide_branching", False))
         if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
             raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
-        return cls(*own, SolverSettings(**options), detail)
+        return cls(*own, SolverSettings(**options), detail, guide_branching)
 
 
 @dataclasses.dataclass
@@ -207,6 +219,9 @@ class _Run:
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
     export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
+    guide_plan: Plan | None = None  # plan()'s guide
+    guide: list[SolvedPhase] | None = None  # the guide as MILP steps, when it maps
+    guide_branching: bool = False  # the guide's option binaries branched on first
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -264,6 +279,9 @@ class _Run:
         if problem.infeasible is not None:
             stats["reason"] = problem.infeasible
             return self.finish("infeasible")
+        if self.guide_plan is not None:
+            self.guide = steps_of(problem, self.guide_plan.phases) if self.guide_plan.phases else None
+            stats["guide"] = "mapped" if self.guide else "not mappable (ignored)"
         if not problem.deliver:
             stats["phases_tried"].append(1)
             return self.finish("optimal", phases_of(problem, []))
@@ -454,9 +472,13 @@ class _Run:
         t1 = time.perf_counter()
         record["build_s"] = t1 - t0
         stats["build_s"] += t1 - t0
+        if warm is None and self.guide is not None and len(self.guide) <= n_phases - 1:
+            warm = self.guide
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
         self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warm, record)
+        if self.guide is not None and self.guide_branching:
+            record["guide_priorities"] = add_branching_hint(milp, self.guide)
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp

@@ -115,6 +115,27 @@ def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     return bool(model.addSol(solution, free=True))
 
 
+GUIDE_PRIORITY = 10  # SCIP branching priority of a guide's option binaries (the others have 0)
+
+
+def add_branching_hint(milp: Milp, steps: list[SolvedPhase]) -> int:
+    """Branch first on the option binaries that ``steps`` (a guide plan) uses, at their phases; returns how many.
+
+    A priority orders the search only: SCIP still explores (or prunes by bound) every
+    branch, so the optimum and its proof do not depend on the hint.
+    """
+    index = {id(option): o for o, option in enumerate(milp.problem.options)}
+    count = 0
+    for k, step in enumerate(steps, start=1):
+        if step.option is None or k >= milp.n_phases:
+            continue
+        z = milp.z[k].get(index.get(id(step.option), -1))
+        if z is not None:
+            milp.model.chgVarBranchPriority(z, GUIDE_PRIORITY)
+            count += 1
+    return count
+
+
 class _Values:
     """Variable -> value (pyscipopt variables are not hashable: keyed by their unique names)."""
 

@@ -287,6 +287,49 @@ def scale_rows(
     return rows
 
 
+GUIDE_CASES = (("multi", 6), ("multi", 8), ("covered", 3), ("covered", 4))
+
+
+def guide_rows(count: int, time_limit: float) -> list[dict]:
+    """The planner with and without a guide: the optimal plan itself (an oracle, the best a learned hint can be).
+
+    Per scenario (drawn as in :func:`scale_rows`): a plain call, a call guided by its
+    answer (warm start), one guided with branching priorities too, a second plain call;
+    the plain time is the lower of the two. Times in seconds.
+    """
+    rows = []
+    for kind, size in GUIDE_CASES:
+        draw = draw_paper_multi if kind == "multi" else draw_paper_covered
+        for n in range(count):
+            scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+            plain = expert.plan(scenario, time_limit=time_limit)
+            warm = expert.plan(scenario, time_limit=time_limit, guide=plain)
+            branching = expert.plan(scenario, time_limit=time_limit, guide=plain, guide_branching=True)
+            again = expert.plan(scenario, time_limit=time_limit)
+            results = {"warm": warm, "branching": branching}
+            row = {
+                "kind": kind,
+                "objects": size,
+                "seed": SCALE_SEED + n,
+                "status": plain.status,
+                "plain_s": min(plain.stats["total_s"], again.stats["total_s"]),
+                **{f"{name}_s": r.stats["total_s"] for name, r in results.items()},
+                "same_optimum": all(
+                    r.status == plain.status and abs((r.objective or 0) - (plain.objective or 0)) < 1e-6
+                    for r in results.values()
+                ),
+                "nodes": {name: r.stats["solves"][-1].get("nodes") for name, r in {"plain": plain, **results}.items()},
+            }
+            rows.append(row)
+            print(
+                f"{kind} {size} seed {row['seed']}: {plain.status} plain {row['plain_s']:.2f} s, "
+                f"warm {row['warm_s']:.2f} s, +branching {row['branching_s']:.2f} s, nodes {row['nodes']}, "
+                f"same optimum {row['same_optimum']}",
+                flush=True,
+            )
+    return rows
+
+
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -309,7 +352,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
     scale.add_argument("--options", type=json.loads, default=None, help="plan() options as a JSON object")
     scale.add_argument("--out", help="write the rows as JSON here")
+    guide = sub.add_parser("guide", help="the optimal plan as a guide (warm start, branching): the ceiling")
+    guide.add_argument("--count", type=int, default=2, help="scenarios per case")
+    guide.add_argument("--time-limit", type=float, default=60.0, help="seconds per plan() call")
+    guide.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
+    if args.command == "guide":
+        _print_guide(guide_rows(args.count, args.time_limit), args.out)
+        return
     if args.command == "scale":
         _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit, args.options), args.out)
         return
@@ -350,6 +400,23 @@ def _print_corners(rows: list[dict], out: str | None) -> None:
             cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
         print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
     print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_guide(rows: list[dict], out: str | None) -> None:
+    """Per case: the median ratio of the plain time to the guided times (above 1: the guide helps)."""
+    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
+        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+        warm = statistics.median(r["plain_s"] / r["warm_s"] for r in mine)
+        branching = statistics.median(r["plain_s"] / r["branching_s"] for r in mine)
+        plain = statistics.median(r["plain_s"] for r in mine)
+        print(
+            f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  plain median {plain:.2f} s"
+            f"  speed-up warm {warm:.2f}x  warm+branching {branching:.2f}x  "
+            f"same optimum {sum(r['same_optimum'] for r in mine)}/{len(mine)}"
+        )
     if out:
         with open(out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
