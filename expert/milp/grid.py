@@ -17,6 +17,7 @@ and ``u <= a`` when they are integer (the default, so no snapping is needed at a
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -271,6 +272,7 @@ CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # outward signs of the corners: 
 MAX_CORNER_DETAIL = 6  # the largest corner_detail accepted (11 tangents a corner at 4; 6 gives 23)
 
 
+@functools.cache
 def corner_directions(detail: int) -> tuple[tuple[int, int], ...]:
     """Normals ``(a, b)`` (NE quadrant) of the tangents cut at every corner: coprime ``1 <= a, b <= detail``.
 
@@ -282,9 +284,10 @@ def corner_directions(detail: int) -> tuple[tuple[int, int], ...]:
     return tuple(sorted(pairs, key=lambda p: math.atan2(p[1], p[0])))
 
 
-def corner_normals(detail: int) -> list[tuple[int, int]]:
+@functools.cache
+def corner_normals(detail: int) -> tuple[tuple[int, int], ...]:
     """The normals ``(su * a, sv * b)`` of the corner tangents, per corner (NE, NW, SW, SE), as in move_regions."""
-    return [(su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail)]
+    return tuple((su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail))
 
 
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
