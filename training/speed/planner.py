@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -25,6 +26,7 @@ from typing import Any
 import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
+import expert.planner as expert_planner
 from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
 from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, draw_paper_covered, draw_paper_multi, get_family
@@ -330,6 +332,44 @@ def guide_rows(count: int, time_limit: float) -> list[dict]:
     return rows
 
 
+DECOUPLED_CASES = (("covered", 3, 4), ("multi", 5, 2), ("covered", 4, 1))  # kind, objects, scenarios
+DECOUPLED_VARIANTS = ("base", "no decoupled plan below 4 objects", "no two-at-a-time pass", "base again")
+
+
+def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
+    """The decoupled first plan's cost and worth: each scenario (drawn as in :func:`scale_rows`) four ways in turn.
+
+    Variants: the planner as it is; without the decoupled plan for three objects with
+    pushes (``DECOUPLED_FROM`` 5); without its second, two-objects-at-a-time pass
+    (``LOOKAHEAD_MIN_S`` infinite); as it is again. Times in seconds.
+    """
+    planner = expert_planner
+    rows = []
+    for kind, size, count in DECOUPLED_CASES:
+        draw = draw_paper_multi if kind == "multi" else draw_paper_covered
+        for n in range(count):
+            scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+            row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
+            for variant in DECOUPLED_VARIANTS:
+                saved = planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S
+                planner.DECOUPLED_FROM = 5 if variant.startswith("no decoupled") else saved[0]
+                planner.LOOKAHEAD_MIN_S = math.inf if variant.startswith("no two") else saved[1]
+                try:
+                    result = expert.plan(scenario, time_limit=time_limit)
+                finally:
+                    planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S = saved
+                row[variant] = {
+                    "status": result.status,
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "decoupled_s": result.stats.get("decoupled_s", 0.0),
+                }
+            rows.append(row)
+            cells = " | ".join(f"{v} {row[v]['total_s']:.2f} s" for v in DECOUPLED_VARIANTS)
+            print(f"{kind} {size} seed {row['seed']}: {cells}", flush=True)
+    return rows
+
+
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -356,7 +396,15 @@ def main(argv: Sequence[str] | None = None) -> None:
     guide.add_argument("--count", type=int, default=2, help="scenarios per case")
     guide.add_argument("--time-limit", type=float, default=60.0, help="seconds per plan() call")
     guide.add_argument("--out", help="write the rows as JSON here")
+    decoupled = sub.add_parser("decoupled", help="the decoupled first plan and its second pass, on and off")
+    decoupled.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
+    if args.command == "decoupled":
+        rows = decoupled_rows()
+        if args.out:
+            with open(args.out, "w", encoding="utf-8") as f:
+                json.dump(rows, f, indent=1)
+        return
     if args.command == "guide":
         _print_guide(guide_rows(args.count, args.time_limit), args.out)
         return
