@@ -56,6 +56,7 @@ DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
+SECOND_PASS_FIRST_SOLUTIONS = False  # the two-at-a-time pass with SCIP's first solutions, not optimal sub-plans
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail", "guide_branching"}
 
@@ -424,7 +425,8 @@ class _Run:
             if lookahead == 2 and (good or budget.left() < LOOKAHEAD_MIN_S):
                 break
             try:
-                found = decoupled_plan(self.scenario, order, lattice, budget, plan, lookahead)
+                sub_planner = _first_solution_planner if lookahead == 2 and SECOND_PASS_FIRST_SOLUTIONS else plan
+                found = decoupled_plan(self.scenario, order, lattice, budget, sub_planner, lookahead)
             except TimeUp:
                 break
             if found is not None and (phases is None or _better(self.scenario, found, phases)):

@@ -333,7 +333,13 @@ def guide_rows(count: int, time_limit: float) -> list[dict]:
 
 
 DECOUPLED_CASES = (("covered", 3, 4), ("multi", 5, 2), ("covered", 4, 1))  # kind, objects, scenarios
-DECOUPLED_VARIANTS = ("base", "no decoupled plan below 4 objects", "no two-at-a-time pass", "base again")
+DECOUPLED_VARIANTS = (
+    "base",
+    "no decoupled plan below 4 objects",
+    "no two-at-a-time pass",
+    "two-at-a-time pass of first solutions",
+    "base again",
+)
 
 
 def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
@@ -341,7 +347,8 @@ def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
 
     Variants: the planner as it is; without the decoupled plan for three objects with
     pushes (``DECOUPLED_FROM`` 5); without its second, two-objects-at-a-time pass
-    (``LOOKAHEAD_MIN_S`` infinite); as it is again. Times in seconds.
+    (``LOOKAHEAD_MIN_S`` infinite); that pass made of SCIP's first solutions
+    (``SECOND_PASS_FIRST_SOLUTIONS``); as it is again. Times in seconds.
     """
     planner = expert_planner
     rows = []
@@ -351,13 +358,14 @@ def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
             scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
             row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
             for variant in DECOUPLED_VARIANTS:
-                saved = planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S
+                saved = planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS
                 planner.DECOUPLED_FROM = 5 if variant.startswith("no decoupled") else saved[0]
                 planner.LOOKAHEAD_MIN_S = math.inf if variant.startswith("no two") else saved[1]
+                planner.SECOND_PASS_FIRST_SOLUTIONS = variant.endswith("first solutions") or saved[2]
                 try:
                     result = expert.plan(scenario, time_limit=time_limit)
                 finally:
-                    planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S = saved
+                    planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS = saved
                 row[variant] = {
                     "status": result.status,
                     "objective": result.objective,
