@@ -22,6 +22,8 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Point, Rect
 
@@ -305,6 +307,53 @@ def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
         cx = rect.max_x if a > 0 else rect.min_x
         cy = rect.max_y if b > 0 else rect.min_y
         out.append(grid.diagonal_at_least(a, b, a * cx + b * cy + radius * math.hypot(a, b)))
+    return tuple(out)
+
+
+START_TANGENT_COEFFICIENT = 1000  # the largest whole coefficient of a start tangent's normal
+START_TANGENT_SLACK = 1e-5  # metres: a start tangent keeps at least this between its line and the grown rectangle
+
+
+@functools.lru_cache(maxsize=65536)
+def start_tangents(grid: Grid, point: Point, rect: Rect, radius: float) -> tuple[DiagonalPlane, ...]:
+    """The lines through the exact start ``point`` that (nearly) touch ``rect`` grown by ``radius``, as regions.
+
+    Each is ``a i + b j >= c`` with whole ``a``, ``b`` (a normal within a hair of the
+    tangent's, turned 3 mrad away from the rectangle so that the line separates it from the
+    disc by at least :data:`START_TANGENT_SLACK`) through ``point``: a move from the start
+    to a lattice point on the far side clears the rectangle (the segment stays in the
+    half-plane). They make the first move exact (up to that turn) where it passes a corner
+    at any angle, and hold only for moves from ``point``. Empty when ``point`` is inside the
+    grown rectangle; an axis-parallel tangent is left out (a side of the rectangle covers it).
+    """
+    corners = [(x, y) for x in (rect.min_x, rect.max_x) for y in (rect.min_y, rect.max_y)]
+    px, py = point
+
+    def slack(theta: float) -> float:
+        nx, ny = math.cos(theta), math.sin(theta)
+        return nx * px + ny * py - max(nx * cx + ny * cy for cx, cy in corners) - radius
+
+    thetas = np.linspace(0.0, 2 * math.pi, 720, endpoint=False)
+    nx, ny = np.cos(thetas), np.sin(thetas)
+    support = np.max(np.stack([nx * cx + ny * cy for cx, cy in corners]), axis=0)
+    ok = nx * px + ny * py - support - radius > 0
+    if ok.all() or not ok.any():
+        return ()
+    out = []
+    for edge in np.flatnonzero(ok != np.roll(ok, 1)):  # ok changes between thetas[edge - 1] and thetas[edge]
+        lo, hi = float(thetas[edge - 1]) - (2 * math.pi if edge == 0 else 0.0), float(thetas[edge])
+        inside_hi = bool(ok[edge])
+        for _ in range(40):
+            mid = (lo + hi) / 2
+            if (slack(mid) > 0) == inside_hi:
+                hi = mid
+            else:
+                lo = mid
+        theta = hi + 3e-3 if inside_hi else lo - 3e-3  # into the separating arc (radians)
+        a, b = round(START_TANGENT_COEFFICIENT * math.cos(theta)), round(START_TANGENT_COEFFICIENT * math.sin(theta))
+        if a == 0 or b == 0 or slack(math.atan2(b, a)) < START_TANGENT_SLACK:
+            continue
+        out.append(grid.diagonal_at_least(a, b, a * px + b * py))
     return tuple(out)
 
 

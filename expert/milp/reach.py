@@ -39,7 +39,7 @@ import numpy as np
 from scipy import ndimage
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import DiagonalPlane, IndexBox, move_regions, point_in_move_region
+from expert.milp.grid import DiagonalPlane, IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
 from fetchcarry_env.geometry import Rect
 
@@ -52,9 +52,10 @@ def reachable_mask(problem: Problem, deadline: Deadline = NEVER) -> np.ndarray:
 
 
 def _reachable(free: np.ndarray, seed: np.ndarray) -> np.ndarray:
+    """The components of ``free`` that hold a point of ``seed``, and ``seed`` itself (one move from the start)."""
     labels, _ = ndimage.label(free, structure=EIGHT_NEIGHBOURS)
     hit = np.unique(labels[seed & free])
-    return np.isin(labels, hit[hit > 0])
+    return np.isin(labels, hit[hit > 0]) | seed
 
 
 def free_and_seed(problem: Problem, deadline: Deadline = NEVER) -> tuple[np.ndarray, np.ndarray]:
@@ -84,18 +85,19 @@ def free_and_seed(problem: Problem, deadline: Deadline = NEVER) -> tuple[np.ndar
                 cut |= _member(plane, wi, wj)
             free[i0 - domain.i_lo : i1 - domain.i_lo + 1, j0 - domain.j_lo : j1 - domain.j_lo + 1] &= cut
         with_start = [plane for n, plane in enumerate(planes) if point_in_move_region(grid, start, rect, radius, n)]
-        if len(with_start) < len(planes):
-            near = np.zeros_like(free)
-            for plane in with_start:
-                near |= _member(plane, ii, jj)
-            seed &= near
+        with_start += start_tangents(grid, start, rect, radius)  # the first move's own regions (Eq. 18 at k = 1)
+        near = np.zeros_like(free)
+        for plane in with_start:  # exactly: the seed needs no connectivity argument
+            near |= _member(plane, ii, jj, relaxed=False)
+        seed &= near
     return free, seed
 
 
-def _member(plane, ii: np.ndarray, jj: np.ndarray) -> np.ndarray:
-    """The lattice points ``ii x jj`` (index columns and rows) in ``plane`` (a cut other than 45 degrees relaxed)."""
-    if isinstance(plane, DiagonalPlane):  # relaxed by half a cell when not octilinear (module doc)
-        slack = 0 if plane.octilinear else (abs(plane.su) + abs(plane.sv)) // 2
+def _member(plane, ii: np.ndarray, jj: np.ndarray, relaxed: bool = True) -> np.ndarray:
+    """The lattice points ``ii x jj`` (index columns and rows) in ``plane``; ``relaxed``: a cut other than 45 degrees
+    is widened by half a cell (module doc)."""
+    if isinstance(plane, DiagonalPlane):
+        slack = 0 if plane.octilinear or not relaxed else (abs(plane.su) + abs(plane.sv)) // 2
         return plane.su * ii + plane.sv * jj >= plane.bound - slack
     index = ii if plane.axis == 0 else jj
     member = index <= plane.bound if plane.upper else index >= plane.bound

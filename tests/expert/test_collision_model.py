@@ -40,13 +40,14 @@ def test_diagonal_gap_is_passable():
 
 
 def test_square_cornered_rule_said_infeasible(monkeypatch):
-    """Without the four corner regions the same scenario has no plan (the issue's false "infeasible")."""
+    """Without the four corner regions (and the start's tangents) the scenario has no plan (a false "infeasible")."""
 
     def four_regions(grid, rect, radius):
         return move_regions(grid, rect, radius)[:4]
 
     for module in (collision, bounds, reach):
         monkeypatch.setattr(module, "move_regions", four_regions)
+        monkeypatch.setattr(module, "start_tangents", lambda *args: ())  # the paper's rule: no start tangents
     result = plan(diagonal_gap())
     assert result.status == "infeasible"
     assert "cannot get to" in result.stats["reason"]

@@ -26,6 +26,9 @@ from typing import Any
 import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
+import expert.milp.bounds as bounds_module
+import expert.milp.collision as collision_module
+import expert.milp.reach as reach_module
 import expert.planner as expert_planner
 from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
@@ -378,6 +381,40 @@ def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
     return rows
 
 
+def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
+    """Each benchmark scenario up to three objects with and without the start's tangents (Eq. 18 at the first move).
+
+    Without: ``start_tangents`` replaced by a function returning none, in the planner's
+    three users (collision, bounds, reach). Interleaved per scenario; times in seconds.
+    """
+    modules = (collision_module, bounds_module, reach_module)
+    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
+    rows = []
+    for case in chosen:
+        rng = np.random.default_rng(seed)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict[str, Any] = {"group": case.group}
+            for name in ("with", "without"):
+                saved = [m.start_tangents for m in modules]
+                if name == "without":
+                    for m in modules:
+                        m.start_tangents = lambda *args: ()
+                try:
+                    result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT)
+                finally:
+                    for m, f in zip(modules, saved, strict=True):
+                        m.start_tangents = f
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                }
+            rows.append(row)
+    return rows
+
+
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -406,7 +443,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     guide.add_argument("--out", help="write the rows as JSON here")
     decoupled = sub.add_parser("decoupled", help="the decoupled first plan and its second pass, on and off")
     decoupled.add_argument("--out", help="write the rows as JSON here")
+    tangents = sub.add_parser("tangents", help="the start's tangents on and off on the benchmark's cases")
+    tangents.add_argument("--scale", type=float, default=0.25)
+    tangents.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
+    if args.command == "tangents":
+        _print_tangents(tangent_rows(args.scale), args.out)
+        return
     if args.command == "decoupled":
         rows = decoupled_rows()
         if args.out:
@@ -456,6 +499,28 @@ def _print_corners(rows: list[dict], out: str | None) -> None:
             cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
         print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
     print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_tangents(rows: list[dict], out: str | None) -> None:
+    """Per group: median times with and without the start's tangents and the plans they improve."""
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        with_s = statistics.median(r["with"]["total_s"] for r in mine)
+        without_s = statistics.median(r["without"]["total_s"] for r in mine)
+        better = sum(
+            r["with"]["phases"] < r["without"]["phases"]
+            or (
+                r["with"]["phases"] == r["without"]["phases"]
+                and r["with"]["objective"] < r["without"]["objective"] - 1e-6
+            )
+            for r in mine
+            if r["with"]["objective"] is not None and r["without"]["objective"] is not None
+        )
+        ratio = with_s / without_s
+        print(f"{group:<6} n={len(mine):<3} with {with_s:.3f} s, without {without_s:.3f} s ({ratio:.2f}x)", better)
     if out:
         with open(out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
