@@ -139,3 +139,33 @@ def test_finer_corners_find_a_plan_the_octagon_misses():
 def test_corner_detail_is_checked(bad):
     with pytest.raises(ValueError, match="corner_detail"):
         plan(diagonal_gap(), corner_detail=bad)
+
+
+@pytest.mark.parametrize("start", [(0.5, 0.7), (2.5, 0.4), (4.6, 4.5), (1.0, 2.5)])
+def test_start_tangents_keep_the_first_move_clear(start):
+    """Every lattice point beyond a start tangent is joined to the start by a segment a radius or more from the rect."""
+    import numpy as np
+
+    from expert.milp.grid import Grid, start_tangents
+    from fetchcarry_env.actions import Lattice
+
+    area, rect, radius = Rect(0.0, 0.0, 5.0, 5.0), Rect(2.0, 2.0, 3.0, 3.0), 0.22
+    grid = Grid.for_area(Lattice.over(area, 0.05), area, radius)
+    tangents = start_tangents(grid, start, rect, radius)
+    assert len(tangents) == 2
+    for plane in tangents:
+        points = [grid.point(i, j) for i in range(0, 101, 3) for j in range(0, 101, 3) if plane.holds_at(i, j)]
+        assert points
+        for q in points:
+            along = np.linspace(0.0, 1.0, 200)
+            xs, ys = start[0] + along * (q[0] - start[0]), start[1] + along * (q[1] - start[1])
+            assert min(rect.distance_to_point((x, y)) for x, y in zip(xs, ys, strict=True)) >= radius - 1e-9
+
+
+def test_no_start_tangent_from_inside_the_grown_rectangle():
+    from expert.milp.grid import Grid, start_tangents
+    from fetchcarry_env.actions import Lattice
+
+    area = Rect(0.0, 0.0, 5.0, 5.0)
+    grid = Grid.for_area(Lattice.over(area, 0.05), area, 0.22)
+    assert start_tangents(grid, (3.1, 2.5), Rect(2.0, 2.0, 3.0, 3.0), 0.22) == ()
