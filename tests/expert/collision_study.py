@@ -16,6 +16,7 @@ walls' corners drawn on purpose (below). Units: metres and seconds.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import statistics
@@ -29,6 +30,7 @@ from test_lattice_search import RESOLUTION, random_room
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import get_family
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
 
@@ -72,9 +74,18 @@ def diagonal_room(rng: np.random.Generator, name: str) -> Scenario:
             return scenario
 
 
-def scenarios(count: int) -> list[Scenario]:
-    """``count`` of each kind, seeded by their index (rooms from seed 100 on: the test uses 0-20)."""
-    out = [random_room(np.random.default_rng(100 + s), f"room-{100 + s}") for s in range(count)]
+FAMILIES = ("basic", "corridor", "turned-room", "turned-corridor")  # the single-object families without pushes
+
+
+def scenarios(count: int, per_family: int = 0) -> list[Scenario]:
+    """``count`` of each kind, seeded by their index (rooms from seed 100 on: the test uses 0-20), and
+    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ..."""
+    out = [
+        dataclasses.replace(get_family(f).sample(np.random.default_rng(s)), name=f"{f}-{s}")
+        for f in FAMILIES
+        for s in range(per_family)
+    ]
+    out += [random_room(np.random.default_rng(100 + s), f"room-{100 + s}") for s in range(count)]
     out += [corridor_room(np.random.default_rng(s), f"corridor-{s}") for s in range(count)]
     out += [diagonal_room(np.random.default_rng(s), f"diagonal-{s}") for s in range(count)]
     return out
@@ -120,10 +131,11 @@ def summary(rows: list[dict], name: str) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=10, help="scenarios of each kind")
+    parser.add_argument("--families", type=int, default=0, help="scenarios of each single-object family")
     parser.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args()
     rows = []
-    for scenario in scenarios(args.count):
+    for scenario in scenarios(args.count, args.families):
         row = run(scenario)
         rows.append(row)
         cells = "  ".join(f"{n}: {row[n]['phases']} {row[n]['objective']}" for n in CHOICES)
