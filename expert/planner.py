@@ -15,7 +15,9 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 import time
+from pathlib import Path
 from typing import Any
 
 import pyscipopt
@@ -37,10 +39,12 @@ from expert.milp.collision import Infeasible
 from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
+from expert.milp.export import export_model
+from expert.milp.grid import MAX_CORNER_DETAIL
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
-from expert.milp.warm import add_warm_start
+from expert.milp.warm import add_branching_hint, add_warm_start
 from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
@@ -52,8 +56,9 @@ DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
+SECOND_PASS_FIRST_SOLUTIONS = False  # the two-at-a-time pass with SCIP's first solutions, not optimal sub-plans
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional"}
+_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail", "guide_branching"}
 
 
 def optimality(extra_phases: int, status: str = "optimal", fewest_proven: bool = False) -> str:
@@ -93,6 +98,8 @@ def plan(
     lattice: Lattice | None = None,
     holding: str | None = None,
     extra_phases: int = 0,
+    export_models: str | os.PathLike | None = None,
+    guide: Plan | None = None,
     **solver_options: Any,
 ) -> Plan:
     """Plan ``scenario`` (optimal for the fewest phases that admit a plan); never raises for "no plan".
@@ -111,6 +118,16 @@ def plan(
             followed by idle phases (no move, no action), which are dropped from the
             answer. ``optimal`` then means optimal among all plans of at most ``N + k``
             phases, compared by Eq. 1 over ``N + k`` phases (``stats["optimality"]``).
+        export_models: an existing folder: every MILP solved is written there as MPS with
+            a JSON of its variables' meanings and its optimum (:mod:`expert.milp.export`);
+            ``stats["solves"][i]["exported"]`` names the file.
+        guide: a plan for this scenario from elsewhere (a learned policy's rollout, an
+            earlier answer): SCIP's warm start in every model whose phases it fits (checked
+            feasible first, so the options it beats are fixed as for the decoupled plan)
+            and, with the solver option ``guide_branching=True``, a branching hint (its
+            option binaries branched on first). Only the search changes: the answer and
+            its proof are the same with any guide or none.
+            ``stats["guide"]`` says whether it mapped onto the lattice and the options.
         **solver_options: ``integral`` (bool, default True: integer lattice bases),
             ``lower_bound`` (bool, default True: start at the proven lower bound, not 3),
             ``fewest_cuts`` (bool, default True: the valid inequalities of a model whose
@@ -118,6 +135,10 @@ def plan(
             ``conditional`` (bool, default True: Eq. 1's lower bound per action, pose box and
             phase as cuts, and the options that cannot beat the warm start fixed to 0,
             :mod:`expert.milp.conditional`),
+            ``corner_detail`` (int 1-6, default 1: the octagon; higher adds tangents of the
+            rounded corners to Eq. 18, :func:`expert.milp.grid.corner_directions`: closer to the
+            exact swept-disc rule, slower; ``docs/formulation.md``, "Collision model"),
+            ``guide_branching`` (bool, default False: see ``guide``),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
 
@@ -144,6 +165,9 @@ def plan(
     options = _Options.parse(solver_options, extra_phases)
     lattice = lattice or Lattice.over(scenario.area, DEFAULT_RESOLUTION)
     run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
+    run.export_dir = None if export_models is None else Path(export_models)
+    run.corner_detail = options.corner_detail
+    run.guide_plan, run.guide_branching = guide, options.guide_branching
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
     except TimeUp:
@@ -159,6 +183,8 @@ class _Options:
     fewest_cuts: bool
     conditional: bool
     settings: SolverSettings
+    corner_detail: int = 1
+    guide_branching: bool = False
 
     @classmethod
     def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
@@ -169,8 +195,12 @@ class _Options:
         if not isinstance(extra_phases, int) or extra_phases < 0:
             raise ValueError(f"extra_phases must be a whole number >= 0, got {extra_phases!r}")
         options = dict(solver_options)
+        detail = options.pop("corner_detail", 1)
+        guide_branching = bool(options.pop("guide_branching", False))
+        if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
+            raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
-        return cls(*own, SolverSettings(**options))
+        return cls(*own, SolverSettings(**options), detail, guide_branching)
 
 
 @dataclasses.dataclass
@@ -188,6 +218,11 @@ class _Run:
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[SolvedPhase] | None = None  # the decoupled plan as MILP steps, for warm starts
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
+    export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
+    corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
+    guide_plan: Plan | None = None  # plan()'s guide
+    guide: list[SolvedPhase] | None = None  # the guide as MILP steps, when it maps
+    guide_branching: bool = False  # the guide's option binaries branched on first
 
     def __post_init__(self) -> None:
         self.stats.update(
@@ -231,16 +266,30 @@ class _Run:
         self, lattice: Lattice, holding: str | None, integral: bool, use_bound: bool, max_phases: int | None
     ) -> Plan:
         stats, deadline = self.stats, self.deadline
-        problem = prepare(self.scenario, lattice, holding=holding, integral=integral, deadline=deadline)
+        problem = prepare(
+            self.scenario,
+            lattice,
+            holding=holding,
+            integral=integral,
+            deadline=deadline,
+            corner_detail=self.corner_detail,
+        )
         stats["prepare_s"] = time.perf_counter() - self.started
         stats["options"] = len(problem.options)
         deadline.check()
         if problem.infeasible is not None:
             stats["reason"] = problem.infeasible
             return self.finish("infeasible")
+        if self.guide_plan is not None:
+            self.guide = steps_of(problem, self.guide_plan.phases) if self.guide_plan.phases else None
+            stats["guide"] = "mapped" if self.guide else "not mappable (ignored)"
         if not problem.deliver:
             stats["phases_tried"].append(1)
             return self.finish("optimal", phases_of(problem, []))
+        reason = self.unreachable(problem)  # before any MILP: a few milliseconds at any size
+        if reason is not None:
+            stats["reason"] = reason
+            return self.finish("infeasible")
         many = holding is None and len(problem.deliver) >= DECOUPLED_FROM - (1 if problem.pushes.pushable else 0)
         if many and deadline.left() < FIRST_PLAN_BELOW_S:
             self.first_plan(problem, lattice)
@@ -290,11 +339,6 @@ class _Run:
             outcome = self.solve(problem, n_phases, pairs, fewest=fewer_infeasible and self.fewest_cuts)
             if outcome == "infeasible":
                 fewer_infeasible = True
-                if n_phases == first:
-                    reason = self.unreachable(problem)
-                    if reason is not None:
-                        stats["reason"] = reason
-                        return self.finish("infeasible")
                 continue
             if outcome == "time_limit":
                 return self.out_of_time()
@@ -381,7 +425,8 @@ class _Run:
             if lookahead == 2 and (good or budget.left() < LOOKAHEAD_MIN_S):
                 break
             try:
-                found = decoupled_plan(self.scenario, order, lattice, budget, plan, lookahead)
+                sub_planner = _first_solution_planner if lookahead == 2 and SECOND_PASS_FIRST_SOLUTIONS else plan
+                found = decoupled_plan(self.scenario, order, lattice, budget, sub_planner, lookahead)
             except TimeUp:
                 break
             if found is not None and (phases is None or _better(self.scenario, found, phases)):
@@ -429,9 +474,13 @@ class _Run:
         t1 = time.perf_counter()
         record["build_s"] = t1 - t0
         stats["build_s"] += t1 - t0
+        if warm is None and self.guide is not None and len(self.guide) <= n_phases - 1:
+            warm = self.guide
         if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
             warm = self.warm
         self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warm, record)
+        if self.guide is not None and self.guide_branching:
+            record["guide_priorities"] = add_branching_hint(milp, self.guide)
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp
@@ -443,6 +492,9 @@ class _Run:
             raise KeyboardInterrupt("planning interrupted during the SCIP solve")
         record.update(status=status, solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
         stats["solve_s"] += record["solve_s"]
+        if self.export_dir is not None:
+            mps, _ = export_model(milp, self.export_dir, {**record, "solver": solver_name()})
+            record["exported"] = mps.name
         if status in ("infeasible", "inforunbd"):
             return "infeasible"
         if model.getNSols() == 0:

@@ -18,7 +18,7 @@ from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import IndexBox, move_regions, point_in_move_region
+from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
@@ -101,14 +101,19 @@ class Connectivity:
             planes = move_regions(problem.grid, rect, radius)
             if any(self.domain.inside(p) for p in planes):
                 continue  # the rectangle lies outside the domain: no move can hit it
-            at_start = tuple(n for n in range(len(planes)) if point_in_move_region(self.start, rect, radius, n))
-            self.blockers.append((planes, at_start))
+            regular = len(planes)
+            at_start = tuple(
+                n for n in range(regular) if point_in_move_region(problem.grid, self.start, rect, radius, n)
+            )
+            tangents = start_tangents(problem.grid, self.start, rect, radius)  # as the MILP's first move
+            planes = (*planes, *tangents)
+            self.blockers.append((planes, at_start + tuple(range(regular, len(planes))), regular))
         self._memo: dict = {}
 
     def _branches(self, a: IndexBox | None, w: IndexBox, depth: int):
         """The ways past blocker ``depth``: one ``(a, w)`` pair per usable region (clipped), or ``[(a, w)]``."""
-        planes, at_start = self.blockers[depth]
-        regions = at_start if a is None else range(len(planes))
+        planes, at_start, regular = self.blockers[depth]
+        regions = at_start if a is None else range(regular)
         usable = [n for n in regions if w.meets(planes[n]) and (a is None or a.meets(planes[n]))]
         if any(w.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
             return [(a, w)]

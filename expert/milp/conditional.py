@@ -260,7 +260,10 @@ def add_conditional_cuts(milp, conditional: Conditional) -> int:
 
 
 def fix_above(milp, conditional: Conditional, incumbent: float) -> int:
-    """Fix to 0 the options whose bound exceeds ``incumbent``, Eq. 1 of a plan SCIP accepted in this model.
+    """Fix to 0 the options whose bound exceeds ``incumbent``, Eq. 1 of a plan checked feasible in this model.
+
+    The caller passes the Eq. 1 of a warm start only when :func:`expert.milp.warm.add_warm_start`
+    returned True (the plan passed ``checkSol``); an unchecked plan could cut the optimum off.
 
     No plan through them beats the one at hand, so the optimum stays in the model. Returns how many.
     """

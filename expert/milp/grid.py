@@ -17,9 +17,12 @@ and ``u <= a`` when they are integer (the default, so no snapping is needed at a
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+
+import numpy as np
 
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Point, Rect
@@ -53,7 +56,11 @@ class HalfPlane:
 
 @dataclass(frozen=True)
 class DiagonalPlane:
-    """``su * i + sv * j >= bound`` (``su``, ``sv`` in {-1, +1}), in lattice indices: a cut corner of an octagon."""
+    """``su * i + sv * j >= bound`` (``su``, ``sv`` non-zero whole numbers), in lattice indices: a cut corner.
+
+    ``(1, 1)``-type planes are the octagon's 45-degree cuts; other directions (``(2, 1)``,
+    ``(1, 2)``, ...) are further tangents of the rounded corner (:func:`corner_directions`).
+    """
 
     su: int
     sv: int
@@ -61,9 +68,14 @@ class DiagonalPlane:
 
     def value_range(self, box: IndexBox) -> tuple[int, int]:
         """The least and the largest ``su * i + sv * j`` over the (non-empty) ``box``."""
-        i_lo, i_hi = (box.i_lo, box.i_hi) if self.su > 0 else (-box.i_hi, -box.i_lo)
-        j_lo, j_hi = (box.j_lo, box.j_hi) if self.sv > 0 else (-box.j_hi, -box.j_lo)
+        i_lo, i_hi = sorted((self.su * box.i_lo, self.su * box.i_hi))
+        j_lo, j_hi = sorted((self.sv * box.j_lo, self.sv * box.j_hi))
         return i_lo + j_lo, i_hi + j_hi
+
+    @property
+    def octilinear(self) -> bool:
+        """Whether the plane is one of the octagon's 45-degree cuts (``|su| = |sv| = 1``)."""
+        return abs(self.su) == 1 and abs(self.sv) == 1
 
     def holds_at(self, i: float, j: float) -> bool:
         return self.su * i + self.sv * j >= self.bound
@@ -108,15 +120,15 @@ class IndexBox:
             # su * i >= bound - sv * j: the loosest j gives the bounding box's limit on i, and vice versa.
             j_best = max(plane.sv * j_lo, plane.sv * j_hi)
             i_best = max(plane.su * i_lo, plane.su * i_hi)
-            i_need, j_need = plane.bound - j_best, plane.bound - i_best
+            i_need, j_need = plane.bound - j_best, plane.bound - i_best  # su * i >= i_need, sv * j >= j_need
             if plane.su > 0:
-                i_lo = max(i_lo, i_need)
+                i_lo = max(i_lo, -(-i_need // plane.su))
             else:
-                i_hi = min(i_hi, -i_need)
+                i_hi = min(i_hi, i_need // plane.su)
             if plane.sv > 0:
-                j_lo = max(j_lo, j_need)
+                j_lo = max(j_lo, -(-j_need // plane.sv))
             else:
-                j_hi = min(j_hi, -j_need)
+                j_hi = min(j_hi, j_need // plane.sv)
             return IndexBox(i_lo, i_hi, j_lo, j_hi)
         if plane.axis == 0:
             i_lo, i_hi = (i_lo, min(i_hi, plane.bound)) if plane.upper else (max(i_lo, plane.bound), i_hi)
@@ -156,9 +168,12 @@ class Grid:
     lattice: Lattice
     domain: IndexBox
     integral: bool = True
+    corner_detail: int = 1  # the corner tangents of Eq. 18: corner_directions(corner_detail)
 
     @classmethod
-    def for_area(cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True) -> Grid:
+    def for_area(
+        cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True, corner_detail: int = 1
+    ) -> Grid:
         """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
         probe = cls(lattice, IndexBox(0, -1, 0, -1), integral)
         inner = area.inflate(-radius)
@@ -168,7 +183,7 @@ class Grid:
             max(0, probe.index_at_least(1, inner.min_y)),
             min(lattice.shape[1] - 1, probe.index_at_most(1, inner.max_y)),
         )
-        return cls(lattice, domain, integral)
+        return cls(lattice, domain, integral, corner_detail)
 
     @property
     def resolution(self) -> float:
@@ -218,8 +233,9 @@ class Grid:
     def rhs(self, plane: Plane) -> float:
         """Right-hand side of the MILP row for ``plane`` (a diagonal plane reads ``su u + sv v >= rhs``)."""
         if isinstance(plane, DiagonalPlane):
-            # Continuous u, v each move by less than 1/2 when snapped, so su u + sv v by less than 1.
-            return float(plane.bound) if self.integral else plane.bound + 1.0 - 2 * EPS_CELL
+            # Continuous u, v each move by less than 1/2 when snapped: su u + sv v by less than (|su| + |sv|) / 2.
+            weight = abs(plane.su) + abs(plane.sv)
+            return float(plane.bound) if self.integral else plane.bound + weight * (0.5 - EPS_CELL)
         return self.upper(plane.bound) if plane.upper else self.lower(plane.bound)
 
     def diagonal_at_least(self, su: int, sv: int, value: float) -> DiagonalPlane:
@@ -231,7 +247,8 @@ class Grid:
     def plane_value_range(self, plane: DiagonalPlane) -> tuple[float, float]:
         """The least and largest ``su u + sv v`` (index units) of MILP base variables over the domain."""
         lo, hi = plane.value_range(self.domain)
-        return (float(lo), float(hi)) if self.integral else (lo - 1.0, hi + 1.0)
+        slack = (abs(plane.su) + abs(plane.sv)) / 2
+        return (float(lo), float(hi)) if self.integral else (lo - slack, hi + slack)
 
     def var_bounds(self, axis: int) -> tuple[float, float]:
         """Bounds (index units) of a base coordinate variable: the domain on ``axis``."""
@@ -253,34 +270,101 @@ def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]
 
 
 SQRT2 = math.sqrt(2.0)
-CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # (su, sv) of the octagon's cut corners: NE, NW, SW, SE
+CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # outward signs of the corners: NE, NW, SW, SE
+MAX_CORNER_DETAIL = 6  # the largest corner_detail accepted (11 tangents a corner at 4; 6 gives 23)
+
+
+@functools.cache
+def corner_directions(detail: int) -> tuple[tuple[int, int], ...]:
+    """Normals ``(a, b)`` (NE quadrant) of the tangents cut at every corner: coprime ``1 <= a, b <= detail``.
+
+    ``detail = 1`` gives ``(1, 1)`` alone, the octagon; 2 adds ``(2, 1), (1, 2)`` (a 16-gon),
+    3 a 32-gon, 4 a 48-gon (``docs/formulation.md``, "Collision model", measures them).
+    Ordered by angle. Mirrored to each corner.
+    """
+    pairs = {(a, b) for a in range(1, detail + 1) for b in range(1, detail + 1) if math.gcd(a, b) == 1}
+    return tuple(sorted(pairs, key=lambda p: math.atan2(p[1], p[0])))
+
+
+@functools.cache
+def corner_normals(detail: int) -> tuple[tuple[int, int], ...]:
+    """The normals ``(su * a, sv * b)`` of the corner tangents, per corner (NE, NW, SW, SE), as in move_regions."""
+    return tuple((su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail))
 
 
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
-    """The eight regions of Eq. 18 in our tighter model: outside the octagon around ``rect`` grown by ``radius``.
+    """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
 
     The first four are :func:`base_regions` (the sides of the grown rectangle); the
-    last four cut its corners (NE, NW, SW, SE): ``su x + sv y >= su cx + sv cy + radius
-    sqrt(2)`` at corner ``(cx, cy)``, the tangent to the corner's quarter circle at 45
-    degrees. The octagon holds the rectangle's disc-swept shape (every point outside it
-    is ``radius`` or more from ``rect``) and touches it on all eight sides.
+    others cut its corners (NE, NW, SW, SE), one per normal of :func:`corner_directions` (``grid.corner_detail``):
+    ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
+    the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
+    cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
+    outside it is ``radius`` or more from ``rect``) and touches it on every side.
     """
     out: list[Plane] = list(base_regions(grid, rect, radius))
-    for su, sv in CORNERS:
-        cx = rect.max_x if su > 0 else rect.min_x
-        cy = rect.max_y if sv > 0 else rect.min_y
-        out.append(grid.diagonal_at_least(su, sv, su * cx + sv * cy + radius * SQRT2))
+    for a, b in corner_normals(grid.corner_detail):
+        cx = rect.max_x if a > 0 else rect.min_x
+        cy = rect.max_y if b > 0 else rect.min_y
+        out.append(grid.diagonal_at_least(a, b, a * cx + b * cy + radius * math.hypot(a, b)))
     return tuple(out)
 
 
-def point_in_move_region(point: Point, rect: Rect, radius: float, region: int) -> bool:
+START_TANGENT_COEFFICIENT = 1000  # the largest whole coefficient of a start tangent's normal
+START_TANGENT_SLACK = 1e-5  # metres: a start tangent keeps at least this between its line and the grown rectangle
+
+
+@functools.lru_cache(maxsize=65536)
+def start_tangents(grid: Grid, point: Point, rect: Rect, radius: float) -> tuple[DiagonalPlane, ...]:
+    """The lines through the exact start ``point`` that (nearly) touch ``rect`` grown by ``radius``, as regions.
+
+    Each is ``a i + b j >= c`` with whole ``a``, ``b`` (a normal within a hair of the
+    tangent's, turned 3 mrad away from the rectangle so that the line separates it from the
+    disc by at least :data:`START_TANGENT_SLACK`) through ``point``: a move from the start
+    to a lattice point on the far side clears the rectangle (the segment stays in the
+    half-plane). They make the first move exact (up to that turn) where it passes a corner
+    at any angle, and hold only for moves from ``point``. Empty when ``point`` is inside the
+    grown rectangle; an axis-parallel tangent is left out (a side of the rectangle covers it).
+    """
+    corners = [(x, y) for x in (rect.min_x, rect.max_x) for y in (rect.min_y, rect.max_y)]
+    px, py = point
+
+    def slack(theta: float) -> float:
+        nx, ny = math.cos(theta), math.sin(theta)
+        return nx * px + ny * py - max(nx * cx + ny * cy for cx, cy in corners) - radius
+
+    thetas = np.linspace(0.0, 2 * math.pi, 720, endpoint=False)
+    nx, ny = np.cos(thetas), np.sin(thetas)
+    support = np.max(np.stack([nx * cx + ny * cy for cx, cy in corners]), axis=0)
+    ok = nx * px + ny * py - support - radius > 0
+    if ok.all() or not ok.any():
+        return ()
+    out = []
+    for edge in np.flatnonzero(ok != np.roll(ok, 1)):  # ok changes between thetas[edge - 1] and thetas[edge]
+        lo, hi = float(thetas[edge - 1]) - (2 * math.pi if edge == 0 else 0.0), float(thetas[edge])
+        inside_hi = bool(ok[edge])
+        for _ in range(40):
+            mid = (lo + hi) / 2
+            if (slack(mid) > 0) == inside_hi:
+                hi = mid
+            else:
+                lo = mid
+        theta = hi + 3e-3 if inside_hi else lo - 3e-3  # into the separating arc (radians)
+        a, b = round(START_TANGENT_COEFFICIENT * math.cos(theta)), round(START_TANGENT_COEFFICIENT * math.sin(theta))
+        if a == 0 or b == 0 or slack(math.atan2(b, a)) < START_TANGENT_SLACK:
+            continue
+        out.append(grid.diagonal_at_least(a, b, a * px + b * py))
+    return tuple(out)
+
+
+def point_in_move_region(grid: Grid, point: Point, rect: Rect, radius: float, region: int) -> bool:
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
     if region < 4:
         return point_in_region(point, rect, radius, region)
-    su, sv = CORNERS[region - 4]
-    cx = rect.max_x if su > 0 else rect.min_x
-    cy = rect.max_y if sv > 0 else rect.min_y
-    return su * point[0] + sv * point[1] >= su * cx + sv * cy + radius * SQRT2 - GEOM_TOL
+    a, b = corner_normals(grid.corner_detail)[region - 4]
+    cx = rect.max_x if a > 0 else rect.min_x
+    cy = rect.max_y if b > 0 else rect.min_y
+    return a * point[0] + b * point[1] >= a * cx + b * cy + radius * math.hypot(a, b) - GEOM_TOL
 
 
 def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:

@@ -59,13 +59,16 @@ def prepare(
     holding: str | None = None,
     integral: bool = True,
     deadline: Deadline = NEVER,
+    corner_detail: int = 1,
 ) -> Problem:
     """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
+
+    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`).
 
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
     robot = scenario.robot
-    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral)
+    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral, corner_detail)
     ids = {o.id for o in scenario.objects}
     if holding is not None and holding not in ids:
         raise ValueError(f"holding {holding!r} is not an object of scenario {scenario.name!r}")

@@ -1,4 +1,4 @@
-"""Warm starts: a known plan handed to SCIP as a first solution (``createSol`` / ``addSol``).
+"""Warm starts: a known plan handed to SCIP as a first solution (``createSol``, ``checkSol``, ``addSol``).
 
 A plan found earlier (the fewest-phases plan when :func:`expert.planner.plan` solves
 again with extra phases, or any plan of at most ``N`` phases) is written as values of
@@ -92,7 +92,14 @@ def _set_regions(milp: Milp, values: _Values) -> bool:
 
 
 def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
-    """Give SCIP the plan ``steps`` as a first solution; True when SCIP accepted it as feasible."""
+    """Give SCIP the plan ``steps`` as a first solution; True only when it is feasible in this model.
+
+    The solution is checked against every constraint, bound and integrality
+    (``checkSol``) before it is added: ``addSol`` alone is no such check (in the problem
+    stage SCIP returns True for an infeasible solution too), and :func:`expert.milp.
+    conditional.fix_above` relies on the answer to fix options to 0. An infeasible
+    solution is not added.
+    """
     values = solution_values(milp, steps)
     if values is None:
         return False
@@ -102,7 +109,31 @@ def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     solution = model.createSol()
     for var, value in values.items():
         model.setSolVal(solution, var, value)
+    if not model.checkSol(solution, printreason=False, completely=True):
+        model.freeSol(solution)
+        return False
     return bool(model.addSol(solution, free=True))
+
+
+GUIDE_PRIORITY = 10  # SCIP branching priority of a guide's option binaries (the others have 0)
+
+
+def add_branching_hint(milp: Milp, steps: list[SolvedPhase]) -> int:
+    """Branch first on the option binaries that ``steps`` (a guide plan) uses, at their phases; returns how many.
+
+    A priority orders the search only: SCIP still explores (or prunes by bound) every
+    branch, so the optimum and its proof do not depend on the hint.
+    """
+    index = {id(option): o for o, option in enumerate(milp.problem.options)}
+    count = 0
+    for k, step in enumerate(steps, start=1):
+        if step.option is None or k >= milp.n_phases:
+            continue
+        z = milp.z[k].get(index.get(id(step.option), -1))
+        if z is not None:
+            milp.model.chgVarBranchPriority(z, GUIDE_PRIORITY)
+            count += 1
+    return count
 
 
 class _Values:

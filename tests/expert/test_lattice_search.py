@@ -6,7 +6,8 @@ does (no false "infeasible"), with at most one phase more (a straight move grazi
 rounded corner that the octagon splits in two), and with the same number of phases an
 Eq. 1 no better than the search's (the search uses the exact swept-disc rule and the
 exact arm line, which the MILP approximates from the safe side) and within the gap
-measured in ``docs/formulation.md`` ("Collision model": 60 scenarios, at most 0.58 m).
+measured before (60 such rooms, at most 0.58 m; ``docs/formulation.md``, "Collision model",
+has the study of diagonal gaps and corridors, where the octagon loses phases).
 """
 
 from __future__ import annotations

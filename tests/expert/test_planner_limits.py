@@ -126,7 +126,21 @@ def test_every_part_of_plan_counts_against_the_time_limit(name, limit):
 
 
 def test_a_thousand_obstacles_plan_without_a_recursion_error():
-    """The one-move connectivity walked the obstacles recursively (one frame each)."""
-    result = plan(many_obstacles(1000), time_limit=60.0)
+    """The one-move connectivity walked the obstacles recursively (one frame each).
+
+    plan() now answers this layout from the reachability check before the bounds, so the
+    walk over all 1,000 blockers is run directly too.
+    """
+    from expert.milp.bounds import Connectivity
+    from expert.milp.deadline import Deadline
+    from expert.milp.problem import prepare
+    from fetchcarry_env.actions import Lattice
+
+    scenario = many_obstacles(1000)
+    result = plan(scenario, time_limit=60.0)
     assert result.status in ("optimal", "feasible", "infeasible", "time_limit")
-    assert "lower_bound" in result.stats
+    assert "lower_bound" in result.stats or "cannot get to" in result.stats["reason"]
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    free = Connectivity(problem, Deadline.after(60.0))
+    assert len(free.blockers) > 900
+    free.one_move_from(None)  # depth 1,000: no RecursionError

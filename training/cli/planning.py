@@ -106,6 +106,13 @@ def _add_plan_options(parser: argparse.ArgumentParser) -> None:
         "0, the default, is the paper's rule: optimal among plans with the fewest phases",
     )
     parser.add_argument("--plot", metavar="PNG", help="also draw the plan from above into this image file")
+    parser.add_argument(
+        "--export-model",
+        metavar="DIR",
+        help="write the MILP of each phase count solved into this folder (made if missing): "
+        "<scenario>_N<phases>.mps and a .json of what every variable means, SCIP's status and the optimum "
+        "(for learned MILP solving; any MPS reader such as HiGHS finds the same optimum)",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object instead of a table")
 
 
@@ -121,10 +128,16 @@ def run_plan(args: argparse.Namespace) -> int:
         check_writable(plot_path, "plot")
         check_plot_format(plot_path)
 
+    export_dir = _export_dir(args.export_model)
+
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
     result = run_planner(
-        scenario, time_limit=args.time_limit, max_phases=args.max_phases, extra_phases=args.extra_phases
+        scenario,
+        time_limit=args.time_limit,
+        max_phases=args.max_phases,
+        extra_phases=args.extra_phases,
+        export_models=export_dir,
     )
     if result.status == INTERRUPTED_STATUS:  # a solve cut short by Ctrl-C is never written as a plan
         raise KeyboardInterrupt
@@ -146,6 +159,20 @@ def run_plan(args: argparse.Namespace) -> int:
         tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
         echo(f"fetchcarry: warning: the plan breaks the rules of docs/plan-format.md:\n{shown}{tail}", file=sys.stderr)
     return 0 if result.found else 1
+
+
+def _export_dir(path: str | None) -> Path | None:
+    """The folder for ``--export-model`` (made if missing), or None; a path that is not a folder is bad input."""
+    if path is None:
+        return None
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"--export-model {folder}: not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UsageError(f"--export-model {folder}: cannot make the folder ({error.strerror})") from None
+    return folder
 
 
 def _plan_summary_text(
@@ -172,6 +199,9 @@ def _plan_summary_text(
     if plan.phases:
         lines += ["", _phase_table(plan)]
     lines += ["", f"plan written to {output}" if output is not None else "plan not written (-o PLAN writes it)"]
+    exported = [s["exported"] for s in plan.stats.get("solves", []) if isinstance(s, dict) and "exported" in s]
+    if exported:
+        lines.append(f"models written: {', '.join(exported)} (each with a .json of its variables and optimum)")
     if plot_path is not None:
         lines.append(f"plot written to {plot_path}")
     return "\n".join(lines)

@@ -14,6 +14,10 @@ Units: seconds.
 
 from __future__ import annotations
 
+import argparse
+import itertools
+import json
+import math
 import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -22,9 +26,14 @@ from typing import Any
 import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
-from expert.plans import Plan
+import expert.milp.bounds as bounds_module
+import expert.milp.collision as collision_module
+import expert.milp.reach as reach_module
+import expert.planner as expert_planner
+from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
-from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, get_family
+from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, draw_paper_covered, draw_paper_multi, get_family
+from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
 DEFAULT_SEED = 2024
 DEFAULT_TIME_LIMIT = 60.0  # seconds per planning call: generous, so that statuses are about optimality
@@ -34,7 +43,12 @@ BASELINE_OPTIONS: dict[str, Any] = {
     "lower_bound": False,
     "params": {"presolving/maxrestarts": -1, "branching/relpscost/maxlookahead": 9},
 }
-"""SCIP's default settings and the paper's deepening from N = 3, without our bounds and cuts."""
+"""SCIP's default settings and no skeleton bounds (``lower_bound=False``).
+
+Not the paper's plain deepening: the planner still starts at the counting bound (not 3)
+and keeps the fewest-phases cuts, the counting delivery-timing cuts, the Eq. 18 link cuts
+and the decoupled warm start (``docs/benchmarks/planner.md``, "What made it fast").
+"""
 WARM_UP_FAMILY = "paper-basic-I"
 PAPER_VB = {"I": "0.05 (0.02)", "II": "0.13 (0.09)", "III": "0.22 (0.20)", "IV": "0.19 (0.23)", "V": "0.36 (0.23)"}
 PAPER_VC = {"A": "0.29 (0.18)", "B": "0.53 (0.08)", "C": "0.46 (0.15)", "D": "0.64 (0.19)", "E": "0.55 (0.23)"}
@@ -173,3 +187,377 @@ def time_shares(runs: Sequence[Run]) -> dict[str, float]:
     shares["other"] = 1.0 - sum(shares.values())
     shares["extra_n_tried"] = sum(len(r.phases_tried) - 1 for r in runs) / len(runs)
     return shares
+
+
+EXTRA_PHASES_CASES = ("2 obj", "3 obj", "cov 2", "cov 3")
+"""The multi-object groups of :func:`cases` that :func:`extra_phases_rows` plans (30 scenarios at scale 1)."""
+
+
+def extra_phases_rows(seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT, k: int = 1) -> list[dict]:
+    """Each multi-object scenario planned with ``extra_phases=0`` and ``k``: phases, travel, Eq. 1 over ``N + k``.
+
+    Eq. 1 over ``N + k`` phases of the ``N``-phase plan is its Eq. 1 minus ``W1 n k`` (``k``
+    idle phases at its end, each earning ``W1`` per object); ``gain`` is how much lower the
+    ``extra_phases=k`` plan's is (0: unchanged). Times in seconds, travel in metres.
+    """
+
+    rows = []
+    for case in (c for c in cases() if c.group in EXTRA_PHASES_CASES):
+        rng = np.random.default_rng(seed)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            base = expert.plan(scenario, time_limit=time_limit)
+            longer = expert.plan(scenario, time_limit=time_limit, extra_phases=k)
+            n_objects, horizon = len(scenario.objects), len(base.phases) + k
+            over = [
+                plan_objective(scenario, r.phases) - DELIVERY_BONUS * n_objects * (horizon - len(r.phases))
+                for r in (base, longer)
+            ]
+            rows.append(
+                {
+                    "group": case.group,
+                    "scenario": scenario.name,
+                    "statuses": [base.status, longer.status],
+                    "phases": [len(base.phases), len(longer.phases)],
+                    "travel_m": [_travel(r.phases) for r in (base, longer)],
+                    "eq1_over_n_plus_k": over,
+                    "gain": over[0] - over[1],
+                    "time_s": [base.stats["total_s"], longer.stats["total_s"]],
+                }
+            )
+    return rows
+
+
+CORNER_CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}
+"""Corner tangents compared by :func:`corner_rows`: name -> ``plan(..., corner_detail=...)``."""
+
+
+def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
+    """Each benchmark scenario (``cases(scale)`` up to three objects) planned with every choice of corner tangents.
+
+    Interleaved per scenario, so the load moves all choices alike. Times in seconds.
+    """
+    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
+    rows = []
+    for case in chosen:
+        rng = np.random.default_rng(seed)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict[str, Any] = {"group": case.group, "case": case.name}
+            for name, detail in CORNER_CHOICES.items():
+                result = expert.plan(scenario, time_limit=time_limit, corner_detail=detail)
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "valid": not result.found or validate_plan(scenario, result) == [],
+                }
+            rows.append(row)
+    return rows
+
+
+SCALE_SEED = 7000  # scale_rows' own seeds: not the benchmark's 2024, not the families' tests'
+
+
+def scale_rows(
+    objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float, options: dict | None = None
+) -> list[dict]:
+    """``count`` scenarios per size, drawn here: ``draw_paper_multi`` with ``objects`` and ``draw_paper_covered``
+    (every goal covered) with ``covered`` objects, scenario ``n`` from ``default_rng(SCALE_SEED + n)``.
+
+    One in-process :func:`expert.plan` call each (with ``options``); times in seconds.
+    """
+    rows = []
+    for kind, sizes, draw in (("multi", objects, draw_paper_multi), ("covered", covered, draw_paper_covered)):
+        for size in sizes:
+            for n in range(count):
+                scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+                result = expert.plan(scenario, time_limit=time_limit, **(options or {}))
+                rows.append(
+                    {
+                        "kind": kind,
+                        "objects": size,
+                        "seed": SCALE_SEED + n,
+                        "status": result.status,
+                        "gap": result.stats.get("gap"),
+                        "phases": len(result.phases),
+                        "total_s": result.stats["total_s"],
+                        "valid": not result.found or validate_plan(scenario, result) == [],
+                    }
+                )
+                print(
+                    f"{kind} {size} seed {SCALE_SEED + n}: {result.status} {result.stats['total_s']:.2f} s", flush=True
+                )
+    return rows
+
+
+GUIDE_CASES = (("multi", 6), ("multi", 8), ("covered", 3), ("covered", 4))
+
+
+def guide_rows(count: int, time_limit: float) -> list[dict]:
+    """The planner with and without a guide: the optimal plan itself (an oracle, the best a learned hint can be).
+
+    Per scenario (drawn as in :func:`scale_rows`): a plain call, a call guided by its
+    answer (warm start), one guided with branching priorities too, a second plain call;
+    the plain time is the lower of the two. Times in seconds.
+    """
+    rows = []
+    for kind, size in GUIDE_CASES:
+        draw = draw_paper_multi if kind == "multi" else draw_paper_covered
+        for n in range(count):
+            scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+            plain = expert.plan(scenario, time_limit=time_limit)
+            warm = expert.plan(scenario, time_limit=time_limit, guide=plain)
+            branching = expert.plan(scenario, time_limit=time_limit, guide=plain, guide_branching=True)
+            again = expert.plan(scenario, time_limit=time_limit)
+            results = {"warm": warm, "branching": branching}
+            row = {
+                "kind": kind,
+                "objects": size,
+                "seed": SCALE_SEED + n,
+                "status": plain.status,
+                "plain_s": min(plain.stats["total_s"], again.stats["total_s"]),
+                **{f"{name}_s": r.stats["total_s"] for name, r in results.items()},
+                "same_optimum": all(
+                    r.status == plain.status and abs((r.objective or 0) - (plain.objective or 0)) < 1e-6
+                    for r in results.values()
+                ),
+                "nodes": {name: r.stats["solves"][-1].get("nodes") for name, r in {"plain": plain, **results}.items()},
+            }
+            rows.append(row)
+            print(
+                f"{kind} {size} seed {row['seed']}: {plain.status} plain {row['plain_s']:.2f} s, "
+                f"warm {row['warm_s']:.2f} s, +branching {row['branching_s']:.2f} s, nodes {row['nodes']}, "
+                f"same optimum {row['same_optimum']}",
+                flush=True,
+            )
+    return rows
+
+
+DECOUPLED_CASES = (("covered", 3, 4), ("multi", 5, 2), ("covered", 4, 1))  # kind, objects, scenarios
+DECOUPLED_VARIANTS = (
+    "base",
+    "no decoupled plan below 4 objects",
+    "no two-at-a-time pass",
+    "two-at-a-time pass of first solutions",
+    "base again",
+)
+
+
+def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
+    """The decoupled first plan's cost and worth: each scenario (drawn as in :func:`scale_rows`) four ways in turn.
+
+    Variants: the planner as it is; without the decoupled plan for three objects with
+    pushes (``DECOUPLED_FROM`` 5); without its second, two-objects-at-a-time pass
+    (``LOOKAHEAD_MIN_S`` infinite); that pass made of SCIP's first solutions
+    (``SECOND_PASS_FIRST_SOLUTIONS``); as it is again. Times in seconds.
+    """
+    planner = expert_planner
+    rows = []
+    for kind, size, count in DECOUPLED_CASES:
+        draw = draw_paper_multi if kind == "multi" else draw_paper_covered
+        for n in range(count):
+            scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+            row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
+            for variant in DECOUPLED_VARIANTS:
+                saved = planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS
+                planner.DECOUPLED_FROM = 5 if variant.startswith("no decoupled") else saved[0]
+                planner.LOOKAHEAD_MIN_S = math.inf if variant.startswith("no two") else saved[1]
+                planner.SECOND_PASS_FIRST_SOLUTIONS = variant.endswith("first solutions") or saved[2]
+                try:
+                    result = expert.plan(scenario, time_limit=time_limit)
+                finally:
+                    planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS = saved
+                row[variant] = {
+                    "status": result.status,
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "decoupled_s": result.stats.get("decoupled_s", 0.0),
+                }
+            rows.append(row)
+            cells = " | ".join(f"{v} {row[v]['total_s']:.2f} s" for v in DECOUPLED_VARIANTS)
+            print(f"{kind} {size} seed {row['seed']}: {cells}", flush=True)
+    return rows
+
+
+def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
+    """Each benchmark scenario up to three objects with and without the start's tangents (Eq. 18 at the first move).
+
+    Without: ``start_tangents`` replaced by a function returning none, in the planner's
+    three users (collision, bounds, reach). Interleaved per scenario; times in seconds.
+    """
+    modules = (collision_module, bounds_module, reach_module)
+    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
+    rows = []
+    for case in chosen:
+        rng = np.random.default_rng(seed)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict[str, Any] = {"group": case.group}
+            for name in ("with", "without"):
+                saved = [m.start_tangents for m in modules]
+                if name == "without":
+                    for m in modules:
+                        m.start_tangents = lambda *args: ()
+                try:
+                    result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT)
+                finally:
+                    for m, f in zip(modules, saved, strict=True):
+                        m.start_tangents = f
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                }
+            rows.append(row)
+    return rows
+
+
+def _travel(phases) -> float:
+    """The travel term of Eq. 1 (metres)."""
+    return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m training.speed.planner extra-phases [--out FILE]``: the table of ``docs/benchmarks/planner.md``."""
+    parser = argparse.ArgumentParser(prog="python -m training.speed.planner", description=main.__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    extra = sub.add_parser("extra-phases", help="extra_phases=1 against 0 on the 30 multi-object scenarios")
+    extra.add_argument("--seed", type=int, default=DEFAULT_SEED)
+    extra.add_argument("--out", help="write the rows as JSON here")
+    corners = sub.add_parser("corners", help="octagon against finer corner tangents on the benchmark's cases")
+    corners.add_argument("--scale", type=float, default=0.25, help="scenarios per case, times the benchmark's")
+    corners.add_argument("--out", help="write the rows as JSON here")
+    scale = sub.add_parser("scale", help="8-10 objects and covered goals, seeded here, proven optimal or not")
+    scale.add_argument("--objects", type=int, nargs="*", default=[8, 10])
+    scale.add_argument("--covered", type=int, nargs="*", default=[3, 4])
+    scale.add_argument("--count", type=int, default=4, help="scenarios per size")
+    scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    scale.add_argument("--options", type=json.loads, default=None, help="plan() options as a JSON object")
+    scale.add_argument("--out", help="write the rows as JSON here")
+    guide = sub.add_parser("guide", help="the optimal plan as a guide (warm start, branching): the ceiling")
+    guide.add_argument("--count", type=int, default=2, help="scenarios per case")
+    guide.add_argument("--time-limit", type=float, default=60.0, help="seconds per plan() call")
+    guide.add_argument("--out", help="write the rows as JSON here")
+    decoupled = sub.add_parser("decoupled", help="the decoupled first plan and its second pass, on and off")
+    decoupled.add_argument("--out", help="write the rows as JSON here")
+    tangents = sub.add_parser("tangents", help="the start's tangents on and off on the benchmark's cases")
+    tangents.add_argument("--scale", type=float, default=0.25)
+    tangents.add_argument("--out", help="write the rows as JSON here")
+    args = parser.parse_args(argv)
+    if args.command == "tangents":
+        _print_tangents(tangent_rows(args.scale), args.out)
+        return
+    if args.command == "decoupled":
+        rows = decoupled_rows()
+        if args.out:
+            with open(args.out, "w", encoding="utf-8") as f:
+                json.dump(rows, f, indent=1)
+        return
+    if args.command == "guide":
+        _print_guide(guide_rows(args.count, args.time_limit), args.out)
+        return
+    if args.command == "scale":
+        _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit, args.options), args.out)
+        return
+    if args.command == "corners":
+        _print_corners(corner_rows(args.scale), args.out)
+        return
+    rows = extra_phases_rows(args.seed)
+    for row in rows:
+        print(
+            f"{row['group']:<6} {row['scenario']:<28} phases {row['phases']} travel "
+            f"{row['travel_m'][0]:.2f} -> {row['travel_m'][1]:.2f} m  gain {row['gain']:.2f}  "
+            f"time {row['time_s'][0]:.2f} / {row['time_s'][1]:.2f} s  {row['statuses']}"
+        )
+    changed = [r for r in rows if r["gain"] > 1e-6]
+    print(f"{len(changed)} of {len(rows)} improved: " + ", ".join(f"{r['group']} {r['gain']:.2f}" for r in changed))
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_corners(rows: list[dict], out: str | None) -> None:
+    """Per group: the median time of each choice, its ratio to the octagon's, and the plans that changed."""
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        base = statistics.median(r["octagon"]["total_s"] for r in mine)
+        cells = []
+        for name in CORNER_CHOICES:
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            better = sum(
+                r[name]["phases"] < r["octagon"]["phases"]
+                or (
+                    r[name]["phases"] == r["octagon"]["phases"]
+                    and (r[name]["objective"] or 0) < (r["octagon"]["objective"] or 0) - 1e-6
+                )
+                for r in mine
+            )
+            worst = max(r[name]["total_s"] for r in mine)
+            cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
+        print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
+    print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_tangents(rows: list[dict], out: str | None) -> None:
+    """Per group: median times with and without the start's tangents and the plans they improve."""
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        with_s = statistics.median(r["with"]["total_s"] for r in mine)
+        without_s = statistics.median(r["without"]["total_s"] for r in mine)
+        better = sum(
+            r["with"]["phases"] < r["without"]["phases"]
+            or (
+                r["with"]["phases"] == r["without"]["phases"]
+                and r["with"]["objective"] < r["without"]["objective"] - 1e-6
+            )
+            for r in mine
+            if r["with"]["objective"] is not None and r["without"]["objective"] is not None
+        )
+        ratio = with_s / without_s
+        print(f"{group:<6} n={len(mine):<3} with {with_s:.3f} s, without {without_s:.3f} s ({ratio:.2f}x)", better)
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_guide(rows: list[dict], out: str | None) -> None:
+    """Per case: the median ratio of the plain time to the guided times (above 1: the guide helps)."""
+    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
+        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+        warm = statistics.median(r["plain_s"] / r["warm_s"] for r in mine)
+        branching = statistics.median(r["plain_s"] / r["branching_s"] for r in mine)
+        plain = statistics.median(r["plain_s"] for r in mine)
+        print(
+            f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  plain median {plain:.2f} s"
+            f"  speed-up warm {warm:.2f}x  warm+branching {branching:.2f}x  "
+            f"same optimum {sum(r['same_optimum'] for r in mine)}/{len(mine)}"
+        )
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+def _print_scale(rows: list[dict], out: str | None) -> None:
+    """Per kind and size: median and p95 of the time, how many were proven optimal."""
+    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
+        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+        times = [r["total_s"] for r in mine]
+        optimal = sum(r["status"] == "optimal" for r in mine)
+        print(
+            f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  median {statistics.median(times):.2f} s  "
+            f"p95 {float(np.percentile(times, 95)):.2f} s  proven optimal {optimal}/{len(mine)}  "
+            f"invalid {sum(not r['valid'] for r in mine)}"
+        )
+    if out:
+        with open(out, "w", encoding="utf-8") as f:
+            json.dump(rows, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,150 @@
+"""The collision model against the exact swept-disc rule: phases and Eq. 1 per choice of corner tangents.
+
+Run from the project root (it prints one line per scenario and a summary per choice):
+
+    PYTHONPATH=. python tests/expert/collision_study.py --out results.json
+
+Each single-object scenario is solved by the exhaustive search of the exact rule
+(``lattice_search.search``, on a 0.1 m lattice) and by the planner on the same lattice
+with each set of corner tangents (``plan(..., corner_detail=d)``,
+:func:`expert.milp.grid.corner_directions`): the octagon (1), a 16-gon (2), a 32-gon (3)
+and a 48-gon (4). Scenarios: 3 x 3 m rooms with random walls
+(``test_lattice_search.random_room``), L-shaped corridors and diagonal gaps between two
+walls' corners drawn on purpose (below). Units: metres and seconds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+from lattice_search import search
+from test_lattice_search import RESOLUTION, random_room
+
+from expert.planner import plan
+from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import get_family
+from fetchcarry_env.geometry import Rect
+from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
+
+CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}  # name: corner_detail
+ROOM = Rect(0.0, 0.0, 3.0, 3.0)
+
+
+def corridor_room(rng: np.random.Generator, name: str) -> Scenario:
+    """An L-shaped corridor (bottom, then right) 0.46-0.8 m wide round a block, to a table in the top strip."""
+    while True:
+        wb, wr = (float(v) for v in rng.uniform(0.46, 0.8, 2))
+        top = float(rng.uniform(2.0, 2.2))
+        tx = float(rng.uniform(0.7, 1.6))
+        scenario = Scenario(
+            name=name,
+            area=ROOM,
+            robot=Robot((float(rng.uniform(0.3, 1.0)), wb / 2)),
+            tables=(Table("table", Rect(tx - 0.25, 2.45, tx + 0.25, 2.95)),),
+            obstacles=(Obstacle("block", Rect(0.0, wb, 3.0 - wr, top)),),
+            objects=(DeliveryObject("bottle", (tx - 0.15, 2.55), (tx + 0.15, 2.55)),),
+        )
+        if not check_rules(scenario):
+            return scenario
+
+
+def diagonal_room(rng: np.random.Generator, name: str) -> Scenario:
+    """Walls top-left and bottom-right whose corners leave a diagonal gap of 0.45-0.65 m at 30-60 degrees."""
+    while True:
+        gap, angle = float(rng.uniform(0.45, 0.65)), math.radians(float(rng.uniform(30.0, 60.0)))
+        xa, yb = (float(v) for v in rng.uniform(1.0, 1.4, 2))
+        xb, ya = xa + gap * math.cos(angle), yb + gap * math.sin(angle)
+        scenario = Scenario(
+            name=name,
+            area=ROOM,
+            robot=Robot((float(rng.uniform(0.3, 0.8)), float(rng.uniform(0.3, 0.8)))),
+            tables=(Table("table", Rect(2.2, 2.2, 2.7, 2.7)),),
+            obstacles=(Obstacle("wall_a", Rect(0.0, ya, xa, 3.0)), Obstacle("wall_b", Rect(xb, 0.0, 3.0, yb))),
+            objects=(DeliveryObject("bottle", (2.3, 2.45), (2.6, 2.45)),),
+        )
+        if not check_rules(scenario):
+            return scenario
+
+
+FAMILIES = ("basic", "corridor", "turned-room", "turned-corridor")  # the single-object families without pushes
+
+
+def scenarios(count: int, per_family: int = 0) -> list[Scenario]:
+    """``count`` of each kind, seeded by their index (rooms from seed 100 on: the test uses 0-20), and
+    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ..."""
+    out = [
+        dataclasses.replace(get_family(f).sample(np.random.default_rng(s)), name=f"{f}-{s}")
+        for f in FAMILIES
+        for s in range(per_family)
+    ]
+    out += [random_room(np.random.default_rng(100 + s), f"room-{100 + s}") for s in range(count)]
+    out += [corridor_room(np.random.default_rng(s), f"corridor-{s}") for s in range(count)]
+    out += [diagonal_room(np.random.default_rng(s), f"diagonal-{s}") for s in range(count)]
+    return out
+
+
+def run(scenario: Scenario) -> dict:
+    """The exact search and every choice of corner tangents on one scenario."""
+    lattice = Lattice.over(scenario.area, RESOLUTION)
+    t0 = time.perf_counter()
+    exact = search(scenario, lattice, max_phases=8)
+    row = {"scenario": scenario.name, "exact": [exact.phases, exact.objective], "search_s": time.perf_counter() - t0}
+    for name, detail in CHOICES.items():
+        result = plan(scenario, lattice=lattice, time_limit=60.0, corner_detail=detail)
+        valid = not result.found or validate_plan(scenario, result) == []
+        row[name] = {
+            "status": result.status,
+            "phases": len(result.phases) if result.found else None,
+            "objective": result.objective,
+            "total_s": result.stats["total_s"],
+            "valid": valid,
+        }
+    return row
+
+
+def summary(rows: list[dict], name: str) -> str:
+    """Phases above the exact rule's, Eq. 1 excess at equal phases (absolute and relative), time."""
+    more = [r for r in rows if r["exact"][0] is not None and (r[name]["phases"] or 99) > r["exact"][0]]
+    false_infeasible = [r for r in rows if r["exact"][0] is not None and r[name]["phases"] is None]
+    equal = [r for r in rows if r["exact"][0] is not None and r[name]["phases"] == r["exact"][0]]
+    excess = [r[name]["objective"] - r["exact"][1] for r in equal]
+    relative = [e / max(abs(r["exact"][1]), 1e-9) for e, r in zip(excess, equal, strict=True)]
+    over = [e for e in relative if e > 0.01]
+    times = [r[name]["total_s"] for r in rows]
+    return (
+        f"{name:<8} more phases {len(more)} (no plan {len(false_infeasible)}) of "
+        f"{sum(r['exact'][0] is not None for r in rows)} feasible; equal phases {len(equal)}: "
+        f"Eq. 1 excess max {max(excess, default=0):.3f} m, over 1 %: {len(over)}; "
+        f"invalid {sum(not r[name]['valid'] for r in rows)}; time median {statistics.median(times):.3f} s, "
+        f"max {max(times):.3f} s"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--count", type=int, default=10, help="scenarios of each kind")
+    parser.add_argument("--families", type=int, default=0, help="scenarios of each single-object family")
+    parser.add_argument("--out", help="write the rows as JSON here")
+    args = parser.parse_args()
+    rows = []
+    for scenario in scenarios(args.count, args.families):
+        row = run(scenario)
+        rows.append(row)
+        cells = "  ".join(f"{n}: {row[n]['phases']} {row[n]['objective']}" for n in CHOICES)
+        print(f"{row['scenario']:<14} exact {row['exact']}  {cells}", flush=True)
+    for name in CHOICES:
+        print(summary(rows, name))
+    if args.out:
+        Path(args.out).write_text(json.dumps(rows, indent=1), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
