@@ -5,7 +5,6 @@ and the benchmark's metrics share one definition. The benchmark's episodes are n
 independent trials: several training seeds of one method run on the same scenarios and
 their failures cluster by scenario, so every interval over pooled seeds resamples
 scenarios (clusters), and comparisons of two methods are paired on the same scenarios.
-scipy is imported inside the bootstraps (about 0.3 s), so that importing this stays cheap.
 """
 
 from __future__ import annotations
@@ -14,6 +13,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from scipy.stats import binomtest, bootstrap
 
 Z_95 = 1.96  # the normal quantile of a two-sided 95 % interval
 
@@ -47,8 +47,6 @@ def cluster_bootstrap(
     with none. The interval lies within the values' range (a ratio of costs is never
     negative).
     """
-    from scipy.stats import bootstrap
-
     pairs = [(s, c) for s, c in zip(sums, counts, strict=True) if c > 0]
     if not pairs:
         return (math.nan, math.nan, math.nan)
@@ -105,7 +103,5 @@ def paired_bootstrap(differences: Sequence[float], level: float = 0.95) -> tuple
 
 def sign_test(wins: int, losses: int) -> float:
     """Two-sided sign-test p-value of ``wins`` against ``losses`` (ties left out); 1 with neither."""
-    from scipy.stats import binomtest
-
     trials = wins + losses
     return 1.0 if trials == 0 else float(binomtest(wins, trials, 0.5).pvalue)

@@ -34,10 +34,12 @@ from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.jsontext import JsonInputError, read_json
+from training.data.generate import progress_bar
 from training.envs import make_env
 from training.errors import BenchmarkError
 from training.evaluation.results import scenario_digest
 from training.evaluation.splits import SPLITS, EvalScenario, Split, get_split, split_scenarios
+from training.evaluation.tasks import run_all
 from training.rollout import run_episode
 
 FORMAT = "fetchcarry-references/1"
@@ -152,12 +154,9 @@ def compute_references(
     """The reference file's content for split version ``version`` (``iid-v1``): every part's references.
 
     ``episodes`` maps a part to its episode count (default: each part's own). Episodes run
-    here, on the process pool or on Ray (:func:`training.evaluation.runner.run_tasks`);
+    here, on the process pool or on Ray (:func:`training.evaluation.tasks.run_all`);
     records are put in index order, so every backend gives the same file, planning times aside.
     """
-    from training.data.generate import progress_bar
-    from training.evaluation.runner import run_tasks  # the runner reads references: imported here, no circle
-
     parts = [s for s in SPLITS.values() if s.version == version and s.part]
     if not parts:
         known = ", ".join(sorted({s.version for s in SPLITS.values() if s.part}))
@@ -168,9 +167,7 @@ def compute_references(
         tasks = [(time_limit, item) for item in items]
         records = []
         with progress_bar(len(tasks), f"references {part.name}", enabled=progress) as bar:
-            for record in run_tasks(
-                tasks, workers=workers, backend=backend, ray_address=ray_address, function=_reference_task
-            ):
+            for record in run_all(tasks, _reference_task, workers=workers, backend=backend, ray_address=ray_address):
                 records.append(record)
                 bar.update(1)
         content["parts"][part.part] = sorted(records, key=lambda r: r["index"])

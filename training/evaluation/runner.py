@@ -5,7 +5,7 @@ planner: on a published split's part, checked against the split's fixed referenc
 which every cost ratio is to; elsewhere every cost ratio is to its cost on the same
 scenario) and ``random-phases`` (the normalised score's zero), next to the policies
 asked for. Episodes run in this process
-(``workers=1``), on a process pool or on Ray, with the worker set-up of
+(``workers=1``), on a process pool or on Ray (:mod:`training.evaluation.tasks`), with the worker set-up of
 ``fetchcarry generate`` (:mod:`training.data.generate`): workers ignore Ctrl-C and die with
 their parent.
 
@@ -31,17 +31,14 @@ once (exit 2, naming the holder) rather than overwrite the first one's records.
 
 from __future__ import annotations
 
-import multiprocessing
-import os
 import time
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.observation import Capacity
-from training.data.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
+from training.data.generate import BACKENDS, progress_bar
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
 from training.evaluation.metrics import SCORE_ZERO, Row, by_objects, fill_expert_costs, summarise
@@ -50,6 +47,7 @@ from training.evaluation.report import source_table, summary_markdown
 from training.evaluation.results import RESULTS, ResultsLock, read_results, scenario_digest
 from training.evaluation.results import write_results as write_results_file
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
+from training.evaluation.tasks import run_all
 from training.pictures.benchmark import plot_splits
 from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
 
@@ -236,77 +234,11 @@ def write_report(out: Path, rows: list[Row], records: list[dict[str, Any]], titl
 
 
 def run_tasks(
-    tasks: Sequence[Any],
-    *,
-    workers: int = 1,
-    backend: str = "process",
-    ray_address: str | None = None,
-    function: Callable[[Any], dict[str, Any]] | None = None,
+    tasks: Sequence[Task], *, workers: int = 1, backend: str = "process", ray_address: str | None = None
 ) -> Iterator[dict[str, Any]]:
-    """Each task's record, as they finish (Ray: on ``ray_address``, if given).
-
-    ``function`` (a module-level function, picklable) makes a task's record; by default a
-    benchmark episode with its ``index`` in the split (the references use their own).
-    """
-    function = function or _indexed
-    if backend == "ray":
-        yield from _run_ray(function, list(tasks), workers, ray_address)
-    elif workers == 1:
-        for task in tasks:
-            yield function(task)
-    else:
-        yield from _run_pool(function, list(tasks), workers)
+    """Each task's record (with its ``index`` in the split), as they finish (Ray: on ``ray_address``, if given)."""
+    yield from run_all(tasks, _indexed, workers=workers, backend=backend, ray_address=ray_address)
 
 
 def _indexed(task: Task) -> dict[str, Any]:
     return {**run_task(task), "index": task[1].index}
-
-
-def _run_pool(function: Callable[[Any], dict], tasks: list[Any], workers: int) -> Iterator[dict[str, Any]]:
-    # The pool of ``fetchcarry generate``: spawned workers that ignore Ctrl-C and die with this process.
-    pool = ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=worker_setup,
-        initargs=(os.getpid(),),
-    )
-    finished_cleanly = False
-    try:
-        pending = {pool.submit(function, task) for task in tasks}
-        while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                yield future.result()
-        finished_cleanly = True
-    finally:
-        if not finished_cleanly:
-            _terminate_workers(pool)
-        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
-
-
-def _run_ray(
-    function: Callable[[Any], dict], tasks: list[Any], workers: int, address: str | None
-) -> Iterator[dict[str, Any]]:
-    try:
-        import ray
-    except ModuleNotFoundError:
-        raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
-    started_here = not ray.is_initialized()
-    if started_here and address is None:
-        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-    elif started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(function)
-    queue, pending = list(tasks), []
-    try:
-        while queue or pending:
-            while queue and len(pending) < 2 * workers:  # few in flight: an interruption loses only those
-                pending.append(remote.remote(queue.pop(0)))
-            finished, pending = ray.wait(pending, num_returns=1)
-            for ref in finished:
-                yield ray.get(ref)
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started_here:
-            ray.shutdown()
