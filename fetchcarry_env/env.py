@@ -35,6 +35,7 @@ from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action, move_
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
 from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
 from fetchcarry_env.sim.client import check_display, display_available
+from fetchcarry_env.worlds.physics import ItemPhysics, PhysicsVariation, physics_variation
 
 DEFAULT_RESOLUTION = 0.05  # metres between lattice points
 DEFAULT_IMAGE_SIZE = (320, 240)  # pixels (width, height) of rgb_array frames
@@ -116,8 +117,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     | ``achieved_goal`` | 3 per object | each object's centre ``x, y, z`` (m); a held one is lifted 5 cm |
     | ``desired_goal`` | 3 per object | each goal's centre ``x, y, z`` (m), the object standing there |
 
-    The capacity (default 4 objects, 8 clutter, 6 tables, 12 obstacles, 4 postures)
-    fixes the sizes; every bound is +-200 m, which holds every valid world: coordinates
+    The capacity fixes the sizes (``Capacity()``: 4 objects, 8 clutter, 6 tables, 12
+    obstacles, 4 postures; by default the family's, which holds every scenario it draws:
+    see ``capacity`` below); every bound is +-200 m, which holds every valid world: coordinates
     lie within 100 m of the origin (scenario rule 6) and a held object rides at the hand,
     up to a posture's reach (at most 100 m) from the base and 5 cm above its table.
 
@@ -160,7 +162,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     ```python
     gym.make("FetchCarryPush-v0", scenario=None, family=None, resolution=0.05, capacity=None,
-             render_mode=None, camera="perspective", width=320, height=240)
+             physics=None, render_mode=None, camera="perspective", width=320, height=240)
     ```
 
     - ``scenario``: a :class:`~fetchcarry_env.scenario.Scenario`, a scenario mapping or
@@ -169,7 +171,14 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     - ``family``: the name of a scenario family (``basic``, ``push``, ``corridor``,
       ``multi``, ``mixed``); give at most one of ``scenario`` and ``family``.
     - ``resolution``: metres between lattice points.
-    - ``capacity``: a :class:`~fetchcarry_env.observation.Capacity` (slots in the observation).
+    - ``capacity``: the observation's slots: a :class:`~fetchcarry_env.observation.Capacity`,
+      a mapping of its counts or a text ``"objects=8,clutter=12"`` (the other counts
+      the default's). By default the family's (:attr:`Family.capacity`, which holds every
+      scenario it draws), or for a fixed scenario the default grown to hold it.
+    - ``physics``: a physics variation (:mod:`fetchcarry_env.worlds.physics`): a name
+      (``"home"``), a ``PhysicsVariation``, or ``"none"``; by default the family's
+      (``perturbed``: ``"home"``; a fixed scenario: none). Each piece of clutter's mass
+      and friction are then drawn from ``np_random`` at every reset, after the scenario.
     - ``render_mode``: ``"rgb_array"`` (headless, PyBullet's tiny renderer) or
       ``"human"`` (a PyBullet window). ``"human"`` needs a display: without one it
       raises :class:`~fetchcarry_env.errors.UsageError`, and the instance's
@@ -198,7 +207,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         scenario: ScenarioLike | None = None,
         family: str | None = None,
         resolution: float = DEFAULT_RESOLUTION,
-        capacity: Capacity | None = None,
+        capacity: Capacity | Mapping[str, int] | str | None = None,
+        physics: str | PhysicsVariation | None = None,
         render_mode: str | None = None,
         camera: str = "perspective",
         width: int = DEFAULT_IMAGE_SIZE[0],
@@ -208,15 +218,19 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
         modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
         self.metadata = {**type(self).metadata, "render_modes": modes}
-        self.capacity = capacity if capacity is not None else Capacity()
         self._fixed: Scenario | None = None
         self._family_name: str | None = None
         if scenario is not None:
             self._fixed = _as_scenario(scenario)
             extent = self._fixed.area
+            self.capacity = _as_capacity(capacity, Capacity().holding(self._fixed))
         else:
             self._family_name = family if family is not None else DEFAULT_FAMILY
             extent = self._family.extent
+            self.capacity = _as_capacity(capacity, self._family.capacity)
+        default_physics = self._family.physics if self._family_name is not None else None
+        self.physics = physics_variation(physics) if physics is not None else default_physics
+        self._item_physics: dict[str, ItemPhysics] = {}  # this episode's clutter masses and frictions
         self.lattice = Lattice.over(extent, resolution)
         self._extent: Rect = extent
         if self._fixed is not None:
@@ -287,7 +301,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._check_fits(scenario)
         self._scenario = scenario
         self._state = WorldState.initial(scenario)
-        self._sim.reset(scenario, self._state)
+        self._item_physics = self.physics.draw(self.np_random, scenario) if self.physics is not None else {}
+        self._sim.reset(scenario, self._state, item_physics=self._item_physics)
         self._sim_in_sync, self._snapshot = True, None
         self._path_length = 0.0
         self._travel_cost = 0.0
@@ -458,7 +473,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         """Rebuild the simulation after a copy or close(), exactly where the world was."""
         if self._sim_in_sync:
             return
-        self._sim.reset(self.scenario, self.state, self._snapshot)
+        self._sim.reset(self.scenario, self.state, self._snapshot, item_physics=self._item_physics)
         self._sim_in_sync, self._snapshot = True, None
 
     def _decode(self, action: Any) -> Action:
@@ -506,6 +521,19 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
                 self._achieved if self._achieved is not None else observation["achieved_goal"]
             ).copy(),
         }
+
+
+def _as_capacity(capacity: Capacity | Mapping[str, int] | str | None, default: Capacity) -> Capacity:
+    """The env's capacity from its ``capacity`` argument (see the class docstring), ``default`` if None."""
+    if capacity is None:
+        return default
+    if isinstance(capacity, Capacity):
+        return capacity
+    if isinstance(capacity, str):
+        return Capacity.parse(capacity)
+    if isinstance(capacity, Mapping):
+        return Capacity.parse(",".join(f"{k}={v}" for k, v in capacity.items())) if capacity else Capacity()
+    raise TypeError(f"capacity must be a Capacity, a mapping or a text, got {type(capacity).__name__}")
 
 
 def _as_scenario(scenario: ScenarioLike) -> Scenario:

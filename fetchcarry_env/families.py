@@ -56,7 +56,7 @@ Units are metres.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TypeVar
 
 import numpy as np
@@ -70,11 +70,16 @@ from fetchcarry_env.kinematics import (
     reaches,
     swept_rect,
 )
+from fetchcarry_env.observation import Capacity
 from fetchcarry_env.reachability import FreeSpace, unreachable_targets
 from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table, check_rules
+from fetchcarry_env.worlds.apartment import draw_apartment
+from fetchcarry_env.worlds.base import EXTENT, TABLE_HEIGHT, free_spot, name, point_near, robot, square, uniform
+from fetchcarry_env.worlds.objects import MAX_OBJECTS, draw_objects
+from fetchcarry_env.worlds.perturbed import perturb
+from fetchcarry_env.worlds.physics import HOME, PhysicsVariation
+from fetchcarry_env.worlds.unseen import draw_unseen
 
-EXTENT = Rect(-1.0, -1.0, 6.0, 6.0)  # metres: the floor every family's room lies in
-TABLE_HEIGHT = 0.70  # metres
 PUSH_RESOLUTION = 0.05  # metres: the default lattice; strokes are checked on it
 MAX_ATTEMPTS = 200  # layouts drawn before a family gives up (never reached in tests)
 
@@ -84,41 +89,37 @@ T = TypeVar("T")
 
 @dataclass(frozen=True)
 class Family:
-    """A named scenario generator and the floor extent its scenarios lie in."""
+    """A named scenario generator, the floor extent its scenarios lie in, and what the env needs for them.
+
+    ``capacity`` is the observation's room that holds every scenario the family draws
+    (the env's default for the family; a draw that would not fit is drawn again), and
+    ``physics`` the physics variation the env applies to its episodes, if any
+    (:mod:`fetchcarry_env.worlds.physics`).
+    """
 
     name: str
     description: str
     extent: Rect
     draw: Sampler
+    capacity: Capacity = field(default_factory=Capacity)
+    physics: PhysicsVariation | None = None
 
     def sample(self, rng: np.random.Generator) -> Scenario:
-        """A valid, workable scenario drawn from ``rng``."""
+        """A valid, workable scenario drawn from ``rng`` that fits :attr:`capacity`."""
         for _ in range(MAX_ATTEMPTS):
             scenario = self.draw(rng)
-            if not check_rules(scenario) and not unreachable_targets(scenario) and _pushes_possible(scenario):
+            if (
+                self.capacity.fits(scenario)
+                and not check_rules(scenario)
+                and not unreachable_targets(scenario)
+                and _pushes_possible(scenario)
+            ):
                 return scenario
         raise RuntimeError(f"family {self.name!r} drew no workable scenario in {MAX_ATTEMPTS} attempts")
 
 
 # ---------------------------------------------------------------------- helpers
-def _square(center: Point, size: float) -> Rect:
-    return Rect.around(center, size / 2, size / 2)
-
-
-def _uniform(rng: np.random.Generator, low: float, high: float) -> float:
-    return float(rng.uniform(low, high))
-
-
-def _point_near(rng: np.random.Generator, center: Point, spread: float) -> Point:
-    return (center[0] + _uniform(rng, -spread, spread), center[1] + _uniform(rng, -spread, spread))
-
-
-def _robot(rng: np.random.Generator, start: Point) -> Robot:
-    return Robot(start=start, heading=HEADINGS[int(rng.integers(4))])
-
-
-def _name(family: str, rng: np.random.Generator) -> str:
-    return f"{family}-{int(rng.integers(1_000_000)):06d}"
+_square, _uniform, _point_near, _robot, _name = square, uniform, point_near, robot, name
 
 
 def _pushes_possible(scenario: Scenario) -> bool:
@@ -212,13 +213,8 @@ def _bases_reaching(point: Point, heading: Heading, posture: Posture) -> list[Po
 def _free_spot(
     rng: np.random.Generator, table: Rect, radius: float, margin: float, taken: list[tuple[Point, float]]
 ) -> Point:
-    """A point on ``table`` near an edge (within reach from that side), clear of ``taken`` discs."""
-    inner = table.inflate(-(radius + margin))
-    for _ in range(50):
-        p = (_uniform(rng, inner.min_x, inner.max_x), _uniform(rng, inner.min_y, inner.max_y))
-        if not any(discs_overlap(p, radius + 0.02, c, r) for c, r in taken):
-            return p
-    return inner.center
+    """A point on ``table`` clear of ``taken`` discs (:func:`fetchcarry_env.worlds.base.free_spot`)."""
+    return free_spot(rng, table, radius, margin, taken)
 
 
 # ---------------------------------------------------------------------- basic (V-B)
@@ -554,8 +550,20 @@ def draw_turned_corridor(rng: np.random.Generator) -> Scenario:
 def _family_per_value(
     name: str, description: str, draw: Callable[[np.random.Generator, T], Scenario], values: Iterable[T]
 ) -> list[Family]:
-    """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument."""
-    return [Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v)) for v in values]
+    """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument.
+
+    An integer value is the scenarios' object count: the family's capacity holds that many objects.
+    """
+    return [
+        Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v), capacity=_holding(v))
+        for v in values
+    ]
+
+
+def _holding(value: object) -> Capacity:
+    """The default capacity, with room for ``value`` objects when it is an object count."""
+    objects = value if isinstance(value, int) else 0
+    return Capacity(objects=max(Capacity().objects, objects))
 
 
 def draw_mixed(rng: np.random.Generator) -> Scenario:
@@ -571,6 +579,43 @@ def draw_training(rng: np.random.Generator) -> Scenario:
     return (draw_basic, draw_push, draw_corridor)[choice](rng)
 
 
+def draw_perturbed(rng: np.random.Generator) -> Scenario:
+    """A ``training`` scenario (the ``iid`` kind) with its tables and start moved and distractors added."""
+    return perturb(rng, draw_training(rng))
+
+
+OBJECT_COUNTS: tuple[int, ...] = tuple(range(1, MAX_OBJECTS + 1))  # the k of the objects-k families
+GRADED: tuple[Family, ...] = (
+    *(
+        Family(
+            f"objects-{k}",
+            f"{k} object(s) over several tables in a room sized to fit, clutter on goals in half",
+            EXTENT,
+            lambda rng, k=k: draw_objects(rng, k),
+            capacity=Capacity(objects=max(Capacity().objects, k)),
+        )
+        for k in OBJECT_COUNTS
+    ),
+    Family(
+        "apartment",
+        "2-4 rooms joined by doors and corridors, 3-6 tables, 2-5 objects, clutter on some goals",
+        EXTENT,
+        draw_apartment,
+        capacity=Capacity(objects=5),
+    ),
+    Family(
+        "unseen-layouts", "held out: T-junction, U corridor, rooms in a row, table in a dead end", EXTENT, draw_unseen
+    ),
+    Family(
+        "perturbed",
+        "iid scenarios with tables and start moved, distractors, clutter mass and friction varied",
+        EXTENT,
+        draw_perturbed,
+        physics=HOME,
+    ),
+)
+"""The graded worlds (:mod:`fetchcarry_env.worlds`): registered after the families above, drawn by none of them."""
+
 FAMILIES: dict[str, Family] = {
     family.name: family
     for family in (
@@ -583,10 +628,15 @@ FAMILIES: dict[str, Family] = {
         Family("training", "basic, push, corridor or multi-2, uniformly (one and two objects)", EXTENT, draw_training),
         Family("turned-room", "held out: a basic or push room turned a quarter turn", EXTENT, draw_turned_room),
         Family("turned-corridor", "held out: a corridor turned a quarter turn", EXTENT, draw_turned_corridor),
+        *GRADED,
     )
 }
 HELD_OUT_FAMILIES: tuple[str, ...] = ("turned-room", "turned-corridor")
-"""Families whose layouts no training family draws (for the benchmark's ``layouts`` split)."""
+"""Families whose layouts no training family draws (for the benchmark's ``layouts-v0`` split)."""
+UNSEEN_LAYOUT_FAMILIES: tuple[str, ...] = ("unseen-layouts",)
+TRAINING_PREFIXES: tuple[str, ...] = ("basic", "push", "corridor", "multi", "turned-")
+"""How the names of the training families' scenarios (and the turned ones) begin."""
+"""Topologies no training family draws, not even turned (for a new version of the ``layouts`` split)."""
 FAMILY_NAMES: tuple[str, ...] = tuple(FAMILIES)
 DEFAULT_FAMILY = "push"
 

@@ -13,13 +13,14 @@ It follows the goal-env convention (Gymnasium-Robotics): a ``Dict`` with
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from gymnasium import spaces
 
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect
-from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table
+from fetchcarry_env.scenario import MAX_COUNTS, Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table
 
 Point3 = tuple[float, float, float]
 
@@ -72,6 +73,13 @@ def standing_center(scenario: Scenario, obj: DeliveryObject, xy: Point) -> Point
     return (xy[0], xy[1], top + obj.height / 2)
 
 
+CAPACITY_LIMITS = {**MAX_COUNTS, "postures": 64}  # slots of a capacity at most: what a scenario may hold
+
+
+class CapacityError(InputError):
+    """A capacity that is not whole numbers of slots, or beyond what a scenario may hold."""
+
+
 @dataclass(frozen=True)
 class Capacity:
     """How many of each thing an observation has room for (absent slots are zero)."""
@@ -82,18 +90,60 @@ class Capacity:
     obstacles: int = 12
     postures: int = 4
 
-    def check(self, scenario: Scenario) -> None:
-        """Raise ``ValueError`` naming what does not fit."""
-        counts = {
+    def __post_init__(self) -> None:
+        bad = {k: v for k, v in asdict(self).items() if not (isinstance(v, int) and not isinstance(v, bool) and v >= 0)}
+        if bad or self.postures < 1:
+            raise CapacityError(f"a capacity counts slots: whole numbers >= 0 (postures >= 1), got {asdict(self)}")
+
+    @staticmethod
+    def counts(scenario: Scenario) -> dict[str, int]:
+        """How many of each thing ``scenario`` holds, by capacity field."""
+        return {
             "objects": len(scenario.objects),
             "clutter": len(scenario.clutter),
             "tables": len(scenario.tables),
             "obstacles": len(scenario.obstacles),
             "postures": len(scenario.robot.postures),
         }
+
+    def fits(self, scenario: Scenario) -> bool:
+        """True when ``scenario`` has no more of anything than this capacity has room for."""
+        return all(n <= getattr(self, k) for k, n in self.counts(scenario).items())
+
+    def holding(self, scenario: Scenario) -> Capacity:
+        """This capacity, grown where ``scenario`` needs more room."""
+        return Capacity(**{k: max(getattr(self, k), n) for k, n in self.counts(scenario).items()})
+
+    def covers(self, other: Capacity) -> bool:
+        """True when every count of this capacity is at least ``other``'s."""
+        return all(getattr(self, k) >= v for k, v in asdict(other).items())
+
+    def check(self, scenario: Scenario) -> None:
+        """Raise ``ValueError`` naming what does not fit."""
+        counts = self.counts(scenario)
         too_many = [f"{n} {k} (room for {getattr(self, k)})" for k, n in counts.items() if n > getattr(self, k)]
         if too_many:
-            raise ValueError(f"scenario {scenario.name!r} does not fit the observation: " + ", ".join(too_many))
+            raise ValueError(
+                f"scenario {scenario.name!r} does not fit the observation: "
+                + ", ".join(too_many)
+                + " (make the env with a larger capacity=..., or --capacity on the command line)"
+            )
+
+    @classmethod
+    def parse(cls, text: str, base: Capacity | None = None) -> Capacity:
+        """A capacity from ``"objects=8,clutter=12"`` (the other counts from ``base``, by default :class:`Capacity`)."""
+        values = asdict(base if base is not None else cls())
+        for part in (p.strip() for p in text.split(",")):
+            key, sep, value = part.partition("=")
+            if not sep or key.strip() not in values or not value.strip().isdigit():
+                raise CapacityError(
+                    f"capacity {text!r}: give comma-separated KEY=N with KEY one of {', '.join(values)}, "
+                    "e.g. objects=8,clutter=12"
+                )
+            values[key.strip()] = int(value)
+        if any(v > CAPACITY_LIMITS[k] for k, v in values.items()):
+            raise CapacityError(f"capacity {text!r}: at most {CAPACITY_LIMITS} (what a scenario may hold)")
+        return cls(**values)
 
 
 # Per-slot feature widths of the flat observation vector.

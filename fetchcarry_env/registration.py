@@ -15,6 +15,18 @@ def register_envs() -> None:
     exact masks. It takes the env's arguments plus ``layout`` (a
     :class:`fetchcarry_env.phases.PhaseLayout`), ``reward`` (``"paper"``, the env's, or
     ``"learning"``: :class:`fetchcarry_env.shaping.LearningReward`) and ``gamma``.
+
+    Both ids vectorise with ``gym.make_vec(id, num_envs=N, vectorization_mode="sync" |
+    "async", **env_arguments)``: sub-env ``i`` of ``reset(seed=s)`` is the single env
+    reset with ``seed=s + i``, and MaskablePPO's masks are ``venv.call("action_masks")``
+    (one array per sub-env). The vector env declares its autoreset mode in
+    ``metadata["autoreset_mode"]`` (Gymnasium's ``NEXT_STEP`` unless
+    ``vector_kwargs={"autoreset_mode": ...}`` says otherwise): with ``NEXT_STEP`` the
+    step after an episode's end resets that sub-env and ignores its action, so the mask
+    read in between is the final state's; with ``SAME_STEP`` the reset comes at once
+    (``info["final_obs"]``) and the mask is the new episode's. An env connects to
+    PyBullet on its first reset, so ``AsyncVectorEnv``'s probe env in the parent costs no
+    physics server (fork starts a worker in about 0.05 s).
     """
     if ENV_ID not in registry:
         register(

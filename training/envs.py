@@ -17,6 +17,8 @@ import fetchcarry_env  # noqa: F401  (importing registers the env ids)
 from fetchcarry_env.observation import Capacity
 from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
 
+MAX_SEED = 2**32 - 1  # numpy and Gymnasium take seeds 0 .. 2**32 - 1
+
 INTERFACES = {"env": ENV_ID, "phases": PHASES_ENV_ID}
 """Interface name -> the env id a policy of that interface acts in."""
 

@@ -24,7 +24,6 @@ is not listed.
 from __future__ import annotations
 
 import importlib
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -137,26 +136,21 @@ def _user_interface(name: str) -> str:
 
 
 def _run_spec(path: Path) -> PolicySpec:
-    config_path = path / "config.json"
-    if not path.is_dir() or not config_path.is_file():
-        raise BenchmarkError(f"{path} is not a run folder (no config.json)")
+    if not path.is_dir():
+        raise BenchmarkError(f"{path} is not a run folder")
+    # Load it here, so that a broken run folder is bad input, not a crash in a worker; load_policy
+    # reads config.json within bounds (a regular file of bounded size) and checks it first.
+    from training.learners.runs import load_policy, read_saved  # torch at its top
+
     try:
-        config = json.loads(config_path.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise BenchmarkError(f"{config_path} is not valid JSON: {error}") from None
-    if not isinstance(config, dict):
-        raise BenchmarkError(f"{config_path} does not hold a run's configuration")
+        load_policy(path)
+        config = read_saved(path)
+    except (ValueError, OSError) as error:
+        raise BenchmarkError(f"{path} does not load as a policy: {error}") from None
     interface = config.get("interface", "phases" if "candidates" in config else "env")
     if interface not in INTERFACES:
-        raise BenchmarkError(f"{config_path}: unknown interface {interface!r}; known: {', '.join(INTERFACES)}")
+        raise BenchmarkError(f"{path / 'config.json'}: unknown interface {interface!r}; known: {', '.join(INTERFACES)}")
     options = {"capacity": config["capacity"]} if isinstance(config.get("capacity"), dict) else {}
-    # Check that it loads here, so that a broken run folder is bad input, not a crash in a worker.
-    try:
-        from training.learners.runs import load_policy
-
-        load_policy(path)
-    except (ValueError, OSError, KeyError, TypeError, RuntimeError) as error:
-        raise BenchmarkError(f"{path} does not load as a policy: {error}") from None
     return PolicySpec(path.name or str(path), interface, run=str(path.resolve()), env_options=options)
 
 

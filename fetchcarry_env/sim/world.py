@@ -15,6 +15,7 @@ from the same state, gives bit-for-bit the same result.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +74,8 @@ class Simulation:
         self._scenario: Scenario | None = None
         self._poses: dict[str, Pose] = {}
         self._held: str | None = None
+        self._varied = False  # some clutter has a mass or friction of its own (see reset's item_physics)
+        self._built_dynamics: dict[int, tuple[float, tuple[float, ...], float]] = {}  # body -> as built
         self.builds = 0  # how many times bodies were (re)built, for tests and the benchmark
 
     # ------------------------------------------------------------------ lifecycle
@@ -105,16 +108,25 @@ class Simulation:
         )
 
     # ------------------------------------------------------------------ scenario and state
-    def reset(self, scenario: Scenario, state: WorldState, snapshot: Snapshot | None = None) -> None:
+    def reset(
+        self,
+        scenario: Scenario,
+        state: WorldState,
+        snapshot: Snapshot | None = None,
+        item_physics: Mapping[str, tuple[float, float]] | None = None,
+    ) -> None:
         """Show ``scenario`` at ``state``: rebuild the bodies if the layout changed, then pose everything.
 
         Items stand upright where ``state`` puts them, or take the exact poses of ``snapshot``
         (taken from another world in the same state: a copied environment continues with it).
+        ``item_physics`` gives some pieces of clutter their own ``(mass kg, friction)``; the
+        others get :data:`physics.CLUTTER_MASS` and :data:`physics.FRICTION`.
         """
         client = self.client
         if self._layout_key != scenario.layout_key:
             self._build(scenario)
         self._scenario = scenario
+        self._set_clutter_physics(scenario, item_physics or {})
         robot = self._robot_body
         for obj in scenario.objects:
             marker = (obj.goal[0], obj.goal[1], table_top(scenario, obj.goal))
@@ -135,6 +147,27 @@ class Simulation:
         if state.holding is not None:
             self._grasp(state.holding, self._hand_world_position())
         self._fresh_contacts()
+
+    def _set_clutter_physics(self, scenario: Scenario, values: Mapping[str, tuple[float, float]]) -> None:
+        """Give the clutter in ``values`` its mass (inertia scaled alike) and friction, the rest the built ones.
+
+        Nothing is called while no variation was ever set on these bodies, so worlds
+        without one step exactly as before variations existed.
+        """
+        if not values and not self._varied:
+            return
+        client = self.client
+        for item in scenario.clutter:
+            body = self._layout.clutter[item.id]
+            if body not in self._built_dynamics:
+                info = client.getDynamicsInfo(body, -1)
+                self._built_dynamics[body] = (info[0], tuple(info[2]), info[1])  # mass, inertia, friction
+            mass, inertia, friction = self._built_dynamics[body]
+            if item.id in values:
+                new_mass, friction = values[item.id]
+                inertia, mass = tuple(v * new_mass / mass for v in inertia), new_mass
+            client.changeDynamics(body, -1, mass=mass, localInertiaDiagonal=inertia, lateralFriction=friction)
+        self._varied = bool(values)
 
     def snapshot(self) -> Snapshot:
         """The exact state of this world between phases (see :class:`Snapshot`)."""
@@ -347,6 +380,8 @@ class Simulation:
         self._robot = RobotBody(client, scenario.robot.radius, arm_height, lowest_hand=min(tops))
         self._layout_key = scenario.layout_key
         self._held = None
+        self._varied = False
+        self._built_dynamics = {}
         self.builds += 1
 
     def _hand_world_position(self) -> Point3:

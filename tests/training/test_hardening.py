@@ -526,6 +526,35 @@ def test_a_fifo_as_an_input_file_is_exit_2_not_a_hang(capsys, tmp_path: Path, no
     assert "not a regular file (a FIFO)" in err
 
 
+def test_a_fifo_as_the_results_file_of_a_resumed_benchmark_is_exit_2(capsys, tmp_path: Path, no_hang) -> None:
+    out = tmp_path / "b"
+    out.mkdir()
+    os.mkfifo(out / "results.json")
+    status, _, err = run(capsys, "benchmark", "--policies", "random", "--split", "iid", "--episodes", "1",
+                         "--out", out, "--resume", "--no-progress")  # fmt: skip
+    assert status == 2 and "results.json: not a regular file (a FIFO)" in err, err
+
+
+def test_a_fifo_as_the_config_of_a_benchmarked_run_folder_is_exit_2(capsys, tmp_path: Path, no_hang) -> None:
+    run_folder = tmp_path / "run"
+    run_folder.mkdir()
+    os.mkfifo(run_folder / "config.json")
+    status, _, err = run(capsys, "benchmark", "--policies", run_folder, "--split", "iid", "--episodes", "1",
+                         "--out", tmp_path / "b", "--no-progress")  # fmt: skip
+    assert status == 2 and "not a regular file (a FIFO)" in err, err
+
+
+def test_many_unusable_scenario_files_are_summarised(capsys, tmp_path: Path) -> None:
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    for index in range(300):
+        (folder / f"s{index:03d}.json").write_text("{")
+    status, _, err = run(capsys, "benchmark", "--policies", "random", "--scenarios", folder, "--out", tmp_path / "b")
+    assert status == 2, err
+    assert "300 unusable scenario files" in err and "... and 295 more unusable files of 300" in err
+    assert len(err.splitlines()) < 20, err
+
+
 def test_an_unreadable_file_under_proc_is_named(capsys) -> None:
     status, _, err = run(capsys, "validate", EXAMPLE, "/proc/self/mem")
     assert status == 2 and "Input/output error: /proc/self/mem" in err, err
@@ -545,6 +574,24 @@ def test_a_seed_outside_0_to_2_32_is_exit_2(capsys, tmp_path: Path, command: str
     extra = ("--out", tmp_path / "d.png") if command == "demo" else ()
     status, _, err = run(capsys, *SEED_COMMANDS[command], *extra, "--seed", value)
     assert status == 2 and "argument --seed" in err, err
+    assert "internal error" not in err
+
+
+BENCH_AND_TRAIN_SEEDS = {
+    "bench env": ("bench", "env", "--episodes", "1"),
+    "bench generate": ("bench", "generate", "--episodes", "1"),
+    "bench learning-checks ppo": ("bench", "learning-checks", "ppo"),
+    "bench planner": ("bench", "planner"),
+    "train bc": ("train", "bc", "--dataset", DATASET_ID, "--out", "unused"),
+    "train ppo": ("train", "ppo", "--family", "basic", "--out", "unused"),
+}
+
+
+@pytest.mark.parametrize("value", ["-1", str(2**64)])
+@pytest.mark.parametrize("command", sorted(BENCH_AND_TRAIN_SEEDS))
+def test_bench_and_train_refuse_a_seed_outside_0_to_2_32(capsys, command: str, value: str) -> None:
+    status, _, err = run(capsys, *BENCH_AND_TRAIN_SEEDS[command], "--seed", value)
+    assert status == 2 and "2**32 - 1" in err, err
     assert "internal error" not in err
 
 

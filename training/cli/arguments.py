@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
+from dataclasses import asdict
+
+from fetchcarry_env.observation import Capacity, CapacityError
 
 
 def whole_number(text: str) -> int:
@@ -12,6 +15,15 @@ def whole_number(text: str) -> int:
         return int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+
+
+def capacity_text(text: str) -> str:
+    """An observation capacity as ``KEY=N,...`` (checked here, passed on as text: it is JSON for a dataset's spec)."""
+    try:
+        capacity = Capacity.parse(text)
+    except CapacityError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return ",".join(f"{k}={v}" for k, v in asdict(capacity).items())
 
 
 def positive_int(text: str) -> int:

@@ -1,7 +1,7 @@
-"""``fetchcarry bench env|planner|anytime|push|generate|phases|projection``: the benchmarks' options and tables.
+"""``fetchcarry bench env|planner|anytime|push|generate|phases|ppo|projection``: the benchmarks' options and tables.
 
 The measurements live in :mod:`training.speed` (``env``, ``planner``, ``anytime``,
-``push``, ``generate``, ``phases``; ``projection`` is
+``push``, ``generate``, ``phases``, ``ppo``; ``projection`` is
 :func:`training.evaluation.projection.check_projection`) and return figures; this module
 parses the options, runs them and prints the figures for people (or as JSON with ``--json``).
 """
@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from dataclasses import asdict
@@ -17,10 +18,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from fetchcarry_env.errors import UsageError
-from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.arguments import positive_float, positive_int
 from training.cli.episodes import families
 from training.cli.files import check_readable, check_writable
 from training.cli.options import Command
+from training.cli.seeds import seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
 from training.speed import anytime as anytime_speed
@@ -95,21 +97,20 @@ PROJECTION_COMMAND = Command(
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
-    """Add the ``env``, ``planner``, ``anytime``, ``push``, ``generate``, ``phases``, ``projection`` benchmarks."""
+    """Add the benchmarks: env, planner, anytime, push, generate, phases, ppo, projection."""
     _register_env(bench)
     _register_planner(bench)
     _register_anytime(bench)
     _register_push(bench)
     _register_generate(bench)
     _register_phases(bench)
+    _register_ppo(bench)
     _register_projection(bench)
 
 
 def _add_seed(parser: argparse.ArgumentParser, default: int, meaning: str) -> None:
     """``--seed S``: ``meaning``, and its default."""
-    parser.add_argument(
-        "--seed", type=whole_number, default=default, metavar="S", help=f"{meaning} (default {default})"
-    )
+    parser.add_argument("--seed", type=seed, default=default, metavar="S", help=f"{meaning} (default {default})")
 
 
 # ---------------------------------------------------------------------------- bench env
@@ -412,9 +413,7 @@ def _register_generate(bench: argparse._SubParsersAction) -> None:
         metavar="A,B",
         help=f"comma-separated families (default {','.join(DEFAULT_FAMILIES)})",
     )
-    parser.add_argument(
-        "--seed", type=whole_number, default=0, metavar="N", help="episode k uses seed N + k (default 0)"
-    )
+    parser.add_argument("--seed", type=seed, default=0, metavar="N", help="episode k uses seed N + k (default 0)")
     parser.add_argument(
         "--policy", choices=("expert", "random"), default="expert", help="the MILP expert (default) or random"
     )
@@ -474,7 +473,13 @@ def _register_phases(bench: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--steps", type=positive_int, default=1000, metavar="N", help="steps per speed figure (default 1000)"
     )
+    parser.add_argument("--speed-only", action="store_true", help="only the speed table (no expert episodes)")
     parser.set_defaults(handler=run_bench_phases)
+
+
+def _load() -> str:
+    """The load averages (1, 5, 15 minutes) as ``uptime`` prints them: the machine may be shared."""
+    return ", ".join(f"{value:.2f}" for value in os.getloadavg())
 
 
 def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int:
@@ -483,22 +488,11 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
 
     out = out if out is not None else sys.stdout
     names = families(args.families)
-    print(f"expert actions expressible as candidates ({args.episodes} episodes per family, seeds from 0)", file=out)
+    if not args.speed_only:
+        _print_expressibility(names, args.episodes, out)
     print(
-        f"{'family':10} {'success':>8} {'actions':>8} {'expressible':>12} {'episodes':>9} {'mask ms':>8}  by mode",
-        file=out,
-    )
-    for family in names:
-        r = phases_speed.expressibility(family, args.episodes)
-        modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
-        print(
-            f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
-            f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}",
-            file=out,
-        )
-    print(
-        f"\nspeed ({args.steps} random masked steps per family; mask ms: mean and median per step; "
-        "ratio: plain / phases steps per second; the machine is shared: compare the ratio)",
+        f"speed ({args.steps} random masked steps per family; mask ms: mean and median per step; "
+        f"ratio: plain / phases steps per second; the machine is shared: compare the ratio; load {_load()})",
         file=out,
     )
     print(
@@ -512,6 +506,82 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
         print(
             f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} {r['mask_median_ms']:7.2f} "
             f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
+            file=out,
+        )
+    print(f"load at the end {_load()}", file=out)
+    return 0
+
+
+def _print_expressibility(names: tuple[str, ...], episodes: int, out: TextIO) -> None:
+    """The expert's actions that a candidate stands for, per family (``episodes`` seeds from 0)."""
+    from training.speed import phases as phases_speed
+
+    print(f"expert actions expressible as candidates ({episodes} episodes per family, seeds from 0)", file=out)
+    print(
+        f"{'family':10} {'success':>8} {'actions':>8} {'expressible':>12} {'episodes':>9} {'mask ms':>8}  by mode",
+        file=out,
+    )
+    for family in names:
+        r = phases_speed.expressibility(family, episodes)
+        modes = ", ".join(f"{m} {k}/{n}" for m, (k, n) in r["by_mode"].items())
+        print(
+            f"{family:10} {r['expert_success']:8.0%} {r['actions']:8d} {r['expressible']:12.1%} "
+            f"{r['whole_episodes']:9.0%} {r['mask_ms']:8.2f}  {modes}",
+            file=out,
+        )
+    print(file=out)
+
+
+# ---------------------------------------------------------------------------- bench ppo
+def _register_ppo(bench: argparse._SubParsersAction) -> None:
+    parser = bench.add_parser(
+        "ppo",
+        help="MaskablePPO's training speed on the candidate phases: env steps per second with 1 and 2 envs",
+        description="Train the ppo learner's model (scratch MLP actor, the published rollout, epochs and batch "
+        "size) on one family for --steps env steps with each number of envs in --envs, and print the env steps "
+        "per second of model.learn (rollouts and updates; no evaluation, no set-up) and of its rollouts alone, "
+        "with the load average (the machine may be shared: compare the envs measured in one run). "
+        "More than one env: one forked worker process each.",
+    )
+    parser.add_argument("--family", default="basic", metavar="NAME", help="scenario family (default basic)")
+    parser.add_argument("--envs", default="1,2", metavar="N[,N...]", help="numbers of envs to time (default 1,2)")
+    parser.add_argument(
+        "--steps", type=positive_int, default=4096, metavar="N", help="env steps per figure (default 4096)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.set_defaults(handler=run_bench_ppo)
+
+
+def _env_counts(text: str) -> list[int]:
+    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to 64."""
+    try:
+        counts = [int(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        counts = []
+    if not counts or not all(1 <= n <= 64 for n in counts):
+        raise UsageError(f"--envs: expected numbers from 1 to 64 separated by commas, got {text!r}")
+    return counts
+
+
+def run_bench_ppo(args: argparse.Namespace, out: TextIO | None = None) -> int:
+    """Time MaskablePPO with each number of envs and print steps per second (or JSON)."""
+    from training.learners.options import check_family
+    from training.speed import ppo as ppo_speed
+
+    out = out if out is not None else sys.stdout
+    check_family(args.family)
+    counts = _env_counts(args.envs)
+    started = _load()
+    results = [ppo_speed.ppo_speed(args.family, n, args.steps) for n in counts]
+    if args.json:
+        echo(json.dumps({"load_start": started, "results": [ppo_speed.as_row(r) for r in results]}, indent=2), out)
+        return 0
+    print(f"MaskablePPO on {args.family}, {args.steps} env steps per figure (load at the start {started})", file=out)
+    print(f"{'envs':>4} {'steps':>6} {'seconds':>8} {'steps/s':>8} {'rollout steps/s':>16} {'load':>5}", file=out)
+    for r in results:
+        print(
+            f"{r.envs:4d} {r.steps:6d} {r.seconds:8.1f} {r.steps_per_s:8.0f} {r.rollout_steps_per_s:16.0f} "
+            f"{r.load:5.2f}",
             file=out,
         )
     return 0

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from training import load_policy
 from training.cli.arguments import positive_int, whole_number
+from training.cli.seeds import seed
 from training.cli.text import echo
 from training.learners.options import HELDOUT_SEED_BASE, BCConfig, check_family
 
@@ -67,7 +68,7 @@ def _register_learning_checks(bench: argparse._SubParsersAction) -> None:
     ppo.add_argument("--family", default="basic", metavar="NAME", help="scenario family (default basic)")
     ppo.add_argument("--steps", type=positive_int, default=20_000, metavar="N", help="env steps (default 20000)")
     ppo.add_argument("--eval-episodes", type=positive_int, default=50, metavar="N", help="held-out seeds (default 50)")
-    ppo.add_argument("--seed", type=whole_number, default=0, metavar="N", help="training seed (default 0)")
+    ppo.add_argument("--seed", type=seed, default=0, metavar="N", help="training seed (default 0)")
     ppo.add_argument("--out", metavar="DIR", help="write ppo.zip and metrics.csv into DIR")
     ppo.set_defaults(handler=run_check_ppo)
 

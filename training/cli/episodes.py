@@ -16,7 +16,7 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
-from training.cli.arguments import non_negative_int, positive_float, positive_int
+from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
 from training.cli.seeds import check_seed_range, seed
@@ -75,6 +75,14 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
         metavar="S",
         help="seconds per planning call of the expert (default 10)",
     )
+    parser.add_argument(
+        "--capacity",
+        type=capacity_text,
+        metavar="K=N,...",
+        help="the observation's slots, e.g. objects=8,clutter=12 (the other counts the default's: objects 4, "
+        "clutter 8, tables 6, obstacles 12, postures 4); default: the family's, which holds every scenario it "
+        "draws, or for --scenario the default grown to hold it",
+    )
 
 
 def episode_source(args: argparse.Namespace, policy: str | None = None) -> EpisodeSource:
@@ -90,6 +98,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
         policy=policy,
         time_limit=args.time_limit,
         interface=getattr(args, "interface", "env"),
+        capacity=getattr(args, "capacity", None),
     )
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 
 from fetchcarry_env.errors import InputError
-from training.data.sources import MAX_SEED  # numpy's SeedSequence and Gymnasium's reset(seed=) take 0 .. 2**32 - 1
+from training.envs import MAX_SEED  # numpy's SeedSequence and Gymnasium's reset(seed=) take 0 .. 2**32 - 1
 
 
 def seed(text: str) -> int:

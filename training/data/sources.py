@@ -13,16 +13,16 @@ import gymnasium as gym
 
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
+from fetchcarry_env.observation import Capacity
 from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
 from training.envs import INTERFACES as ENV_IDS
-from training.envs import make_env
+from training.envs import MAX_SEED, make_env
 from training.policies.protocol import Policy
 from training.resolve import recording_policy
 
 INTERFACES = tuple(ENV_IDS)  # the env's own MultiDiscrete actions, or the Discrete candidate phases
 POLICIES = ("expert", "random")
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call
-MAX_SEED = 2**32 - 1  # numpy and Gymnasium take seeds 0 .. 2**32 - 1
 PROJECTION = "nearest move candidate"  # what a phases dataset records for an expert move no candidate expresses
 
 
@@ -43,6 +43,7 @@ class EpisodeSource:
     time_limit: float = DEFAULT_TIME_LIMIT  # seconds per planning call (expert)
     env_id: str = ENV_ID
     interface: str = "env"
+    capacity: str | None = None  # the observation's slots, "objects=8,clutter=12"; None: the env's default
 
     def __post_init__(self) -> None:
         if self.interface not in INTERFACES:
@@ -57,11 +58,14 @@ class EpisodeSource:
             raise UsageError(f"the time limit must be a positive number of seconds, got {self.time_limit}")
         if not 0 <= self.seed <= MAX_SEED:
             raise UsageError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {self.seed}")
+        if self.capacity is not None:
+            Capacity.parse(self.capacity)  # a CapacityError (bad input) names what is wrong
 
     @property
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
-        return {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+        kwargs = {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+        return kwargs if self.capacity is None else {**kwargs, "capacity": self.capacity}
 
     @property
     def gym_id(self) -> str:
@@ -105,6 +109,8 @@ class GenerationConfig:
     def manifest(self) -> dict[str, Any]:
         """The options that identify the staged episodes (everything but how many there are)."""
         manifest = {"dataset_id": self.dataset_id, **asdict(self.source)}
+        if manifest["capacity"] is None:  # datasets made before --capacity existed keep their manifest
+            del manifest["capacity"]
         if manifest["interface"] == "env":  # datasets made before the interface existed keep their manifest
             del manifest["interface"]
         else:  # phases: how an expert move no candidate expresses is recorded (truncated datasets did not say)

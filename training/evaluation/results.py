@@ -25,6 +25,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
+from fetchcarry_env.jsontext import read_json_or
 from fetchcarry_env.scenario import Scenario
 from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
@@ -33,6 +34,7 @@ RESULTS = "results.json"
 LOCK = ".results.lock"  # in the output folder: held (flock) by the benchmark writing there
 SCHEMA_VERSION = 1  # 0: a plain list of records (no digest); 1: {"schema_version": 1, "records": [...]}
 FORMAT_DOC = "docs/results-format.md"
+MAX_RESULTS_BYTES = 256 * 2**20  # bytes: about half a million records; a larger file is refused unread
 
 _INT, _NUMBER, _TEXT, _BOOL, _NULL = "an integer", "a number", "a string", "true or false", "null"
 FIELDS: dict[str, tuple[str, ...]] = {
@@ -163,10 +165,7 @@ def read_results(path: str | Path) -> list[dict[str, Any]]:
     ``FileNotFoundError`` propagates (a caller decides whether a missing file is empty).
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ResultsError(f"{path}: not valid JSON ({error})") from None
+    data = read_json_or(path, MAX_RESULTS_BYTES, lambda problem: ResultsError(f"{path}: {problem}"))
     return parse_results(data, path)
 
 

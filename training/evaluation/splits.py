@@ -195,6 +195,9 @@ def extent_text(rect: Rect) -> str:
     return f"x from {rect.min_x:g} to {rect.max_x:g} m, y from {rect.min_y:g} to {rect.max_y:g} m"
 
 
+SHOWN_PROBLEMS = 5  # a folder's unusable files named in the message; the rest are counted
+
+
 def folder_scenarios(
     folder: str | Path, episodes: int | None = None, learned: Sequence[str] = ()
 ) -> list[EvalScenario]:
@@ -218,14 +221,17 @@ def folder_scenarios(
         try:
             scenario = Scenario.load(path)
         except (ScenarioError, OSError) as error:
-            problems.append(f"{path.name}: {error}")
+            problems.append(str(error))  # it names the file
             continue
         if not EXTENT.contains_rect(scenario.area):
             problems.append(f"{path.name}: its area ({extent_text(scenario.area)}) {_outside(learned)}")
             continue
         out.append(EvalScenario(index, f"scenarios:{folder.name}", path.name, EVAL_SEED_BASE + index, scenario))
     if problems:
-        raise BenchmarkError("unusable scenario files:\n" + "\n".join(problems))
+        shown = problems[:SHOWN_PROBLEMS]
+        if len(problems) > SHOWN_PROBLEMS:
+            shown.append(f"... and {len(problems) - SHOWN_PROBLEMS} more unusable files of {len(files)}")
+        raise BenchmarkError(f"{len(problems)} unusable scenario files in {folder}:\n" + "\n".join(shown))
     return out
 
 

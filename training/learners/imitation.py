@@ -27,7 +27,8 @@ from tqdm import tqdm
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import describe
-from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observation import Capacity, observation_size
+from fetchcarry_env.phases import PhaseLayout
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
 from training.learners.encoders import Ensemble, build_network
@@ -131,15 +132,20 @@ def load_network_policy(path: str | Path, env: Any = None) -> Any:
 
     Reads ``config.json`` (checked: :func:`training.learners.runs.read_config`) and the
     ``model.pt`` tensors (``weights_only``); :class:`~training.learners.runs.RunFolderError` otherwise.
+    With ``env``, the policy acts at the env's observation capacity (:func:`acting_capacity`).
     """
     path = Path(path)
     saved = runs.read_config(path)
     config = runs.network_config(saved)
-    capacity = Capacity(**saved["capacity"])
+    trained = Capacity(**saved["capacity"])
     ensemble = saved["kind"] == "ensemble"
     configs = [runs.network_config(member) for member in saved["options"]["members"]] if ensemble else [config]
+    capacity = acting_capacity(path, trained, configs, env)
+    candidates, features = saved["candidates"], saved["features"]
+    if capacity != trained:
+        candidates, features = PhaseLayout.for_postures(capacity=capacity).size, observation_size(capacity)
     try:
-        built = [build_network(c, capacity, saved["candidates"], torch.zeros(1, saved["features"])) for c in configs]
+        built = [build_network(c, capacity, candidates, torch.zeros(1, features)) for c in configs]
     except ValueError as error:  # e.g. the set encoder for another number of candidates than its layout's
         raise runs.RunFolderError(f"{path / runs.CONFIG_FILE}: {error}") from None
     network = Ensemble(built) if ensemble else built[0]
@@ -150,8 +156,36 @@ def load_network_policy(path: str | Path, env: Any = None) -> Any:
     policy = BCPolicy(network, config, capacity, env)
     with torch.inference_mode():
         # Trace it now, so that the first decision is not slower.
-        policy.candidate_scores(torch.zeros(1, saved["features"]), torch.arange(saved["candidates"]))
+        policy.candidate_scores(torch.zeros(1, features), torch.arange(candidates))
     return policy
+
+
+def acting_capacity(path: Path, trained: Capacity, configs: list[BCConfig], env: Any) -> Capacity:
+    """The capacity a run's policy acts at: ``env``'s, if it has one, else the one it was trained with.
+
+    The set encoder's weights do not depend on the capacity (one token per slot, one head per
+    kind of slot), so it acts at any capacity; a flat network (``mlp``) has one input per
+    feature and one output per candidate of the capacity it was trained with, and refuses
+    any other with :class:`CapacityMismatch`.
+    """
+    capacity = trained
+    if env is not None:
+        try:
+            capacity = env.get_wrapper_attr("capacity")
+        except AttributeError:
+            capacity = trained
+    if capacity == trained or all(c.encoder == "set" for c in configs):
+        return capacity
+    raise CapacityMismatch(
+        f"{path} is a flat network ({configs[0].encoder}) trained at capacity {asdict(trained)}; the env has "
+        f"{asdict(capacity)}, and a flat network acts only at its own capacity (one input per feature, one "
+        f"output per candidate): make the env with capacity={asdict(trained)} (--capacity on the command "
+        "line), or train a set encoder (--encoder set), which acts at any capacity"
+    )
+
+
+class CapacityMismatch(InputError):
+    """A flat network asked to act at another observation capacity than the one it was trained with."""
 
 
 def load_weights(network: torch.nn.Module, weights: Path) -> dict[str, torch.Tensor]:

@@ -16,7 +16,9 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
+from training.envs import MAX_SEED
 
+MAX_ENVS = 64  # vector envs of a PPO run (one process each beyond the first)
 HELDOUT_SEED_BASE = 100_000  # held-out episode k uses HELDOUT_SEED_BASE + k (the learning checks' held-out seeds)
 
 EPOCHS_HELP = "epochs (per iteration for dagger; default {default})"
@@ -58,7 +60,18 @@ def nested(*, omit: tuple[str, ...] = ()) -> dict[str, Any]:
 
 def seed_option() -> Any:
     """The ``seed`` field of every learner (``--seed``): the run's weights depend on it alone, on CPU."""
-    return option(0, "training seed (default {default})")
+    return option(0, "training seed, 0 to 2**32 - 1 (default {default})", metavar="N", parse=read_seed)
+
+
+def read_seed(text: str) -> int:
+    """A training seed from the command line: a whole number from 0 to 2**32 - 1 (what numpy and torch take)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise InputError(f"expected a whole number, got {text[:40]!r}") from None
+    if not 0 <= value <= MAX_SEED:
+        raise InputError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {text[:40]}")
+    return value
 
 
 def check_family(name: str) -> None:
@@ -111,8 +124,8 @@ class BCConfig:
 class PPOOptions:
     """A PPO run's budget and settings (the defaults are the published budget)."""
 
-    steps: int = option(20_000, "env steps in total (default {default})", positive=True)
-    n_steps: int = option(256, "env steps per rollout (default {default})", positive=True)
+    steps: int = option(20_000, "env steps in total, over all envs (default {default})", positive=True)
+    n_steps: int = option(256, "env steps per rollout, over all envs (default {default})", positive=True)
     batch_size: int = 64
     n_epochs: int = 10
     learning_rate: float = option(3e-4, STEP_SIZE_HELP, metavar="LR", positive=True)
@@ -123,10 +136,18 @@ class PPOOptions:
     hidden: int = option(256, HIDDEN_HELP, positive=True)
     seed: int = seed_option()
     init: str | None = option(None, "a bc or dagger run folder whose network starts the actor", metavar="RUN_DIR")
+    envs: int = option(
+        1,
+        "envs stepped side by side (default {default}; more than 1: one worker process each, env i's first "
+        f"episode from seed --seed + i; at most {MAX_ENVS})",
+        positive=True,
+    )
 
     def __post_init__(self) -> None:
         if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
             raise InputError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
+        if not 1 <= self.envs <= min(MAX_ENVS, self.n_steps):
+            raise InputError(f"envs must be from 1 to {MAX_ENVS} and at most n_steps, got {self.envs}")
         if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
             raise InputError("learning_rate must be positive and gamma in (0, 1]")
         BCConfig(encoder=self.encoder, hidden=self.hidden)

@@ -1,8 +1,13 @@
 """MaskablePPO (sb3-contrib, unchanged) on the candidate phases, with an actor a BC run can initialise.
 
 The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shaped
-progress; refusals cost more than moving), one env, its flat observation vector
-(``observation["observation"]``) as the policy's input. The policy,
+progress; refusals cost more than moving), its flat observation vector
+(``observation["observation"]``) as the policy's input, ``envs`` of them side by side
+(:func:`make_vec_env`: SB3's ``DummyVecEnv`` for one, ``SubprocVecEnv`` with one forked
+worker per env for more; MaskablePPO reads their masks with ``env_method("action_masks")``).
+Env ``i``'s first episode is drawn with seed ``seed + i`` (SB3's ``VecEnv.seed``), its
+later episodes from its own generator; a rollout is ``n_steps`` env steps over all envs
+(``n_steps // envs`` each). The policy,
 :class:`CandidateActorCritic`, is sb3-contrib's ``MaskableActorCriticPolicy`` whose
 action head is the BC network of the chosen encoder (:mod:`training.learners.encoders`):
 the observation goes straight to it (no shared layers), and a separate two-layer MLP
@@ -57,6 +62,23 @@ def make_training_env(family: str) -> gym.Env:
     return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
 
 
+def make_vec_env(family: str, envs: int) -> Any:
+    """SB3's vector env of ``envs`` training envs: in this process for one, one forked worker each for more.
+
+    Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
+    platform has no fork, SB3's default start method is used.
+    """
+    import multiprocessing
+
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    makers = [lambda: make_training_env(family)] * envs
+    if envs == 1:
+        return DummyVecEnv(makers)
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+    return SubprocVecEnv(makers, start_method=method)
+
+
 def _policy_class() -> type:
     from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
 
@@ -103,14 +125,17 @@ def _metrics_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOpti
             self.episodes = int(rows[-1]["episodes"]) if rows else 0
 
         def _on_step(self) -> bool:
-            info = self.locals["infos"][0]
-            self.returns += float(self.locals["rewards"][0])
-            self.paper += float(info.get("paper_reward", 0.0))
-            if self.locals["dones"][0]:
-                self.finished.append((bool(info.get("is_success")), self.returns, self.paper,
-                                      float(info.get("travel_cost", 0.0))))  # fmt: skip
-                self.returns = self.paper = 0.0
-            bar.update(1)
+            infos, rewards, dones = self.locals["infos"], self.locals["rewards"], self.locals["dones"]
+            if isinstance(self.returns, float):  # one running sum per env, from the first step on
+                self.returns, self.paper = np.zeros(len(infos)), np.zeros(len(infos))
+            for i, info in enumerate(infos):  # in env order: the rows do not depend on the workers' timing
+                self.returns[i] += float(rewards[i])
+                self.paper[i] += float(info.get("paper_reward", 0.0))
+                if dones[i]:
+                    self.finished.append((bool(info.get("is_success")), float(self.returns[i]),
+                                          float(self.paper[i]), float(info.get("travel_cost", 0.0))))  # fmt: skip
+                    self.returns[i] = self.paper[i] = 0.0
+            bar.update(len(infos))
             return True
 
         def _on_rollout_end(self) -> None:
@@ -161,10 +186,6 @@ def train_ppo(
     :class:`~training.learners.options.PPORun` as keyword arguments). An ``options.init``
     that is not a bc or dagger run of this interface is a :class:`RunFolderError`.
     """
-    from sb3_contrib import MaskablePPO
-    from stable_baselines3.common.logger import Logger
-    from stable_baselines3.common.vec_env import DummyVecEnv
-
     torch.set_num_threads(1)
     if options.init is not None:
         init = runs.read_config(options.init)
@@ -178,10 +199,10 @@ def train_ppo(
     if options.init is not None:  # the init run's network features too, so that its weights fit
         start = runs.network_config(init)
         config = replace(config, relative=start.relative, push_scores=start.push_scores)
-    env = DummyVecEnv([lambda: make_training_env(family)])
-    base = env.envs[0].unwrapped
-    capacity, candidates = base.capacity, int(env.action_space.n)
-    features = int(env.observation_space.shape[0])
+    probe = make_training_env(family)  # its spaces and capacity (it connects to no physics server)
+    capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
+    features = int(probe.observation_space.shape[0])
+    probe.close()
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
         raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
     # The init run's weights are read and checked before the run folder is made: a bad one leaves nothing behind.
@@ -193,42 +214,15 @@ def train_ppo(
                              {"init": options.init, "steps": options.steps})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
-        env.close()
         return runs.read_metrics(folder)
     torch.manual_seed(options.seed)
-    actor = {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
-             "scale": _scale_observations(family, features).tolist()}  # fmt: skip
-    model = MaskablePPO(
-        _policy_class(),
-        env,
-        learning_rate=options.learning_rate,
-        n_steps=options.n_steps,
-        batch_size=options.batch_size,
-        n_epochs=options.n_epochs,
-        gamma=options.gamma,
-        seed=options.seed,
-        device="cpu",
-        verbose=0,
-        policy_kwargs={"actor": actor, "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)}},
-    )
-    model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes an empty folder in /tmp per run
-    rows: list[dict[str, Any]] = []
-    if checkpoint is not None:
-        steps = runs.checkpoint_counter(folder, checkpoint, "steps", options.steps + options.n_steps)
-        try:
-            model.policy.load_state_dict(checkpoint["policy"])
-            model.policy.optimizer.load_state_dict(checkpoint["optimizer"])
-        except (RuntimeError, TypeError, ValueError, KeyError, AttributeError) as error:
-            env.close()
-            file = folder / runs.CHECKPOINT_FILE
-            raise RunFolderError(f"{file}: it does not fit this run ({type(error).__name__})") from None
-        model.num_timesteps = steps
-        rows = [dict(r) for r in checkpoint["metrics"]]
-    elif init_weights is not None:
-        model.policy.action_net.load_state_dict(init_weights)
-    done = model.num_timesteps
-    started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
+    actor = actor_spec(family, config, capacity, candidates, features)
+    env = make_vec_env(family, options.envs)
     try:
+        model = make_model(env, options, actor)
+        rows = _restore(model, folder, checkpoint, options, init_weights)
+        done = model.num_timesteps
+        started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
         with tqdm(total=options.steps, initial=done, desc=f"ppo {folder.name}", unit="step",
                   disable=not progress) as bar:  # fmt: skip
             if done < options.steps:
@@ -239,3 +233,49 @@ def train_ppo(
     finally:
         env.close()
     return rows
+
+
+def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
+    """How :class:`CandidateActorCritic` builds its actor: the network's settings and its input scale (``family``'s)."""
+    return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
+            "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+
+
+def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
+    """MaskablePPO with the candidate actor-critic on ``env`` (a rollout: ``options.n_steps`` over all envs)."""
+    from sb3_contrib import MaskablePPO
+    from stable_baselines3.common.logger import Logger
+
+    model = MaskablePPO(
+        _policy_class(),
+        env,
+        learning_rate=options.learning_rate,
+        n_steps=max(1, options.n_steps // options.envs),
+        batch_size=options.batch_size,
+        n_epochs=options.n_epochs,
+        gamma=options.gamma,
+        seed=options.seed,  # SB3 seeds env i's first reset with seed + i
+        device="cpu",
+        verbose=0,
+        policy_kwargs={"actor": actor, "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)}},
+    )
+    model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes an empty folder in /tmp per run
+    return model
+
+
+def _restore(model: Any, folder: Path, checkpoint: dict[str, Any] | None, options: PPOOptions,
+             init_weights: dict[str, torch.Tensor] | None) -> list[dict[str, Any]]:  # fmt: skip
+    """Load the checkpoint (or the init run's actor) into ``model``; return the learning-curve rows so far."""
+    if checkpoint is None:
+        if init_weights is not None:
+            model.policy.action_net.load_state_dict(init_weights)
+        return []
+    steps = runs.checkpoint_counter(folder, checkpoint, "steps", options.steps + options.n_steps)
+    try:
+        model.policy.load_state_dict(checkpoint["policy"])
+        model.policy.optimizer.load_state_dict(checkpoint["optimizer"])
+    except (RuntimeError, TypeError, ValueError, KeyError, AttributeError) as error:
+        file = folder / runs.CHECKPOINT_FILE
+        raise RunFolderError(f"{file}: it does not fit this run ({type(error).__name__})") from None
+    model.num_timesteps = steps
+    return [dict(r) for r in checkpoint["metrics"]]

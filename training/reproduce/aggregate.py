@@ -28,6 +28,7 @@ import numpy as np
 from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import source_table
 from training.evaluation.results import RESULTS, read_results
+from training.learners.runs import read_saved
 from training.pictures.benchmark import plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
 from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
@@ -50,7 +51,7 @@ def collect(out: Path, baselines: Sequence[Baseline]) -> list[dict[str, Any]]:
 
 def expert_labels(run: Path) -> int | None:
     """The expert labels a bc or dagger run was trained on (from its config.json), None for ppo."""
-    data = json.loads((run / "config.json").read_text()).get("data") or {}
+    data = read_saved(run).get("data") or {}
     for key in ("labelled", "expert_labels"):
         if isinstance(data.get(key), int):
             return data[key]

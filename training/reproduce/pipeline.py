@@ -66,6 +66,7 @@ from training.resolve import available
 DATASET_ID = "fetchcarry/training-phases-v0"
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
 MAX_TIMINGS_BYTES = 10_000_000  # timings.json: seconds per stage and run
+MAX_DIGESTS_BYTES = 10_000_000  # weights.json: one digest per run
 WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
 MINARI_ENV = "MINARI_DATASETS_PATH"
 
@@ -131,9 +132,9 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
     settings = {"budget": asdict(budget)}
     if file.is_file():
         try:
-            saved = json.loads(file.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as error:
-            raise ReproduceError(f"{file} is not valid JSON: {error}") from None
+            saved = read_json(file, MAX_TIMINGS_BYTES)
+        except JsonInputError as error:
+            raise ReproduceError(f"{file}: {error}") from None
         saved_budget = saved.get("budget") if isinstance(saved, dict) else None
         if isinstance(saved_budget, dict):  # a field added since the folder was made: as it was, its default
             defaults = {f.name: f.default for f in fields(Budget) if f.default is not MISSING}
@@ -305,8 +306,10 @@ def forget_retrained(folder: Path, runs: list[Path]) -> None:
     """
     file = folder / WEIGHTS_DIGESTS
     try:
-        before = json.loads(file.read_text())
-    except (FileNotFoundError, json.JSONDecodeError, UnicodeDecodeError):
+        before = read_json(file, MAX_DIGESTS_BYTES)
+    except (FileNotFoundError, JsonInputError):  # none or unreadable: every run is benchmarked again
+        before = {}
+    if not isinstance(before, dict):
         before = {}
     now = {run.name: hashlib.sha256((run / "model.pt").read_bytes()).hexdigest() for run in runs}
     changed = {name for name in now if before.get(name) != now[name]}
