@@ -420,3 +420,21 @@ def test_unknown_policy_lists_what_is_available():
     with pytest.raises(benchmark.BenchmarkError, match="expert, random"):
         benchmark.resolve("no-such-policy")
     assert "greedy" in benchmark.FACTORIES  # wired; resolved only where its module is installed
+
+
+def test_every_policy_has_its_own_colour_and_the_plot_has_zero_bars_and_n(tmp_path: Path):
+    from matplotlib.colors import to_hex
+
+    from training.pictures.benchmark import policy_colours
+
+    names = ["expert", "random-phases", "random", "greedy", "ppo-bc", *(f"method-{k}" for k in range(30))]
+    colours = {to_hex(c) for c in policy_colours(names).values()}
+    assert len(colours) == len(names)  # expert and ppo-bc once shared one
+    records = [_record(p, s, p == "expert" or (p == "me" and s == 1), 5.0, 1.0, objects=1 + s % 2)
+               for p in ("expert", "me", "never") for s in range(4)]  # fmt: skip
+    benchmark.fill_expert_costs(records)
+    rows = benchmark.summarise(records)
+    assert benchmark.plot_splits(rows, tmp_path / "s.png").read_bytes()[:4] == b"\x89PNG"
+    from training.pictures.benchmark import _caption
+
+    assert _caption(rows).startswith("n = 4 episodes per bar")

@@ -43,7 +43,7 @@ def pyplot() -> Any:
 
 
 REFERENCE_COLOURS = {"expert": "#000000", "random-phases": "#7f7f7f", "random": "#bdbdbd", "greedy": "#8c564b"}
-ZERO_MARK = 0.012  # success axis units: a bar of zero success is drawn this high, hatched, so that it shows
+ZERO_MARK = 0.03  # success axis units: a bar of zero success is drawn this high, hatched and labelled "0", so it shows
 
 
 def policy_colours(policies: Sequence[str]) -> dict[str, Any]:
@@ -66,7 +66,9 @@ def _caption(rows: Sequence[Row]) -> str:
     if scenarios:
         text += f" (seeds pooled over {', '.join(map(str, scenarios))} scenarios; intervals resample scenarios)"
     zero = sorted({r.score_zero for r in rows})
-    return text + f"; hatched stub: 0 % success; cost ratio to the split's reference, score zero {'/'.join(zero)}"
+    kinds = sorted({r.reference for r in rows})
+    reference = "the split's fixed reference" if kinds == ["fixed"] else f"the reference ({', '.join(kinds)})"
+    return text + f"; hatched stub marked 0: no success; cost ratio to {reference}; score zero {'/'.join(zero)}"
 
 
 def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, Any]) -> None:
@@ -102,6 +104,8 @@ def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, 
             zero_xs, [ZERO_MARK] * len(zero_xs), width, color="white", edgecolor=colour, hatch="////", linewidth=1.0
         )
         right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, color=colour, edgecolor="black", linewidth=0.3)
+        for x in zero_xs:
+            left.text(x, ZERO_MARK + 0.01, "0", ha="center", va="bottom", fontsize="x-small", color="black")
 
 
 def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None = None) -> Path:
