@@ -20,7 +20,7 @@ COMPARE_COMMAND = Command(
     name="compare",
     help="compare two methods on the same scenarios: paired bootstrap and the sign over training seeds",
     description="Per split that both methods ran, the difference A - B on the scenarios both ran (same seed and "
-    "scenario digest): success (per-scenario success rate over the training seeds, mean difference with a 95 %% "
+    "scenario digest): success (per-scenario success rate over the training seeds, mean difference with a 95 % "
     "paired bootstrap interval over scenarios), travel cost in metres (on the scenarios both solved), and the sign "
     "of the success difference over training seeds with its two-sided sign-test p-value. A method is a policy "
     "label with its training seeds NAME-sK pooled (bc-mlp for bc-mlp-s0, bc-mlp-s1, ...).",
