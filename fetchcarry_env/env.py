@@ -31,6 +31,7 @@ from fetchcarry_env.kinematics import (
     travel_cost,
 )
 from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
+from fetchcarry_env.observations import OBS_MODES, ImageObservations
 from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action, move_stop
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
 from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
@@ -123,6 +124,26 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     lie within 100 m of the origin (scenario rule 6) and a held object rides at the hand,
     up to a posture's reach (at most 100 m) from the base and 5 cm above its table.
 
+    Images (``obs_mode``, :mod:`fetchcarry_env.observations`, ``docs/observations.md``)
+    sit beside those keys, uint8 in ``[0, 255]``, channels first:
+
+    | ``obs_mode`` | added keys | content |
+    |---|---|---|
+    | ``"state"`` (default) | none | the table above, bit for bit |
+    | ``"topdown"`` | ``topdown`` ``(7, S, S)`` | a semantic map drawn from the geometry (no renderer) |
+    | ``"rgbd"`` | ``head_rgbd``, ``overhead_rgbd`` ``(4, C, C)`` | RGB and linear depth, drawn by PyBullet |
+
+    The map's channels: tables, obstacles and walls, objects, goals, clutter, the robot
+    (disc 128, front half 255: its heading), the held object; a thing's pixels hold its
+    slot level ``255 - 224 k // n`` (slot ``k`` of ``n``). The cameras: one on the robot's
+    head (1.2 m up, 35 degrees down along the heading), one straight down over the extent.
+
+    ``topdown_size`` S (64 by default) pixels cover ``topdown_span`` metres (by default
+    the extent's longer side: 7 m for the families, 0.11 m a pixel), centred on the
+    extent (``topdown_frame="world"``) or on the base (``"robot"``, axis-aligned), north
+    up. ``camera_size`` C is 128 by default; ``renderer`` is ``"tiny"`` (PyBullet's CPU
+    renderer, the default) or ``"egl"`` (its EGL plugin, when it loads).
+
     ## Rewards
 
     The paper's objective (Eq. 1) seen one phase at a time: ``+10`` for each object
@@ -162,7 +183,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     ```python
     gym.make("FetchCarryPush-v0", scenario=None, family=None, resolution=0.05, capacity=None,
-             physics=None, render_mode=None, camera="perspective", width=320, height=240)
+             physics=None, render_mode=None, camera="perspective", width=320, height=240,
+             obs_mode="state", topdown_size=64, topdown_frame="world", topdown_span=None,
+             camera_size=128, renderer="tiny")
     ```
 
     - ``scenario``: a :class:`~fetchcarry_env.scenario.Scenario`, a scenario mapping or
@@ -185,6 +208,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
       ``metadata["render_modes"]`` lists only ``"rgb_array"``.
     - ``camera``: ``"perspective"`` or ``"top_down"`` for ``rgb_array`` frames of
       ``width`` x ``height`` pixels.
+    - ``obs_mode``: ``"state"``, ``"topdown"`` or ``"rgbd"`` with its image options (see
+      Observation Space); an image option without an image mode raises ``TypeError``.
 
     The unwrapped env exposes ``scenario``, ``state`` (a
     :class:`~fetchcarry_env.observation.WorldState`), ``lattice``, ``capacity`` and
@@ -213,8 +238,14 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         camera: str = "perspective",
         width: int = DEFAULT_IMAGE_SIZE[0],
         height: int = DEFAULT_IMAGE_SIZE[1],
+        obs_mode: str = "state",
+        **image_options: Any,
     ) -> None:
         self._check_arguments(scenario, family, render_mode, camera, width, height)
+        if obs_mode not in OBS_MODES:
+            raise ValueError(f"obs_mode must be one of {', '.join(OBS_MODES)}, got {obs_mode!r}")
+        if obs_mode == "state" and image_options:
+            raise TypeError(f"image options {sorted(image_options)} need obs_mode 'topdown' or 'rgbd'")
         # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
         modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
         self.metadata = {**type(self).metadata, "render_modes": modes}
@@ -240,6 +271,11 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.image_size = (width, height)
         self.action_space = spaces.MultiDiscrete(action_nvec(self.lattice, self.capacity.postures))
         self.observation_space = observation_space(self.capacity)
+        self.obs_mode = obs_mode
+        self._images: ImageObservations | None = None  # None: the state observation alone
+        if obs_mode != "state":
+            self._images = ImageObservations(obs_mode, extent, self.capacity, image_options)
+            self.observation_space = self._images.space(self.observation_space)
         self._sim = Simulation(gui=render_mode == "human")  # connects to PyBullet on first use
         self._sim_in_sync = False  # False until reset, and after close() or a copy: rebuilt on next use
         self._snapshot: Snapshot | None = None  # the world's exact poses to rebuild from (copies, close)
@@ -308,6 +344,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._travel_cost = 0.0
         self._collisions = 0
         observation = encode(scenario, self._state, self.capacity)
+        if self._images is not None:
+            self._images.add(observation, scenario, self._state, self._sim)
         self._achieved = observation["achieved_goal"]
         info = self._info(observation, travel=0.0, penalty=0.0, invalid=None, contact=None)
         if self.render_mode == "human":
@@ -336,6 +374,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             self._travel_cost += travel
             self._collisions += contact is not None
         observation = encode(scenario, self._state, self.capacity)
+        if self._images is not None:
+            self._images.add(observation, scenario, self._state, self._sim)
         info = self._info(observation, travel=travel, penalty=penalty, invalid=invalid, contact=contact)
         if push_report is not None:
             info["push"] = push_report

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.observations import OBS_MODES, image_options
 from training.envs import INTERFACES
 from training.errors import BenchmarkError
 from training.policies.protocol import Policy
@@ -151,7 +152,20 @@ def _run_spec(path: Path) -> PolicySpec:
     if interface not in INTERFACES:
         raise BenchmarkError(f"{path / 'config.json'}: unknown interface {interface!r}; known: {', '.join(INTERFACES)}")
     options = {"capacity": config["capacity"]} if isinstance(config.get("capacity"), dict) else {}
+    options.update(_image_options(config))
     return PolicySpec(path.name or str(path), interface, run=str(path.resolve()), env_options=options)
+
+
+def _image_options(config: dict[str, Any]) -> dict[str, Any]:
+    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size)."""
+    network = config.get("config")
+    obs_mode = network.get("obs_mode", "state") if isinstance(network, dict) else "state"
+    if obs_mode == "state" or obs_mode not in OBS_MODES or not isinstance(config.get("features"), int):
+        return {}  # an unknown mode is refused when the run folder loads
+    try:
+        return image_options(obs_mode, config["features"])
+    except ValueError:
+        return {}
 
 
 def resolve_all(names: list[str]) -> list[PolicySpec]:

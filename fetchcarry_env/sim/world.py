@@ -173,6 +173,15 @@ class Simulation:
         """The exact state of this world between phases (see :class:`Snapshot`)."""
         return Snapshot(dict(self._poses), self._robot_body.hand)
 
+    def rebuild(self, state: WorldState) -> None:
+        """Build the bodies again exactly where they are (``state``: the world's state now).
+
+        A renderer plugin loaded after the bodies were made (PyBullet's EGL) sees only bodies made after it.
+        """
+        snapshot = self.snapshot()
+        self._layout_key = None
+        self.reset(self._scenario, state, snapshot)
+
     @property
     def poses(self) -> dict[str, Pose]:
         """The recorded pose of every item that is not held."""

@@ -19,7 +19,7 @@ from training.data.sources import EpisodeSource
 from training.speed import anytime, generate, planner, push
 from training.speed import env as env_speed
 
-TINY_ENV = ["--episodes", "2", "--resets", "4", "--random-steps", "20", "--no-progress"]
+TINY_ENV = ["--episodes", "2", "--resets", "4", "--random-steps", "20", "--obs-episodes", "1", "--no-progress"]
 
 
 # ---------------------------------------------------------------------- bench env
@@ -36,6 +36,12 @@ def test_env_benchmark_prints_every_figure_as_json_on_a_clean_stdout(capfd):
         "place step",
         "push step (0.15 m stroke), time / its physics steps' time",
         "random masked policy",
+        "plan step, obs_mode state",
+        "obs_mode topdown (64): added to a step",
+        "obs_mode rgbd (128, tiny): added to a step",
+        "one observation, obs_mode state",
+        "one observation, obs_mode topdown",
+        "one observation, obs_mode rgbd",
         "peak memory of the process (resident)",
     }
     assert all(f["value"] > 0 for f in figures.values())
@@ -50,6 +56,8 @@ def test_env_benchmark_prints_every_figure_as_json_on_a_clean_stdout(capfd):
     ):
         assert figures[name]["goal"] == goal and isinstance(figures[name]["met"], bool)
     assert report["random_policy"]["episodes"] >= 1
+    assert figures["one observation, obs_mode topdown"]["value"] == pytest.approx(0.95 + 7 * 64 * 64 / 1024, abs=0.01)
+    assert figures["obs_mode topdown (64): added to a step"]["goal"] == "0.3 ms or less"
 
 
 def test_env_table_names_goals_and_floors(capsys):

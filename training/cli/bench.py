@@ -120,6 +120,7 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
         ("--episodes", env_speed.DEFAULT_EPISODES, "episodes of the plan"),
         ("--resets", env_speed.DEFAULT_RESETS, "resets of the same layout"),
         ("--random-steps", env_speed.DEFAULT_RANDOM_STEPS, "steps of the random masked policy"),
+        ("--obs-episodes", env_speed.DEFAULT_OBS_EPISODES, "episodes of the plan in each obs_mode"),
     )
     for flag, default, meaning in counts:
         parser.add_argument(
@@ -134,7 +135,14 @@ def _register_env(bench: argparse._SubParsersAction) -> None:
 def run_env(args: argparse.Namespace, out: TextIO | None = None) -> int:
     """Run the env benchmark and print it on ``out`` (stdout); exit 1 only with ``--strict`` and a missed goal."""
     out = out if out is not None else sys.stdout
-    report = env_speed.measure(args.episodes, args.resets, args.random_steps, args.seed, progress=not args.no_progress)
+    report = env_speed.measure(
+        args.episodes,
+        args.resets,
+        args.random_steps,
+        args.seed,
+        progress=not args.no_progress,
+        obs_episodes=args.obs_episodes,
+    )
     print(json.dumps(report, indent=2) if args.json else format_env_report(report), file=out)
     missed = [f["name"] for f in report["figures"] if f["met"] is False]
     return 1 if args.strict and missed else 0

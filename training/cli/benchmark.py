@@ -17,6 +17,7 @@ from pathlib import Path
 
 from training.cli import references
 from training.cli.arguments import add_worker_options, positive_int
+from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 from training.evaluation.runner import RESULTS, SUMMARY, run_benchmark
@@ -65,6 +66,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "changed runs again); its records of other policies and splits stay (one folder can grow a policy at a time)",
     )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
+    add_obs_mode_argument(parser, "the observation the policies get (a run folder of an image network gets its own)")
     parser.set_defaults(handler=run_benchmark_command)
     references.register(commands)
 
@@ -98,6 +100,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             ray_address=args.ray_address,
             progress=not args.no_progress,
             resume=args.resume,
+            obs_mode=args.obs_mode,
         )
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command

@@ -1,4 +1,4 @@
-"""The dataset commands: ``fetchcarry generate`` and ``fetchcarry dataset info|replay``.
+"""The dataset commands: ``fetchcarry generate`` and ``fetchcarry dataset info|replay|render``.
 
 Exit statuses: 0 success; 1 a replay that did not reproduce; 2 bad input (raised as
 ``UsageError`` and friends, turned into one short message by :func:`training.cli.main`);
@@ -10,10 +10,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import asdict
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import add_worker_options, positive_int, whole_number
-from training.cli.episodes import add_source_arguments, episode_source
+from training.cli.episodes import add_obs_mode_argument, add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.options import Command
 from training.cli.text import echo
@@ -25,6 +26,7 @@ from training.data.generate import (
     StagingMismatchError,
     generate,
 )
+from training.data.render import render_dataset
 from training.data.staging import Staging, StagingError
 from training.evaluation.protocol import refuse_split_scenario
 
@@ -171,6 +173,53 @@ def _register_dataset(commands: argparse._SubParsersAction) -> None:
     replay.add_argument("--episode", type=whole_number, required=True, metavar="K", help="episode index (0-based)")
     replay.add_argument("--json", action="store_true", help="print the report as one JSON object")
     replay.set_defaults(handler=run_dataset_replay)
+    _register_render(actions)
+
+
+def _register_render(actions: argparse._SubParsersAction) -> None:
+    render = actions.add_parser(
+        "render",
+        help="replay a dataset into another observation mode (topdown maps, RGB-D images)",
+        description="Replay every episode of dataset ID in an env of the same id and options in --obs-mode, from "
+        "its seed and recorded actions, check that the state and rewards are the recorded ones exactly, and write "
+        "the new dataset NEW_ID: the same actions, rewards, infos and episode metadata, the new observations.",
+        epilog="Exit status: 0 rendered, 2 bad input (an unknown or broken dataset, an episode that does not replay "
+        "exactly, NEW_ID exists without --overwrite), 130 interrupted (nothing is written).",
+    )
+    render.add_argument("dataset_id", metavar="ID")
+    add_obs_mode_argument(render, "the observation of the new dataset")
+    render.add_argument("--out", required=True, metavar="NEW_ID", help="the new dataset's Minari id")
+    render.add_argument("--topdown-size", type=positive_int, metavar="PX", help="topdown map pixels a side (64)")
+    render.add_argument("--topdown-frame", choices=("world", "robot"), help="topdown map centred on (world)")
+    render.add_argument("--camera-size", type=positive_int, metavar="PX", help="rgbd images' pixels a side (128)")
+    render.add_argument("--overwrite", action="store_true", help="replace an existing NEW_ID")
+    render.add_argument("--no-progress", action="store_true", help="no progress bar")
+    render.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    render.set_defaults(handler=run_dataset_render)
+
+
+def run_dataset_render(args: argparse.Namespace) -> int:
+    """``fetchcarry dataset render``: 0 rendered (bad input raises)."""
+    names = ("topdown_size", "topdown_frame", "camera_size")
+    options = {k: getattr(args, k) for k in names if getattr(args, k) is not None}
+    mode_of = {"topdown_size": "topdown", "topdown_frame": "topdown", "camera_size": "rgbd"}
+    wrong = [k for k in options if mode_of[k] != args.obs_mode]
+    if wrong:
+        flags = ", ".join("--" + k.replace("_", "-") for k in wrong)
+        raise UsageError(f"{flags} do(es) not apply to --obs-mode {args.obs_mode}")
+    report = render_dataset(
+        args.dataset_id, args.obs_mode, args.out, image_options=options, overwrite=args.overwrite,
+        progress=not args.no_progress,
+    )  # fmt: skip
+    if args.json:
+        print(json.dumps(asdict(report), indent=2))
+    else:
+        echo(
+            f"dataset {report.dataset_id}: {report.episodes} episodes ({report.steps} steps) of {report.source_id} "
+            f"rendered into obs_mode {report.obs_mode} in {report.wall_s:.1f} s, {report.size_mb:.1f} MB\n"
+            f"written to {dataset_path(report.dataset_id)}"
+        )
+    return 0
 
 
 def run_dataset_info(args: argparse.Namespace) -> int:

@@ -16,6 +16,7 @@ from typing import Any
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
+from fetchcarry_env.observations import OBS_MODES
 from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
@@ -30,6 +31,7 @@ from training.evaluation.expert import (
     results_table,
 )
 from training.pictures.files import render_size
+from training.resolve import resolve
 from training.rollout import run_episode
 
 DEFAULT_DEMO_PICTURE = "episode.png"
@@ -83,6 +85,18 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
         "clutter 8, tables 6, obstacles 12, postures 4); default: the family's, which holds every scenario it "
         "draws, or for --scenario the default grown to hold it",
     )
+    add_obs_mode_argument(parser)
+
+
+def add_obs_mode_argument(parser: argparse.ArgumentParser, meaning: str = "the env's observation") -> None:
+    """``--obs-mode``: ``state`` (default), ``topdown`` or ``rgbd`` (docs/observations.md)."""
+    parser.add_argument(
+        "--obs-mode",
+        choices=OBS_MODES,
+        default="state",
+        help=f"{meaning}: state (the geometry vector, default), topdown (plus a semantic map drawn from the "
+        "geometry) or rgbd (plus head and overhead RGB-D camera images)",
+    )
 
 
 def episode_source(args: argparse.Namespace, policy: str | None = None) -> EpisodeSource:
@@ -99,6 +113,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
         time_limit=args.time_limit,
         interface=getattr(args, "interface", "env"),
         capacity=getattr(args, "capacity", None),
+        obs_mode=getattr(args, "obs_mode", "state"),
     )
 
 
@@ -162,14 +177,15 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
 
 def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
     """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
-    if run is not None:
-        source = replace(source, interface="phases")
-
+    options: dict[str, Any] = {}
+    if run is not None:  # the run's network sees its own obs_mode
+        options = dict(_run_spec_options(run))
+        source = replace(source, interface="phases", obs_mode=options.pop("obs_mode", source.obs_mode))
     if picture is None:
-        env = source.build_env()
+        env = source.build_env(**options)
     else:
         size = render_size(picture)
-        env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1])
+        env = source.build_env(render_mode="rgb_array", width=size[0], height=size[1], **options)
     try:
         policy = source.build_policy(env) if run is None else _load_run(run, env)
         record = run_episode(env, policy, source.seed, render=picture is not None)
@@ -180,6 +196,13 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
 
         save_episode_picture(record, picture)
     return record
+
+
+def _run_spec_options(run: Path) -> dict[str, Any]:
+    """The image options of run folder ``run``'s env (``obs_mode`` and the image size; none for the state)."""
+    options = dict(resolve(str(run)).env_options)
+    options.pop("capacity", None)
+    return options
 
 
 def _load_run(run: Path, env: Any) -> Any:

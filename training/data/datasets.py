@@ -85,6 +85,12 @@ TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.
     "render_mode": (type(None),),  # gym.make records it; replay renders nothing
     "reward": (str,),  # FetchCarryPushPhases-v0: "paper" or "learning" (the env checks the name)
     "gamma": (int, float),  # FetchCarryPushPhases-v0: the learning reward's discount
+    "obs_mode": (str,),  # "state", "topdown" or "rgbd" (the env checks the name)
+    "topdown_size": (int,),  # the image options of obs_mode (the env checks their ranges)
+    "topdown_frame": (str,),
+    "topdown_span": (int, float),
+    "camera_size": (int,),
+    "renderer": (str,),
 }
 
 
@@ -650,4 +656,6 @@ def _is_ours(entry_point: Any) -> bool:
 
 
 def _observation_error(observation: dict[str, np.ndarray], recorded: dict[str, np.ndarray], index: int) -> float:
-    return max(float(np.max(np.abs(np.asarray(observation[k]) - recorded[k][index]))) for k in recorded)
+    return max(
+        float(np.max(np.abs(np.asarray(observation[k], dtype=np.float64) - recorded[k][index]))) for k in recorded
+    )  # float64: an image's uint8 difference would wrap around

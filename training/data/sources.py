@@ -14,6 +14,7 @@ import gymnasium as gym
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observations import OBS_MODES
 from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
 from training.envs import INTERFACES as ENV_IDS
 from training.envs import MAX_SEED, make_env
@@ -34,6 +35,8 @@ class EpisodeSource:
     ``interface`` is the action interface episodes are recorded in: ``env`` (the env's
     own ``MultiDiscrete`` actions, ``env_id``) or ``phases`` (``FetchCarryPushPhases-v0``'s
     candidate indices, with each state's candidate mask; see :mod:`training.policies.phase_expert`).
+    ``obs_mode`` is the env's observation mode (``state``, ``topdown``, ``rgbd``): what the
+    episodes' observations hold besides the state.
     """
 
     family: str | None = None  # a scenario family name, or
@@ -44,8 +47,11 @@ class EpisodeSource:
     env_id: str = ENV_ID
     interface: str = "env"
     capacity: str | None = None  # the observation's slots, "objects=8,clutter=12"; None: the env's default
+    obs_mode: str = "state"
 
     def __post_init__(self) -> None:
+        if self.obs_mode not in OBS_MODES:
+            raise UsageError(f"unknown observation mode {self.obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
         if self.interface not in INTERFACES:
             raise UsageError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
         if (self.family is None) == (self.scenario is None):
@@ -64,8 +70,12 @@ class EpisodeSource:
     @property
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of ``gym.make`` (JSON-serialisable, so Minari can store the env spec)."""
-        kwargs = {"family": self.family} if self.family is not None else {"scenario": self.scenario}
-        return kwargs if self.capacity is None else {**kwargs, "capacity": self.capacity}
+        kwargs: dict[str, Any] = {"family": self.family} if self.family is not None else {"scenario": self.scenario}
+        if self.capacity is not None:
+            kwargs["capacity"] = self.capacity
+        if self.obs_mode != "state":  # a state dataset's env spec stays as it was before observation modes
+            kwargs["obs_mode"] = self.obs_mode
+        return kwargs
 
     @property
     def gym_id(self) -> str:
@@ -111,6 +121,8 @@ class GenerationConfig:
         manifest = {"dataset_id": self.dataset_id, **asdict(self.source)}
         if manifest["capacity"] is None:  # datasets made before --capacity existed keep their manifest
             del manifest["capacity"]
+        if manifest["obs_mode"] == "state":  # datasets made before observation modes keep their manifest
+            del manifest["obs_mode"]
         if manifest["interface"] == "env":  # datasets made before the interface existed keep their manifest
             del manifest["interface"]
         else:  # phases: how an expert move no candidate expresses is recorded (truncated datasets did not say)

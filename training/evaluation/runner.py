@@ -33,11 +33,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observations import OBS_MODES
 from training.data.generate import BACKENDS, progress_bar
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
@@ -79,6 +80,7 @@ def run_benchmark(
     ray_address: str | None = None,
     progress: bool = False,
     resume: bool = False,
+    obs_mode: str = "state",
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
 
@@ -99,7 +101,7 @@ def run_benchmark(
         raise BenchmarkError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
     if episodes is not None and episodes < 1:
         raise BenchmarkError(f"the number of episodes must be at least 1, got {episodes}")
-    specs = with_references(policies)
+    specs = with_observations(with_references(policies), obs_mode)
     if split is not None:
         names = [split] if isinstance(split, str) else list(split)
         if not names:
@@ -187,6 +189,16 @@ def with_references(policies: list[str]) -> list[PolicySpec]:
     references = [resolve(name) for name in (EXPERT, SCORE_ZERO) if name not in names]
     ordered = references + specs
     return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != SCORE_ZERO))  # stable: the rest keep their order
+
+
+def with_observations(specs: list[PolicySpec], obs_mode: str) -> list[PolicySpec]:
+    """``specs`` acting in envs of ``obs_mode``, but for run folders of an image network (they keep their own mode)."""
+    if obs_mode not in OBS_MODES:
+        raise BenchmarkError(f"unknown observation mode {obs_mode!r}; known: {', '.join(OBS_MODES)}")
+    if obs_mode == "state":
+        return specs
+    return [s if "obs_mode" in s.env_options else replace(s, env_options={**s.env_options, "obs_mode": obs_mode})
+            for s in specs]  # fmt: skip
 
 
 def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:

@@ -32,7 +32,7 @@ from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
 from fetchcarry_env.phases import PhaseLayout
 from training.data.expert_labels import Demonstrations, record_demonstrations  # noqa: F401  (re-exported)
 from training.learners import runs
-from training.learners.encoders import CandidateScorer, build_network
+from training.learners.encoders import CandidateScorer, build_network, network_input
 from training.learners.options import BCConfig
 from training.policies.protocol import MaskedPolicy
 
@@ -114,7 +114,8 @@ class BCPolicy(MaskedPolicy):
 
     def act(self, observation: Any, action_masks: np.ndarray | None, episode_start: Any, deterministic: bool) -> Any:
         """The best-scoring allowed candidate (sampled from the scores' softmax unless ``deterministic``)."""
-        flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation, np.float32)
+        flat = network_input(observation, self.config.obs_mode) if isinstance(observation, dict) else observation
+        flat = np.asarray(flat, np.float32)
         batched = flat.ndim == 2
         masks = self.env_masks() if action_masks is None else np.asarray(action_masks, dtype=bool)
         masks = masks.reshape(len(flat) if batched else 1, -1)

@@ -16,10 +16,18 @@
     object token its pick and place poses, a clutter token its pushes and approach
     poses, a table or obstacle token its waypoints; so the weights do not depend on
     how many slots there are, and a network built for a larger capacity loads them.
+``cnn``
+    Pixels (``obs_mode`` ``topdown`` or ``rgbd``; :mod:`fetchcarry_env.observations`):
+    the images, flattened into the network's input row by :func:`network_input` (uint8
+    values, the two RGB-D cameras stacked as 8 channels), scaled to [0, 1], with two
+    coordinate channels appended (CoordConv), through stride-2 convolutions down to at
+    most 16 x 16 cells and one 3 x 3 convolution, then two layers to the scores
+    (:class:`ImageScorer`).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -29,6 +37,8 @@ from torch import nn
 
 from fetchcarry_env.geometry import HEADINGS, heading_vector
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
+from fetchcarry_env.observations import IMAGE_KEYS
+from fetchcarry_env.observations.topdown import CHANNELS
 from fetchcarry_env.phases import PhaseLayout
 
 COORD_SCALE = 5.0  # metres: coordinates are divided by this in the set encoder (the families' floor is 7 m)
@@ -44,8 +54,49 @@ RELATIVE_COLUMNS: dict[str, tuple[int, ...]] = {
 """Columns of each slot (:data:`FIELDS`) that are x, y pairs: the set encoder's relative features subtract the base."""
 
 
+IMAGE_CHANNELS = {"topdown": len(CHANNELS), "rgbd": 2 * 4}  # channels of the cnn's input per obs_mode
+CNN_WIDTHS = (32, 64, 64)  # channels of the cnn's stride-2 convolutions (the last also of its 3 x 3 one)
+CNN_CELLS = 16  # the stride-2 convolutions go on until the feature map is at most this many cells a side
+
+
+def network_input(observation: dict[str, np.ndarray], obs_mode: str) -> np.ndarray:
+    """What a network of ``obs_mode`` reads: the state vector, or the images flattened (one row per observation).
+
+    ``observation`` is one observation (arrays as the env gives them) or a batch (a leading
+    axis on every array). ``state``: ``observation["observation"]`` as float32; ``topdown``:
+    the map, ``(7 * S * S,)`` uint8; ``rgbd``: the head and overhead images stacked as
+    8 channels, ``(8 * C * C,)`` uint8. ``KeyError`` names the key a missing image needs.
+    """
+    if obs_mode == "state":
+        return np.asarray(observation["observation"], dtype=np.float32)
+    keys = IMAGE_KEYS[obs_mode]
+    missing = [key for key in keys if key not in observation]
+    if missing:
+        raise KeyError(f"this network sees obs_mode {obs_mode!r}: the observation lacks {', '.join(missing)}")
+    images = [np.asarray(observation[key], dtype=np.uint8) for key in keys]
+    batched = images[0].ndim == 4
+    image = np.concatenate(images, axis=1 if batched else 0)
+    return image.reshape(len(image), -1) if batched else image.reshape(-1)
+
+
+def image_shape(obs_mode: str, features: int) -> tuple[int, int, int]:
+    """``(channels, side, side)`` of the images of ``obs_mode`` whose flattened row has ``features`` values.
+
+    ``ValueError`` unless they make square images of 8 to 1024 pixels a side.
+    """
+    channels = IMAGE_CHANNELS.get(obs_mode)
+    if channels is None:
+        raise ValueError(f"the cnn encoder reads obs_mode topdown or rgbd, not {obs_mode!r}")
+    side = math.isqrt(features // channels)
+    if channels * side * side != features or not 8 <= side <= 1024:
+        raise ValueError(f"{features} input values are not {channels} square images of 8 to 1024 pixels a side")
+    return channels, side, side
+
+
 def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:
     """The network ``config.encoder`` names, for ``candidates`` scores; ``observations`` set the MLP's scaling."""
+    if config.encoder == "cnn":
+        return ImageScorer(image_shape(config.obs_mode, observations.shape[1]), candidates, config.hidden)
     if config.encoder == "mlp":
         features = RelativeFeatures(capacity) if getattr(config, "relative", False) else None
         network = FlatMLP(observations, candidates, config.hidden, features)
@@ -59,6 +110,51 @@ def build_network(config: Any, capacity: Capacity, candidates: int, observations
     if layout.size != candidates:
         raise ValueError(f"the set encoder needs the default candidate layout ({layout.size}), got {candidates}")
     return SetScorer(capacity, layout, width=min(config.hidden, 128), relative=getattr(config, "relative", False))
+
+
+class ImageScorer(nn.Module):
+    """Images (a flattened uint8 row, :func:`network_input`) -> a small CNN -> two layers -> one score per candidate.
+
+    The pixels are scaled to [0, 1] and two channels of x and y (from -1 to 1) are
+    appended, so that the convolutions know where a thing is (the candidates are
+    numbered by the things' slots and poses, and an object's slot is its pixel value).
+    """
+
+    def __init__(self, shape: tuple[int, int, int], candidates: int, hidden: int) -> None:
+        super().__init__()
+        self.shape = shape
+        channels, side, _ = shape
+        y, x = torch.meshgrid(torch.linspace(-1, 1, side), torch.linspace(-1, 1, side), indexing="ij")
+        self.register_buffer("coordinates", torch.stack([x, y])[None])
+        layers: list[nn.Module] = []
+        width, cells, k = channels + 2, side, 0
+        while cells > CNN_CELLS or k == 0:
+            out = CNN_WIDTHS[min(k, len(CNN_WIDTHS) - 1)]
+            layers += [nn.Conv2d(width, out, kernel_size=4, stride=2), nn.ReLU()]
+            width, cells, k = out, (cells - 4) // 2 + 1, k + 1
+        layers += [nn.Conv2d(width, CNN_WIDTHS[-1], kernel_size=3), nn.ReLU(), nn.Flatten()]
+        cells -= 2
+        self.convolutions = nn.Sequential(*layers)
+        self.head = nn.Sequential(
+            nn.Linear(CNN_WIDTHS[-1] * cells * cells, hidden),
+            nn.ReLU(),
+            nn.Linear(hidden, candidates),
+        )
+
+    def features(self, flat: torch.Tensor) -> torch.Tensor:
+        images = flat.reshape(len(flat), *self.shape).float() / 255.0
+        coordinates = self.coordinates.expand(len(flat), -1, -1, -1)
+        return self.head[:-1](self.convolutions(torch.cat([images, coordinates], dim=1)))
+
+    def forward(self, flat: torch.Tensor) -> torch.Tensor:
+        return self.head[-1](self.features(flat))
+
+    def candidate_scores(self, flat: torch.Tensor, candidates: torch.Tensor) -> torch.Tensor:
+        """``forward(flat)[:, candidates]``, computing only those rows of the last layer."""
+        last = self.head[-1]
+        return F.linear(
+            self.features(flat), last.weight.index_select(0, candidates), last.bias.index_select(0, candidates)
+        )
 
 
 class RelativeFeatures(nn.Module):

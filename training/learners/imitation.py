@@ -31,15 +31,19 @@ from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.phases import PhaseLayout
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.learners.encoders import Ensemble, build_network
+from training.learners.encoders import Ensemble, build_network, network_input
 from training.policies.phase_expert import MASK_INFO
 
 
-def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) -> tuple[Demonstrations, Capacity]:
+def demonstrations_from_dataset(
+    dataset_id: str, episodes: int | None = None, obs_mode: str = "state"
+) -> tuple[Demonstrations, Capacity]:
     """The labelled states of a phases dataset (its first ``episodes``, or all) and the capacity of its env.
 
-    Raises :class:`InputError` (bad input) when the dataset was not
-    recorded in the candidate-phase interface.
+    Each state is what a network of ``obs_mode`` reads (:func:`~training.learners.encoders.network_input`:
+    the state vector as float32, or the images flattened, uint8). Raises :class:`InputError`
+    (bad input) when the dataset was not recorded in the candidate-phase interface, or
+    holds no images of ``obs_mode``.
     """
     from training.data.datasets import load, make_recorded_env
 
@@ -66,7 +70,14 @@ def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) ->
         mask = np.asarray(episode.infos[MASK_INFO], dtype=bool)[:-1]
         actions = np.asarray(episode.actions, dtype=np.int64).reshape(-1)
         allowed = mask[np.arange(len(actions)), actions]
-        observations.append(np.asarray(episode.observations["observation"], dtype=np.float32)[:-1][allowed])
+        try:
+            states = network_input(episode.observations, obs_mode)[:-1][allowed]
+        except KeyError:
+            raise InputError(
+                f"dataset {dataset_id!r} holds no {obs_mode} observations: make a copy that does with "
+                f"fetchcarry dataset render {dataset_id} --obs-mode {obs_mode} --out NEW_ID"
+            ) from None
+        observations.append(states)
         masks.append(mask[allowed])
         labels.append(actions[allowed])
         episodes += 1
@@ -74,7 +85,7 @@ def demonstrations_from_dataset(dataset_id: str, episodes: int | None = None) ->
         dropped += int((~allowed).sum())
         successes += bool(episode.terminations[-1])
     demonstrations = Demonstrations(
-        np.concatenate(observations).astype(np.float32) if observations else np.zeros((0, 1), np.float32),
+        np.concatenate(observations) if observations else np.zeros((0, 1), np.float32),
         np.concatenate(masks) if masks else np.zeros((0, size), bool),
         np.concatenate(labels) if labels else np.zeros(0, np.int64),
         {"dataset_id": dataset_id, "episodes": episodes, "steps": steps, "labelled": steps - dropped,
@@ -98,7 +109,7 @@ def train_bc_run(
     The ``train`` of the ``bc`` learner (:mod:`training.learners.registry`: the fields of
     :class:`~training.learners.options.BCRun` as keyword arguments).
     """
-    demonstrations, capacity = demonstrations_from_dataset(dataset, episodes)
+    demonstrations, capacity = demonstrations_from_dataset(dataset, episodes, config.obs_mode)
     options = {"dataset": dataset, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
     config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)

@@ -100,7 +100,11 @@ def family_names(text: str) -> tuple[str, ...]:
 class BCConfig:
     """What a BC run trains (every field is saved in the run folder's ``config.json``)."""
 
-    encoder: str = option("mlp", "flat MLP or object-centric set encoder (default {default})", choices=("mlp", "set"))
+    encoder: str = option(
+        "mlp",
+        "flat MLP, object-centric set encoder, or a small CNN over the images of --obs-mode (default {default})",
+        choices=("mlp", "set", "cnn"),
+    )
     hidden: int = option(256, HIDDEN_HELP, positive=True)  # units per hidden layer (mlp) or token width (set)
     epochs: int = option(60, EPOCHS_HELP, positive=True)
     batch_size: int = option(128, "minibatch size (default {default})", positive=True)
@@ -112,10 +116,23 @@ class BCConfig:
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
     avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
     push_after_approach: bool = False  # acting: no approach right after an approach (the expert's data never has one)
+    obs_mode: str = option(
+        "state",
+        "what the network sees: state (the observation vector: mlp, set) or the images of topdown or rgbd "
+        "(cnn; the dataset must hold them: fetchcarry dataset render) (default {default})",
+        choices=("state", "topdown", "rgbd"),
+    )
 
     def __post_init__(self) -> None:
-        if self.encoder not in ("mlp", "set"):
-            raise InputError(f"encoder must be 'mlp' or 'set', got {self.encoder!r}")
+        if self.encoder not in ("mlp", "set", "cnn"):
+            raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {self.encoder!r}")
+        if (self.encoder == "cnn") != (self.obs_mode != "state"):
+            raise InputError(
+                f"encoder {self.encoder!r} with obs_mode {self.obs_mode!r}: the cnn encoder reads the images of "
+                "obs_mode topdown or rgbd, the mlp and set encoders the state"
+            )
+        if self.encoder == "cnn" and (self.avoid_returns or self.push_scores):  # (relative: unused by the cnn)
+            raise InputError("avoid_returns and push_scores read the state vector: not with the cnn encoder")
         if min(self.hidden, self.epochs, self.batch_size) < 1 or self.learning_rate <= 0:
             raise InputError("hidden, epochs and batch_size must be positive, learning_rate > 0")
 
@@ -211,6 +228,8 @@ class DaggerRun:
 
     def __post_init__(self) -> None:
         check_family(self.family)
+        if self.config.obs_mode != "state":
+            raise InputError("dagger labels the state only (obs_mode state); train bc learns from topdown or rgbd")
 
 
 @dataclass(frozen=True)

@@ -57,6 +57,7 @@ from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.scenario import MAX_COUNTS
 from training.learners import registry
+from training.learners.encoders import image_shape
 from training.learners.options import BCConfig
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
@@ -135,10 +136,17 @@ def read_config(path: str | Path) -> dict[str, Any]:
     if saved["candidates"] > MAX_CANDIDATES:
         raise RunFolderError(f"{file}: candidates {saved['candidates']:,} is more than the {MAX_CANDIDATES:,} "
                              "a run's network may score")  # fmt: skip
-    size = observation_size(Capacity(**saved["capacity"]))
-    if saved["features"] != size:
-        raise RunFolderError(f"{file}: features must be the observation's length for its capacity ({size}), "
-                             f"got {saved['features']:,}")  # fmt: skip
+    obs_mode = saved["config"].get("obs_mode", "state")
+    if obs_mode == "state":
+        size = observation_size(Capacity(**saved["capacity"]))
+        if saved["features"] != size:
+            raise RunFolderError(f"{file}: features must be the observation's length for its capacity ({size}), "
+                                 f"got {saved['features']:,}")  # fmt: skip
+    else:
+        try:
+            image_shape(obs_mode, saved["features"])
+        except ValueError as error:
+            raise RunFolderError(f"{file}: features: {error}") from None
     weights = sum(network_parameters(saved, config) for config in configs.values())
     if weights > MAX_PARAMETERS:
         raise RunFolderError(f"{file}: its networks would hold {weights:,} weights, more than {MAX_PARAMETERS:,}")
@@ -178,6 +186,9 @@ def network_parameters(saved: dict[str, Any], config: dict[str, Any]) -> int:
     scores of its candidates grow with the run (counted once per candidate and unit).
     """
     hidden, candidates = config.get("hidden", BCConfig().hidden), saved["candidates"]
+    if config.get("encoder") == "cnn":  # the convolutions (at most 64 x 66 x 16 weights each), then the head
+        cells = image_shape(config.get("obs_mode", "topdown"), saved["features"])[1] // 2
+        return 8 * 64 * 66 * 16 + 64 * min(cells, 16) ** 2 * hidden + (hidden + 1) * candidates
     if config.get("encoder", "mlp") != "mlp":
         width = min(hidden, 128)
         return 64 * width * width + candidates * width

@@ -6,7 +6,9 @@ push, a move, a pick, a move, a place), episode after episode, and times every r
 step. It returns, with the project's goal for each: reset of an unchanged layout, move,
 pick and place steps per second, a push step as a multiple of the physics steps it
 simulates, and a random masked policy's steps per second (``gym.make("FetchCarryPush-v0")``:
-random scenarios of the default family, resets included), plus the peak memory. Next to
+random scenarios of the default family, resets included), the plan's step in each
+``obs_mode`` (what ``topdown`` and ``rgbd`` add to the state step, the modes taking turns
+in one run) with the bytes of one observation, plus the peak memory. Next to
 each figure it gives the cost of the PyBullet calls that step cannot avoid (posing the
 bodies it moves, the physics steps it simulates), measured on the same world.
 
@@ -277,6 +279,109 @@ def _push_figure(times: StepTimes) -> Figure:
     )
 
 
+# ---------------------------------------------------------------------- observation modes
+OBS_MODE_OPTIONS: dict[str, dict[str, Any]] = {
+    "state": {},
+    "topdown": {"topdown_size": 64},
+    "rgbd": {"camera_size": 128, "renderer": "tiny"},
+}
+OBS_MODE_GOALS_MS = {"topdown": 0.3, "rgbd": 10.0}  # the most each mode may add to the state step
+DEFAULT_OBS_EPISODES = 20  # episodes of the plan per observation mode
+
+
+@contextmanager
+def image_timer(unwrapped: Any) -> Iterator[list[float]]:
+    """Seconds of each drawing of the images (``ImageObservations.add``) of ``unwrapped`` while the block runs."""
+    images = unwrapped._images
+    spent: list[float] = []
+    if images is None:
+        yield spent
+        return
+    add = images.add
+
+    def timed_add(*args: Any) -> None:
+        started = time.perf_counter()
+        add(*args)
+        spent.append(time.perf_counter() - started)
+
+    images.add = timed_add
+    try:
+        yield spent
+    finally:
+        del images.add
+
+
+def time_obs_modes(episodes: int, progress: bool) -> tuple[dict[str, dict[str, list[float]]], dict[str, list[float]]]:
+    """Seconds of every plan step by kind, and of every drawing of the images, for each ``obs_mode``.
+
+    The modes take turns episode by episode, so that they share the machine's load.
+    """
+    envs = {mode: gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode, **o) for mode, o in OBS_MODE_OPTIONS.items()}
+    times: dict[str, dict[str, list[float]]] = {mode: defaultdict(list) for mode in envs}
+    drawing: dict[str, list[float]] = {mode: [] for mode in envs}
+    for env in envs.values():
+        env.reset(seed=0)
+    actions = _plan_actions(envs["state"].unwrapped)
+    with _progress(episodes * len(envs), "observation modes", progress) as bar:
+        for _ in range(episodes):
+            for mode, env in envs.items():
+                unwrapped = env.unwrapped
+                unwrapped.reset()
+                with image_timer(unwrapped) as drawn:
+                    for kind, vector in actions:
+                        started = time.perf_counter()
+                        unwrapped.step(vector)
+                        times[mode][kind].append(time.perf_counter() - started)
+                drawing[mode] += drawn[1:]  # the reset's drawing is not a step's
+                bar.update()
+    for env in envs.values():
+        env.close()
+    return times, drawing
+
+
+def observation_bytes(mode: str) -> int:
+    """Bytes of one observation of ``mode`` (every key's array)."""
+    env = gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode, **OBS_MODE_OPTIONS[mode])
+    observation, _ = env.reset(seed=0)
+    env.close()
+    return sum(array.nbytes for array in observation.values())
+
+
+def bench_obs_modes(episodes: int, progress: bool) -> list[Figure]:
+    """What each image mode adds to the plan's step (its images' drawing, timed inside the step), in one run.
+
+    Next to it: the mode's step time and its ratio to the state step's (each the mean over
+    the plan's seven steps of the step's median), and the bytes of one observation.
+    """
+    times, drawing = time_obs_modes(episodes, progress)
+    step_s = {mode: statistics.fmean(statistics.median(t) for t in kinds.values()) for mode, kinds in times.items()}
+    state = step_s["state"]
+    figures = [
+        Figure(
+            "plan step, obs_mode state",
+            state * 1e3,
+            "ms",
+            floor=f"mean of the 7 steps' medians ({episodes} episodes)",
+        )
+    ]
+    for mode, goal in OBS_MODE_GOALS_MS.items():
+        added = statistics.median(drawing[mode]) * 1e3
+        options = ", ".join(f"{v}" for v in OBS_MODE_OPTIONS[mode].values())
+        figures.append(
+            Figure(
+                f"obs_mode {mode} ({options}): added to a step",
+                added,
+                "ms",
+                f"{goal} ms or less",
+                added <= goal,
+                f"step {step_s[mode] * 1e3:.2f} ms, {step_s[mode] / state:.2f}x the state step",
+            )
+        )
+    for mode in OBS_MODE_OPTIONS:
+        figures.append(Figure(f"one observation, obs_mode {mode}", observation_bytes(mode) / 1024, "KiB"))
+    return figures
+
+
 # ---------------------------------------------------------------------- a random policy
 def bench_random_policy(steps: int, seed: int, progress: bool) -> tuple[Figure, dict[str, int]]:
     """A random masked policy on ``gym.make("FetchCarryPush-v0")``: steps per second, resets included."""
@@ -310,6 +415,7 @@ def measure(
     random_steps: int = DEFAULT_RANDOM_STEPS,
     seed: int = DEFAULT_SEED,
     progress: bool = True,
+    obs_episodes: int = DEFAULT_OBS_EPISODES,
 ) -> dict[str, Any]:
     """Every figure of the benchmark, with the settings and the machine (a JSON-ready mapping; seconds, MB)."""
     env = gym.make(ENV_ID, scenario=SCENARIO)
@@ -320,6 +426,7 @@ def measure(
     env.close()
     policy, counts = bench_random_policy(random_steps, seed, progress)
     figures.append(policy)
+    figures += bench_obs_modes(obs_episodes, progress)
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux reports kilobytes
     figures.append(Figure("peak memory of the process (resident)", peak_mb, "MB"))
     return {
@@ -329,6 +436,7 @@ def measure(
         "episodes": episodes,
         "resets": resets,
         "random_steps": random_steps,
+        "obs_episodes": obs_episodes,
         "seed": seed,
         "random_policy": counts,
         "wall_s": time.perf_counter() - started,
