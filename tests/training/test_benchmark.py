@@ -43,7 +43,7 @@ KEYS = {
 
 
 def _untimed(records: list[dict]) -> list[dict]:
-    return [{k: v for k, v in r.items() if k not in ("decision_ms", "mask_ms")} for r in records]
+    return [{k: v for k, v in r.items() if k not in ("decision_ms", "mask_ms", "step_ms")} for r in records]
 
 
 @pytest.fixture(scope="module")
@@ -59,12 +59,12 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_expert_and_random_end_to_end(tiny: Path):
     records = read_results(tiny / "results.json")
     assert [(r["policy"], r["source"]) for r in records] == list(
-        itertools.product(["expert", "random"], ["basic", "push"])
+        itertools.product(["expert", "random-phases", "random"], ["basic", "push"])
     )
     for record in records:
         for key, kind in KEYS.items():
             assert isinstance(record[key], kind), key
-        assert record["split"] == "iid-v0"
+        assert record["split"] == "iid-v1:test"
         assert record["seed"] >= benchmark.EVAL_SEED_BASE
         assert 0 <= record["delivered"] <= record["objects"]
         assert record["decision_ms"] > 0
@@ -74,8 +74,9 @@ def test_expert_and_random_end_to_end(tiny: Path):
     random = [r for r in records if r["policy"] == "random"]
     assert [r["expert_cost"] for r in random] == [r["cost"] for r in expert]
     summary = (tiny / "summary.md").read_text()
-    assert "| expert | iid-v0 | 2 | 100.0% [" in summary and "| random | iid-v0 | 2 |" in summary
-    assert "Per scenario source (iid-v0)" in summary and "| policy | basic | push |" in summary
+    assert "| expert | iid-v1:test | 2 | 100.0% [" in summary and "| random | iid-v1:test | 2 |" in summary
+    assert "the zero is random-phases" in summary and "fixed reference" in summary
+    assert "Per scenario source (iid-v1:test)" in summary and "| policy | basic | push |" in summary
     assert "| expert | 100% [21%, 100%] (1.00) | 100% [21%, 100%] (1.00) |" in summary  # one episode each
     assert "| random | 0% [0%, 79%] (-) | 0% [0%, 79%] (-) |" in summary
     assert (tiny / "splits.png").read_bytes()[:4] == b"\x89PNG"
@@ -96,7 +97,11 @@ def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path,
     again = read_results(tmp_path / "results.json")
     assert _untimed(first) == _untimed(again)
     rows = json.loads(capsys.readouterr().out)
-    assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows] == [("expert", 1.0, 1.0), ("random", 0.0, None)]
+    assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows][::2] == [
+        ("expert", 1.0, 1.0),
+        ("random", 0.0, None),
+    ]
+    assert rows[1]["policy"] == "random-phases" and rows[1]["score"] == 0.0 and rows[0]["score"] == 100.0
 
 
 def test_scenario_folder(tmp_path: Path):
@@ -109,7 +114,7 @@ def test_scenario_folder(tmp_path: Path):
     assert main(argv) == 0
     records = read_results(out / "results.json")
     files = ["a_example.json", "b_turned.json"]
-    assert [(r["policy"], r["source"]) for r in records] == list(itertools.product(["expert", "random"], files))
+    assert [(r["policy"], r["source"]) for r in records] == list(itertools.product(["expert", "random-phases"], files))
     assert {r["split"] for r in records} == {"scenarios:mine"}
     assert all(r["success"] for r in records[:2])
     # The turned scenario costs the expert what the original does, up to the lattice: the world is isotropic.
@@ -128,7 +133,7 @@ def test_run_folder_acts_through_the_candidate_phases(tmp_path: Path):
     report = benchmark.run_benchmark([str(tmp_path / "bc-tiny")], split="iid", episodes=1, out=tmp_path / "out")
     assert torch.get_num_threads() == threads  # one thread while deciding, given back afterwards
     names = [r["policy"] for r in report.records]
-    assert names == ["expert", "random", "bc-tiny"]
+    assert names == ["expert", "random-phases", "bc-tiny"]
     learned = report.records[2]
     assert learned["invalid_actions"] == 0  # the candidate masks are exact: a masked policy is never refused
     assert [row.policy for row in report.rows] == names
@@ -157,9 +162,9 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
     calls.clear()
     monkeypatch.setattr(runner, "run_task", lambda task: calls.append(task) or real(task))
     assert main([*argv, "--resume", "--out", str(tmp_path)]) == 0
-    assert [task[0].name for task in calls] == ["random", "random"]
+    assert [task[0].name for task in calls] == ["random-phases", "random-phases", "random", "random"]
     records = read_results(tmp_path / "results.json")
-    assert [r["policy"] for r in records] == ["expert", "expert", "random", "random"]
+    assert [r["policy"] for r in records] == ["expert", "expert", "random-phases", "random-phases", "random", "random"]
     assert all(r["expert_cost"] is not None for r in records)
 
 
@@ -169,12 +174,13 @@ def test_resume_keeps_the_records_of_other_policies_and_splits(tiny: Path, tmp_p
     benchmark.run_benchmark(["random"], split="layouts", episodes=1, out=tmp_path, resume=True)
     records = read_results(tmp_path / "results.json")
     assert [(r["policy"], r["split"]) for r in records[: -len(before)]] == [
-        ("expert", "layouts-v0"),
-        ("random", "layouts-v0"),
+        ("expert", "layouts-v1:test"),
+        ("random-phases", "layouts-v1:test"),
+        ("random", "layouts-v1:test"),
     ]
     assert records[-len(before) :] == before
     summary = (tmp_path / "summary.md").read_text()
-    assert "Benchmark: layouts-v0, iid-v0" in summary  # this run's split first, then the file's others
+    assert "Benchmark: layouts-v1:test, iid-v1:test" in summary  # this run's split first, then the file's others
 
 
 # ------------------------------------------------------------------ bad input
@@ -301,23 +307,34 @@ def test_plots_of_learning_curves_and_demonstrations(tmp_path: Path):
 
 # ------------------------------------------------------------------ splits
 def test_split_seeds_are_disjoint_from_training_seeds_and_from_each_other():
-    seen: set[int] = set()
+    seen: dict[int, set[int]] = {}  # version number -> its seeds
     for split in benchmark.SPLITS.values():
         seeds = {item.seed for item in benchmark.split_scenarios(split, 10)}
+        block = split.offset - split.offset % SPLIT_BLOCK
         assert min(seeds) >= benchmark.EVAL_SEED_BASE + split.offset
-        assert max(seeds) < benchmark.EVAL_SEED_BASE + split.offset + SPLIT_BLOCK
-        assert not seeds & seen
-        seen |= seeds
+        assert max(seeds) < benchmark.EVAL_SEED_BASE + block + SPLIT_BLOCK  # its own block
+        assert not seeds & seen.get(split.version_number, set())  # within a version: disjoint
+        seen.setdefault(split.version_number, set()).update(seeds)
+    # v1's dev parts are v0's scenarios (recipes were tuned on them); its test parts met nothing before
+    test = {
+        s
+        for split in benchmark.SPLITS.values()
+        if split.part == "test"
+        for s in range(split.seed(0), split.seed(299) + 1)
+    }
+    assert not test & seen[0]
     # The learning checks hold out seeds from 100,000 and datasets count up from 0: far below.
     assert benchmark.EVAL_SEED_BASE > 100_000 * 1_000
 
 
 def test_split_names_and_versions():
-    assert benchmark.get_split("iid").name == "iid-v0"
+    assert benchmark.get_split("iid").name == "iid-v1:test"
     assert benchmark.get_split("more-objects-v0").sources[0].name == "multi-3"
     iid = benchmark.split_scenarios("iid", 8)
     assert [item.source for item in iid] == list(TRAINING_FAMILIES) * 2
-    assert [s.scenario for s in iid] == [s.scenario for s in benchmark.split_scenarios("iid-v0", 8)]
+    assert [s.scenario for s in benchmark.split_scenarios("iid:dev", 8)] == [
+        s.scenario for s in benchmark.split_scenarios("iid-v0", 8)
+    ]
     assert [len(item.scenario.objects) for item in benchmark.split_scenarios("more-objects", 4)] == [3, 4, 3, 4]
 
 
@@ -329,7 +346,7 @@ def test_a_split_version_never_changes():
         "layouts-v0": "1f1698736be96064",
         "push-required-v0": "56744d90abfa7852",
     }
-    assert set(published) == set(benchmark.SPLITS)
+    assert set(published) == {s for s in benchmark.SPLITS if s.endswith("-v0")}  # v1: every digest, references
     for name, digest in published.items():
         h = hashlib.sha256()
         for item in benchmark.split_scenarios(name, 3):
@@ -340,13 +357,15 @@ def test_a_split_version_never_changes():
 def test_several_splits_in_one_run(tmp_path: Path):
     report = benchmark.run_benchmark(["random"], split=["layouts", "push-required"], episodes=1, out=tmp_path)
     assert [(r["policy"], r["split"]) for r in report.records] == [
-        ("expert", "layouts-v0"),
-        ("expert", "push-required-v0"),
-        ("random", "layouts-v0"),
-        ("random", "push-required-v0"),
+        ("expert", "layouts-v1:test"),
+        ("expert", "push-required-v1:test"),
+        ("random-phases", "layouts-v1:test"),
+        ("random-phases", "push-required-v1:test"),
+        ("random", "layouts-v1:test"),
+        ("random", "push-required-v1:test"),
     ]
     assert [(row.policy, row.split) for row in report.rows] == [(r["policy"], r["split"]) for r in report.records]
-    assert "Benchmark: layouts-v0, push-required-v0" in (tmp_path / "summary.md").read_text()
+    assert "Benchmark: layouts-v1:test, push-required-v1:test" in (tmp_path / "summary.md").read_text()
 
 
 def test_push_required_scenarios_have_clutter_on_a_goal():
@@ -401,3 +420,21 @@ def test_unknown_policy_lists_what_is_available():
     with pytest.raises(benchmark.BenchmarkError, match="expert, random"):
         benchmark.resolve("no-such-policy")
     assert "greedy" in benchmark.FACTORIES  # wired; resolved only where its module is installed
+
+
+def test_every_policy_has_its_own_colour_and_the_plot_has_zero_bars_and_n(tmp_path: Path):
+    from matplotlib.colors import to_hex
+
+    from training.pictures.benchmark import policy_colours
+
+    names = ["expert", "random-phases", "random", "greedy", "ppo-bc", *(f"method-{k}" for k in range(30))]
+    colours = {to_hex(c) for c in policy_colours(names).values()}
+    assert len(colours) == len(names)  # expert and ppo-bc once shared one
+    records = [_record(p, s, p == "expert" or (p == "me" and s == 1), 5.0, 1.0, objects=1 + s % 2)
+               for p in ("expert", "me", "never") for s in range(4)]  # fmt: skip
+    benchmark.fill_expert_costs(records)
+    rows = benchmark.summarise(records)
+    assert benchmark.plot_splits(rows, tmp_path / "s.png").read_bytes()[:4] == b"\x89PNG"
+    from training.pictures.benchmark import _caption
+
+    assert _caption(rows).startswith("n = 4 episodes per bar")

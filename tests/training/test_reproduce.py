@@ -18,7 +18,7 @@ from training.reproduce.budgets import FULL
 from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings, training_jobs
 from training.reproduce.table import REFERENCES, baselines
 
-SPLITS = ("iid-v0", "more-objects-v0", "layouts-v0", "push-required-v0")
+SPLITS = ("iid-v1:test", "more-objects-v1:test", "layouts-v1:test", "push-required-v1:test")
 MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 
 
@@ -38,8 +38,9 @@ def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
         assert f"## {split}" in summary
     for name in (*REFERENCES, *MAIN):
         assert f"| {name} |" in summary
-    assert "Per scenario source (iid-v0)" in summary and "| baseline | basic | push |" in summary
-    records = json.loads((out / "results.json").read_text())
+    assert "Per scenario source (iid-v1:test)" in summary and "| baseline | basic | push |" in summary
+    records = read_results(out / "results.json")  # schema 1, checked
+    assert json.loads((out / "results.json").read_text())["schema_version"] == 1
     seen = {(r["baseline"], r["split"]) for r in records}
     for split in SPLITS:
         for name in (*REFERENCES, *MAIN):
@@ -48,7 +49,7 @@ def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
     assert {r["training_seed"] for r in records if r["baseline"] in REFERENCES} == {None}
     # the demonstrations curve's runs are measured on iid only
     curve = {r["split"] for r in records if r["baseline"].startswith("bc-mlp-n")}
-    assert curve == {"iid-v0"}
+    assert curve == {"iid-v1:test"}
     for plot in ("splits.png", "ppo_curves.png", "demonstrations.png"):
         assert (out / plot).stat().st_size > 1000, plot
     for job in training_jobs(out, 1, SMOKE):
@@ -80,14 +81,14 @@ def test_a_second_call_skips_every_finished_stage(smoke: Path, tmp_path: Path, c
     assert all(p.stat().st_mtime_ns == mtime for p, mtime in weights.items())  # nothing finished trained again
     n = SMOKE.episodes
     everywhere = 4 + sum(len(b.runs) for b in baselines(1, SMOKE) if not b.label.startswith("bc-mlp-n"))
-    assert f"benchmark iid-v0: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
-    assert "benchmark more-objects-v0: already complete" in stdout
-    assert f"benchmark layouts-v0: {everywhere * n} episodes (0 resumed)" in stdout
-    assert f"benchmark push-required-v0: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
-    records = json.loads((out / "results.json").read_text())
-    assert len(records) == len(json.loads((smoke / "results.json").read_text()))
+    assert f"benchmark iid-v1:test: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
+    assert "benchmark more-objects-v1:test: already complete" in stdout
+    assert f"benchmark layouts-v1:test: {everywhere * n} episodes (0 resumed)" in stdout
+    assert f"benchmark push-required-v1:test: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
+    records = read_results(out / "results.json")
+    assert len(records) == len(read_results(smoke / "results.json"))
     assert {(r["baseline"], r["split"]) for r in records} == {
-        (r["baseline"], r["split"]) for r in json.loads((smoke / "results.json").read_text())
+        (r["baseline"], r["split"]) for r in read_results(smoke / "results.json")
     }
 
 
@@ -176,3 +177,25 @@ def test_with_two_seeds_or_more_the_aimed_runs_make_an_ensemble(tmp_path: Path) 
     assert row.runs == ("dagger-aimed-ensemble",) and not row.per_seed
     assert "dagger-aimed-ensemble" not in {job.name for job in training_jobs(tmp_path, 1, FULL)}
     assert "dagger-aimed-ensemble" not in [b.label for b in baselines(1, FULL)]
+
+
+def test_the_summary_names_its_commit_and_the_table_publishes_under_50_mb(smoke: Path, tmp_path: Path) -> None:
+    from training.reproduce.publish import MAX_PUBLISHED_BYTES, PublishError, commit_line, publish, record_commit
+
+    summary = (smoke / "summary.md").read_text()
+    settings = json.loads((smoke / SETTINGS_FILE).read_text())
+    (commit,) = settings["commits"]
+    assert commit_line([commit]) in summary and commit[:7] in summary
+    out = tmp_path / "copy"
+    shutil.copytree(smoke, out)
+    assert record_commit(out, "f" * 40) == [commit, "f" * 40]  # a call at another commit: the summary says so
+    assert "across 2 commits" in commit_line([commit, "f" * 40])
+    copied = publish(out, tmp_path / "published")
+    assert 0 < copied["bytes"] < MAX_PUBLISHED_BYTES
+    published = tmp_path / "published"
+    assert read_results(published / "results.json") == read_results(out / "results.json")
+    assert (published / "runs" / "bc-mlp-s0" / "config.json").is_file()
+    assert {Path(w).parts[1] for w in copied["weights"]} >= {"bc-mlp-s0", "dagger-s0"}  # one seed: the best
+    assert not (published / "datasets").exists()
+    with pytest.raises(PublishError, match="no finished table"):
+        publish(tmp_path / "published" / "runs", tmp_path / "nowhere")

@@ -67,7 +67,7 @@ def test_a_second_benchmark_on_the_same_folder_exits_2_naming_the_holder(
     status, _, _ = run(capsys, "benchmark", "--policies", "greedy", "--scenarios", scenarios, "--resume",
                        "--out", out, "--no-progress")  # fmt: skip
     assert status == 0
-    assert [r["policy"] for r in read_results(out / "results.json")] == ["expert", "random", "greedy"]
+    assert [r["policy"] for r in read_results(out / "results.json")] == ["expert", "random-phases", "greedy", "random"]
     assert (out / LOCK).exists()
 
 
@@ -76,22 +76,22 @@ def test_resume_runs_again_the_scenarios_whose_files_changed(tmp_path: Path):
     folder = _folder(tmp_path / "cases", "basic", 3)
     out = tmp_path / "bench"
     first = benchmark.run_benchmark(["random"], scenarios=folder, out=out, resume=True)
-    assert first.resumed == 0 and len(first.records) == 6
+    assert first.resumed == 0 and len(first.records) == 9  # expert, random-phases (the references) and random
     again = benchmark.run_benchmark(["random"], scenarios=folder, out=out, resume=True)
-    assert again.resumed == 6  # nothing changed: nothing runs
+    assert again.resumed == 9  # nothing changed: nothing runs
 
     _folder(folder, "push", 3, seed=1)  # three push scenarios under the same names
     pushed = benchmark.run_benchmark(["random"], scenarios=folder, out=out, resume=True)
     assert pushed.resumed == 0
     digests = [scenario_digest(Scenario.load(folder / n)) for n in ("a.json", "b.json", "c.json")]
     records = read_results(out / "results.json")
-    assert len(records) == 6  # the basic scenarios' records are replaced, not kept next to them
-    assert [r["digest"] for r in records] == digests * 2
+    assert len(records) == 9  # the basic scenarios' records are replaced, not kept next to them
+    assert [r["digest"] for r in records] == digests * 3
     assert all(r["source"] in ("a.json", "b.json", "c.json") for r in records)
 
     (folder / "0.json").write_text(EXAMPLE.read_text())  # a file in front: every index moves
     shifted = benchmark.run_benchmark(["random"], scenarios=folder, out=out, resume=True)
-    assert shifted.resumed == 0 and len(read_results(out / "results.json")) == 8
+    assert shifted.resumed == 0 and len(read_results(out / "results.json")) == 12
 
     other = _folder(tmp_path / "elsewhere" / "cases", "corridor", 4, names=["0.json", "a.json", "b.json", "c.json"])
     elsewhere = benchmark.run_benchmark(["random"], scenarios=other, out=out, resume=True)
@@ -126,12 +126,12 @@ def _edited(saved: Path, tmp_path: Path, edit) -> Path:
         (lambda rs: rs[0].pop("success"), r"record 0 \(policy \"expert\".*\) has no 'success'"),
         (lambda rs: rs[0].update(success="yes"), r"record 0 .*'success' = \"yes\", which is not true or false"),
         (
-            lambda rs: rs[2].update(seed=float(rs[2]["seed"])),
-            r"record 2 \(policy \"someone-else\".*'seed' = .*not an integer",
+            lambda rs: rs[3].update(seed=float(rs[3]["seed"])),
+            r"record 3 \(policy \"someone-else\".*'seed' = .*not an integer",
         ),
         (lambda rs: rs[1].update(cost=None), r"record 1 .*'cost' = null, which is not a number"),
         (lambda rs: rs[1].update(delivered=True), r"record 1 .*'delivered' = true"),
-        (lambda rs: rs.append([1, 2]), r"record 3 is list, not an object"),
+        (lambda rs: rs.append([1, 2]), r"record 4 is list, not an object"),
     ],
     ids=["no success", "success yes", "float seed of another policy", "null cost", "bool delivered", "not an object"],
 )
@@ -171,12 +171,13 @@ def test_the_earlier_plain_list_is_read_and_its_episodes_run_again(saved: Path, 
     records = [{k: v for k, v in r.items() if k != "digest"} for r in read_results(saved)]
     legacy = [*records, {**records[1], "policy": "someone-else"}]
     (out / "results.json").write_text(json.dumps(legacy))
-    assert [r["digest"] for r in read_results(out / "results.json")] == [None] * 3
+    assert [r["digest"] for r in read_results(out / "results.json")] == [None] * 4
     report = benchmark.run_benchmark(["random"], scenarios=saved.parent.parent / "scenarios", out=out, resume=True)
     assert report.resumed == 0
     after = read_results(out / "results.json")
     assert [(r["policy"], r["digest"] is None) for r in after] == [
         ("expert", False),
+        ("random-phases", False),
         ("random", False),
         ("someone-else", True),
     ]

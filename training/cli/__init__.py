@@ -6,7 +6,8 @@ One module per group of commands (:mod:`~training.cli.planning`: ``plan``,
 :mod:`~training.cli.bench`: ``bench env|planner|generate|phases|projection``; :mod:`~training.cli.benchmark`:
 ``benchmark``; :mod:`~training.cli.train`: ``train KIND``, one per registered learner; :mod:`~training.cli.checks`:
 ``bench learned|learning-checks``;
-:mod:`~training.cli.reproduce`: ``reproduce``), each with a
+:mod:`~training.cli.reproduce`: ``reproduce``; :mod:`~training.cli.leaderboard`: ``leaderboard``;
+:mod:`~training.cli.compare`: ``compare``; ``references`` with ``benchmark``), each with a
 ``register(commands, bench)`` function. Library code never speaks of flags or exit
 statuses: this package turns its exceptions into them (:mod:`~training.cli.exits`).
 
@@ -32,6 +33,8 @@ COMMAND_MODULES = (
     "training.cli.train",
     "training.cli.checks",
     "training.cli.reproduce",
+    "training.cli.leaderboard",
+    "training.cli.compare",
 )
 """Modules that add commands; a module that is not installed (an optional part) is skipped."""
 

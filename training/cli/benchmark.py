@@ -15,6 +15,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
+from training.cli import references
 from training.cli.arguments import add_worker_options, positive_int
 from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
@@ -67,6 +68,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     add_obs_mode_argument(parser, "the observation the policies get (a run folder of an image network gets its own)")
     parser.set_defaults(handler=run_benchmark_command)
+    references.register(commands)
 
 
 def _description() -> str:

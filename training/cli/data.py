@@ -28,6 +28,7 @@ from training.data.generate import (
 )
 from training.data.render import render_dataset
 from training.data.staging import Staging, StagingError
+from training.evaluation.protocol import refuse_split_scenario
 
 GENERATE_COMMAND = Command(
     name="generate",
@@ -66,6 +67,12 @@ def _add_generate_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
     add_worker_options(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset with this id")
+    parser.add_argument(
+        "--allow-evaluation-seeds",
+        action="store_true",
+        help="allow seeds from 10^9 (the benchmark's) and a split's scenario as --scenario: research on purpose "
+        "(refused by default, exit 2, so that no one trains on what is reported)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
 
@@ -73,6 +80,8 @@ def _add_generate_options(parser: argparse.ArgumentParser) -> None:
 def run_generate(args: argparse.Namespace) -> int:
     """``fetchcarry generate``: 0 the dataset is complete, 130 interrupted (what is staged is kept)."""
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
+    if config.source.scenario is not None:
+        refuse_split_scenario(config.source.scenario, args.allow_evaluation_seeds)
     try:
         report = generate(
             config,
@@ -81,6 +90,7 @@ def run_generate(args: argparse.Namespace) -> int:
             overwrite=args.overwrite,
             progress=not args.no_progress,
             ray_address=args.ray_address,
+            allow_evaluation_seeds=args.allow_evaluation_seeds,
         )
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command

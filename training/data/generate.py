@@ -7,6 +7,10 @@ depend on the ones before it in the same worker) and comes back to this process,
 which stages it at once (:mod:`training.data.staging`); when all are staged the dataset is
 assembled (:mod:`training.data.datasets`) and the staging is removed.
 
+Evaluation seeds are not for training: a dataset whose seeds reach :data:`EVAL_SEED_BASE`
+(10^9, where every benchmark split's seeds start) is refused with
+:class:`EvaluationSeedError` unless ``allow_evaluation_seeds`` (research on purpose).
+
 Backends: ``process`` (default) runs episodes on a local process pool (``workers``
 processes; one worker runs in this process); ``ray`` runs the same episode function
 as Ray tasks, on a local Ray instance or the cluster ``ray_address`` names (Ray is an
@@ -51,11 +55,30 @@ from training.data.sources import (
 from training.data.staging import DatasetLock, Staging, StagingError
 from training.rollout import EpisodeRecord, run_episode
 
+EVAL_SEED_BASE = 1_000_000_000  # the first evaluation seed; training and dataset seeds stay below it
+
+
+class EvaluationSeedError(UsageError):
+    """Training data asked for on evaluation seeds (or a split's scenario) without the explicit override."""
+
+
+def check_training_seeds(first: int, count: int, allow_evaluation_seeds: bool = False) -> None:
+    """Refuse seeds ``first .. first + count - 1`` that reach :data:`EVAL_SEED_BASE` (unless allowed)."""
+    last = first + count - 1
+    if last >= EVAL_SEED_BASE and not allow_evaluation_seeds:
+        raise EvaluationSeedError(
+            f"seeds {first}..{last} reach the evaluation seeds (from {EVAL_SEED_BASE}, the benchmark's splits): "
+            f"give a seed below {EVAL_SEED_BASE - count + 1}, or --allow-evaluation-seeds to train on them on purpose"
+        )
+
+
 __all__ = [
     "DEFAULT_TIME_LIMIT",
     "ENV_ID",
+    "EVAL_SEED_BASE",
     "POLICIES",
     "EpisodeSource",
+    "EvaluationSeedError",
     "GenerationConfig",
     "GenerationReport",
     "generate",
@@ -112,6 +135,7 @@ def generate(
     progress: bool = True,
     ray_address: str | None = None,
     on_episode: Callable[[int, EpisodeRecord], None] | None = None,
+    allow_evaluation_seeds: bool = False,
 ) -> GenerationReport:
     """Make (or finish) the dataset ``config.dataset_id`` and return what was done.
 
@@ -123,9 +147,12 @@ def generate(
     whole) and :class:`StagingMismatchError` when a staging of the id was made with
     other options. Staged episodes that cannot be read are set aside and made again
     (``set_aside`` in the report). ``on_episode`` is called after each episode is
-    staged (tests use it to interrupt a run).
+    staged (tests use it to interrupt a run). Seeds that reach the evaluation seeds are an
+    :class:`EvaluationSeedError` unless ``allow_evaluation_seeds``.
     """
     validate_dataset_id(config.dataset_id)
+    check_training_seeds(config.source.seed, config.episodes, allow_evaluation_seeds)  # a fixed scenario: the CLI
+    # checks its digest against the splits' (training.evaluation.protocol), which this layer cannot read
     if workers < 1:
         raise UsageError(f"the number of workers must be at least 1, got {workers}")
     started = time.perf_counter()

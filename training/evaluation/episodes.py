@@ -34,6 +34,8 @@ decision_ms    mean wall time of the policy's ``predict`` per decision, millisec
 mask_ms        mean wall time per decision of the env's ``action_masks()`` handed to
                the policy, milliseconds (0 for a policy whose ``predict`` takes no
                ``action_masks=``: the expert reads what it needs from the env)
+step_ms        mean wall time of a whole step per decision, milliseconds: the policy,
+               the mask and the env (its ``step``, and its ``reset`` spread over the steps)
 ============== =====================================================================
 """
 
@@ -96,6 +98,7 @@ def benchmark_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool 
         "contacts": int(info["collisions"]),
         "decision_ms": 1000.0 * figures.policy_s / figures.steps,
         "mask_ms": 1000.0 * figures.mask_s / figures.steps,
+        "step_ms": 1000.0 * (figures.policy_s + figures.mask_s + figures.simulation_s) / figures.steps,
     }
 
 

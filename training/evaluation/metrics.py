@@ -1,33 +1,53 @@
 """The benchmark's figures, per policy and split, from the episode records.
 
-Every figure compares a policy with the MILP expert *on the same scenarios*:
+Every figure compares a policy with the MILP expert *on the same scenarios*. The
+expert's result on a scenario is its **reference**: for a published split's part
+(``iid-v1:test``) the fixed reference shipped with the split
+(:mod:`training.evaluation.references`: computed once with a generous planning limit),
+never the expert row of this run, whose wall-clock limit moves with the load; for other
+scenarios (a folder, a v0 split) the expert row of this run. The expert row of a
+published split still runs, and :attr:`Row.disagreements` counts the scenarios where it
+did not reproduce its reference (success, or cost to 1 mm).
 
-- success rate, with a 95 % Wilson score interval (:func:`wilson`);
+Episodes of one scenario (several training seeds of a method, pooled under one label)
+are one cluster: intervals resample scenarios (:mod:`training.stats`).
+
+- success rate, with a 95 % interval (Wilson with one episode per scenario, the
+  clustered bootstrap over scenarios with several);
 - objects delivered per episode;
-- cost ratio: the policy's travel cost over the expert's on the same scenario, averaged
-  over the episodes both solved (a 95 % interval of that mean, normal approximation);
-- SPL-style cost-weighted success, averaged over episodes the expert solved:
-  ``success * expert_cost / max(cost, expert_cost)`` (:func:`spl`; Anderson et al.'s
-  SPL with path length replaced by the paper's travel cost);
-- phases and pushes per episode, next to the expert's on the same scenarios;
+- cost ratio: the policy's travel cost over the reference's on the same scenario,
+  averaged over the episodes both solved, with a clustered bootstrap interval (never
+  negative; none below two scenarios);
+- SPL-style cost-weighted success, averaged over episodes the reference solved:
+  ``success * reference_cost / max(cost, reference_cost)`` (:func:`spl`; Anderson et
+  al.'s SPL with path length replaced by the paper's travel cost);
+- phases and pushes per episode, next to the reference's on the same scenarios;
 - invalid actions and contacts per episode;
-- time per decision, next to the planner's (the expert's time per decision), and the
-  time of the action masks the policy is given, apart;
-- the normalised score ``100 * (R - R_random) / (R_expert - R_random)``, ``R`` the mean
-  episode return (the paper's reward summed) over the split.
+- time per decision: the policy's ``predict``, the env's action masks handed to it, and
+  the whole step (policy, mask and the env's step), next to the planner's;
+- the normalised score ``100 * (R - R_zero) / (R_reference - R_zero)``, ``R`` the mean
+  episode return (the paper's reward summed) over the split, ``R_zero`` that of
+  ``random-phases`` (uniform over the allowed candidate phases, the interface learners
+  act in; ``random``, the MultiDiscrete masked policy, only where random-phases did not
+  run, as :attr:`Row.score_zero` says).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from training.evaluation.references import part_references, references_digest
+from training.evaluation.splits import SPLITS
 from training.resolve import EXPERT, RANDOM
-from training.stats import Z_95, wilson
+from training.stats import Z_95, cluster_bootstrap, success_interval, wilson  # noqa: F401 (re-exported: training.benchmark)
+
+SCORE_ZERO = "random-phases"  # the normalised score's zero: the random policy of the candidate-phase interface
+COST_AGREES_M = 1e-3  # metres: the expert row reproduces its reference cost within this
 
 
 def spl(success: bool, cost: float, expert_cost: float) -> float:
@@ -57,12 +77,12 @@ class Row:
     split: str
     episodes: int
     success: float
-    success_low: float  # 95 % Wilson interval
+    success_low: float  # 95 % interval (Wilson, or the clustered bootstrap over scenarios)
     success_high: float
     delivered: float  # objects delivered per episode
     objects: float  # objects per episode
-    cost_ratio: float  # mean cost / expert cost over episodes both solved
-    cost_ratio_low: float
+    cost_ratio: float  # mean cost / reference cost over episodes both solved
+    cost_ratio_low: float  # 95 % clustered bootstrap interval
     cost_ratio_high: float
     spl: float  # cost-weighted success, over episodes the expert solved
     phases: float
@@ -74,14 +94,52 @@ class Row:
     decision_ms: float  # mean time of the policy's predict per decision
     mask_ms: float  # mean time of the env's action masks per decision
     planner_ms: float  # the expert's time per decision on the same scenarios
-    score: float  # 100 (R - R_random) / (R_expert - R_random); nan if the expert and random tie
+    score: float  # 100 (R - R_zero) / (R_reference - R_zero); nan if they tie
+    scenarios: int = 0  # distinct scenarios (episodes / scenarios = episodes per scenario, the seeds pooled)
+    step_ms: float = math.nan  # mean wall time of a whole step (policy, mask, env step) per decision
+    score_zero: str = SCORE_ZERO  # the policy whose mean return is the score's 0
+    reference: str = "fixed"  # "fixed" (the split's reference file), "expert run" (this run's expert), or "mixed"
+    disagreements: int = 0  # the expert row: scenarios where it did not reproduce the fixed reference
+
+
+def reference_table(records: list[dict[str, Any]]) -> dict[tuple[str, int], dict[str, Any]]:
+    """(split, seed) -> the reference of that scenario: the split's fixed reference, else this run's expert.
+
+    Each reference holds ``success``, ``cost``, ``return``, ``phases``, ``pushes``, ``digest``,
+    ``fixed`` (from a reference file) and ``references`` (the part's references digest, or None).
+    """
+    table: dict[tuple[str, int], dict[str, Any]] = {}
+    for split in dict.fromkeys(r["split"] for r in records):
+        if split in SPLITS and SPLITS[split].part:
+            fixed = part_references(split)
+            digest = references_digest(fixed) if fixed else None
+            table.update({(split, ref["seed"]): {**ref, "fixed": True, "references": digest} for ref in fixed})
+    for r in records:
+        if r["policy"] == EXPERT and (r["split"], r["seed"]) not in table:
+            keys = ("success", "cost", "return", "phases", "pushes", "digest")
+            table[(r["split"], r["seed"])] = {**{k: r.get(k) for k in keys}, "fixed": False, "references": None}
+    return table
+
+
+def reference_of(record: dict[str, Any], table: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any] | None:
+    """The reference of ``record``'s scenario in ``table``, if it is the same scenario (digest)."""
+    ref = table.get((record["split"], record["seed"]))
+    if ref is None or (record.get("digest") is not None and ref["digest"] not in (None, record["digest"])):
+        return None
+    return ref
 
 
 def fill_expert_costs(records: list[dict[str, Any]]) -> None:
-    """Set every record's ``expert_cost`` to the expert's cost on the same scenario (``None`` if it failed)."""
-    costs = {(r["split"], r["seed"]): r["cost"] if r["success"] else None for r in records if r["policy"] == EXPERT}
+    """Set every record's ``expert_cost`` (the reference's cost, ``None`` if it failed) and ``references``.
+
+    ``references`` is the digest of the fixed references the cost came from (None: this
+    run's expert): what ``fetchcarry leaderboard`` checks before merging folders.
+    """
+    table = reference_table(records)
     for record in records:
-        record["expert_cost"] = costs.get((record["split"], record["seed"]))
+        ref = reference_of(record, table)
+        record["expert_cost"] = ref["cost"] if ref is not None and ref["success"] else None
+        record["references"] = ref["references"] if ref is not None else None
 
 
 def _mean(values: Iterable[float]) -> float:
@@ -90,24 +148,62 @@ def _mean(values: Iterable[float]) -> float:
 
 
 def summarise(records: list[dict[str, Any]]) -> list[Row]:
-    """One :class:`Row` per policy and split, in the order they first appear in ``records``."""
+    """One :class:`Row` per policy and split, in the order they first appear in ``records``.
+
+    Records of one policy and scenario (split and seed) are one cluster (training seeds
+    pooled under one label).
+    """
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for record in records:
         groups.setdefault((record["policy"], record["split"]), []).append(record)
-    return [_row(policy, split, group, groups) for (policy, split), group in groups.items()]
+    table = reference_table(records)
+    return [_row(policy, split, group, groups, table) for (policy, split), group in groups.items()]
 
 
-def _row(policy: str, split: str, group: list[dict], groups: dict[tuple[str, str], list[dict]]) -> Row:
+def clusters(group: list[dict[str, Any]], value: Any) -> tuple[list[float], list[float]]:
+    """Per scenario of ``group``: the sum of ``value(record)`` over its records (None skipped) and their count."""
+    sums: dict[int, float] = {}
+    counts: dict[int, float] = {}
+    for r in group:
+        v = value(r)
+        sums.setdefault(r["seed"], 0.0)
+        counts.setdefault(r["seed"], 0.0)
+        if v is not None:
+            sums[r["seed"]] += float(v)
+            counts[r["seed"]] += 1.0
+    return list(sums.values()), list(counts.values())
+
+
+def _ratio(r: dict[str, Any], ref: dict[str, Any] | None) -> float | None:
+    if ref is None or not (r["success"] and ref["success"] and ref["cost"] > 0):
+        return None
+    return r["cost"] / ref["cost"]
+
+
+def _row(
+    policy: str,
+    split: str,
+    group: list[dict],
+    groups: dict[tuple[str, str], list[dict]],
+    table: dict[tuple[str, int], dict[str, Any]],
+) -> Row:
     expert = {r["seed"]: r for r in groups.get((EXPERT, split), [])}
-    random = groups.get((RANDOM, split), [])
+    refs = [reference_of(r, table) for r in group]
+    zero_name = SCORE_ZERO if (SCORE_ZERO, split) in groups else RANDOM
+    zero = groups.get((zero_name, split), [])
     wins = sum(r["success"] for r in group)
-    low, high = wilson(wins, len(group), Z_95)
-    ratios = [r["cost"] / r["expert_cost"] for r in group if r["success"] and (r["expert_cost"] or 0) > 0]
-    ratio, ratio_low, ratio_high = mean_interval(ratios)
-    weighted = [spl(r["success"], r["cost"], r["expert_cost"]) for r in group if r["expert_cost"] is not None]
-    same = [expert[r["seed"]] for r in group if r["seed"] in expert]
-    r_policy, r_expert, r_random = (_mean(r["return"] for r in g) for g in (group, same, random))
-    span = r_expert - r_random
+    low, high = success_interval(*clusters(group, lambda r: float(r["success"])))
+    ratio, ratio_low, ratio_high = cluster_bootstrap(*clusters(group, lambda r: _ratio(r, reference_of(r, table))))
+    weighted = [
+        spl(r["success"], r["cost"], ref["cost"])
+        for r, ref in zip(group, refs, strict=True)
+        if ref is not None and ref["success"]
+    ]
+    known = [ref for ref in refs if ref is not None]
+    r_policy, r_reference = _mean(r["return"] for r in group), _mean(x["return"] for x in known)
+    r_zero = _mean(r["return"] for r in zero)
+    span = r_reference - r_zero
+    kinds = {ref["fixed"] for ref in known}
     return Row(
         policy=policy,
         split=split,
@@ -122,13 +218,50 @@ def _row(policy: str, split: str, group: list[dict], groups: dict[tuple[str, str
         cost_ratio_high=ratio_high,
         spl=_mean(weighted),
         phases=_mean(r["phases"] for r in group),
-        expert_phases=_mean(r["phases"] for r in same),
+        expert_phases=_mean(x["phases"] for x in known),
         pushes=_mean(r["pushes"] for r in group),
-        expert_pushes=_mean(r["pushes"] for r in same),
+        expert_pushes=_mean(x["pushes"] for x in known),
         invalid_actions=_mean(r["invalid_actions"] for r in group),
         contacts=_mean(r["contacts"] for r in group),
         decision_ms=_mean(r["decision_ms"] for r in group),
         mask_ms=_mean(r.get("mask_ms", 0.0) for r in group),
-        planner_ms=_mean(r["decision_ms"] for r in same),
-        score=100.0 * (r_policy - r_random) / span if abs(span) > 1e-12 else math.nan,
+        planner_ms=_mean(expert[r["seed"]]["decision_ms"] for r in group if r["seed"] in expert),
+        score=100.0 * (r_policy - r_zero) / span if abs(span) > 1e-12 else math.nan,
+        scenarios=len({r["seed"] for r in group}),
+        step_ms=_mean(r["step_ms"] for r in group if "step_ms" in r),
+        score_zero=zero_name,
+        reference="mixed" if len(kinds) > 1 else "fixed" if kinds == {True} else "expert run",
+        disagreements=_disagreements(group, refs) if policy == EXPERT else 0,
     )
+
+
+def _disagreements(group: list[dict[str, Any]], refs: list[dict[str, Any] | None]) -> int:
+    """Scenarios where the expert's record differs from its fixed reference (success, or cost by 1 mm)."""
+    return sum(
+        1
+        for r, ref in zip(group, refs, strict=True)
+        if ref is not None
+        and ref["fixed"]
+        and (r["success"] != ref["success"] or abs(r["cost"] - ref["cost"]) > COST_AGREES_M)
+    )
+
+
+def grouped(records: list[dict[str, Any]], key: Callable[[dict[str, Any]], str]) -> list[Row]:
+    """One :class:`Row` per policy and group ``key(record)`` (``Row.split`` is the group), references kept.
+
+    Each record keeps its own split's reference (the groups are only how rows are cut).
+    """
+    table = reference_table(records)
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for record in records:
+        groups.setdefault((record["policy"], key(record)), []).append(record)
+    return [_row(policy, label, group, groups, table) for (policy, label), group in groups.items()]
+
+
+def by_objects(records: list[dict[str, Any]]) -> list[Row]:
+    """One :class:`Row` per policy and object count (``Row.split`` is the count, as text), in count order.
+
+    The graded families (``objects-1`` .. ``objects-8``) and any split of several object
+    counts: success and cost ratio against the number of objects.
+    """
+    return grouped(sorted(records, key=lambda r: r["objects"]), lambda r: str(r["objects"]))

@@ -8,10 +8,11 @@ source of a split. The plots are :mod:`training.pictures.benchmark`'s.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from typing import Any
 
-from training.evaluation.metrics import Row, summarise
+from training.evaluation.metrics import Row, grouped
 
 __all__ = ["COLUMNS", "source_table", "summary_markdown"]
 
@@ -21,14 +22,15 @@ COLUMNS = (
     ("episodes", "n", "{}"),
     ("success", "success [95 % CI]", None),
     ("delivered", "delivered / ep", "{:.2f}"),
-    ("cost_ratio", "cost ratio", "{:.3f}"),
+    ("cost_ratio", "cost ratio [95 % CI]", None),
     ("spl", "SPL (cost)", "{:.3f}"),
     ("phases", "phases (expert)", None),
     ("pushes", "pushes (expert)", None),
     ("invalid_actions", "invalid / ep", "{:.2f}"),
     ("contacts", "contacts / ep", "{:.2f}"),
-    ("decision_ms", "ms / decision (planner)", None),
+    ("decision_ms", "policy ms (planner)", None),
     ("mask_ms", "mask ms", "{:.2f}"),
+    ("step_ms", "step ms", "{:.1f}"),
     ("score", "score", "{:.1f}"),
 )
 
@@ -36,6 +38,13 @@ COLUMNS = (
 def _cell(row: Row, key: str, fmt: str | None) -> str:
     if key == "success":
         return f"{row.success:.1%} [{row.success_low:.1%}, {row.success_high:.1%}]"
+    if key == "cost_ratio":
+        if math.isnan(row.cost_ratio):
+            return "-"
+        interval = "" if math.isnan(row.cost_ratio_low) else f" [{row.cost_ratio_low:.3f}, {row.cost_ratio_high:.3f}]"
+        return f"{row.cost_ratio:.3f}{interval}"
+    if key == "episodes" and row.scenarios and row.scenarios != row.episodes:
+        return f"{row.episodes} ({row.scenarios} scenarios)"
     if key == "phases":
         return f"{row.phases:.1f} ({row.expert_phases:.1f})"
     if key == "pushes":
@@ -57,21 +66,60 @@ def summary_markdown(rows: Sequence[Row], title: str = "Benchmark") -> str:
         "|" + "|".join(" --- " for _ in COLUMNS) + "|",
     ]
     lines += ["| " + " | ".join(_cell(row, key, fmt) for key, _, fmt in COLUMNS) + " |" for row in rows]
-    lines += [
-        "",
-        "- success: episodes that delivered every object, with a 95 % Wilson interval.",
-        "- cost ratio: the paper's travel cost over the MILP expert's on the same scenario, "
-        "mean over episodes both solved. SPL (cost): success x expert cost / max(cost, expert cost), "
-        "mean over episodes the expert solved.",
-        "- phases and pushes per episode, the expert's on the same scenarios in brackets; "
-        "contacts: stops at a contact (the env's `collisions`).",
-        "- ms / decision: wall time of the policy's decision, the expert's (the planner's) in brackets; "
-        "mask ms: the env's action masks handed to the policy, per decision. Timings depend on the machine's load.",
-        "- score: 100 x (R - R_random) / (R_expert - R_random), R the mean episode return "
-        "(the paper's reward: +10 per delivery, minus travel cost and penalties).",
-        "",
-    ]
+    lines += ["", *legend(rows), ""]
     return "\n".join(lines)
+
+
+def legend(rows: Sequence[Row]) -> list[str]:
+    """The lines under a table of ``rows`` that say what each column means and where its reference comes from."""
+    kinds = sorted({row.reference for row in rows})
+    zeros = sorted({row.score_zero for row in rows})
+    disagreements = [
+        f"{row.split}: {row.disagreements} of {row.episodes}"
+        for row in rows
+        if row.policy == "expert" and row.reference != "expert run"
+    ]
+    reference = (
+        "the split's fixed reference (the expert once, with a generous planning limit; training/evaluation/references)"
+        if kinds == ["fixed"]
+        else f"reference: {', '.join(kinds)} "
+        "(fixed: the split's reference file; expert run: this run's expert, timing-dependent)"
+    )
+    lines = [
+        "- success: episodes that delivered every object, with a 95 % interval (Wilson with one episode per "
+        "scenario; with training seeds pooled, a bootstrap over scenarios that keeps each scenario's seeds "
+        "together). n: episodes (and distinct scenarios when seeds are pooled).",
+        f"- cost ratio: the paper's travel cost over {reference} on the same scenario, mean over episodes both "
+        "solved, with a 95 % bootstrap interval over scenarios. SPL (cost): success x reference cost / "
+        "max(cost, reference cost), mean over episodes the reference solved.",
+        "- phases and pushes per episode, the reference's on the same scenarios in brackets; "
+        "contacts: stops at a contact (the env's `collisions`).",
+        "- policy ms: wall time of the policy's decision, the expert's (the planner's) in brackets; "
+        "mask ms: the env's action masks handed to the policy; step ms: the whole step (policy, mask and the "
+        "env), per decision. Timings depend on the machine's load.",
+        f"- score: 100 x (R - R_zero) / (R_reference - R_zero), R the mean episode return (the paper's reward: "
+        f"+10 per delivery, minus travel cost and penalties); the zero is {' / '.join(zeros)} (uniform over the "
+        "allowed candidate phases, the interface learners act in).",
+    ]
+    if disagreements:
+        lines.append(
+            f"- the expert row against the fixed reference: disagreements (success, or cost by 1 mm) "
+            f"{'; '.join(disagreements)}."
+        )
+    return lines
+
+
+def family_of(record: dict[str, Any]) -> str:
+    """The scenario family of a record: its ``family`` field, else its file name without the trailing number.
+
+    ``objects-3-0007.json`` is family ``objects-3``, ``basic-565565.json`` ``basic``, and a
+    name without a trailing number (``push_basic.json``) its own family.
+    """
+    if isinstance(record.get("family"), str):
+        return record["family"]
+    stem = record.get("source", "").rsplit(".json", 1)[0]
+    match = re.match(r"^(.*?)[-_]?\d+$", stem)
+    return match[1] if match and match[1] else stem
 
 
 def source_table(
@@ -83,16 +131,21 @@ def source_table(
 ) -> list[str]:
     """Per scenario source of ``split`` (a family, or a push pattern): each policy's success and cost ratio.
 
+    For a folder of scenario files (``scenarios:FOLDER``) a source is the file's family
+    (:func:`family_of`), so that a folder of many files gives a column per family, not per file.
+
     Markdown lines: ``caption``, then one row per policy (``policies``, or every one in the
     records' order; ``first`` heads the column) and one column per source, each cell the
     success with its 95 % Wilson interval and the cost ratio in brackets; no lines when
     ``split`` has one source.
     """
-    chosen = [{**r, "split": r.get("source", split)} for r in records if r["split"] == split]
-    sources = list(dict.fromkeys(r["split"] for r in chosen))
+    files = split.startswith("scenarios:")
+    chosen = [r for r in records if r["split"] == split]
+    key = family_of if files else lambda r: r.get("source", split)
+    sources = list(dict.fromkeys(key(r) for r in chosen))
     if len(sources) < 2:
         return []
-    rows = {(row.policy, row.split): row for row in summarise(chosen)}
+    rows = {(row.policy, row.split): row for row in grouped(chosen, key)}
     lines = [caption, "", f"| {first} | " + " | ".join(sources) + " |", "| --- |" + " --- |" * len(sources)]
     for name in policies if policies is not None else dict.fromkeys(r["policy"] for r in chosen):
         cells = [rows.get((name, source)) for source in sources]

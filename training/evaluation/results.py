@@ -59,6 +59,14 @@ FIELDS: dict[str, tuple[str, ...]] = {
 }
 """Every record's fields and the JSON kinds each may hold (units: docs/results-format.md). Other fields are kept."""
 
+OPTIONAL: dict[str, tuple[str, ...]] = {
+    "step_ms": (_NUMBER,),
+    "references": (_TEXT, _NULL),
+    "baseline": (_TEXT,),
+    "training_seed": (_INT, _NULL),
+}
+"""Fields a record may lack (written by later versions, or by fetchcarry reproduce), checked when present."""
+
 NOT_NEGATIVE = ("seed", "delivered", "objects", "phases", "pushes", "invalid_actions", "contacts")
 
 
@@ -70,9 +78,16 @@ class ResultsBusyError(BenchmarkError):
     """Another benchmark holds the lock of an output folder."""
 
 
-def scenario_digest(scenario: Scenario) -> str:
-    """The sha256 (hex) of ``scenario``'s canonical JSON: what a record's episode was played on."""
-    return hashlib.sha256(json.dumps(scenario.to_dict(), sort_keys=True).encode()).hexdigest()
+def scenario_digest(scenario: Scenario, named: bool = True) -> str:
+    """The sha256 (hex) of ``scenario``'s canonical JSON: what a record's episode was played on.
+
+    ``named=False`` leaves the scenario's name out: the digest of the world alone, which
+    a renamed copy of a scenario shares (what the protocol's guard compares).
+    """
+    data = scenario.to_dict()
+    if not named:
+        data.pop("name", None)
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
 
 
 def _kind(value: Any) -> str | None:
@@ -94,8 +109,10 @@ def record_problem(record: Any) -> str | None:
     """What is wrong with ``record`` against :data:`FIELDS`, or None when it is a well-formed record."""
     if not isinstance(record, dict):
         return f"is {type(record).__name__}, not an object"
-    for name, kinds in FIELDS.items():
+    for name, kinds in (*FIELDS.items(), *OPTIONAL.items()):
         if name not in record:
+            if name in OPTIONAL:
+                continue
             return f"has no {name!r}"
         kind = _kind(record[name])
         if kind not in kinds and not (kind == _INT and _NUMBER in kinds):  # 3 is a number, 3.0 no integer

@@ -1,23 +1,25 @@
 """Run a benchmark: every policy on every scenario of a split (or a folder), then write the results.
 
 :func:`run_benchmark` always runs the two reference policies, ``expert`` (the MILP
-planner: every cost ratio is to its cost on the same scenario) and ``random`` (the
-normalised score's zero), next to the policies asked for. Episodes run in this process
-(``workers=1``), on a process pool or on Ray, with the worker set-up of
+planner: on a published split's part, checked against the split's fixed reference,
+which every cost ratio is to; elsewhere every cost ratio is to its cost on the same
+scenario) and ``random-phases`` (the normalised score's zero), next to the policies
+asked for. Episodes run in this process
+(``workers=1``), on a process pool or on Ray (:mod:`training.evaluation.tasks`), with the worker set-up of
 ``fetchcarry generate`` (:mod:`training.data.generate`): workers ignore Ctrl-C and die with
 their parent.
 
 ``OUT_DIR/results.json`` is rewritten as episodes finish (at most every
-:data:`WRITE_EVERY_S` seconds) and once more at the end, so an interrupted run keeps
-its finished episodes; ``summary.md`` and ``splits.png`` are written at the end and on
-an interrupt. With ``resume``, the episodes already in ``results.json`` are kept and
-only the others run (an interrupted benchmark continues where it stopped); the records
-of other policies or splits in the file stay after this run's, and in the summary, so
-one folder can grow a policy at a time. A record is this run's episode when its policy,
-split, seed and scenario digest (:func:`training.evaluation.results.scenario_digest`)
-are the episode's: a scenario file whose content changed runs again, and its old record
-goes. Records are kept in a fixed order (policy, then episode), so the same command
-gives the same file, timings aside.
+:data:`WRITE_EVERY_S` seconds) and once more at the end, so an interrupted run keeps its
+finished episodes; ``summary.md``, ``splits.png`` and (with several object counts)
+``objects.png`` are written at the end and on an interrupt. With ``resume``, the
+episodes already in ``results.json`` are kept and only the others run (an interrupted
+benchmark continues where it stopped); the records of other policies or splits in the
+file stay after this run's, and in the summary, so one folder can grow a policy at a
+time. A record is this run's episode when its policy, split, seed and scenario digest
+(:func:`training.evaluation.results.scenario_digest`) are the episode's: a scenario file
+whose content changed runs again, and its old record goes. Records are kept in a fixed
+order (policy, then episode), so the same command gives the same file, timings aside.
 
 The file's format, its validation and atomic writes are
 :mod:`training.evaluation.results`'s: a file that breaks the schema is refused (exit 2,
@@ -29,29 +31,28 @@ once (exit 2, naming the holder) rather than overwrite the first one's records.
 
 from __future__ import annotations
 
-import multiprocessing
-import os
 import time
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.observation import Capacity
 from fetchcarry_env.observations import OBS_MODES
-from training.data.generate import BACKENDS, _terminate_workers, progress_bar, worker_setup
+from training.data.generate import BACKENDS, progress_bar
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
-from training.evaluation.metrics import Row, fill_expert_costs, summarise
+from training.evaluation.metrics import SCORE_ZERO, Row, by_objects, fill_expert_costs, summarise
+from training.evaluation.references import reference_for
 from training.evaluation.report import source_table, summary_markdown
 from training.evaluation.results import RESULTS, ResultsLock, read_results, scenario_digest
 from training.evaluation.results import write_results as write_results_file
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
+from training.evaluation.tasks import run_all
 from training.pictures.benchmark import plot_splits
 from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
 
-SUMMARY, PLOT = "summary.md", "splits.png"
+SUMMARY, PLOT, OBJECTS_PLOT = "summary.md", "splits.png", "objects.png"
 WRITE_EVERY_S = 1.0  # seconds between rewrites of results.json while episodes finish
 
 Task = tuple[PolicySpec, EvalScenario]
@@ -109,6 +110,8 @@ def run_benchmark(
     else:
         items = folder_scenarios(scenarios, episodes, learned=[spec.name for spec in specs if spec.run])
     check_fits(specs, items)
+    for item in items:
+        reference_for(item)  # a published split whose scenarios differ from its reference file is refused
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with ResultsLock(out):
@@ -172,17 +175,20 @@ def finished_records(out: Path, tasks: list[Task]) -> tuple[list[dict[str, Any]]
 
 
 def with_references(policies: list[str]) -> list[PolicySpec]:
-    """The specs of ``policies`` with ``expert`` and ``random`` first (added if missing)."""
+    """The specs of ``policies`` with ``expert`` and ``random-phases`` (the score's zero) first (added if missing)."""
     if not policies:
         raise BenchmarkError("give at least one policy")
     specs = resolve_all(policies)
-    clashes = [s.run for s in specs if s.run is not None and s.name in (EXPERT, RANDOM)]
+    fixed = (EXPERT, SCORE_ZERO, RANDOM)
+    clashes = [s.run or s.user for s in specs if (s.run or s.user) is not None and s.name in fixed]
     if clashes:
-        raise BenchmarkError(f"a run folder may not be named {EXPERT!r} or {RANDOM!r} (the references): {clashes[0]}")
+        raise BenchmarkError(
+            f"a run folder may not be named {' or '.join(map(repr, fixed))} (the references): {clashes[0]}"
+        )
     names = [s.name for s in specs]
-    references = [resolve(name) for name in (EXPERT, RANDOM) if name not in names]
+    references = [resolve(name) for name in (EXPERT, SCORE_ZERO) if name not in names]
     ordered = references + specs
-    return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != RANDOM))  # stable: the rest keep their order
+    return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != SCORE_ZERO))  # stable: the rest keep their order
 
 
 def with_observations(specs: list[PolicySpec], obs_mode: str) -> list[PolicySpec]:
@@ -235,68 +241,16 @@ def write_report(out: Path, rows: list[Row], records: list[dict[str, Any]], titl
         tables += ["\n".join(lines)] if lines else []
     (out / SUMMARY).write_text("\n".join(tables))
     plot_splits(rows, out / PLOT)
+    if len({r["objects"] for r in records}) > 1:  # success and cost ratio against the number of objects
+        plot_splits(by_objects(records), out / OBJECTS_PLOT, groups_label="objects in the scenario")
 
 
 def run_tasks(
-    tasks: list[Task], *, workers: int = 1, backend: str = "process", ray_address: str | None = None
+    tasks: Sequence[Task], *, workers: int = 1, backend: str = "process", ray_address: str | None = None
 ) -> Iterator[dict[str, Any]]:
     """Each task's record (with its ``index`` in the split), as they finish (Ray: on ``ray_address``, if given)."""
-    if backend == "ray":
-        yield from _run_ray(tasks, workers, ray_address)
-    elif workers == 1:
-        for task in tasks:
-            yield _indexed(task)
-    else:
-        yield from _run_pool(_indexed, tasks, workers)
+    yield from run_all(tasks, _indexed, workers=workers, backend=backend, ray_address=ray_address)
 
 
 def _indexed(task: Task) -> dict[str, Any]:
     return {**run_task(task), "index": task[1].index}
-
-
-def _run_pool(function: Callable[[Task], dict], tasks: list[Task], workers: int) -> Iterator[dict[str, Any]]:
-    # The pool of ``fetchcarry generate``: spawned workers that ignore Ctrl-C and die with this process.
-    pool = ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=worker_setup,
-        initargs=(os.getpid(),),
-    )
-    finished_cleanly = False
-    try:
-        pending = {pool.submit(function, task) for task in tasks}
-        while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
-                yield future.result()
-        finished_cleanly = True
-    finally:
-        if not finished_cleanly:
-            _terminate_workers(pool)
-        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
-
-
-def _run_ray(tasks: list[Task], workers: int, address: str | None) -> Iterator[dict[str, Any]]:
-    try:
-        import ray
-    except ModuleNotFoundError:
-        raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
-    started_here = not ray.is_initialized()
-    if started_here and address is None:
-        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-    elif started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(_indexed)
-    queue, pending = list(tasks), []
-    try:
-        while queue or pending:
-            while queue and len(pending) < 2 * workers:  # few in flight: an interruption loses only those
-                pending.append(remote.remote(queue.pop(0)))
-            finished, pending = ray.wait(pending, num_returns=1)
-            for ref in finished:
-                yield ray.get(ref)
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started_here:
-            ray.shutdown()

@@ -27,6 +27,15 @@ split                  scenarios
 
 A name without a version (``iid``) means the newest version. A new version gets a new
 entry here; an existing version never changes.
+
+Dev and test (version 1): every ``-v1`` split has two parts with disjoint seeds,
+``NAME-v1:dev`` (episode ``k``: seed ``EVAL_SEED_BASE + offset + k``, the seeds of
+``-v0``, on which recipes were tuned) for choosing recipes, and ``NAME-v1:test``
+(episode ``k``: seed ``EVAL_SEED_BASE + offset + TEST_SHIFT + k``, never used before
+version 1) for reporting, 300 episodes by default. A version without a part
+(``iid-v1``, ``iid``) means its ``test`` part; ``iid:dev`` is the newest version's
+``dev`` part. Each part's scenarios are pinned by the digest of every scenario in the
+split's reference file (:mod:`training.evaluation.references`).
 """
 
 from __future__ import annotations
@@ -40,12 +49,14 @@ import numpy as np
 from fetchcarry_env.families import EXTENT, HELD_OUT_FAMILIES, Family, draw_push, get_family
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import Scenario, ScenarioError
+from training.data.generate import EVAL_SEED_BASE  # first evaluation seed; training and dataset seeds stay below it
 from training.errors import BenchmarkError
 
-EVAL_SEED_BASE = 1_000_000_000  # first evaluation seed; training and dataset seeds stay below it
 SPLIT_BLOCK = 1_000_000  # seeds reserved per split (episode k of a split uses base + offset + k)
 TRAINING_FAMILIES = ("basic", "push", "corridor", "multi-2")  # what a learner is trained on
 SCENARIO_FILES = "*.json"  # what --scenarios reads from a folder
+TEST_SHIFT = SPLIT_BLOCK // 2  # a v1 split's test part starts this far into its block
+DEV, TEST = "dev", "test"  # the parts of a v1 split: choose recipes on dev, report on test
 
 
 @dataclass(frozen=True)
@@ -66,15 +77,28 @@ class Split:
     offset: int  # this split's seeds start at EVAL_SEED_BASE + offset
     episodes: int = 100  # the default number of episodes
 
+    part: str = ""  # "dev" or "test" for a v1 split's part, "" for a v0 split (one part)
+
     @property
     def base_name(self) -> str:
-        """The name without its version (``iid`` for ``iid-v0``)."""
-        return self.name.rsplit("-v", 1)[0]
+        """The name without its version and part (``iid`` for ``iid-v0`` and ``iid-v1:test``)."""
+        return self.version.rsplit("-v", 1)[0]
+
+    @property
+    def version(self) -> str:
+        """The name without its part (``iid-v1`` for ``iid-v1:test``): what a reference file is named after."""
+        return self.name.split(":", 1)[0]
+
+    @property
+    def version_number(self) -> int:
+        """The version as a number (1 for ``iid-v1:dev``)."""
+        return int(self.version.rsplit("-v", 1)[1])
 
     def seed(self, index: int) -> int:
         """The seed of episode ``index``."""
-        if not 0 <= index < SPLIT_BLOCK:
-            raise BenchmarkError(f"a split has at most {SPLIT_BLOCK} episodes, asked for episode {index}")
+        room = SPLIT_BLOCK - TEST_SHIFT if self.part else SPLIT_BLOCK
+        if not 0 <= index < room:
+            raise BenchmarkError(f"a split has at most {room} episodes, asked for episode {index}")
         return EVAL_SEED_BASE + self.offset + index
 
 
@@ -98,31 +122,57 @@ def _push_pattern(pattern: str) -> Source:
     return Source(f"push-{pattern}", Family(f"push-{pattern}", f"Table I pattern {pattern}", EXTENT, draw))
 
 
-SPLITS: dict[str, Split] = {
-    split.name: split
-    for split in (
-        Split("iid-v0", "unseen seeds of the training families", _families(*TRAINING_FAMILIES), 0 * SPLIT_BLOCK),
-        Split("more-objects-v0", "three and four objects", _families("multi-3", "multi-4"), 1 * SPLIT_BLOCK),
-        Split("layouts-v0", "room and corridor layouts held out", _families(*HELD_OUT_FAMILIES), 2 * SPLIT_BLOCK),
-        Split(
-            "push-required-v0",
-            "every scenario needs a push, Table I patterns A-E",
-            tuple(_push_pattern(p) for p in "ABCDE"),
-            3 * SPLIT_BLOCK,
-        ),
+_V0 = (
+    Split("iid-v0", "unseen seeds of the training families", _families(*TRAINING_FAMILIES), 0 * SPLIT_BLOCK),
+    Split("more-objects-v0", "three and four objects", _families("multi-3", "multi-4"), 1 * SPLIT_BLOCK),
+    Split("layouts-v0", "room and corridor layouts held out", _families(*HELD_OUT_FAMILIES), 2 * SPLIT_BLOCK),
+    Split(
+        "push-required-v0",
+        "every scenario needs a push, Table I patterns A-E",
+        tuple(_push_pattern(p) for p in "ABCDE"),
+        3 * SPLIT_BLOCK,
+    ),
+)
+DEV_EPISODES, TEST_EPISODES = 100, 300  # a v1 part's default episodes (the published table: 300 per test split)
+
+
+def _parts(v0: Split) -> tuple[Split, Split]:
+    """Version 1 of ``v0``: its dev part (v0's seeds) and its test part (fresh seeds), same sources."""
+    name = f"{v0.base_name}-v1"
+    return (
+        Split(f"{name}:{DEV}", v0.description, v0.sources, v0.offset, DEV_EPISODES, DEV),
+        Split(f"{name}:{TEST}", v0.description, v0.sources, v0.offset + TEST_SHIFT, TEST_EPISODES, TEST),
     )
-}
+
+
+SPLITS: dict[str, Split] = {split.name: split for split in (*_V0, *(p for v0 in _V0 for p in _parts(v0)))}
+"""Every split (and part) by its full name: ``iid-v0``, ``iid-v1:dev``, ``iid-v1:test``, ..."""
 
 
 def get_split(name: str) -> Split:
-    """The split called ``name`` (``iid`` means its newest version); :class:`BenchmarkError` otherwise."""
+    """The split called ``name``; :class:`BenchmarkError` otherwise.
+
+    ``iid`` means its newest version, a version of two parts without one (``iid-v1``)
+    its ``test`` part, and ``iid:dev`` the newest version's ``dev`` part.
+    """
     if name in SPLITS:
         return SPLITS[name]
-    versions = sorted((s for s in SPLITS.values() if s.base_name == name), key=lambda s: int(s.name.rsplit("v", 1)[1]))
+    stem, _, part = name.partition(":")
+    if f"{stem}:{part or TEST}" in SPLITS:
+        return SPLITS[f"{stem}:{part or TEST}"]
+    versions = sorted((s for s in SPLITS.values() if s.base_name == stem), key=lambda s: s.version_number)
     if versions:
-        return versions[-1]
+        newest = [s for s in versions if s.version_number == versions[-1].version_number]
+        chosen = [s for s in newest if s.part == (part or (TEST if s.part else ""))]
+        if chosen:
+            return chosen[0]
     known = ", ".join(sorted({s.base_name for s in SPLITS.values()} | set(SPLITS)))
     raise BenchmarkError(f"unknown split {name!r}; known: {known}")
+
+
+def published_splits() -> list[Split]:
+    """The splits and parts that ship a reference file (every v1 part), in table order."""
+    return [s for s in SPLITS.values() if s.part]
 
 
 def split_scenarios(split: Split | str, episodes: int | None = None) -> list[EvalScenario]:

@@ -1,6 +1,8 @@
 """The benchmark's and the published table's plots, as PNG files.
 
-:func:`plot_splits` draws success and cost ratio per split with their 95 % intervals;
+:func:`plot_splits` draws success and cost ratio per split (or per object count) with
+their 95 % intervals, a distinct colour for every policy (:func:`policy_colours`) and n in
+the caption;
 :func:`plot_learning_curve` draws a run folder's ``metrics.csv`` (any numeric columns
 against its first); :func:`plot_demonstrations` draws success against the number of
 demonstrations from records that carry a ``demonstrations`` count;
@@ -40,18 +42,45 @@ def pyplot() -> Any:
     return plt
 
 
-def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
-    """Success and cost ratio per split and policy, with 95 % intervals, as one PNG."""
+REFERENCE_COLOURS = {"expert": "#000000", "random-phases": "#7f7f7f", "random": "#bdbdbd", "greedy": "#8c564b"}
+ZERO_MARK = 0.03  # success axis units: a bar of zero success is drawn this high, hatched and labelled "0", so it shows
+
+
+def policy_colours(policies: Sequence[str]) -> dict[str, Any]:
+    """A distinct colour for every policy: fixed ones for the references, then tab10, tab20b, tab20c, then hues."""
     plt = pyplot()
-    splits = list(dict.fromkeys(r.split for r in rows))
+    palette = [c for name in ("tab10", "tab20b", "tab20c") for c in plt.get_cmap(name).colors]
+    palette = [c for c in palette if plt.matplotlib.colors.to_hex(c) not in REFERENCE_COLOURS.values()]
+    out: dict[str, Any] = {}
+    others = [p for p in dict.fromkeys(policies) if p not in REFERENCE_COLOURS]
+    for k, policy in enumerate(others):
+        out[policy] = palette[k] if k < len(palette) else plt.get_cmap("hsv")((k - len(palette)) / max(1, len(others)))
+    return {**{p: REFERENCE_COLOURS[p] for p in policies if p in REFERENCE_COLOURS}, **out}
+
+
+def _caption(rows: Sequence[Row]) -> str:
+    """``n = 300 episodes per policy and split (100 scenarios x 3 seeds pooled)``: what the bars are made of."""
+    counts = sorted({r.episodes for r in rows})
+    scenarios = sorted({r.scenarios for r in rows if r.scenarios and r.scenarios != r.episodes})
+    text = f"n = {', '.join(map(str, counts))} episodes per bar"
+    if scenarios:
+        text += f" (seeds pooled over {', '.join(map(str, scenarios))} scenarios; intervals resample scenarios)"
+    zero = sorted({r.score_zero for r in rows})
+    kinds = sorted({r.reference for r in rows})
+    reference = "the split's fixed reference" if kinds == ["fixed"] else f"the reference ({', '.join(kinds)})"
+    return text + f"; hatched stub marked 0: no success; cost ratio to {reference}; score zero {'/'.join(zero)}"
+
+
+def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, Any]) -> None:
+    """Success and cost-ratio bars of ``rows`` per group (``row.split``) and policy, with their intervals."""
+    left, right = axes
     policies = list(dict.fromkeys(r.policy for r in rows))
     by_key = {(r.policy, r.split): r for r in rows}
     width = 0.8 / max(1, len(policies))
-    figure, (left, right) = plt.subplots(1, 2, figsize=(max(8.0, 2.5 * len(splits) + 4), 4))
     for k, policy in enumerate(policies):
-        xs, success, s_err, ratio, r_err, r_xs = [], [], [[], []], [], [[], []], []
-        for j, split in enumerate(splits):
-            row = by_key.get((policy, split))
+        xs, success, s_err, ratio, r_err, r_xs, zero_xs = [], [], [[], []], [], [[], []], [], []
+        for j, group in enumerate(groups):
+            row = by_key.get((policy, group))
             if row is None:
                 continue
             x = j + (k - (len(policies) - 1) / 2) * width
@@ -59,6 +88,7 @@ def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
             success.append(row.success)
             s_err[0].append(row.success - row.success_low)
             s_err[1].append(row.success_high - row.success)
+            zero_xs += [x] if row.success == 0 else []
             if not math.isnan(row.cost_ratio):
                 r_xs.append(x)
                 ratio.append(row.cost_ratio)
@@ -66,16 +96,44 @@ def plot_splits(rows: Sequence[Row], path: str | Path) -> Path:
                 high = row.cost_ratio_high if not math.isnan(row.cost_ratio_high) else row.cost_ratio
                 r_err[0].append(row.cost_ratio - low)
                 r_err[1].append(high - row.cost_ratio)
-        left.bar(xs, success, width, yerr=s_err, capsize=3, label=policy)
-        right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, label=policy)
-    for axis, label in ((left, "success rate (95 % Wilson)"), (right, "cost ratio to the expert (95 % CI)")):
-        axis.set_xticks(range(len(splits)), splits)
+        colour = colours[policy]
+        left.bar(
+            xs, success, width, yerr=s_err, capsize=3, label=policy, color=colour, edgecolor="black", linewidth=0.3
+        )
+        left.bar(
+            zero_xs, [ZERO_MARK] * len(zero_xs), width, color="white", edgecolor=colour, hatch="////", linewidth=1.0
+        )
+        right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, color=colour, edgecolor="black", linewidth=0.3)
+        for x in zero_xs:
+            left.text(x, ZERO_MARK + 0.01, "0", ha="center", va="bottom", fontsize="x-small", color="black")
+
+
+def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None = None) -> Path:
+    """Success and cost ratio per split (or per group: ``row.split``) and policy, with 95 % intervals, as one PNG.
+
+    Every policy has its own colour (:func:`policy_colours`), a bar of zero success shows
+    as a hatched stub, and the caption gives n (episodes per bar, and the scenarios when
+    seeds are pooled). ``groups_label`` names the x axis (the splits by default).
+    """
+    plt = pyplot()
+    groups = list(dict.fromkeys(r.split for r in rows))
+    policies = list(dict.fromkeys(r.policy for r in rows))
+    colours = policy_colours(policies)
+    figure, axes = plt.subplots(1, 2, figsize=(max(8.0, 2.5 * len(groups) + 4), 4.4))
+    _bars(axes, rows, groups, colours)
+    left, right = axes
+    for axis, label in ((left, "success rate (95 % CI)"), (right, "cost ratio to the reference (95 % CI)")):
+        axis.set_xticks(range(len(groups)), groups, fontsize="small")
         axis.set_ylabel(label)
+        if groups_label:
+            axis.set_xlabel(groups_label)
     left.set_ylim(0, 1.05)
     right.axhline(1.0, color="grey", linewidth=0.8)
     handles, labels = left.get_legend_handles_labels()
     figure.legend(handles, labels, loc="upper center", ncol=min(len(policies), 6), fontsize="small", frameon=False)
-    figure.tight_layout(rect=(0, 0, 1, 0.92))
+    figure.text(0.5, 0.01, _caption(rows), ha="center", fontsize="x-small", wrap=True)
+    rows_of_legend = math.ceil(len(policies) / 6)
+    figure.tight_layout(rect=(0, 0.05, 1, 1 - 0.06 * rows_of_legend))
     figure.savefig(path, dpi=DPI)
     plt.close(figure)
     return Path(path)
@@ -158,8 +216,8 @@ def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]
     """
     plt = pyplot()
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, (label, runs) in enumerate(curves):
+    colours = policy_colours([label for label, _ in curves])
+    for label, runs in curves:
         for j, rows in enumerate(runs):
             if not rows:
                 continue
@@ -168,7 +226,7 @@ def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]
                     axes[r][c].plot(
                         [row[x] for row in rows],
                         [row[key] for row in rows],
-                        color=colours[k % 10],
+                        color=colours[label],
                         alpha=0.8,
                         marker="o",
                         markersize=MARKER_SIZE,

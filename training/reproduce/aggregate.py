@@ -17,7 +17,6 @@ return against env steps and wall-clock seconds, one line per run) and
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -27,10 +26,11 @@ import numpy as np
 
 from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import source_table
-from training.evaluation.results import RESULTS, read_results
+from training.evaluation.results import RESULTS, read_results, write_results
 from training.learners.runs import read_saved
 from training.pictures.benchmark import plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
+from training.reproduce.publish import commit_line
 from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
 
 SUMMARY, SPLITS_PLOT = "summary.md", "splits.png"
@@ -58,10 +58,16 @@ def expert_labels(run: Path) -> int | None:
     return None
 
 
-def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, seeds: int, timings: dict) -> Path:
-    """Write ``summary.md``, ``results.json`` and the plots of the reproduction in ``out``; return summary.md's path."""
+def write_published(
+    out: Path, baselines: Sequence[Baseline], budget: Budget, seeds: int, timings: dict, commits: Sequence[str] = ()
+) -> Path:
+    """Write ``summary.md``, ``results.json`` and the plots of the reproduction in ``out``; return summary.md's path.
+
+    ``commits`` are the commits of the code that made the folder (:func:`training.reproduce.publish.record_commit`):
+    the summary names them.
+    """
     records = collect(out, baselines)
-    (out / RESULTS).write_text(json.dumps(records, indent=1) + "\n")
+    write_results(out / RESULTS, records)
     per_run = {(row.policy, row.split): row for row in summarise(records)}
     pooled = {(row.policy, row.split): row for row in summarise([{**r, "policy": r["baseline"]} for r in records])}
     labels = {name: expert_labels(out / "runs" / name) for b in baselines for name in b.runs}
@@ -71,10 +77,15 @@ def write_published(out: Path, baselines: Sequence[Baseline], budget: Budget, se
     lines = [
         "# The published table",
         "",
-        f"Budget `{budget.name}`, {seeds} training seed(s), {budget.episodes} episodes per split; learners trained "
-        "on the `training` family (basic, push, corridor, multi-2). Learned baselines: the mean over training seeds "
-        "with the range (min-max) in brackets; success also pooled over the seeds' episodes with its 95 % Wilson "
-        "interval. Cost ratio: travel cost over the MILP expert's on the same scenario (episodes both solved).",
+        commit_line(commits) if commits else "Commit not recorded.",
+        "",
+        f"Budget `{budget.name}`, {seeds} training seed(s), {budget.episodes} episodes per split (the test parts); "
+        "learners trained on the `training` family (basic, push, corridor, multi-2). Learned baselines: the mean "
+        "over training seeds with the range (min-max) in brackets; success also pooled over the seeds' episodes "
+        "with a 95 % bootstrap interval over scenarios (each scenario's seeds kept together: they are not "
+        "independent trials). Cost ratio: travel cost over the split's fixed reference on the same scenario "
+        "(episodes both solved). Score: its zero is random-phases. Paired comparisons: `fetchcarry compare A B "
+        "--results DIR/benchmark/SPLIT`.",
         "",
     ]
     for split in dict.fromkeys(r["split"] for r in records):

@@ -50,6 +50,7 @@ from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 from training.reproduce.aggregate import write_published
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
+from training.reproduce.publish import record_commit
 from training.reproduce.table import (
     CURVE_SPLIT,
     ENSEMBLE,
@@ -129,7 +130,7 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
     if seeds < 1:
         raise ReproduceError(f"the number of training seeds must be at least 1, got {seeds}")
     file = out / SETTINGS_FILE
-    settings = {"budget": asdict(budget)}
+    settings: dict[str, Any] = {"budget": asdict(budget)}
     if file.is_file():
         try:
             saved = read_json(file, MAX_TIMINGS_BYTES)
@@ -150,6 +151,8 @@ def check_settings(out: Path, seeds: int, budget: Budget) -> None:
                 f"{out} holds a reproduction of {saved_seeds if sane else 'other'} training seeds, not {seeds}: "
                 f"{again} use another folder"
             )
+        commits = saved.get("commits") if isinstance(saved, dict) else None
+        settings["commits"] = commits if isinstance(commits, list) else []  # publish.record_commit adds this call's
     elif out.exists() and any(out.iterdir()):
         raise ReproduceError(f"{out} exists and is not an empty folder or a reproduction folder")
     out.mkdir(parents=True, exist_ok=True)
@@ -236,6 +239,7 @@ def reproduce(
         raise ReproduceError(f"the number of workers must be at least 1, got {workers}")
     out = Path(out)
     check_settings(out, seeds, budget)
+    commits = record_commit(out)
     timings = Timings(out)
     root = Path(datasets) if datasets is not None else out / "datasets"
     with minari_root(root.resolve()):
@@ -243,7 +247,7 @@ def reproduce(
         _stage_training(out, seeds, budget, workers, timings, say)
         _stage_benchmark(out, seeds, budget, workers, progress, timings, say)
     with timings.stage("report"):
-        summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data)
+        summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data, commits)
     say(f"[4/4] report: {summary}, {out / 'results.json'} and the plots in {out}")
     return summary
 

@@ -1,0 +1,123 @@
+"""``fetchcarry leaderboard`` and ``fetchcarry compare``: a user's factory policy among others, refusals."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from training.cli import main
+from training.evaluation.results import read_results, write_results
+
+USER_MODULE = """
+import numpy as np
+
+
+class FirstAllowed:
+    def predict(self, observation, state=None, episode_start=None, deterministic=False, action_masks=None):
+        return int(np.flatnonzero(action_masks)[0]), state
+
+
+def make_policy(env):
+    return FirstAllowed()
+"""  # the ten-line example of docs/protocol.md
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    root = tmp_path_factory.mktemp("board")
+    (root / "my_policies.py").write_text(USER_MODULE)
+    sys.path.insert(0, str(root))
+    try:
+        mine, theirs = root / "mine", root / "theirs"
+        common = ["--split", "iid", "--episodes", "4", "--no-progress"]
+        assert main(["benchmark", "--policies", "my_policies:make_policy", *common, "--out", str(mine)]) == 0
+        assert main(["benchmark", "--policies", "greedy", *common, "--out", str(theirs)]) == 0
+    finally:
+        sys.path.remove(str(root))
+    # a third folder: a method of two training seeds (its records made from the greedy's, one seed failing one)
+    seeds = root / "seeds"
+    greedy = [r for r in read_results(theirs / "results.json") if r["policy"] == "greedy"]
+    made = [
+        {**r, "policy": f"made-s{k}", "success": r["success"] and not (k == 1 and i == 0)}
+        for k in range(2)
+        for i, r in enumerate(greedy)
+    ]
+    seeds.mkdir()
+    write_results(seeds / "results.json", made)
+    return {"mine": mine, "theirs": theirs, "seeds": seeds, "root": root}
+
+
+def test_a_users_factory_is_merged_with_two_other_folders(folders: dict, capsys: pytest.CaptureFixture) -> None:
+    argv = ["leaderboard", str(folders["mine"]), str(folders["theirs"]), str(folders["seeds"]), "--json"]
+    assert main(argv) == 0
+    board = json.loads(capsys.readouterr().out)
+    entries = board["iid-v1:test"]
+    methods = [e["policy"] for e in entries]
+    assert set(methods) == {"expert", "random-phases", "my_policies:make_policy", "greedy", "made"}
+    assert [e["rank"] for e in entries] == list(range(1, len(entries) + 1))
+    assert [e["success"] for e in entries] == sorted((e["success"] for e in entries), reverse=True)
+    made = next(e for e in entries if e["policy"] == "made")
+    assert made["seeds"] == 2 and made["episodes"] == 8 and made["scenarios"] == 4
+    assert made["against_first"]["scenarios"] == 4 and made["against_first"]["seeds"] == 2
+    assert entries[0]["against_first"] is None
+    assert main(argv[:-1]) == 0
+    text = capsys.readouterr().out
+    assert "my_policies:make_policy" in text and "random-phases" in text and "paired bootstrap" in text
+
+
+def test_compare_is_paired_on_the_same_scenarios(folders: dict, capsys: pytest.CaptureFixture) -> None:
+    argv = ["compare", "made", "greedy", "--results", str(folders["theirs"]), str(folders["seeds"]), "--json"]
+    assert main(argv) == 0
+    (result,) = json.loads(capsys.readouterr().out)
+    # seed 1 fails the first scenario greedy solved: -1/2 on one scenario of four, the others equal
+    greedy = [r for r in read_results(folders["theirs"] / "results.json") if r["policy"] == "greedy"]
+    expected = -0.5 / 4 if greedy[0]["success"] else 0.0
+    assert result["scenarios"] == 4 and result["success_diff"] == pytest.approx(expected)
+    assert result["success_low"] <= result["success_diff"] <= result["success_high"] <= 0
+    assert result["cost_diff"] == pytest.approx(0.0)  # the same costs where both solved
+    assert result["seeds"] == 2 and result["seed_wins"] == 0
+    assert main(["compare", "nobody", "greedy", "--results", str(folders["theirs"])]) == 2
+
+
+def _copy(folders: dict, name: str, change: dict) -> Path:
+    out = folders["root"] / name
+    out.mkdir(exist_ok=True)
+    records = [
+        {**r, **change, "policy": f"{r['policy']}-{name}"}
+        for r in read_results(folders["mine"] / "results.json")
+        if r["policy"] == "my_policies:make_policy"
+    ]
+    write_results(out / "results.json", records)
+    return out
+
+
+def test_different_versions_references_or_a_method_twice_are_refused(folders: dict, capsys) -> None:
+    v0 = _copy(folders, "v0", {"split": "iid-v0", "references": None})
+    other = _copy(folders, "other", {"references": "0" * 64})
+    assert main(["leaderboard", str(folders["mine"]), str(v0)]) == 2
+    assert "different versions of iid: iid-v1" in capsys.readouterr().err
+    assert main(["leaderboard", str(folders["theirs"]), str(other)]) == 2
+    assert "different references" in capsys.readouterr().err
+    assert main(["leaderboard", str(folders["mine"]), str(folders["mine"])]) == 2
+    assert "in both" in capsys.readouterr().err
+    assert main(["leaderboard", str(folders["root"] / "nothing-here")]) == 2
+
+
+def test_a_folder_of_scenarios_is_tabled_by_family_not_by_file() -> None:
+    from training.evaluation.report import family_of, source_table
+
+    def record(policy: str, source: str, seed: int, success: bool) -> dict:
+        return {"policy": policy, "scenario": source, "split": "scenarios:mine", "source": source, "seed": seed,
+                "digest": None, "success": success, "delivered": int(success), "objects": 1, "cost": 5.0,
+                "expert_cost": 5.0, "return": 5.0, "phases": 3, "pushes": 0, "invalid_actions": 0, "contacts": 0,
+                "decision_ms": 1.0, "mask_ms": 0.0}  # fmt: skip
+
+    files = ["objects-1-0001.json", "objects-1-0002.json", "objects-2-0001.json", "push_basic.json"]
+    records = [record(p, f, k, p == "expert" or k == 0) for p in ("expert", "me") for k, f in enumerate(files)]
+    lines = source_table(records, "scenarios:mine", "caption")
+    assert lines[2] == "| policy | objects-1 | objects-2 | push_basic |"
+    assert lines[5].startswith("| me | 50% [")
+    assert family_of({"source": "x.json", "family": "given"}) == "given"

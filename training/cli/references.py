@@ -1,0 +1,102 @@
+"""The ``fetchcarry references`` command: make or check the fixed references of the published splits.
+
+Exit statuses: 0 made (or, with ``--check``, every file agrees with its split); 1 a file
+disagrees with sampling its split again (``--check``); 2 bad input (an unknown split).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from training.cli.arguments import add_worker_options, positive_int
+from training.cli.options import Command
+from training.cli.text import echo
+from training.evaluation.references import (
+    FOLDER,
+    REFERENCE_TIME_LIMIT,
+    compute_references,
+    digest_mismatches,
+    part_references,
+    write_references,
+)
+from training.evaluation.splits import published_splits
+
+REFERENCES_COMMAND = Command(
+    name="references",
+    help="make or check the fixed expert references of the published splits",
+    description="Run the MILP expert once, with a generous planning limit, on every scenario of a split's dev "
+    "and test parts, and write the split's reference file (every scenario's digest and the expert's cost, "
+    "return, phases, pushes and proven status). The benchmark's cost ratio, SPL and score read these files, "
+    "never a run's timing. --check samples every published split again and compares every digest.",
+    epilog="Exit status: 0 written (or every file agrees), 1 a file disagrees with its split (--check), 2 bad input.",
+)
+
+
+def register(commands: argparse._SubParsersAction) -> None:
+    """Add ``references`` to the ``fetchcarry`` parser."""
+    parser = REFERENCES_COMMAND.add(commands, run_references)
+    versions = sorted({s.version for s in published_splits()})
+    parser.add_argument(
+        "--split",
+        nargs="+",
+        metavar="NAME",
+        default=versions,
+        help=f"split versions to make (default every one: {', '.join(versions)})",
+    )
+    parser.add_argument("--dev-episodes", type=positive_int, metavar="N", help="dev episodes (default the part's)")
+    parser.add_argument("--test-episodes", type=positive_int, metavar="N", help="test episodes (default the part's)")
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=REFERENCE_TIME_LIMIT,
+        metavar="S",
+        help=f"seconds per planning call (default {REFERENCE_TIME_LIMIT:g})",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=FOLDER,
+        metavar="DIR",
+        help="folder of the reference files (default: the package's own)",
+    )
+    add_worker_options(parser)
+    parser.add_argument("--check", action="store_true", help="only compare every digest with its split, sampled again")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run_references(args: argparse.Namespace) -> int:
+    """``fetchcarry references``: 0 written or agreeing, 1 a disagreement (``--check``)."""
+    if args.check:
+        problems = [line for split in published_splits() for line in digest_mismatches(split)]
+        for line in problems[:20]:
+            echo(line)
+        checked = sum(len(part_references(s)) for s in published_splits())
+        echo(f"{checked} scenario digests checked, {len(problems)} differ")
+        return 1 if problems else 0
+    episodes = {k: v for k, v in (("dev", args.dev_episodes), ("test", args.test_episodes)) if v}
+    for version in dict.fromkeys(s.partition(":")[0] for s in args.split):
+        started = time.perf_counter()
+        content = compute_references(
+            version,
+            episodes=episodes,
+            workers=args.workers,
+            backend=args.backend,
+            ray_address=args.ray_address,
+            time_limit=args.time_limit,
+            progress=not args.no_progress,
+        )
+        path = write_references(content, args.out)
+        echo(f"{path}: {_summary(content)}, {time.perf_counter() - started:.0f} s")
+    return 0
+
+
+def _summary(content: dict) -> str:
+    """``dev 100 (100 solved, 100 proven optimal, planning 12.3 s), test ...``."""
+    parts = []
+    for part, records in content["parts"].items():
+        solved, proven = sum(r["success"] for r in records), sum(r["proven"] for r in records)
+        planning = sum(r["planning_s"] for r in records)
+        parts.append(f"{part} {len(records)} ({solved} solved, {proven} proven optimal, planning {planning:.1f} s)")
+    return ", ".join(parts)

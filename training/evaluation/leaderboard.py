@@ -1,0 +1,166 @@
+"""``fetchcarry leaderboard``: result folders merged into one ranked table per split, with paired statistics.
+
+Each folder is a ``fetchcarry benchmark --out`` folder (its ``results.json``, checked
+against its schema). Folders are merged only when they are comparable:
+
+- one version of each split (``iid-v0`` and ``iid-v1:test`` never meet in one table),
+- one reference per split: every record's ``references`` (the digest of the fixed
+  references its cost ratio was read from, or ``null`` for a run's own expert) agrees,
+- one set of records per method: a learned method in two folders is refused (name
+  runs apart); the reference policies (``expert``, ``random``, ``random-phases``,
+  ``greedy``) are taken from the first folder that has them.
+
+Per split, methods (training seeds pooled, :func:`training.evaluation.compare.method_of`)
+are ranked by success, then SPL; each row gives the paired comparison with the row
+ranked first (:func:`training.evaluation.compare.compare`) on the scenarios both ran.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from training.errors import BenchmarkError
+from training.evaluation.compare import Comparison, compare, method_of, pooled
+from training.evaluation.metrics import Row, summarise
+from training.evaluation.report import legend
+from training.evaluation.results import RESULTS, read_results
+from training.evaluation.splits import SPLITS
+
+SHARED = ("expert", "random", "random-phases", "greedy")  # references every folder may hold
+
+
+class LeaderboardError(BenchmarkError):
+    """Result folders that cannot be merged into one table (bad input, exit 2)."""
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One method on one split: its rank, figures (seeds pooled), seeds, folder and comparison with the first."""
+
+    rank: int
+    row: Row
+    seeds: int
+    folder: str
+    against_first: Comparison | None
+
+    def to_dict(self) -> dict[str, Any]:
+        data = {"rank": self.rank, "seeds": self.seeds, "folder": self.folder, **asdict(self.row)}
+        data["against_first"] = asdict(self.against_first) if self.against_first else None
+        return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in data.items()}
+
+
+def merge_folders(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
+    """Every record of ``folders``' ``results.json``, with ``folder``; :class:`LeaderboardError` if not comparable."""
+    if not folders:
+        raise LeaderboardError("give at least one results folder")
+    merged: list[dict[str, Any]] = []
+    owner: dict[tuple[str, str], str] = {}  # (method, split) -> folder
+    for folder in map(Path, folders):
+        path = folder / RESULTS if folder.is_dir() else folder
+        try:
+            records = read_results(path)
+        except FileNotFoundError:
+            raise LeaderboardError(f"{folder}: no {RESULTS} (a fetchcarry benchmark --out folder)") from None
+        keys = {(method_of(r)[0], r["split"]) for r in records}
+        for method, split in keys:
+            first = owner.get((method, split))
+            if first is not None and method not in SHARED:
+                raise LeaderboardError(
+                    f"{method} on {split} is in both {first} and {folder}: give its runs other names"
+                )
+        fresh = {key for key in keys if key not in owner}
+        merged += [{**r, "folder": str(folder)} for r in records if (method_of(r)[0], r["split"]) in fresh]
+        owner.update({key: str(folder) for key in fresh})
+    _check_comparable(merged)
+    return merged
+
+
+def _check_comparable(records: list[dict[str, Any]]) -> None:
+    """One version per split, one reference per split."""
+    versions: dict[str, dict[str, str]] = {}  # base name (iid) -> version (iid-v1) -> the first folder with it
+    for r in records:
+        split = SPLITS.get(r["split"])
+        base, version = (split.base_name, split.version) if split else (r["split"], r["split"])
+        versions.setdefault(base, {}).setdefault(version, r["folder"])
+    for base, seen in versions.items():
+        if len(seen) > 1:
+            listed = ", ".join(f"{name} ({folder})" for name, folder in seen.items())
+            raise LeaderboardError(f"results of different versions of {base}: {listed}; benchmark them on one version")
+    refs: dict[str, dict[Any, str]] = {}
+    for r in records:
+        refs.setdefault(r["split"], {}).setdefault(r.get("references"), r["folder"])
+    for split, seen in refs.items():
+        if len(seen) > 1:
+            listed = ", ".join(f"{(d or 'its own expert run')[:12]} ({folder})" for d, folder in seen.items())
+            raise LeaderboardError(f"results on {split} against different references: {listed}")
+
+
+def leaderboard(records: Sequence[dict[str, Any]]) -> dict[str, list[Entry]]:
+    """Per split, the methods ranked by success then SPL, each compared with the first."""
+    records = list(records)
+    rows = summarise(pooled(records))
+    folders = {(method_of(r)[0], r["split"]): r.get("folder", "") for r in records}
+    seeds: dict[tuple[str, str], set] = {}
+    for r in pooled(records):
+        seeds.setdefault((r["policy"], r["split"]), set()).add(r["training_seed"])
+    out: dict[str, list[Entry]] = {}
+    for split in dict.fromkeys(row.split for row in rows):
+        ranked = sorted((row for row in rows if row.split == split), key=lambda row: (-row.success, -_or0(row.spl)))
+        entries = []
+        for rank, row in enumerate(ranked, 1):
+            against = None if rank == 1 else compare(records, row.policy, ranked[0].policy, split)
+            key = (row.policy, split)
+            entries.append(Entry(rank, row, len(seeds[key] - {None}) or 1, folders.get(key, ""), against))
+        out[split] = entries
+    return out
+
+
+def _or0(value: float) -> float:
+    return 0.0 if math.isnan(value) else value
+
+
+def leaderboard_markdown(board: dict[str, list[Entry]]) -> str:
+    """The ranked tables in Markdown, with the legend of the benchmark's columns."""
+    lines = ["# Leaderboard", ""]
+    for split, entries in board.items():
+        first = entries[0].row.policy  # the column's header names it
+        lines += [
+            f"## {split}",
+            "",
+            f"| rank | method | seeds | n | success [95 % CI] | cost ratio [95 % CI] | SPL | score | "
+            f"success - {first} [95 % CI] | seeds up/down (p) | folder |",
+            "| --- " * 11 + "|",
+        ]
+        for e in entries:
+            row, c = e.row, e.against_first
+            ratio = (
+                "-"
+                if math.isnan(row.cost_ratio)
+                else f"{row.cost_ratio:.3f}"
+                + ("" if math.isnan(row.cost_ratio_low) else f" [{row.cost_ratio_low:.3f}, {row.cost_ratio_high:.3f}]")
+            )
+            diff = (
+                "-"
+                if c is None
+                else (f"{100 * c.success_diff:+.1f} pts [{100 * c.success_low:+.1f}, {100 * c.success_high:+.1f}]")
+            )
+            signs = "-" if c is None else f"{c.seed_wins}/{c.seed_losses} ({c.sign_p:.2g})"
+            score = "-" if math.isnan(row.score) else f"{row.score:.1f}"
+            spl = "-" if math.isnan(row.spl) else f"{row.spl:.3f}"
+            lines.append(
+                f"| {e.rank} | {row.policy} | {e.seeds} | {row.episodes} | {row.success:.1%} [{row.success_low:.1%}, "
+                f"{row.success_high:.1%}] | {ratio} | {spl} | {score} | {diff} | {signs} | {e.folder} |"
+            )
+        lines.append("")
+    lines += [
+        *legend([e.row for entries in board.values() for e in entries]),
+        "- success - FIRST: the paired bootstrap over the scenarios both ran of the per-scenario success "
+        "difference with the method ranked first (seeds pooled); seeds up/down: training seeds whose success rate "
+        "is above / below the first's, with the two-sided sign-test p-value.",
+        "",
+    ]
+    return "\n".join(lines)
