@@ -58,7 +58,15 @@ FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decouple
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 SECOND_PASS_FIRST_SOLUTIONS = False  # the two-at-a-time pass with SCIP's first solutions, not optimal sub-plans
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
-_PLANNER_OPTIONS = {"integral", "lower_bound", "fewest_cuts", "conditional", "corner_detail", "guide_branching"}
+_PLANNER_OPTIONS = {
+    "integral",
+    "lower_bound",
+    "fewest_cuts",
+    "conditional",
+    "corner_detail",
+    "guide_branching",
+    "first_move_tangents",
+}
 
 
 def optimality(extra_phases: int, status: str = "optimal", fewest_proven: bool = False) -> str:
@@ -138,6 +146,11 @@ def plan(
             ``corner_detail`` (int 1-6, default 1: the octagon; higher adds tangents of the
             rounded corners to Eq. 18, :func:`expert.milp.grid.corner_directions`: closer to the
             exact swept-disc rule, slower; ``docs/formulation.md``, "Collision model"),
+            ``first_move_tangents`` (bool, default False: the first move may also pass a
+            corner along the start's own tangents, :func:`expert.milp.grid.start_tangents`;
+            never worse, one phase fewer on some diagonal gaps, 1.0-1.3x time; off by default
+            so that the expert's plans, and so the datasets and split references made with
+            it, stay those of the model they were made with),
             ``guide_branching`` (bool, default False: see ``guide``),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
@@ -167,6 +180,7 @@ def plan(
     run = _Run(scenario, started, deadline, options.settings, extra_phases, options.fewest_cuts, options.conditional)
     run.export_dir = None if export_models is None else Path(export_models)
     run.corner_detail = options.corner_detail
+    run.first_move_tangents = options.first_move_tangents
     run.guide_plan, run.guide_branching = guide, options.guide_branching
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
@@ -185,6 +199,7 @@ class _Options:
     settings: SolverSettings
     corner_detail: int = 1
     guide_branching: bool = False
+    first_move_tangents: bool = False
 
     @classmethod
     def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
@@ -197,10 +212,11 @@ class _Options:
         options = dict(solver_options)
         detail = options.pop("corner_detail", 1)
         guide_branching = bool(options.pop("guide_branching", False))
+        tangents = bool(options.pop("first_move_tangents", False))
         if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
             raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
-        return cls(*own, SolverSettings(**options), detail, guide_branching)
+        return cls(*own, SolverSettings(**options), detail, guide_branching, tangents)
 
 
 @dataclasses.dataclass
@@ -220,6 +236,7 @@ class _Run:
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
     export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
+    first_move_tangents: bool = False  # the start's tangents for the first move (expert.milp.grid.start_tangents)
     guide_plan: Plan | None = None  # plan()'s guide
     guide: list[SolvedPhase] | None = None  # the guide as MILP steps, when it maps
     guide_branching: bool = False  # the guide's option binaries branched on first
@@ -273,6 +290,7 @@ class _Run:
             integral=integral,
             deadline=deadline,
             corner_detail=self.corner_detail,
+            first_move_tangents=self.first_move_tangents,
         )
         stats["prepare_s"] = time.perf_counter() - self.started
         stats["options"] = len(problem.options)

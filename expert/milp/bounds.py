@@ -105,7 +105,9 @@ class Connectivity:
             at_start = tuple(
                 n for n in range(regular) if point_in_move_region(problem.grid, self.start, rect, radius, n)
             )
-            tangents = start_tangents(problem.grid, self.start, rect, radius)  # as the MILP's first move
+            tangents = (
+                start_tangents(problem.grid, self.start, rect, radius) if problem.grid.first_move_tangents else ()
+            )  # as the MILP's first move
             planes = (*planes, *tangents)
             self.blockers.append((planes, at_start + tuple(range(regular, len(planes))), regular))
         self._memo: dict = {}

@@ -65,7 +65,10 @@ def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
     for name, rect in rects:
         deadline.check()
         regular = move_regions(grid, rect, radius)
-        planes = (*regular, *start_tangents(grid, start, rect, radius))  # the tangents: the first move only
+        planes = (
+            *regular,
+            *(start_tangents(grid, start, rect, radius) if grid.first_move_tangents else ()),
+        )  # the tangents: the first move only
         usable = [n for n, plane in enumerate(regular) if domain.meets(plane)]
         if any(domain.inside(planes[n]) for n in usable):
             continue

@@ -169,10 +169,17 @@ class Grid:
     domain: IndexBox
     integral: bool = True
     corner_detail: int = 1  # the corner tangents of Eq. 18: corner_directions(corner_detail)
+    first_move_tangents: bool = False  # the first move also gets the start's tangents (start_tangents)
 
     @classmethod
     def for_area(
-        cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True, corner_detail: int = 1
+        cls,
+        lattice: Lattice,
+        area: Rect,
+        radius: float,
+        integral: bool = True,
+        corner_detail: int = 1,
+        first_move_tangents: bool = False,
     ) -> Grid:
         """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
         probe = cls(lattice, IndexBox(0, -1, 0, -1), integral)
@@ -183,7 +190,7 @@ class Grid:
             max(0, probe.index_at_least(1, inner.min_y)),
             min(lattice.shape[1] - 1, probe.index_at_most(1, inner.max_y)),
         )
-        return cls(lattice, domain, integral, corner_detail)
+        return cls(lattice, domain, integral, corner_detail, first_move_tangents)
 
     @property
     def resolution(self) -> float:

@@ -60,6 +60,7 @@ def prepare(
     integral: bool = True,
     deadline: Deadline = NEVER,
     corner_detail: int = 1,
+    first_move_tangents: bool = False,
 ) -> Problem:
     """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
 
@@ -68,7 +69,7 @@ def prepare(
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
     robot = scenario.robot
-    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral, corner_detail)
+    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral, corner_detail, first_move_tangents)
     ids = {o.id for o in scenario.objects}
     if holding is not None and holding not in ids:
         raise ValueError(f"holding {holding!r} is not an object of scenario {scenario.name!r}")

@@ -26,9 +26,6 @@ from typing import Any
 import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
-import expert.milp.bounds as bounds_module
-import expert.milp.collision as collision_module
-import expert.milp.reach as reach_module
 import expert.planner as expert_planner
 from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
@@ -384,10 +381,9 @@ def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
 def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
     """Each benchmark scenario up to three objects with and without the start's tangents (Eq. 18 at the first move).
 
-    Without: ``start_tangents`` replaced by a function returning none, in the planner's
-    three users (collision, bounds, reach). Interleaved per scenario; times in seconds.
+    With: the solver option ``first_move_tangents`` on; without: off (the default).
+    Interleaved per scenario; times in seconds.
     """
-    modules = (collision_module, bounds_module, reach_module)
     chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
     rows = []
     for case in chosen:
@@ -396,15 +392,8 @@ def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
             scenario = get_family(case.family).sample(rng)
             row: dict[str, Any] = {"group": case.group}
             for name in ("with", "without"):
-                saved = [m.start_tangents for m in modules]
-                if name == "without":
-                    for m in modules:
-                        m.start_tangents = lambda *args: ()
-                try:
-                    result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT)
-                finally:
-                    for m, f in zip(modules, saved, strict=True):
-                        m.start_tangents = f
+                options = {"first_move_tangents": name == "with"}
+                result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT, solver_options=options)
                 row[name] = {
                     "status": result.status,
                     "phases": len(result.phases),
