@@ -24,7 +24,7 @@ from training.cli.files import check_readable, check_writable
 from training.cli.options import Command
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
-from training.learners.options import PPOOptions, check_family
+from training.learners.options import MAX_ENVS, PPOOptions, check_family
 from training.speed import anytime as anytime_speed
 from training.speed import env as env_speed
 from training.speed import generate as generate_speed
@@ -592,13 +592,13 @@ def _register_ppo(bench: argparse._SubParsersAction) -> None:
 
 
 def _env_counts(text: str) -> list[int]:
-    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to 64."""
+    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to ``MAX_ENVS``."""
     try:
         counts = [int(part) for part in text.split(",") if part.strip()]
     except ValueError:
         counts = []
-    if not counts or not all(1 <= n <= 64 for n in counts):
-        raise UsageError(f"--envs: expected numbers from 1 to 64 separated by commas, got {text!r}")
+    if not counts or not all(1 <= n <= MAX_ENVS for n in counts):
+        raise UsageError(f"--envs: expected numbers from 1 to {MAX_ENVS} separated by commas, got {text!r}")
     return counts
 
 
