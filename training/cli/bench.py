@@ -25,7 +25,7 @@ from training.cli.options import Command
 from training.cli.seeds import seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
-from training.learners.options import PPOOptions, check_family
+from training.learners.options import MAX_ENVS, PPOOptions, check_family
 from training.speed import anytime as anytime_speed
 from training.speed import env as env_speed
 from training.speed import generate as generate_speed
@@ -506,12 +506,13 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
         _print_expressibility(names, args.episodes, out)
     print(
         f"speed ({args.steps} random masked steps per family; mask ms: mean and median per step; "
-        f"ratio: plain / phases steps per second; the machine is shared: compare the ratio; load {_load()})",
+        f"ratio: plain / phases steps per second; load: the 1-minute load average after the family; the machine is "
+        f"shared: compare the ratio; load at the start {_load()})",
         file=out,
     )
     print(
-        f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'median':>7} {'plain steps/s':>14} {'ratio':>6}  "
-        "allowed steps refused",
+        f"{'family':10} {'phases steps/s':>15} {'mask ms':>8} {'median':>7} {'plain steps/s':>14} {'ratio':>6} "
+        f"{'load':>5}  allowed steps refused",
         file=out,
     )
     for family in names:
@@ -519,12 +520,12 @@ def run_bench_phases(args: argparse.Namespace, out: TextIO | None = None) -> int
         ratio = r["plain_steps_per_s"] / r["phases_steps_per_s"]
         print(
             f"{family:10} {r['phases_steps_per_s']:15.0f} {r['mask_ms']:8.2f} {r['mask_median_ms']:7.2f} "
-            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f}  {r['refused']}, stopped at a contact {r['contacts']}",
+            f"{r['plain_steps_per_s']:14.0f} {ratio:6.1f} {os.getloadavg()[0]:5.2f}  "
+            f"{r['refused']}, stopped at a contact {r['contacts']}",
             file=out,
         )
     if args.split:
         _print_split(names, args.steps, out)
-    print(f"load at the end {_load()}", file=out)
     return 0
 
 
@@ -596,13 +597,13 @@ def _register_ppo(bench: argparse._SubParsersAction) -> None:
 
 
 def _env_counts(text: str) -> list[int]:
-    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to 64."""
+    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to ``MAX_ENVS``."""
     try:
         counts = [int(part) for part in text.split(",") if part.strip()]
     except ValueError:
         counts = []
-    if not counts or not all(1 <= n <= 64 for n in counts):
-        raise UsageError(f"--envs: expected numbers from 1 to 64 separated by commas, got {text!r}")
+    if not counts or not all(1 <= n <= MAX_ENVS for n in counts):
+        raise UsageError(f"--envs: expected numbers from 1 to {MAX_ENVS} separated by commas, got {text!r}")
     return counts
 
 
