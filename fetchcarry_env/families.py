@@ -548,22 +548,25 @@ def draw_turned_corridor(rng: np.random.Generator) -> Scenario:
 
 # ---------------------------------------------------------------------- registry
 def _family_per_value(
-    name: str, description: str, draw: Callable[[np.random.Generator, T], Scenario], values: Iterable[T]
+    name: str,
+    description: str,
+    draw: Callable[[np.random.Generator, T], Scenario],
+    values: Iterable[T],
+    capacity: Callable[[T], Capacity] = lambda _: Capacity(),
 ) -> list[Family]:
     """One family per value: ``{}`` in ``name`` and ``description`` stands for it; it is ``draw``'s second argument.
 
-    An integer value is the scenarios' object count: the family's capacity holds that many objects.
+    ``capacity`` gives each family's observation capacity from its value.
     """
     return [
-        Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v), capacity=_holding(v))
+        Family(name.format(v), description.format(v), EXTENT, lambda rng, v=v: draw(rng, v), capacity(v))
         for v in values
     ]
 
 
-def _holding(value: object) -> Capacity:
-    """The default capacity, with room for ``value`` objects when it is an object count."""
-    objects = value if isinstance(value, int) else 0
-    return Capacity(objects=max(Capacity().objects, objects))
+def _objects_capacity(count: int) -> Capacity:
+    """Room for ``count`` objects (at least the default's four)."""
+    return Capacity(objects=max(Capacity().objects, count))
 
 
 def draw_mixed(rng: np.random.Generator) -> Scenario:
@@ -592,7 +595,7 @@ GRADED: tuple[Family, ...] = (
             f"{k} object(s) over several tables in a room sized to fit, clutter on goals in half",
             EXTENT,
             lambda rng, k=k: draw_objects(rng, k),
-            capacity=Capacity(objects=max(Capacity().objects, k)),
+            capacity=_objects_capacity(k),
         )
         for k in OBJECT_COUNTS
     ),
@@ -651,10 +654,18 @@ PAPER_FAMILIES: dict[str, Family] = {
         ),
         Family("paper-corridor", "IV-F: the L corridor of Fig. 4", EXTENT, draw_paper_corridor),
         *_family_per_value(
-            "paper-multi-{}", "{} objects over three fixed tables", draw_paper_multi, PAPER_MULTI_COUNTS
+            "paper-multi-{}",
+            "{} objects over three fixed tables",
+            draw_paper_multi,
+            PAPER_MULTI_COUNTS,
+            _objects_capacity,
         ),
         *_family_per_value(
-            "paper-covered-{}", "{} objects, a block on every goal", draw_paper_covered, PAPER_COVERED_COUNTS
+            "paper-covered-{}",
+            "{} objects, a block on every goal",
+            draw_paper_covered,
+            PAPER_COVERED_COUNTS,
+            _objects_capacity,
         ),
     )
 }
