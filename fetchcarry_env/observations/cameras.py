@@ -71,30 +71,32 @@ class Cameras:
         client = sim.client
         renderer = self._renderer(sim, state)
         return {
-            "head": self._image(client, renderer, *self._head(state)),
-            "overhead": self._image(client, renderer, *self._overhead()),
+            "head": self._image(client, renderer, *self._head(client, state)),
+            "overhead": self._image(client, renderer, *self._overhead(client)),
         }
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_egl": {}}  # a copy has its own PyBullet world: load the plugin again there
 
     # ------------------------------------------------------------------ internals
-    def _head(self, state: WorldState) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
+    def _head(
+        self, client: QuietClient, state: WorldState
+    ) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
         hx, hy = heading_vector(state.heading)
         eye = [state.base[0] + HEAD_FORWARD * hx, state.base[1] + HEAD_FORWARD * hy, HEAD_HEIGHT]
         drop = math.tan(math.radians(HEAD_PITCH))
         target = [eye[0] + hx, eye[1] + hy, HEAD_HEIGHT - drop]
-        view = pybullet.computeViewMatrix(eye, target, [0.0, 0.0, 1.0])
+        view = client.computeViewMatrix(eye, target, [0.0, 0.0, 1.0])
         near, far = HEAD_RANGE
-        projection = pybullet.computeProjectionMatrixFOV(HEAD_FOV, 1.0, near, far)
+        projection = client.computeProjectionMatrixFOV(HEAD_FOV, 1.0, near, far)
         return view, projection, HEAD_RANGE, HEAD_RANGE
 
-    def _overhead(self) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
+    def _overhead(self, client: QuietClient) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
         cx, cy = self.extent.center
         height = self.overhead_height
-        view = pybullet.computeViewMatrix([cx, cy, height], [cx, cy, 0.0], [0.0, 1.0, 0.0])
+        view = client.computeViewMatrix([cx, cy, height], [cx, cy, 0.0], [0.0, 1.0, 0.0])
         planes = (height - OVERHEAD_RANGE, height + 0.05)
-        projection = pybullet.computeProjectionMatrixFOV(OVERHEAD_FOV, 1.0, *planes)
+        projection = client.computeProjectionMatrixFOV(OVERHEAD_FOV, 1.0, *planes)
         return view, projection, planes, (height - OVERHEAD_RANGE, height)
 
     def _image(
