@@ -151,7 +151,7 @@ def _run_spec(path: Path) -> PolicySpec:
     if interface not in INTERFACES:
         raise BenchmarkError(f"{config_path}: unknown interface {interface!r}; known: {', '.join(INTERFACES)}")
     options = {"capacity": config["capacity"]} if isinstance(config.get("capacity"), dict) else {}
-    options.update(_image_options(config))
+    options.update(run_image_options(config))
     # Check that it loads here, so that a broken run folder is bad input, not a crash in a worker.
     try:
         from training.learners.runs import load_policy
@@ -162,8 +162,11 @@ def _run_spec(path: Path) -> PolicySpec:
     return PolicySpec(path.name or str(path), interface, run=str(path.resolve()), env_options=options)
 
 
-def _image_options(config: dict[str, Any]) -> dict[str, Any]:
-    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size)."""
+def run_image_options(config: dict[str, Any]) -> dict[str, Any]:
+    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size).
+
+    ``config`` is the run folder's ``config.json`` (as read).
+    """
     network = config.get("config")
     obs_mode = network.get("obs_mode", "state") if isinstance(network, dict) else "state"
     if obs_mode == "state" or obs_mode not in OBS_MODES or not isinstance(config.get("features"), int):
