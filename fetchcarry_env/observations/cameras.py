@@ -19,6 +19,7 @@ physics did (a pushed box turned a little, say) as well as the geometry.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import math
 import warnings
@@ -110,14 +111,16 @@ class Cameras:
     ) -> np.ndarray:
         """One RGB-D image: RGB as drawn; the depth buffer turned to metres (``planes``: the projection's
         near and far) and quantised over ``depth_range`` (metres)."""
-        _, _, rgba, depth, _ = client.getCameraImage(
-            self.size,
-            self.size,
-            viewMatrix=view,
-            projectionMatrix=projection,
-            renderer=renderer,
-            flags=pybullet.ER_NO_SEGMENTATION_MASK,
-        )
+        quiet = silenced_file_descriptors(1) if renderer != pybullet.ER_TINY_RENDERER else contextlib.nullcontext()
+        with quiet:  # EGL prints its vendor on stdout
+            _, _, rgba, depth, _ = client.getCameraImage(
+                self.size,
+                self.size,
+                viewMatrix=view,
+                projectionMatrix=projection,
+                renderer=renderer,
+                flags=pybullet.ER_NO_SEGMENTATION_MASK,
+            )
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(self.size, self.size, 4)
         buffer = np.asarray(depth, dtype=np.float64).reshape(self.size, self.size)
         near, far = planes
@@ -143,7 +146,8 @@ class Cameras:
         with silenced_file_descriptors(1, 2):  # the plugin prints its OpenGL version on stdout
             loaded = _load_egl(client)
         if loaded:
-            sim.rebuild(state)
+            with silenced_file_descriptors(1, 2):
+                sim.rebuild(state)
         else:
             warnings.warn("PyBullet's EGL plugin did not load: drawing with the tiny renderer", stacklevel=3)
         self._egl.update(client=id(sim.client), loaded=loaded)
