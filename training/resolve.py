@@ -152,12 +152,15 @@ def _run_spec(path: Path) -> PolicySpec:
     if interface not in INTERFACES:
         raise BenchmarkError(f"{path / 'config.json'}: unknown interface {interface!r}; known: {', '.join(INTERFACES)}")
     options = {"capacity": config["capacity"]} if isinstance(config.get("capacity"), dict) else {}
-    options.update(_image_options(config))
+    options.update(run_image_options(config))
     return PolicySpec(path.name or str(path), interface, run=str(path.resolve()), env_options=options)
 
 
-def _image_options(config: dict[str, Any]) -> dict[str, Any]:
-    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size)."""
+def run_image_options(config: dict[str, Any]) -> dict[str, Any]:
+    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size).
+
+    ``config`` is the run folder's ``config.json`` (as read).
+    """
     network = config.get("config")
     obs_mode = network.get("obs_mode", "state") if isinstance(network, dict) else "state"
     if obs_mode == "state" or obs_mode not in OBS_MODES or not isinstance(config.get("features"), int):

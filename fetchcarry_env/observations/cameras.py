@@ -19,6 +19,7 @@ physics did (a pushed box turned a little, say) as well as the geometry.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import math
 import warnings
@@ -71,30 +72,32 @@ class Cameras:
         client = sim.client
         renderer = self._renderer(sim, state)
         return {
-            "head": self._image(client, renderer, *self._head(state)),
-            "overhead": self._image(client, renderer, *self._overhead()),
+            "head": self._image(client, renderer, *self._head(client, state)),
+            "overhead": self._image(client, renderer, *self._overhead(client)),
         }
 
     def __getstate__(self) -> dict:
         return {**self.__dict__, "_egl": {}}  # a copy has its own PyBullet world: load the plugin again there
 
     # ------------------------------------------------------------------ internals
-    def _head(self, state: WorldState) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
+    def _head(
+        self, client: QuietClient, state: WorldState
+    ) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
         hx, hy = heading_vector(state.heading)
         eye = [state.base[0] + HEAD_FORWARD * hx, state.base[1] + HEAD_FORWARD * hy, HEAD_HEIGHT]
         drop = math.tan(math.radians(HEAD_PITCH))
         target = [eye[0] + hx, eye[1] + hy, HEAD_HEIGHT - drop]
-        view = pybullet.computeViewMatrix(eye, target, [0.0, 0.0, 1.0])
+        view = client.computeViewMatrix(eye, target, [0.0, 0.0, 1.0])
         near, far = HEAD_RANGE
-        projection = pybullet.computeProjectionMatrixFOV(HEAD_FOV, 1.0, near, far)
+        projection = client.computeProjectionMatrixFOV(HEAD_FOV, 1.0, near, far)
         return view, projection, HEAD_RANGE, HEAD_RANGE
 
-    def _overhead(self) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
+    def _overhead(self, client: QuietClient) -> tuple[list, list, tuple[float, float], tuple[float, float]]:
         cx, cy = self.extent.center
         height = self.overhead_height
-        view = pybullet.computeViewMatrix([cx, cy, height], [cx, cy, 0.0], [0.0, 1.0, 0.0])
+        view = client.computeViewMatrix([cx, cy, height], [cx, cy, 0.0], [0.0, 1.0, 0.0])
         planes = (height - OVERHEAD_RANGE, height + 0.05)
-        projection = pybullet.computeProjectionMatrixFOV(OVERHEAD_FOV, 1.0, *planes)
+        projection = client.computeProjectionMatrixFOV(OVERHEAD_FOV, 1.0, *planes)
         return view, projection, planes, (height - OVERHEAD_RANGE, height)
 
     def _image(
@@ -108,14 +111,16 @@ class Cameras:
     ) -> np.ndarray:
         """One RGB-D image: RGB as drawn; the depth buffer turned to metres (``planes``: the projection's
         near and far) and quantised over ``depth_range`` (metres)."""
-        _, _, rgba, depth, _ = client.getCameraImage(
-            self.size,
-            self.size,
-            viewMatrix=view,
-            projectionMatrix=projection,
-            renderer=renderer,
-            flags=pybullet.ER_NO_SEGMENTATION_MASK,
-        )
+        quiet = silenced_file_descriptors(1) if renderer != pybullet.ER_TINY_RENDERER else contextlib.nullcontext()
+        with quiet:  # EGL prints its vendor on stdout
+            _, _, rgba, depth, _ = client.getCameraImage(
+                self.size,
+                self.size,
+                viewMatrix=view,
+                projectionMatrix=projection,
+                renderer=renderer,
+                flags=pybullet.ER_NO_SEGMENTATION_MASK,
+            )
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(self.size, self.size, 4)
         buffer = np.asarray(depth, dtype=np.float64).reshape(self.size, self.size)
         near, far = planes
@@ -141,7 +146,8 @@ class Cameras:
         with silenced_file_descriptors(1, 2):  # the plugin prints its OpenGL version on stdout
             loaded = _load_egl(client)
         if loaded:
-            sim.rebuild(state)
+            with silenced_file_descriptors(1, 2):
+                sim.rebuild(state)
         else:
             warnings.warn("PyBullet's EGL plugin did not load: drawing with the tiny renderer", stacklevel=3)
         self._egl.update(client=id(sim.client), loaded=loaded)

@@ -115,7 +115,8 @@ class QuietClient(BulletClient):
     def close(self) -> None:
         """Disconnect (safe to call twice)."""
         if self._client >= 0 and self._pid == os.getpid():
-            with contextlib.suppress(pybullet.error):
+            # Quiet: a server with PyBullet's EGL plugin prints "Destroy EGL OpenGL window." on stdout.
+            with contextlib.suppress(pybullet.error), silenced_file_descriptors(1):
                 pybullet.disconnect(physicsClientId=self._client)
         self._client = -1
         # Forget the bound functions: another server may get this id, and a call must not reach it.

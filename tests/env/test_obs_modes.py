@@ -141,3 +141,15 @@ def test_rgbd_images_come_from_the_world_and_copies_continue_exactly():
 def test_bad_observation_options_are_refused(options, error):
     with pytest.raises(error):
         gym.make(PHASES, family="basic", **options)
+
+
+def test_the_egl_renderer_draws_the_world_and_prints_nothing(capfd):
+    import importlib.util
+
+    if importlib.util.find_spec("eglRenderer") is None:
+        pytest.skip("PyBullet's EGL plugin is not installed here")
+    env = gym.make(PHASES, family="push", obs_mode="rgbd", camera_size=32, renderer="egl")
+    observation = random_episode(env, seed=2, steps=1)[-1]
+    env.close()
+    assert observation["overhead_rgbd"][:3].std() > 5 and (observation["overhead_rgbd"][3] < 200).any()  # tables
+    assert capfd.readouterr().out == ""

@@ -206,7 +206,7 @@ def test_train_is_generated_from_the_options_dataclasses(capsys) -> None:
     status, out, _ = run(capsys, "train", "dagger", "--help")
     assert status == 0
     for text in ("--episodes-per-iteration N", "--time-limit S", "--learner-families NAME[,NAME...]",
-                 "--workers W", "--backend {process,ray}", "--encoder {mlp,set}", "--no-progress"):  # fmt: skip
+                 "--workers W", "--backend {process,ray}", "--encoder {mlp,set,cnn}", "--no-progress"):  # fmt: skip
         assert text in out, text
     assert "epochs (per iteration for dagger; default 40)" in out and "(default 10)" in out
     status, out, _ = run(capsys, "train", "ensemble", "--help")

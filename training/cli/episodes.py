@@ -31,7 +31,7 @@ from training.evaluation.expert import (
     results_table,
 )
 from training.pictures.files import render_size
-from training.resolve import resolve
+from training.resolve import run_image_options
 from training.rollout import run_episode
 
 DEFAULT_DEMO_PICTURE = "episode.png"
@@ -200,9 +200,9 @@ def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
 
 def _run_spec_options(run: Path) -> dict[str, Any]:
     """The image options of run folder ``run``'s env (``obs_mode`` and the image size; none for the state)."""
-    options = dict(resolve(str(run)).env_options)
-    options.pop("capacity", None)
-    return options
+    from training.learners.runs import read_config  # torch at its top
+
+    return run_image_options(read_config(run))  # a broken config.json: a RunFolderError naming it
 
 
 def _load_run(run: Path, env: Any) -> Any:

@@ -224,7 +224,7 @@ class DaggerRun:
 
     family: str = option(help=FAMILY_HELP, metavar="NAME")
     options: DaggerOptions = field(default_factory=DaggerOptions, metadata=nested())
-    config: BCConfig = field(default_factory=BCConfig, metadata=nested(omit=("epochs",)))
+    config: BCConfig = field(default_factory=BCConfig, metadata=nested(omit=("epochs", "obs_mode")))
 
     def __post_init__(self) -> None:
         check_family(self.family)
