@@ -51,7 +51,7 @@ def test_same_optimum_as_recorded(scenario, monkeypatch):
 def test_start_tangents_never_make_a_plan_worse(scenario):
     """The start's tangents only add first moves: never more phases, never a higher Eq. 1 at equal phases."""
     expected = RECORDED[scenario.name]
-    result = plan(scenario, time_limit=120.0, solver_options={"first_move_tangents": True})
+    result = plan(scenario, time_limit=120.0, first_move_tangents=True)
     assert result.status == "optimal" and validate_plan(scenario, result) == []
     assert len(result.phases) <= expected["phases"]
     if len(result.phases) == expected["phases"]:

@@ -392,8 +392,7 @@ def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
             scenario = get_family(case.family).sample(rng)
             row: dict[str, Any] = {"group": case.group}
             for name in ("with", "without"):
-                options = {"first_move_tangents": name == "with"}
-                result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT, solver_options=options)
+                result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT, first_move_tangents=name == "with")
                 row[name] = {
                     "status": result.status,
                     "phases": len(result.phases),
