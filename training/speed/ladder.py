@@ -169,14 +169,17 @@ def plot(table: dict[tuple[str, int], dict[str, Any]], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     figure, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2))
-    for policy in sorted({p for p, _ in table}):
+    policies = sorted({p for p, _ in table})
+    for index, policy in enumerate(policies):
         ks = sorted(k for p, k in table if p == policy)
         rows = [table[policy, k] for k in ks]
+        shifted = np.array(ks) + 0.06 * (index - (len(policies) - 1) / 2)  # intervals apart
         success = np.array([r["success"] for r in rows])
         error = np.array([success - [r["success_low"] for r in rows], [r["success_high"] for r in rows] - success])
-        left.errorbar(ks, success, yerr=error, marker="o", capsize=3, label=policy)
+        colour = f"C{index}"
+        left.errorbar(shifted, success, yerr=error, marker="o", capsize=3, label=policy, color=colour)
         if policy != "greedy":
-            right.plot(ks, [r["cost_to_greedy"] for r in rows], marker="o", label=policy)
+            right.plot(ks, [r["cost_to_greedy"] for r in rows], marker="o", label=policy, color=colour)
     for k, goal in GOALS.items():
         left.plot([k], [goal], marker="*", markersize=14, color="black", linestyle="none")
     left.plot([], [], marker="*", color="black", linestyle="none", label="goal (k=6: 80 %, k=8: 60 %)")
@@ -192,9 +195,19 @@ def plot(table: dict[tuple[str, int], dict[str, Any]], path: Path) -> None:
     plt.close(figure)
 
 
-def report(out: Path) -> str:
-    """Write ``out/summary.md`` and ``out/ladder.png`` from ``out/results.json``; return the markdown."""
-    table = summaries(read_records(out))
+def report(out: Path, also: Sequence[Path] = ()) -> str:
+    """Write ``out/summary.md`` and ``out/ladder.png`` from ``out/results.json``; return the markdown.
+
+    The records of the folders ``also`` (run apart, for example by another process) are
+    merged into ``out/results.json`` first; a (policy, k, seed) ``out`` holds already is kept.
+    """
+    records = read_records(out)
+    done = {(r["policy"], r["k"], r["seed"]) for r in records}
+    for folder in also:
+        records += [r for r in read_records(folder) if (r["policy"], r["k"], r["seed"]) not in done]
+        done = {(r["policy"], r["k"], r["seed"]) for r in records}
+    write_records(out, records)
+    table = summaries(records)
     text = markdown(table)
     (out / "summary.md").write_text(text)
     plot(table, out / "ladder.png")
@@ -223,13 +236,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     running.add_argument("--no-progress", action="store_true", help="no progress bar")
     reporting = commands.add_parser("report", help="write OUT/summary.md and OUT/ladder.png")
     reporting.add_argument("out", type=Path, help="results folder")
+    reporting.add_argument("--also", type=Path, nargs="*", default=[], help="folders whose records to merge into OUT")
     args = parser.parse_args(argv)
     if args.command == "run":
         seeds = seeds_of(args.seeds, args.episodes)
         run(args.policies, _ks(args.ks), seeds, args.out, progress=not args.no_progress)
         if args.expert_ks:
             run([EXPERT], _ks(args.expert_ks), seeds, args.out, progress=not args.no_progress)
-    print(report(args.out), end="")
+    print(report(args.out, args.also if args.command == "report" else ()), end="")
 
 
 if __name__ == "__main__":
