@@ -73,10 +73,11 @@ def test_run_resumes_without_running_again_what_it_holds(tmp_path, monkeypatch):
         seeds = list(seeds)
         calls.append((name, k, seeds))
         for seed in seeds:
-            yield ladder.EpisodeResult(seed, True, 1.0, 4, 0)
+            yield ladder.EpisodeResult(seed, True, 1.0, 4, 0), {"delivered": 1}
 
     monkeypatch.setattr(ladder, "policy_episodes", fake)
     ladder.run(["greedy"], [1, 2], [5, 6], tmp_path, progress=False)
     ladder.run(["greedy"], [1, 2, 3], [5, 6], tmp_path, progress=False)
     assert calls == [("greedy", 1, [5, 6]), ("greedy", 2, [5, 6]), ("greedy", 3, [5, 6])]
     assert len(ladder.read_records(tmp_path)) == 6
+    assert all(r["delivered"] == 1 for r in ladder.read_records(tmp_path))

@@ -72,8 +72,11 @@ def write_records(out: Path, records: list[dict[str, Any]]) -> None:
     temporary.replace(out / RESULTS)
 
 
-def policy_episodes(name: str, k: int, seeds: Iterable[int]) -> Iterable[EpisodeResult]:
+def policy_episodes(name: str, k: int, seeds: Iterable[int]) -> Iterable[tuple[EpisodeResult, dict[str, Any]]]:
     """Episodes of the policy ``name`` (a run folder, ``greedy``, ``random-phases``, or ``expert``) on ``objects-k``.
+
+    Each comes with the objects it delivered and its outcome (``delivered``, ``truncated``
+    at the env's 50 phases, ...), where the episode's figures say them.
 
     A learned or random policy acts in the candidate phases at the family's capacity;
     ``greedy`` in the env's own actions; the ``expert`` through the candidate phases as
@@ -87,15 +90,17 @@ def policy_episodes(name: str, k: int, seeds: Iterable[int]) -> Iterable[Episode
             expert = ExpertPolicy(env)
             for seed in seeds:
                 record = expert_episode(env, expert, seed)
-                yield EpisodeResult(seed, bool(record.success), float(record.travel_cost), int(record.steps), 0)
+                result = EpisodeResult(seed, bool(record.success), float(record.travel_cost), int(record.steps), 0)
+                yield result, {}
             return
         policy = build(spec, env)
         deterministic = name != "random-phases"  # the masked random policy is seeded by the episode's seed
         for seed in seeds:
             episode = run_episode(env, policy, seed, deterministic=deterministic, stop_on_failure=False)
             figures, info = episode.figures, episode.info
-            yield EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), figures.steps,
-                                figures.invalid_actions, figures.policy_s)  # fmt: skip
+            result = EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), figures.steps,
+                                   figures.invalid_actions, figures.policy_s)  # fmt: skip
+            yield result, {"delivered": figures.delivered, "outcome": figures.outcome}
     finally:
         env.close()
 
@@ -114,8 +119,8 @@ def run(policies: Sequence[str], ks: Sequence[int], seeds: Sequence[int], out: P
     for name, k in todo:
         missing = [s for s in seeds if (label(name), k, s) not in done]
         bar.set_description(f"{label(name)} on {family(k)}")
-        for result in policy_episodes(name, k, missing):
-            records.append({"policy": label(name), "family": family(k), "k": k, **asdict(result)})
+        for result, extra in policy_episodes(name, k, missing):
+            records.append({"policy": label(name), "family": family(k), "k": k, **asdict(result), **extra})
             write_records(out, records)
             bar.update()
     bar.close()
