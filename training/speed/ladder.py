@@ -7,8 +7,8 @@ appends one record per episode to ``DIR/results.json`` (rewritten after each epi
 so an interrupted run resumes where it stopped); ``--expert-ks`` runs the MILP expert
 too on those k, for the cost ratio to the expert. ``python -m training.speed.ladder
 report DIR`` writes ``DIR/summary.md`` (success with its 95 % Wilson interval, cost
-ratio to greedy and to the expert per policy and k, the issue's goals met or missed)
-and ``DIR/ladder.png``.
+ratio to greedy and to the expert, the share of objects delivered, per policy and k; the
+issue's goals met or missed) and ``DIR/ladder.png``.
 
 Seeds (``--seeds``): ``dev`` counts up from :data:`DEV_FIRST_SEED` (the held-out seeds no
 dataset is made from; recipes are chosen there, on ``objects-5`` and ``objects-6``),
@@ -135,13 +135,19 @@ def summaries(records: list[dict[str, Any]]) -> dict[tuple[str, int], dict[str, 
     for r in records:
         fields = {key: r[key] for key in ("seed", "success", "travel_cost", "phases", "refused", "decision_s")}
         by.setdefault((r["policy"], r["k"]), []).append(EpisodeResult(**fields))
+    delivered: dict[tuple[str, int], list[float]] = {}
+    for r in records:
+        if "delivered" in r:
+            delivered.setdefault((r["policy"], r["k"]), []).append(r["delivered"] / r["k"])
     costs = {key: {e.seed: e.travel_cost for e in results if e.success} for key, results in by.items()}
     table = {}
     for (policy, k), results in by.items():
         to_greedy: Summary = summarise(results, costs.get(("greedy", k), {}))
         to_expert: Summary = summarise(results, costs.get((EXPERT, k), {}))
+        shares = delivered.get((policy, k))
         table[policy, k] = {**asdict(to_greedy), "cost_to_greedy": to_greedy.cost_ratio,
-                            "cost_to_expert": to_expert.cost_ratio}  # fmt: skip
+                            "cost_to_expert": to_expert.cost_ratio,
+                            "delivered": float(np.mean(shares)) if shares else math.nan}  # fmt: skip
     return table
 
 
@@ -151,12 +157,13 @@ def _cell(value: float, form: str) -> str:
 
 def markdown(table: dict[tuple[str, int], dict[str, Any]]) -> str:
     """The table (one row per policy and k) and the goals, met or missed, of each learned policy."""
-    lines = ["| policy | k | episodes | success [95 % Wilson] | cost / greedy | cost / expert | phases | refused |",
-             "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| policy | k | episodes | success [95 % Wilson] | delivered | cost / greedy | cost / expert | phases"
+             " | refused |", "|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for (policy, k), s in sorted(table.items()):
         lines.append(
             f"| {policy} | {k} | {s['episodes']} | {s['success']:.0%} [{s['success_low']:.0%}, {s['success_high']:.0%}]"
-            f" | {_cell(s['cost_to_greedy'], '.2f')} | {_cell(s['cost_to_expert'], '.2f')}"
+            f" | {_cell(s['delivered'], '.0%')} | {_cell(s['cost_to_greedy'], '.2f')}"
+            f" | {_cell(s['cost_to_expert'], '.2f')}"
             f" | {s['phases']:.1f} | {s['refused']:.1f} |"
         )
     lines.append("")
