@@ -25,6 +25,6 @@ python -m training.speed.ladder run --policies "$OUT/runs/bc-set-e20-s0" "$OUT/r
 
 # 4. The curve: the chosen run, greedy and random-phases on 40 test seeds (from 1,090,000,000)
 #    of objects-1..8, the expert on objects-1..4 for the cost ratio to the expert.
-python -m training.speed.ladder run --policies "$OUT/runs/bc-set-e60-s0" greedy random-phases \
+python -m training.speed.ladder run --policies "$OUT/runs/bc-set-e20-s0" greedy random-phases \
     --ks 1-8 --expert-ks 1-4 --episodes 40 --seeds test --out "$OUT/test"
 python -m training.speed.ladder report "$OUT/test"
