@@ -75,6 +75,7 @@ from fetchcarry_env.reachability import FreeSpace, unreachable_targets
 from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Posture, Robot, Scenario, Table, check_rules
 from fetchcarry_env.worlds.apartment import draw_apartment
 from fetchcarry_env.worlds.base import EXTENT, TABLE_HEIGHT, free_spot, name, point_near, robot, square, uniform
+from fetchcarry_env.worlds.ladder import draw_ladder
 from fetchcarry_env.worlds.objects import MAX_OBJECTS, draw_objects
 from fetchcarry_env.worlds.perturbed import perturb
 from fetchcarry_env.worlds.physics import HOME, PhysicsVariation
@@ -632,6 +633,7 @@ FAMILIES: dict[str, Family] = {
         Family("turned-room", "held out: a basic or push room turned a quarter turn", EXTENT, draw_turned_room),
         Family("turned-corridor", "held out: a corridor turned a quarter turn", EXTENT, draw_turned_corridor),
         *GRADED,
+        Family("objects-1-4", "objects-k with k uniform in 1..4 (the ladder's training family)", EXTENT, draw_ladder),
     )
 }
 HELD_OUT_FAMILIES: tuple[str, ...] = ("turned-room", "turned-corridor")

@@ -1,0 +1,83 @@
+"""The ladder: its training family (objects-1-4), its seed blocks, and the report's figures and verdicts."""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+
+import numpy as np
+import pytest
+
+from fetchcarry_env.families import get_family
+from fetchcarry_env.worlds.ladder import draw_ladder
+from fetchcarry_env.worlds.objects import draw_objects
+from training.evaluation.splits import EVAL_SEED_BASE, SPLIT_BLOCK, SPLITS
+from training.speed import ladder
+from training.stats import wilson
+
+
+def test_the_training_family_draws_one_to_four_objects_at_capacity_four_and_repeats():
+    family = get_family("objects-1-4")
+    assert family.capacity.objects == 4
+    counts = Counter(len(family.sample(np.random.default_rng(seed)).objects) for seed in range(80))
+    assert set(counts) == {1, 2, 3, 4}
+    assert min(counts.values()) >= 10  # uniform: about 20 each
+    first = family.sample(np.random.default_rng(7)).to_dict()
+    assert family.sample(np.random.default_rng(7)).to_dict() == first
+
+
+def test_a_ladder_draw_is_the_objects_k_draw_after_k():
+    rng, again = np.random.default_rng(3), np.random.default_rng(3)
+    scenario = draw_ladder(rng)
+    k = int(again.integers(1, 5))
+    assert draw_objects(again, k).to_dict() == scenario.to_dict()
+
+
+def test_dev_and_test_seeds_meet_no_training_seed_and_no_split():
+    dev, test = ladder.seeds_of("dev", 500), ladder.seeds_of("test", 500)
+    assert not set(dev) & set(test)
+    assert max(dev) < EVAL_SEED_BASE <= min(test)
+    for split in SPLITS.values():
+        used = range(EVAL_SEED_BASE + split.offset, EVAL_SEED_BASE + split.offset + SPLIT_BLOCK)
+        assert not (min(test) in used or max(test) in used), split.name
+
+
+def _record(policy: str, k: int, seed: int, success: bool, cost: float) -> dict:
+    return {"policy": policy, "family": f"objects-{k}", "k": k, "seed": seed, "success": success,
+            "travel_cost": cost, "phases": 10, "refused": 0, "decision_s": 0.01}  # fmt: skip
+
+
+def test_the_report_counts_success_costs_and_goals(tmp_path):
+    records = [_record("greedy", 6, s, True, 10.0) for s in range(10)]
+    records += [_record("bc", 6, s, s < 8, 12.0) for s in range(10)]  # 80 %: met, cost 1.2 x greedy's
+    records += [_record("bc", 8, s, s < 5, 20.0) for s in range(10)]  # 50 %: missed, greedy not run there
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "results.json").write_text(json.dumps({"records": records[:10]}))
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "results.json").write_text(json.dumps({"records": records[10:]}))
+    text = ladder.report(tmp_path / "a", [tmp_path / "b"])
+    table = ladder.summaries(ladder.read_records(tmp_path / "a"))
+    assert table["bc", 6]["success"] == pytest.approx(0.8)
+    assert (table["bc", 6]["success_low"], table["bc", 6]["success_high"]) == pytest.approx(wilson(8, 10))
+    assert table["bc", 6]["cost_to_greedy"] == pytest.approx(1.2)
+    assert np.isnan(table["bc", 8]["cost_to_greedy"])
+    assert "- bc: at least 80% on objects-6: met (80%)" in text
+    assert "- bc: at least 60% on objects-8: missed (50%)" in text
+    assert (tmp_path / "a" / "ladder.png").stat().st_size > 0
+
+
+def test_run_resumes_without_running_again_what_it_holds(tmp_path, monkeypatch):
+    calls = []
+
+    def fake(name, k, seeds):
+        seeds = list(seeds)
+        calls.append((name, k, seeds))
+        for seed in seeds:
+            yield ladder.EpisodeResult(seed, True, 1.0, 4, 0), {"delivered": 1}
+
+    monkeypatch.setattr(ladder, "policy_episodes", fake)
+    ladder.run(["greedy"], [1, 2], [5, 6], tmp_path, progress=False)
+    ladder.run(["greedy"], [1, 2, 3], [5, 6], tmp_path, progress=False)
+    assert calls == [("greedy", 1, [5, 6]), ("greedy", 2, [5, 6]), ("greedy", 3, [5, 6])]
+    assert len(ladder.read_records(tmp_path)) == 6
+    assert all(r["delivered"] == 1 for r in ladder.read_records(tmp_path))
