@@ -18,14 +18,12 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
 import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from datetime import timedelta
 from pathlib import Path
 
 import pytest
+from hang import hang_guard
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import file_bytes, mutated, to_json_text
@@ -46,22 +44,6 @@ def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("benchmark")
     run_benchmark(**BENCHMARK, out=out)
     return out
-
-
-@contextmanager
-def hang_guard(seconds: int) -> Iterator[None]:
-    """Fail (``TimeoutError``) if the block runs longer than ``seconds``."""
-
-    def alarm(signum: int, frame: object) -> None:
-        raise TimeoutError(f"reading a results file took more than {seconds} s: a hang")
-
-    previous = signal.signal(signal.SIGALRM, alarm)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 def _copy(finished: Path) -> Path:
@@ -91,7 +73,7 @@ def _records_or_refusal(file: Path) -> list[dict] | None:
 def test_fuzz_a_mutated_results_file_is_read_or_refused_naming_it(finished, data):
     folder = _copy(finished)
     _mutate(data, folder / RESULTS)
-    with hang_guard(HANG_SECONDS):
+    with hang_guard(HANG_SECONDS, "reading a results file"):
         records = _records_or_refusal(folder / RESULTS)
     for record in records or ():
         assert isinstance(record["success"], bool) and isinstance(record["seed"], int), record
@@ -105,7 +87,7 @@ def test_fuzz_a_resumed_benchmark_keeps_every_record_it_read_or_leaves_the_file(
     file = folder / RESULTS
     _mutate(data, file)
     before = file.read_bytes()
-    with hang_guard(HANG_SECONDS):
+    with hang_guard(HANG_SECONDS, "reading a results file"):
         records = _records_or_refusal(file)
         try:
             run_benchmark(**BENCHMARK, out=folder, resume=True)
@@ -136,5 +118,5 @@ def test_a_results_file_of_another_kind_is_refused_naming_it(finished, kind: str
         file.symlink_to("/dev/zero")
     else:
         file.write_bytes(b"")
-    with hang_guard(HANG_SECONDS):
+    with hang_guard(HANG_SECONDS, "reading a results file"):
         assert _records_or_refusal(file) is None

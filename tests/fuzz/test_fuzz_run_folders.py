@@ -18,10 +18,7 @@ import json
 import os
 import pickle
 import shutil
-import signal
 import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import replace
 from datetime import timedelta
 from pathlib import Path
@@ -29,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from hang import hang_guard
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from mutations import file_bytes, mutated, to_json_text
@@ -58,22 +56,6 @@ def trained(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     return {kind: root / kind for kind in KINDS}
 
 
-@contextmanager
-def hang_guard(seconds: int) -> Iterator[None]:
-    """Fail (``TimeoutError``) if the block runs longer than ``seconds``: a hang must not stall the suite."""
-
-    def alarm(signum: int, frame: object) -> None:
-        raise TimeoutError(f"loading a run folder took more than {seconds} s: a hang")
-
-    previous = signal.signal(signal.SIGALRM, alarm)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, previous)
-
-
 def _copy(trained: dict[str, Path], kind: str) -> Path:
     folder = Path(tempfile.mkdtemp(dir=trained[kind].parent)) / kind
     shutil.copytree(trained[kind], folder)
@@ -82,7 +64,7 @@ def _copy(trained: dict[str, Path], kind: str) -> Path:
 
 def check_loads_or_refuses(folder: Path) -> None:
     """``load_policy(folder)`` gives a policy that acts, or a RunFolderError naming the folder; nothing else."""
-    with hang_guard(HANG_SECONDS):
+    with hang_guard(HANG_SECONDS, "loading a run folder"):
         try:
             policy = training.load_policy(folder)
         except runs.RunFolderError as error:

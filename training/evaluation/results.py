@@ -25,7 +25,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from fetchcarry_env.jsontext import read_json_or
+from fetchcarry_env.jsontext import describe, read_json_or
 from fetchcarry_env.scenario import Scenario
 from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
@@ -116,7 +116,7 @@ def record_problem(record: Any) -> str | None:
             return f"has no {name!r}"
         kind = _kind(record[name])
         if kind not in kinds and not (kind == _INT and _NUMBER in kinds):  # 3 is a number, 3.0 no integer
-            return f"has {name!r} = {json.dumps(record[name])}, which is not {' or '.join(kinds)}"
+            return f"has {name!r} = {_shown(record[name])}, which is not {' or '.join(kinds)}"
     for name in NOT_NEGATIVE:
         if record[name] < 0:
             return f"has {name!r} = {record[name]}, which is negative"
@@ -133,7 +133,7 @@ def parse_results(data: Any, path: Path) -> list[dict[str, Any]]:
         version = data.get("schema_version")
         if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version <= SCHEMA_VERSION:
             raise ResultsError(
-                f"{path}: schema_version {json.dumps(version)} is not one this version reads (1 to {SCHEMA_VERSION})"
+                f"{path}: schema_version {_shown(version)} is not one this version reads (1 to {SCHEMA_VERSION})"
             )
         records = data.get("records")
         if not isinstance(records, list):
@@ -151,11 +151,23 @@ def parse_results(data: Any, path: Path) -> list[dict[str, Any]]:
     return out
 
 
+MAX_SHOWN_CHARS = 80  # characters of a string value quoted in a message
+
+
+def _shown(value: Any) -> str:
+    """``value`` as the file says it (JSON), cut short: a message names a record without printing megabytes."""
+    if isinstance(value, str):
+        return json.dumps(value if len(value) <= MAX_SHOWN_CHARS else value[:MAX_SHOWN_CHARS] + "...")
+    if value is None or isinstance(value, bool | float) or (isinstance(value, int) and value.bit_length() <= 128):
+        return json.dumps(value)
+    return describe(value)
+
+
 def _label(record: Any) -> str:
     """``(policy ..., split ..., seed ...) `` as far as ``record`` has them, to find it in the file."""
     if not isinstance(record, dict):
         return ""
-    parts = [f"{key} {json.dumps(record[key])}" for key in ("policy", "split", "seed") if key in record]
+    parts = [f"{key} {_shown(record[key])}" for key in ("policy", "split", "seed") if key in record]
     return f"({', '.join(parts)}) " if parts else ""
 
 

@@ -487,9 +487,7 @@ def _print_corners(rows: list[dict], out: str | None) -> None:
             cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
         print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
     print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
-    if out:
-        with open(out, "w", encoding="utf-8") as f:
-            json.dump(rows, f, indent=1)
+    _save(rows, out)
 
 
 def _print_tangents(rows: list[dict], out: str | None) -> None:
@@ -509,15 +507,25 @@ def _print_tangents(rows: list[dict], out: str | None) -> None:
         )
         ratio = with_s / without_s
         print(f"{group:<6} n={len(mine):<3} with {with_s:.3f} s, without {without_s:.3f} s ({ratio:.2f}x)", better)
+    _save(rows, out)
+
+
+def _save(rows: list[dict], out: str | None) -> None:
+    """Write the raw ``rows`` as JSON to ``out`` (nothing without one)."""
     if out:
         with open(out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
 
 
+def _by_kind_and_size(rows: list[dict]) -> list[tuple[tuple[str, int], list[dict]]]:
+    """``rows`` grouped by ``(kind, objects)``, in the order the groups first appear."""
+    keys = dict.fromkeys((r["kind"], r["objects"]) for r in rows)
+    return [(key, [r for r in rows if (r["kind"], r["objects"]) == key]) for key in keys]
+
+
 def _print_guide(rows: list[dict], out: str | None) -> None:
     """Per case: the median ratio of the plain time to the guided times (above 1: the guide helps)."""
-    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
-        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+    for key, mine in _by_kind_and_size(rows):
         warm = statistics.median(r["plain_s"] / r["warm_s"] for r in mine)
         branching = statistics.median(r["plain_s"] / r["branching_s"] for r in mine)
         plain = statistics.median(r["plain_s"] for r in mine)
@@ -526,15 +534,12 @@ def _print_guide(rows: list[dict], out: str | None) -> None:
             f"  speed-up warm {warm:.2f}x  warm+branching {branching:.2f}x  "
             f"same optimum {sum(r['same_optimum'] for r in mine)}/{len(mine)}"
         )
-    if out:
-        with open(out, "w", encoding="utf-8") as f:
-            json.dump(rows, f, indent=1)
+    _save(rows, out)
 
 
 def _print_scale(rows: list[dict], out: str | None) -> None:
     """Per kind and size: median and p95 of the time, how many were proven optimal."""
-    for key in dict.fromkeys((r["kind"], r["objects"]) for r in rows):
-        mine = [r for r in rows if (r["kind"], r["objects"]) == key]
+    for key, mine in _by_kind_and_size(rows):
         times = [r["total_s"] for r in mine]
         optimal = sum(r["status"] == "optimal" for r in mine)
         print(
@@ -542,9 +547,7 @@ def _print_scale(rows: list[dict], out: str | None) -> None:
             f"p95 {float(np.percentile(times, 95)):.2f} s  proven optimal {optimal}/{len(mine)}  "
             f"invalid {sum(not r['valid'] for r in mine)}"
         )
-    if out:
-        with open(out, "w", encoding="utf-8") as f:
-            json.dump(rows, f, indent=1)
+    _save(rows, out)
 
 
 if __name__ == "__main__":
