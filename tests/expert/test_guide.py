@@ -9,10 +9,13 @@ import numpy as np
 import pytest
 from cli_run import run
 
-from expert.guide import compact_phases
+from expert.decoupled import steps_of
+from expert.guide import compact_phases, guide_steps, snapped_steps
+from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.plans import Phase, Plan, plan_objective
 from expert.validate import validate_plan
+from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
 from fetchcarry_env.scenario import Scenario
 from training.guidance import rollout_plan
@@ -94,3 +97,18 @@ def test_plan_guide_on_the_command_line(capsys, tmp_path):
     assert status == 2 and "not a plan file" in err
     status, _, err = run(capsys, "plan", EXAMPLE, "--guide-branching")
     assert status == 2 and "needs --guide" in err
+
+
+def test_a_pose_outside_the_boxes_is_snapped_into_its_option(three_objects):
+    """A pick from a base the MILP's pose boxes leave out (the env accepts more): mapped onto the nearest box."""
+    scenario, plain = three_objects
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    k = next(k for k, p in enumerate(plain.phases) if p.action == "pick")
+    moved = dataclasses.replace(plain.phases[k], base=(plain.phases[k].base[0] + 2.0, plain.phases[k].base[1]))
+    phases = (*plain.phases[:k], moved, *plain.phases[k + 1 :])
+    assert steps_of(problem, phases) is None
+    steps = snapped_steps(problem, phases)
+    assert steps is not None and len(steps) == len(phases) - 1
+    step = steps[k - 1]
+    assert step.option.kind == "pick" and step.option.target == moved.target and step.option.box.contains(*step.cell)
+    assert guide_steps(problem, phases)  # the guide is used, not ignored
