@@ -349,6 +349,9 @@ def learned_guide_rows(run: str, count: int, time_limit: float, kinds: Sequence[
     family's of seeds ``LEARNED_GUIDE_SEED + n``, covered ones drawn as in :func:`scale_rows`.
     ``kinds`` keeps the cases named (``objects-6``, ``covered``). Times in seconds.
     """
+    import torch  # the learned policy's forward pass: one thread (as the ladder runs it on this 2-core machine)
+
+    torch.set_num_threads(1)
     rows = []
     for kind, size in LEARNED_GUIDE_CASES:
         if kinds is not None and kind not in kinds:
