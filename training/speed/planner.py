@@ -291,6 +291,33 @@ def scale_rows(
     return rows
 
 
+def ab_rows(
+    objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float, variants: dict[str, dict]
+) -> list[dict]:
+    """Each scenario of :func:`scale_rows` planned with every variant (``name -> plan() options``) in turn.
+
+    Interleaved per scenario, so the load moves all variants alike. Times in seconds.
+    """
+    rows = []
+    for kind, sizes, draw in (("multi", objects, draw_paper_multi), ("covered", covered, draw_paper_covered)):
+        for size in sizes:
+            for n in range(count):
+                scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+                row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
+                for name, options in variants.items():
+                    result = expert.plan(scenario, time_limit=time_limit, **options)
+                    row[name] = {
+                        "status": result.status,
+                        "objective": result.objective,
+                        "total_s": result.stats["total_s"],
+                        "valid": not result.found or validate_plan(scenario, result) == [],
+                    }
+                rows.append(row)
+                cells = ", ".join(f"{v} {row[v]['status']} {row[v]['total_s']:.2f} s" for v in variants)
+                print(f"{kind} {size} seed {row['seed']}: {cells}", flush=True)
+    return rows
+
+
 GUIDE_CASES = (("multi", 6), ("multi", 8), ("covered", 3), ("covered", 4))
 
 
@@ -497,12 +524,20 @@ def main(argv: Sequence[str] | None = None) -> None:
     scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
     scale.add_argument("--options", type=json.loads, default=None, help="plan() options as a JSON object")
     scale.add_argument("--out", help="write the rows as JSON here")
+    ab = sub.add_parser("ab", help="plan() option variants against each other, interleaved per scenario")
+    ab.add_argument("--objects", type=int, nargs="*", default=[8])
+    ab.add_argument("--covered", type=int, nargs="*", default=[3, 4])
+    ab.add_argument("--count", type=int, default=4, help="scenarios per size")
+    ab.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    ab.add_argument("--variants", type=json.loads, required=True, help='{"name": {plan() options}, ...}')
+    ab.add_argument("--out", help="write the rows as JSON here")
     guide = sub.add_parser("guide", help="the optimal plan as a guide (warm start, branching): the ceiling")
     guide.add_argument("--count", type=int, default=2, help="scenarios per case")
     guide.add_argument("--time-limit", type=float, default=60.0, help="seconds per plan() call")
     guide.add_argument("--out", help="write the rows as JSON here")
     learned = sub.add_parser("learned-guide", help="a learned rollout and greedy's as guides, against none")
-    learned.add_argument("--run", required=True, help="a run folder of fetchcarry train (the learned policy)")
+    learned.add_argument("--run", help="a run folder of fetchcarry train (the learned policy)")
+    learned.add_argument("--report", metavar="FILE", help="print the summary of rows saved by --out, run nothing")
     learned.add_argument("--count", type=int, default=4, help="scenarios per case")
     learned.add_argument("--kinds", nargs="*", default=None, help="cases kept: objects-6 objects-7 objects-8 covered")
     learned.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
@@ -516,7 +551,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     if args.command == "tangents":
         _print_tangents(tangent_rows(args.scale), args.out)
         return
+    if args.command == "ab":
+        _print_ab(ab_rows(args.objects, args.covered, args.count, args.time_limit, args.variants), args.out)
+        return
     if args.command == "learned-guide":
+        if args.report:
+            with open(args.report, encoding="utf-8") as f:
+                _print_learned_guide(json.load(f), None)
+            return
         _print_learned_guide(learned_guide_rows(args.run, args.count, args.time_limit, args.kinds), args.out)
         return
     if args.command == "decoupled":
@@ -618,17 +660,38 @@ def _print_guide(rows: list[dict], out: str | None) -> None:
     _save(rows, out)
 
 
+def _print_ab(rows: list[dict], out: str | None) -> None:
+    """Per kind and size: each variant's median time, its median ratio to the first variant's, proven counts."""
+    names = [k for k in rows[0] if isinstance(rows[0][k], dict)] if rows else []
+    for key, mine in _by_kind_and_size(rows):
+        cells = []
+        for name in names:
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            ratio = statistics.median(r[names[0]]["total_s"] / r[name]["total_s"] for r in mine)
+            proven = sum(r[name]["status"] == "optimal" for r in mine)
+            cells.append(f"{name} {median:.2f} s ({ratio:.2f}x, proven {proven}/{len(mine)})")
+        print(f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  " + "  ".join(cells))
+    _save(rows, out)
+
+
 def _print_learned_guide(rows: list[dict], out: str | None) -> None:
-    """Per case and over all: the median ratio of the plain time (mean of two calls) to each guided time."""
+    """Per case and over all: the median ratio of the plain time (mean of two calls) to each guided time.
+
+    Ratios over the scenarios every call proved optimal (a call cut at the time limit has
+    no time to a proven optimum); "same optimum" over those too.
+    """
     for label, mine in [*[(f"{k[0]} {k[1]}", m) for k, m in _by_kind_and_size(rows)], ("all", rows)]:
+        proven = [r for r in mine if all(r[c]["status"] == "optimal" for c in GUIDED_CALLS)]
+        plain = statistics.median(r["plain_s"] for r in mine)
+        head = f"{label:<12} n={len(mine):<3} plain median {plain:.2f} s, all calls proven {len(proven)}/{len(mine)}"
         cells = []
         for name in GUIDED_CALLS[1:3]:
-            ratio = statistics.median(r["plain_s"] / r[name]["total_s"] for r in mine)
-            same = sum(r["same_optimum"][name] for r in mine)
-            cells.append(f"{name} {ratio:.2f}x (same optimum {same}/{len(mine)})")
-        plain = statistics.median(r["plain_s"] for r in mine)
-        proven = sum(r["plain"]["status"] == "optimal" for r in mine)
-        head = f"{label:<12} n={len(mine):<3} plain median {plain:.2f} s (proven {proven}/{len(mine)})"
+            if not proven:
+                continue
+            ratio = statistics.median(r["plain_s"] / r[name]["total_s"] for r in proven)
+            same = sum(r["same_optimum"][name] for r in proven)
+            delivered = sum(r["guides"][name]["delivered"] for r in mine)
+            cells.append(f"{name} {ratio:.2f}x (same optimum {same}/{len(proven)}, rollout delivered {delivered})")
         print(head + "  " + "  ".join(cells))
     _save(rows, out)
 
