@@ -23,6 +23,7 @@ from typing import Any
 import pyscipopt
 
 from expert.decoupled import decoupled_plan, steps_of
+from expert.guide import guide_steps
 from expert.milp.bounds import (
     Connectivity,
     PairCosts,
@@ -238,7 +239,7 @@ class _Run:
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
     first_move_tangents: bool = False  # the start's tangents for the first move (expert.milp.grid.start_tangents)
     guide_plan: Plan | None = None  # plan()'s guide
-    guide: list[SolvedPhase] | None = None  # the guide as MILP steps, when it maps
+    guides: list[list[SolvedPhase]] = dataclasses.field(default_factory=list)  # the guide as MILP steps, compact too
     guide_branching: bool = False  # the guide's option binaries branched on first
 
     def __post_init__(self) -> None:
@@ -299,8 +300,9 @@ class _Run:
             stats["reason"] = problem.infeasible
             return self.finish("infeasible")
         if self.guide_plan is not None:
-            self.guide = steps_of(problem, self.guide_plan.phases) if self.guide_plan.phases else None
-            stats["guide"] = "mapped" if self.guide else "not mappable (ignored)"
+            self.guides = guide_steps(problem, self.guide_plan.phases)
+            stats["guide"] = "mapped" if self.guides else "not mappable (ignored)"
+            stats["guide_phases"] = [len(steps) + 1 for steps in self.guides]
         if not problem.deliver:
             stats["phases_tried"].append(1)
             return self.finish("optimal", phases_of(problem, []))
@@ -492,13 +494,11 @@ class _Run:
         t1 = time.perf_counter()
         record["build_s"] = t1 - t0
         stats["build_s"] += t1 - t0
-        if warm is None and self.guide is not None and len(self.guide) <= n_phases - 1:
-            warm = self.guide
-        if warm is None and self.warm is not None and len(self.warm) <= n_phases - 1:
-            warm = self.warm
-        self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warm, record)
-        if self.guide is not None and self.guide_branching:
-            record["guide_priorities"] = add_branching_hint(milp, self.guide)
+        warms = [warm] if warm is not None else self.warm_starts(n_phases)
+        self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warms, record)
+        if self.guides and self.guide_branching:
+            fitting = [steps for steps in self.guides if len(steps) <= n_phases - 1]
+            record["guide_priorities"] = add_branching_hint(milp, (fitting or self.guides)[-1])
         remaining = deadline.left() - RESERVE_S
         if remaining <= 0:
             raise TimeUp
@@ -538,23 +538,34 @@ class _Run:
         self.stats["lower_bound_s"] += time.perf_counter() - t_bound
         return bound, windows, cond
 
+    def warm_starts(self, n_phases: int) -> list[list[SolvedPhase]]:
+        """The plans that fit a model of ``n_phases``: the guide (as it is, compact) and the decoupled plan."""
+        known = [*self.guides, *([self.warm] if self.warm is not None else [])]
+        return [steps for steps in known if len(steps) <= n_phases - 1]
+
     def add_cuts_and_warm_start(
         self,
         milp: Milp,
         problem: Problem,
         n_phases: int,
         cond: Conditional | None,
-        warm: list[SolvedPhase] | None,
+        warms: list[list[SolvedPhase]],
         record: dict[str, Any],
     ) -> None:
-        """The conditional cuts, the warm start and, when the warm start has ``n_phases``, the options it beats."""
+        """The conditional cuts, the warm starts SCIP accepts (each checked) and the options the best of
+        those with ``n_phases`` phases beats (its Eq. 1 is the MILP's)."""
         if cond is not None:
             record["conditional_fixed"] = add_conditional_cuts(milp, cond)
-        if warm is not None:
-            record["warm_start"] = add_warm_start(milp, warm)
-            known = phases_of(problem, warm)
-            if cond is not None and record["warm_start"] and len(known) == n_phases:  # its Eq. 1 is the MILP's
-                record["conditional_fixed"] += fix_above(milp, cond, plan_objective(self.scenario, known))
+        if not warms:
+            return
+        accepted = [steps for steps in warms if add_warm_start(milp, steps)]
+        record["warm_start"] = bool(accepted)
+        if self.guides:  # whether SCIP took the guide itself (as it is or compact) as a first solution
+            record["guide_warm_start"] = any(steps is guide for steps in accepted for guide in self.guides)
+        full = [phases_of(problem, steps) for steps in accepted]
+        values = [plan_objective(self.scenario, known) for known in full if len(known) == n_phases]
+        if cond is not None and values:
+            record["conditional_fixed"] += fix_above(milp, cond, min(values))
 
     def read_solution(self, problem: Problem, milp: Milp) -> list[SolvedPhase]:
         """The best solution's steps; its objective, dual bound and gap go to the stats."""

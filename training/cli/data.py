@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 from dataclasses import asdict
+from pathlib import Path
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import add_worker_options, positive_int, whole_number
@@ -26,6 +27,7 @@ from training.data.generate import (
     StagingMismatchError,
     generate,
 )
+from training.data.models import CollectionConfig, generate_models
 from training.data.render import render_dataset
 from training.data.staging import Staging, StagingError
 from training.evaluation.protocol import refuse_split_scenario
@@ -38,7 +40,10 @@ GENERATE_COMMAND = Command(
     "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
     "interrupted run resumes where it stopped when the same command is run again. An existing dataset id "
     "is never overwritten without --overwrite; with it, the new dataset replaces the old one only once it is "
-    "whole. One run per dataset id at a time; a staged episode that cannot be read is set aside and made again.",
+    "whole. One run per dataset id at a time; a staged episode that cannot be read is set aside and made again. "
+    "With --models --out DIR it writes no dataset but a collection of the planner's MILPs for the family's seeds "
+    "(MPS, a JSON of the variables' meanings and the known optimum, the scenario and the plan per seed; an "
+    "interrupted run keeps the seeds it finished and the same command resumes).",
     epilog="Exit status: 0 the dataset is complete (also when it already was, with the same options), 2 bad "
     "input (an existing id made with other options, a partial run with other options, another run working on "
     "the id, too little disk space), 130 interrupted (run the same command again to resume).",
@@ -64,7 +69,17 @@ def _add_generate_options(parser: argparse.ArgumentParser) -> None:
         "action_mask; an expert move no candidate expresses is recorded as the nearest allowed move candidate and "
         "the expert plans again from where it left the robot; the per-step info projected marks those steps)",
     )
-    parser.add_argument("--dataset-id", required=True, metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0")
+    parser.add_argument(
+        "--dataset-id", metavar="ID", help="Minari id, e.g. fetchcarry/push-expert-v0 (required without --models)"
+    )
+    parser.add_argument(
+        "--models",
+        action="store_true",
+        help="instead of a dataset, write the MILPs the planner solves for each of the family's seeds into --out: "
+        "per seed its scenario, the plan and each phase count's model as MPS with a JSON of its variables and the "
+        "optimum SCIP proved (--time-limit is per scenario; resumable like a dataset)",
+    )
+    parser.add_argument("--out", metavar="DIR", help="with --models: the collection's folder (made if missing)")
     add_worker_options(parser)
     parser.add_argument("--overwrite", action="store_true", help="replace an existing dataset with this id")
     parser.add_argument(
@@ -79,6 +94,12 @@ def _add_generate_options(parser: argparse.ArgumentParser) -> None:
 
 def run_generate(args: argparse.Namespace) -> int:
     """``fetchcarry generate``: 0 the dataset is complete, 130 interrupted (what is staged is kept)."""
+    if args.models:
+        return run_generate_models(args)
+    if args.dataset_id is None:
+        raise UsageError("give --dataset-id ID (or --models --out DIR for a collection of MILPs)")
+    if args.out is not None:
+        raise UsageError("--out is for --models; a dataset goes to --dataset-id")
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
     if config.source.scenario is not None:
         refuse_split_scenario(config.source.scenario, args.allow_evaluation_seeds)
@@ -108,6 +129,45 @@ def run_generate(args: argparse.Namespace) -> int:
     for file in report.set_aside:
         say(f"warning: the staged episode {file} could not be read: set aside in its folder's corrupt/ and made again")
     _print_generation(report, args.json)
+    return 0
+
+
+def run_generate_models(args: argparse.Namespace) -> int:
+    """``fetchcarry generate --models``: 0 the collection is complete, 130 interrupted (finished seeds are kept)."""
+    if args.family is None:
+        raise UsageError("--models takes --family NAME (a collection is made of a family's seeds)")
+    if args.out is None:
+        raise UsageError("--models writes into a folder: give --out DIR")
+    if args.dataset_id is not None:
+        raise UsageError("--models writes no dataset: give --out DIR, not --dataset-id")
+    config = CollectionConfig(args.family, args.seed, args.episodes, args.time_limit)
+    try:
+        report = generate_models(
+            config, Path(args.out), progress=not args.no_progress, allow_evaluation_seeds=args.allow_evaluation_seeds
+        )
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
+        say(f"interrupted: the seeds finished are kept in {args.out}; run the same command again to resume")
+        return INTERRUPTED
+    summary = {
+        "out": str(report.out),
+        "family": config.family,
+        "seeds": [config.seed, config.seed + config.episodes - 1],
+        "resumed": report.resumed,
+        "generated": report.generated,
+        "models": report.models,
+        "proven_optimal": report.proven,
+        "wall_s": report.wall_s,
+    }
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        echo(
+            f"collection of {config.family}, seeds {config.seed}..{config.seed + config.episodes - 1}: "
+            f"{config.episodes} scenarios ({report.resumed} resumed, {report.generated} planned now), "
+            f"{report.models} models, {report.proven} scenarios proven optimal, in {report.wall_s:.1f} s\n"
+            f"written to {report.out} (index: {report.out / 'collection.json'})"
+        )
     return 0
 
 

@@ -30,6 +30,8 @@ from training.cli.files import (
 )
 from training.cli.options import Command
 from training.cli.text import echo
+from training.errors import BenchmarkError
+from training.guidance import rollout_plan
 
 DEFAULT_TIME_LIMIT = 10.0  # seconds for the whole planning call
 MAX_SUMMARY_PHASES = 30  # phases listed in the one-screen summary
@@ -113,6 +115,18 @@ def _add_plan_options(parser: argparse.ArgumentParser) -> None:
         "<scenario>_N<phases>.mps and a .json of what every variable means, SCIP's status and the optimum "
         "(for learned MILP solving; any MPS reader such as HiGHS finds the same optimum)",
     )
+    parser.add_argument(
+        "--guide",
+        metavar="GUIDE",
+        help="a plan to guide the search: a plan file (fetchcarry-plan/1), or a policy whose episode on SCENARIO "
+        "becomes the plan (a run folder of fetchcarry train, or greedy); SCIP's warm start where it fits a model "
+        "(as it is, or with its moves dropped), the optimum and its proof unchanged",
+    )
+    parser.add_argument(
+        "--guide-branching",
+        action="store_true",
+        help="with --guide: also branch first on the guide's choices (a hint; the proof is unchanged)",
+    )
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object instead of a table")
 
 
@@ -129,6 +143,9 @@ def run_plan(args: argparse.Namespace) -> int:
         check_plot_format(plot_path)
 
     export_dir = _export_dir(args.export_model)
+    if args.guide_branching and args.guide is None:
+        raise UsageError("--guide-branching needs --guide GUIDE")
+    guide = None if args.guide is None else load_guide(args.guide, scenario)
 
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
 
@@ -138,6 +155,8 @@ def run_plan(args: argparse.Namespace) -> int:
         max_phases=args.max_phases,
         extra_phases=args.extra_phases,
         export_models=export_dir,
+        guide=guide,
+        guide_branching=args.guide_branching,
     )
     if result.status == INTERRUPTED_STATUS:  # a solve cut short by Ctrl-C is never written as a plan
         raise KeyboardInterrupt
@@ -152,13 +171,43 @@ def run_plan(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(_plan_summary_json(scenario_path, result, output, plot_path, violations), indent=2))
     else:
-        echo(_plan_summary_text(scenario_path, result, output, plot_path, args.time_limit))
+        text = _plan_summary_text(scenario_path, result, output, plot_path, args.time_limit)
+        guide_line = _guide_text(result, guide)
+        echo(text if guide_line is None else f"{text}\nguide      {guide_line}")
     if violations:
         shown = "\n".join(f"  - {v}" for v in violations[:MAX_SUMMARY_VIOLATIONS])
         more = len(violations) - MAX_SUMMARY_VIOLATIONS
         tail = f"\n  ... and {more} more (fetchcarry validate lists them all)" if more > 0 else ""
         echo(f"fetchcarry: warning: the plan breaks the rules of docs/plan-format.md:\n{shown}{tail}", file=sys.stderr)
     return 0 if result.found else 1
+
+
+def load_guide(text: str, scenario: Scenario) -> Plan:
+    """The guide ``--guide`` names: a plan file as it is, else the episode of the policy it names on ``scenario``."""
+    path = Path(text)
+    if path.is_file():
+        return load_plan(path)
+    try:
+        return rollout_plan(text, scenario)
+    except BenchmarkError as error:
+        raise UsageError(f"--guide {text}: not a plan file, and {error}") from None
+
+
+def _guide_text(plan: Plan, guide: Plan | None) -> str | None:
+    """One line on the guide: where it came from, its phases, whether it mapped and was taken as a warm start."""
+    if guide is None:
+        return None
+    source = guide.stats.get("policy")
+    origin = (
+        f"episode of {source} ({'delivered' if guide.stats.get('delivered') else 'not delivered'}, "
+        f"{guide.stats.get('rollout_s', 0.0):.2f} s)"
+        if source
+        else f"plan file ({guide.status})"
+    )
+    solves = [s for s in plan.stats.get("solves", []) if isinstance(s, dict)]
+    taken = "yes" if any(s.get("guide_warm_start") for s in solves) else "no (it fits no model, or is not a plan of it)"
+    mapped = plan.stats.get("guide", "-")
+    return f"{origin}, {len(guide.phases)} phases: {mapped}; SCIP took it as a warm start: {taken}"
 
 
 def _export_dir(path: str | None) -> Path | None:

@@ -27,10 +27,12 @@ import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
 import expert.planner as expert_planner
+from expert.guide import compact_phases
 from expert.plans import Plan, plan_objective
 from expert.validate import validate_plan
 from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, draw_paper_covered, draw_paper_multi, get_family
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from training.guidance import rollout_plan
 
 DEFAULT_SEED = 2024
 DEFAULT_TIME_LIMIT = 60.0  # seconds per planning call: generous, so that statuses are about optimality
@@ -289,6 +291,33 @@ def scale_rows(
     return rows
 
 
+def ab_rows(
+    objects: Sequence[int], covered: Sequence[int], count: int, time_limit: float, variants: dict[str, dict]
+) -> list[dict]:
+    """Each scenario of :func:`scale_rows` planned with every variant (``name -> plan() options``) in turn.
+
+    Interleaved per scenario, so the load moves all variants alike. Times in seconds.
+    """
+    rows = []
+    for kind, sizes, draw in (("multi", objects, draw_paper_multi), ("covered", covered, draw_paper_covered)):
+        for size in sizes:
+            for n in range(count):
+                scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
+                row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
+                for name, options in variants.items():
+                    result = expert.plan(scenario, time_limit=time_limit, **options)
+                    row[name] = {
+                        "status": result.status,
+                        "objective": result.objective,
+                        "total_s": result.stats["total_s"],
+                        "valid": not result.found or validate_plan(scenario, result) == [],
+                    }
+                rows.append(row)
+                cells = ", ".join(f"{v} {row[v]['status']} {row[v]['total_s']:.2f} s" for v in variants)
+                print(f"{kind} {size} seed {row['seed']}: {cells}", flush=True)
+    return rows
+
+
 GUIDE_CASES = (("multi", 6), ("multi", 8), ("covered", 3), ("covered", 4))
 
 
@@ -330,6 +359,76 @@ def guide_rows(count: int, time_limit: float) -> list[dict]:
                 flush=True,
             )
     return rows
+
+
+LEARNED_GUIDE_CASES = (("objects-6", 6), ("objects-7", 7), ("objects-8", 8), ("covered", 3), ("covered", 4))
+LEARNED_GUIDE_SEED = 300_000  # objects-k scenario n is the family's of seed LEARNED_GUIDE_SEED + n (below 10^9)
+GUIDED_CALLS = ("plain", "learned", "greedy", "plain again")
+
+
+def learned_guide_rows(run: str, count: int, time_limit: float, kinds: Sequence[str] | None = None) -> list[dict]:
+    """The planner with and without a policy's rollout as its guide (warm start and branching hint).
+
+    Per scenario: the rollouts of the run folder ``run`` (a learned policy) and of
+    ``greedy`` (:func:`training.guidance.rollout_plan`, timed apart), then four planning
+    calls in turn: plain, guided by the learned rollout, guided by greedy's, plain again
+    (``guide_branching=True`` for the guided ones). ``objects-k`` scenarios are the
+    family's of seeds ``LEARNED_GUIDE_SEED + n``, covered ones drawn as in :func:`scale_rows`.
+    ``kinds`` keeps the cases named (``objects-6``, ``covered``). Times in seconds.
+    """
+    import torch  # the learned policy's forward pass: one thread (as the ladder runs it on this 2-core machine)
+
+    torch.set_num_threads(1)
+    rows = []
+    for kind, size in LEARNED_GUIDE_CASES:
+        if kinds is not None and kind not in kinds:
+            continue
+        for n in range(count):
+            if kind == "covered":
+                seed, scenario = SCALE_SEED + n, draw_paper_covered(np.random.default_rng(SCALE_SEED + n), size)
+            else:
+                seed = LEARNED_GUIDE_SEED + n
+                scenario = get_family(kind).sample(np.random.default_rng(seed))
+            guides = {"learned": rollout_plan(run, scenario), "greedy": rollout_plan("greedy", scenario)}
+            row: dict[str, Any] = {"kind": kind, "objects": size, "seed": seed, "scenario": scenario.name}
+            row["guides"] = {name: _guide_figures(scenario, g) for name, g in guides.items()}
+            for call in GUIDED_CALLS:
+                guide = guides.get(call)
+                result = expert.plan(scenario, time_limit=time_limit, guide=guide, guide_branching=guide is not None)
+                last = (result.stats.get("solves") or [{}])[-1]
+                row[call] = {
+                    "status": result.status,
+                    "objective": result.objective,
+                    "phases": len(result.phases),
+                    "total_s": result.stats["total_s"],
+                    "nodes": last.get("nodes"),
+                    "guide_warm_start": last.get("guide_warm_start"),
+                    "guide_priorities": last.get("guide_priorities"),
+                    "valid": not result.found or validate_plan(scenario, result) == [],
+                }
+            row["plain_s"] = statistics.fmean(row[c]["total_s"] for c in ("plain", "plain again"))
+            reference = row["plain"]
+            row["same_optimum"] = {
+                name: row[name]["status"] == reference["status"]
+                and abs((row[name]["objective"] or 0) - (reference["objective"] or 0)) < 1e-6
+                for name in GUIDED_CALLS[1:]
+            }
+            rows.append(row)
+            cells = ", ".join(f"{c} {row[c]['status']} {row[c]['total_s']:.2f} s" for c in GUIDED_CALLS)
+            print(f"{kind} seed {seed}: {cells}; guides {row['guides']}", flush=True)
+    return rows
+
+
+def _guide_figures(scenario, guide: Plan) -> dict[str, Any]:
+    """A rollout's figures: delivered, phases, its Eq. 1 (when delivered), validity, seconds."""
+    return {
+        "delivered": guide.stats["delivered"],
+        "phases": len(guide.phases),
+        "compact_phases": len(compact_phases(guide.phases)),
+        "objective": guide.objective,
+        "valid": guide.found and validate_plan(scenario, guide) == [],
+        "rollout_s": guide.stats["rollout_s"],
+    }
 
 
 DECOUPLED_CASES = (("covered", 3, 4), ("multi", 5, 2), ("covered", 4, 1))  # kind, objects, scenarios
@@ -425,10 +524,24 @@ def main(argv: Sequence[str] | None = None) -> None:
     scale.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
     scale.add_argument("--options", type=json.loads, default=None, help="plan() options as a JSON object")
     scale.add_argument("--out", help="write the rows as JSON here")
+    ab = sub.add_parser("ab", help="plan() option variants against each other, interleaved per scenario")
+    ab.add_argument("--objects", type=int, nargs="*", default=[8])
+    ab.add_argument("--covered", type=int, nargs="*", default=[3, 4])
+    ab.add_argument("--count", type=int, default=4, help="scenarios per size")
+    ab.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    ab.add_argument("--variants", type=json.loads, required=True, help='{"name": {plan() options}, ...}')
+    ab.add_argument("--out", help="write the rows as JSON here")
     guide = sub.add_parser("guide", help="the optimal plan as a guide (warm start, branching): the ceiling")
     guide.add_argument("--count", type=int, default=2, help="scenarios per case")
     guide.add_argument("--time-limit", type=float, default=60.0, help="seconds per plan() call")
     guide.add_argument("--out", help="write the rows as JSON here")
+    learned = sub.add_parser("learned-guide", help="a learned rollout and greedy's as guides, against none")
+    learned.add_argument("--run", help="a run folder of fetchcarry train (the learned policy)")
+    learned.add_argument("--report", metavar="FILE", help="print the summary of rows saved by --out, run nothing")
+    learned.add_argument("--count", type=int, default=4, help="scenarios per case")
+    learned.add_argument("--kinds", nargs="*", default=None, help="cases kept: objects-6 objects-7 objects-8 covered")
+    learned.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
+    learned.add_argument("--out", help="write the rows as JSON here")
     decoupled = sub.add_parser("decoupled", help="the decoupled first plan and its second pass, on and off")
     decoupled.add_argument("--out", help="write the rows as JSON here")
     tangents = sub.add_parser("tangents", help="the start's tangents on and off on the benchmark's cases")
@@ -437,6 +550,16 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.command == "tangents":
         _print_tangents(tangent_rows(args.scale), args.out)
+        return
+    if args.command == "ab":
+        _print_ab(ab_rows(args.objects, args.covered, args.count, args.time_limit, args.variants), args.out)
+        return
+    if args.command == "learned-guide":
+        if args.report:
+            with open(args.report, encoding="utf-8") as f:
+                _print_learned_guide(json.load(f), None)
+            return
+        _print_learned_guide(learned_guide_rows(args.run, args.count, args.time_limit, args.kinds), args.out)
         return
     if args.command == "decoupled":
         rows = decoupled_rows()
@@ -534,6 +657,42 @@ def _print_guide(rows: list[dict], out: str | None) -> None:
             f"  speed-up warm {warm:.2f}x  warm+branching {branching:.2f}x  "
             f"same optimum {sum(r['same_optimum'] for r in mine)}/{len(mine)}"
         )
+    _save(rows, out)
+
+
+def _print_ab(rows: list[dict], out: str | None) -> None:
+    """Per kind and size: each variant's median time, its median ratio to the first variant's, proven counts."""
+    names = [k for k in rows[0] if isinstance(rows[0][k], dict)] if rows else []
+    for key, mine in _by_kind_and_size(rows):
+        cells = []
+        for name in names:
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            ratio = statistics.median(r[names[0]]["total_s"] / r[name]["total_s"] for r in mine)
+            proven = sum(r[name]["status"] == "optimal" for r in mine)
+            cells.append(f"{name} {median:.2f} s ({ratio:.2f}x, proven {proven}/{len(mine)})")
+        print(f"{key[0]:<8} {key[1]:>2} objects  n={len(mine)}  " + "  ".join(cells))
+    _save(rows, out)
+
+
+def _print_learned_guide(rows: list[dict], out: str | None) -> None:
+    """Per case and over all: the median ratio of the plain time (mean of two calls) to each guided time.
+
+    Ratios over the scenarios every call proved optimal (a call cut at the time limit has
+    no time to a proven optimum); "same optimum" over those too.
+    """
+    for label, mine in [*[(f"{k[0]} {k[1]}", m) for k, m in _by_kind_and_size(rows)], ("all", rows)]:
+        proven = [r for r in mine if all(r[c]["status"] == "optimal" for c in GUIDED_CALLS)]
+        plain = statistics.median(r["plain_s"] for r in mine)
+        head = f"{label:<12} n={len(mine):<3} plain median {plain:.2f} s, all calls proven {len(proven)}/{len(mine)}"
+        cells = []
+        for name in GUIDED_CALLS[1:3]:
+            if not proven:
+                continue
+            ratio = statistics.median(r["plain_s"] / r[name]["total_s"] for r in proven)
+            same = sum(r["same_optimum"][name] for r in proven)
+            delivered = sum(r["guides"][name]["delivered"] for r in mine)
+            cells.append(f"{name} {ratio:.2f}x (same optimum {same}/{len(proven)}, rollout delivered {delivered})")
+        print(head + "  " + "  ".join(cells))
     _save(rows, out)
 
 
