@@ -39,12 +39,17 @@ from tqdm import tqdm
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
+from training.learners.allowed import AllowedCategorical, allowed_distribution
 from training.learners.encoders import build_network
 from training.learners.options import BCConfig, PPOOptions
 from training.learners.runs import RunFolderError
 
+MASK_KEY = "next_action_mask"  # MaskInInfo's key: the mask of the state a step or reset leads to
 SCALE_RESETS = 32  # scratch runs standardise the MLP's input with the observations of this many resets
 VALUE_LAYERS = (256, 256)  # units of the value MLP
+ADAM_OPTIONS = {"eps": 1e-5, "fused": True}
+"""SB3's Adam for PPO (its eps), as one fused kernel: the same update, about 7x faster on CPU than the
+per-tensor loop (2.4 ms against 17 ms a step for the actor's and critic's 1.2 M weights, one thread)."""
 
 
 class FlatObservation(gym.ObservationWrapper):
@@ -58,6 +63,26 @@ class FlatObservation(gym.ObservationWrapper):
         return observation["observation"]
 
 
+class MaskInInfo(gym.Wrapper):
+    """The mask of the state a step or reset leads to, in its ``info`` (``MASK_KEY``); none for an episode's end.
+
+    So that a worker process sends the next state's mask with the step's results, and
+    MaskablePPO's ``env_method("action_masks")`` needs no second round trip per step
+    (:func:`_masks_from_infos`). The mask is the env's own ``action_masks()``.
+    """
+
+    def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
+        observation, info = self.env.reset(**kwargs)
+        info[MASK_KEY] = self.env.get_wrapper_attr("action_masks")()
+        return observation, info
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        if not (terminated or truncated):
+            info[MASK_KEY] = self.env.get_wrapper_attr("action_masks")()
+        return observation, reward, terminated, truncated, info
+
+
 def make_training_env(family: str) -> gym.Env:
     """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations."""
     return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
@@ -67,15 +92,45 @@ def make_vec_env(family: str, envs: int) -> Any:
     """SB3's vector env of ``envs`` training envs: in this process for one, one forked worker each for more.
 
     Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
-    platform has no fork, SB3's default start method is used.
+    platform has no fork, SB3's default start method is used. The masks come with each
+    step's results (:class:`MaskInInfo`, :func:`_masks_from_infos`).
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    makers = [lambda: make_training_env(family)] * envs
+    makers = [lambda: MaskInInfo(make_training_env(family))] * envs
     if envs == 1:
-        return DummyVecEnv(makers)
+        return _masks_from_infos(DummyVecEnv(makers))
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-    return SubprocVecEnv(makers, start_method=method)
+    return _masks_from_infos(SubprocVecEnv(makers, start_method=method))
+
+
+def _masks_from_infos(venv: Any) -> Any:
+    """``venv`` whose ``env_method("action_masks")`` answers from the masks the last step or reset sent.
+
+    After a step, env ``i``'s mask is that of its step's info, or of its reset's info
+    (SB3's ``reset_infos``) where the episode ended and the env reset itself. The mask
+    is taken out of the info, so that the infos the callbacks see are the env's.
+    """
+    from stable_baselines3.common.vec_env import VecEnvWrapper
+
+    class MasksFromInfos(VecEnvWrapper):
+        def reset(self) -> Any:
+            observation = self.venv.reset()
+            self.masks = [info.pop(MASK_KEY) for info in self.venv.reset_infos]
+            return observation
+
+        def step_wait(self) -> Any:
+            observation, rewards, dones, infos = self.venv.step_wait()
+            ended = self.venv.reset_infos
+            self.masks = [(ended[i] if done else infos[i]).pop(MASK_KEY) for i, done in enumerate(dones)]
+            return observation, rewards, dones, infos
+
+        def env_method(self, method_name: str, *args: Any, indices: Any = None, **kwargs: Any) -> list[Any]:
+            if method_name != "action_masks" or args or kwargs:
+                return self.venv.env_method(method_name, *args, indices=indices, **kwargs)
+            return [self.masks[i].copy() for i in self._get_indices(indices)]
+
+    return MasksFromInfos(venv)
 
 
 def _policy_class() -> type:
@@ -96,6 +151,38 @@ def _policy_class() -> type:
                 BCConfig(**spec["config"]), Capacity(**spec["capacity"]), spec["candidates"], scale
             )
             self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
+
+        def _latents(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+            features = self.extract_features(obs)
+            if self.share_features_extractor:
+                return self.mlp_extractor(features)
+            return self.mlp_extractor.forward_actor(features[0]), self.mlp_extractor.forward_critic(features[1])
+
+        def _allowed(self, latent_pi: torch.Tensor, action_masks: Any) -> AllowedCategorical:
+            return allowed_distribution(self.action_net, latent_pi, action_masks, int(self.action_space.n))
+
+        def forward(self, obs: torch.Tensor, deterministic: bool = False, action_masks: Any = None) -> Any:
+            """Actions, values and log-probabilities; with masks, only the allowed candidates are scored."""
+            if action_masks is None:
+                return super().forward(obs, deterministic, action_masks)
+            latent_pi, latent_vf = self._latents(obs)
+            distribution = self._allowed(latent_pi, action_masks)
+            actions = distribution.get_actions(deterministic=deterministic)
+            return actions, self.value_net(latent_vf), distribution.log_prob(actions)
+
+        def evaluate_actions(self, obs: torch.Tensor, actions: torch.Tensor, action_masks: Any = None) -> Any:
+            """Values, log-probabilities and entropies of a minibatch (scored over its allowed candidates)."""
+            if action_masks is None:
+                return super().evaluate_actions(obs, actions, action_masks)
+            latent_pi, latent_vf = self._latents(obs)
+            distribution = self._allowed(latent_pi, action_masks)
+            return self.value_net(latent_vf), distribution.log_prob(actions), distribution.entropy()
+
+        def get_distribution(self, obs: torch.Tensor, action_masks: Any = None) -> Any:
+            if action_masks is None:
+                return super().get_distribution(obs, action_masks)
+            features = super().extract_features(obs, self.pi_features_extractor)
+            return self._allowed(self.mlp_extractor.forward_actor(features), action_masks)
 
     return CandidateActorCritic
 
@@ -266,7 +353,11 @@ def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
         seed=options.seed,  # SB3 seeds env i's first reset with seed + i
         device="cpu",
         verbose=0,
-        policy_kwargs={"actor": actor, "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)}},
+        policy_kwargs={
+            "actor": actor,
+            "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)},
+            "optimizer_kwargs": ADAM_OPTIONS,
+        },
     )
     model.set_logger(Logger(folder=None, output_formats=[]))  # SB3's default makes an empty folder in /tmp per run
     return model
