@@ -4,20 +4,27 @@ The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shape
 progress; refusals cost more than moving), its flat observation vector
 (``observation["observation"]``) as the policy's input, ``envs`` of them side by side
 (:func:`make_vec_env`: SB3's ``DummyVecEnv`` for one, ``SubprocVecEnv`` with one forked
-worker per env for more; MaskablePPO reads their masks with ``env_method("action_masks")``).
+worker per env for more; MaskablePPO reads their masks with ``env_method("action_masks")``,
+which answers from the masks each step's results bring along: :class:`MaskInInfo`).
 Env ``i``'s first episode is drawn with seed ``seed + i`` (SB3's ``VecEnv.seed``), its
 later episodes from its own generator; a rollout is ``n_steps`` env steps over all envs
 (``n_steps // envs`` each). The policy,
 :class:`CandidateActorCritic`, is sb3-contrib's ``MaskableActorCriticPolicy`` whose
 action head is the BC network of the chosen encoder (:mod:`training.learners.encoders`):
 the observation goes straight to it (no shared layers), and a separate two-layer MLP
-gives the value. So a BC or DAgger run of the same encoder initialises the actor
-(``init``), and a finished PPO run's actor loads as any other run's network.
+gives the value. Given masks, it scores only the candidates some state of the batch
+allows (:mod:`training.learners.allowed`: the same distribution and gradients as
+sb3-contrib's masked one, in a fraction of the time), and Adam runs as one fused
+kernel. So a BC or DAgger run of the same encoder initialises the actor (``init``), and a
+finished PPO run's actor loads as any other run's network.
 
-Learning curves: after every rollout, ``metrics.csv`` gains a row with the env steps,
-the wall-clock seconds, and the training episodes finished in that rollout: success
-rate, mean return (learning reward), mean paper return and mean travel cost (the
-paper's cost, metres). A checkpoint (weights, optimiser, step count, metrics) is
+Learning curves (:mod:`training.learners.ppo_curves`): after every rollout,
+``metrics.csv`` gains a row with the env steps, the wall-clock seconds of training
+(evaluations left out), the training episodes finished in that rollout (success rate,
+mean return in the learning reward, mean paper return, mean travel cost in metres) and,
+every ``eval_every`` env steps and at the end, the success and travel cost of the actor on
+``eval_episodes`` held-out seeds (NaN in the rows between).
+A checkpoint (weights, optimiser, step count, metrics) is
 written every ``checkpoint_every`` steps and at the end; a resumed run continues from
 the last one (the episode under way at the interruption starts again, so a resumed run
 is complete but not bit-identical to an uninterrupted one).
@@ -26,7 +33,6 @@ is complete but not bit-identical to an uninterrupted one).
 from __future__ import annotations
 
 import multiprocessing
-import time
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -42,6 +48,7 @@ from training.learners import runs
 from training.learners.allowed import AllowedCategorical, allowed_distribution
 from training.learners.encoders import build_network
 from training.learners.options import BCConfig, PPOOptions
+from training.learners.ppo_curves import curves_callback, heldout_evaluator
 from training.learners.runs import RunFolderError
 
 MASK_KEY = "next_action_mask"  # MaskInInfo's key: the mask of the state a step or reset leads to
@@ -197,58 +204,6 @@ def _scale_observations(family: str, features: int) -> np.ndarray:
     return np.asarray(rows, np.float32).reshape(len(rows), features)
 
 
-def _metrics_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOptions, started: float, bar: Any):
-    from stable_baselines3.common.callbacks import BaseCallback
-
-    class Curves(BaseCallback):
-        """Rows of learning curves per rollout, checkpoints every ``checkpoint_every`` steps, the progress bar."""
-
-        def __init__(self) -> None:
-            super().__init__()
-            self.returns = self.paper = 0.0
-            self.finished: list[tuple[bool, float, float, float]] = []
-            self.saved_at = rows[-1]["steps"] if rows else 0
-            self.episodes = int(rows[-1]["episodes"]) if rows else 0
-
-        def _on_step(self) -> bool:
-            infos, rewards, dones = self.locals["infos"], self.locals["rewards"], self.locals["dones"]
-            if isinstance(self.returns, float):  # one running sum per env, from the first step on
-                self.returns, self.paper = np.zeros(len(infos)), np.zeros(len(infos))
-            for i, info in enumerate(infos):  # in env order: the rows do not depend on the workers' timing
-                self.returns[i] += float(rewards[i])
-                self.paper[i] += float(info.get("paper_reward", 0.0))
-                if dones[i]:
-                    self.finished.append((bool(info.get("is_success")), float(self.returns[i]),
-                                          float(self.paper[i]), float(info.get("travel_cost", 0.0))))  # fmt: skip
-                    self.returns[i] = self.paper[i] = 0.0
-            bar.update(len(infos))
-            return True
-
-        def _on_rollout_end(self) -> None:
-            done = self.finished
-            self.episodes += len(done)
-            rows.append(
-                {
-                    "steps": self.num_timesteps,
-                    "seconds": time.perf_counter() - started,
-                    "episodes": self.episodes,
-                    "success": float(np.mean([d[0] for d in done])) if done else float("nan"),
-                    "return": float(np.mean([d[1] for d in done])) if done else float("nan"),
-                    "paper_return": float(np.mean([d[2] for d in done])) if done else float("nan"),
-                    "travel_cost": float(np.mean([d[3] for d in done])) if done else float("nan"),
-                }
-            )
-            self.finished = []
-            runs.write_metrics(folder, rows)
-            if rows[-1]["success"] == rows[-1]["success"]:
-                bar.set_postfix_str(f"success {rows[-1]['success']:.0%}", refresh=False)
-            if self.num_timesteps - self.saved_at >= options.checkpoint_every:
-                save_ppo_checkpoint(folder, self.model, rows)
-                self.saved_at = self.num_timesteps
-
-    return Curves()
-
-
 def save_ppo_checkpoint(folder: Path, model: Any, rows: list[dict[str, Any]]) -> None:
     runs.save_checkpoint(folder, {"policy": model.policy.state_dict(), "optimizer": model.policy.optimizer.state_dict(),
                                   "steps": int(model.num_timesteps), "metrics": rows})  # fmt: skip
@@ -296,8 +251,8 @@ def train_ppo(
     if options.init is not None:
         init_weights = _init_weights(Path(options.init), config, capacity, candidates, features)
     run_options = {"family": family, **asdict(options)}
-    if resume and options.envs == 1 and _saved_without_envs(Path(out)):
-        del run_options["envs"]  # a run folder from before --envs existed: it ran one env
+    if resume:
+        _drop_legacy_options(Path(out), run_options)
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
                              {"init": options.init, "steps": options.steps})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
@@ -310,12 +265,13 @@ def train_ppo(
         model = make_model(env, options, actor)
         rows = _restore(model, folder, checkpoint, options, init_weights)
         done = model.num_timesteps
-        started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
+        evaluate = heldout_evaluator(folder, family, capacity, options.eval_episodes)
         with tqdm(total=options.steps, initial=done, desc=f"ppo {folder.name}", unit="step",
                   disable=not progress) as bar:  # fmt: skip
             if done < options.steps:
-                model.learn(options.steps - done, callback=_metrics_callback(rows, folder, options, started, bar),
-                            reset_num_timesteps=checkpoint is None)  # fmt: skip
+                callback = curves_callback(rows, folder, options, bar, evaluate,
+                                           lambda trained: save_ppo_checkpoint(folder, trained, rows))  # fmt: skip
+                model.learn(options.steps - done, callback=callback, reset_num_timesteps=checkpoint is None)
         save_ppo_checkpoint(folder, model, rows)
         runs.finish_run(folder, model.policy.action_net, config_json)
     finally:
@@ -323,12 +279,24 @@ def train_ppo(
     return rows
 
 
-def _saved_without_envs(out: Path) -> bool:
-    """True when ``out`` holds a run whose options do not say how many envs it ran (it ran one)."""
+LEGACY_OPTIONS = ("envs", "eval_every", "eval_episodes")
+"""Options a run folder may not record (it was made before they existed): it resumes if they have their defaults."""
+
+
+def _drop_legacy_options(out: Path, run_options: dict[str, Any]) -> None:
+    """Remove from ``run_options`` the :data:`LEGACY_OPTIONS` that ``out``'s saved run lacks, where they are defaults.
+
+    A run from before ``--envs`` ran one env; one from before the held-out evaluations
+    gains them from its resumption on (its earlier rows hold NaN there).
+    """
     if not (out / runs.CONFIG_FILE).is_file():
-        return False
-    options = runs.read_saved(out).get("options")
-    return isinstance(options, dict) and "envs" not in options
+        return
+    saved = runs.read_saved(out).get("options")
+    if not isinstance(saved, dict):
+        return
+    for name in LEGACY_OPTIONS:
+        if name not in saved and run_options.get(name) == PPOOptions.__dataclass_fields__[name].default:
+            del run_options[name]
 
 
 def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
