@@ -240,6 +240,8 @@ def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]
         for c, x in enumerate(("env steps", "wall-clock seconds of training")):
             axes[r][c].set_xlabel(x)
             axes[r][c].set_ylabel(key)
+            if r < 2:
+                axes[r][c].set_ylim(-0.03, 1.03)  # success rates on one scale: 98 % does not look like a fall
     for r, c in ((0, 0), (1, 0)):
         if axes[r][c].get_legend_handles_labels()[0]:
             axes[r][c].legend(fontsize="small")
