@@ -2,8 +2,10 @@
 
 :func:`evaluate` runs a policy (stable-baselines3's ``predict`` protocol, given the
 masks as ``action_masks=``) for one episode per seed on ``FetchCarryPushPhases-v0``
-and reports success, the paper's travel cost, phases and refusals; :func:`expert_costs`
-runs the expert on the same seeds so that costs compare scenario by scenario.
+and reports success, the paper's travel cost, phases and refusals; :func:`heldout_success`
+gives a learner's success rate and mean cost on the held-out seeds (PPO's learning
+curves); :func:`expert_costs` runs the expert on the same seeds so that costs compare
+scenario by scenario.
 """
 
 from __future__ import annotations
