@@ -47,6 +47,18 @@ def test_allowed_distribution_is_the_masked_one(encoder: str) -> None:
     assert bool(torch.as_tensor(masks)[torch.arange(len(drawn)), drawn].all())  # a draw is always allowed
 
 
+def test_the_image_network_scores_a_batch_of_allowed_candidates_as_its_forward_does() -> None:
+    candidates = 300
+    flat = torch.as_tensor(np.random.default_rng(4).integers(0, 256, (8, 7 * 16 * 16)), dtype=torch.float32)
+    torch.manual_seed(0)
+    network = build_network(BCConfig(encoder="cnn", obs_mode="topdown", hidden=16), Capacity(), candidates, flat)
+    _, masks, actions = _batch(5, 8, candidates, 30)
+    full = MaskableCategoricalDistribution(candidates).proba_distribution(network(flat))
+    full.apply_masking(masks)
+    mine = allowed_distribution(network, flat, masks, candidates)
+    assert torch.allclose(mine.log_prob(actions), full.log_prob(actions), atol=1e-5)
+
+
 @pytest.mark.parametrize("encoder", ["mlp", "set"])
 def test_allowed_gradients_are_the_masked_ones(encoder: str) -> None:
     """The PPO loss's gradient on every weight, the refused candidates' rows of the last layer included (zero)."""

@@ -5,9 +5,9 @@ sets the refused ones to -1e8, so that their probability is exactly 0 in float32
 log-probability never enters the loss and their scores get a gradient of exactly 0. A
 state allows some 30 candidates, and a minibatch of 64 states a few hundred between them:
 :class:`AllowedCategorical` computes only the scores of the candidates that some row of
-the batch allows (:func:`allowed_columns`, through the flat network's ``candidate_scores``,
-which computes only those rows of its last layer; the set encoder's batches go through
-its ``forward``) and is, up to the order of floating-point
+the batch allows (:func:`allowed_columns`, through the flat and image networks'
+``candidate_scores``, which compute only those rows of their last layer; the set
+encoder's batches go through its ``forward``) and is, up to the order of floating-point
 sums, the same distribution: the same log-probabilities, entropy, argmax and gradients
 (the columns left out get a gradient of 0, as before). A draw samples the same
 probabilities from a shorter vector, so a seed gives other draws than the full one.
@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from training.learners.encoders import FlatMLP, candidate_scores
+from training.learners.encoders import FlatMLP, ImageScorer, candidate_scores
 
 REFUSED_LOGIT = -1e8  # sb3-contrib's score of a refused candidate (its probability is exactly 0 in float32)
 
@@ -74,7 +74,7 @@ def allowed_distribution(network: Any, flat: torch.Tensor, masks: Any, candidate
     """``network``'s masked distribution over the ``candidates`` of the observations ``flat`` (B, F)."""
     masks = as_masks(masks, len(flat))
     columns = allowed_columns(masks)
-    if isinstance(network, FlatMLP) or len(flat) == 1:
+    if isinstance(network, FlatMLP | ImageScorer) or len(flat) == 1:  # their candidate_scores take batches
         scores = candidate_scores(network, flat, columns)
     else:  # the set encoder scores a batch through its whole Transformer anyway
         scores = network(flat).index_select(1, columns)
