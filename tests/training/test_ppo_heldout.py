@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -77,3 +78,28 @@ def test_the_curve_plot_shows_heldout_success_where_it_was_measured(tmp_path: Pa
         height, width = near.shape
         top_right = near[: height // 3, width // 2 :]  # held-out success against seconds (no legend there)
         assert (top_right.sum() > 20) == (name == "with")
+
+
+def test_a_run_folder_from_before_heldout_evaluations_resumes_and_gains_them(tmp_path: Path) -> None:
+    """Options without ``eval_every`` and ``eval_episodes`` (written before they existed) resume at the defaults."""
+    options = PPOOptions(**{**TINY.__dict__, "eval_every": 2048, "eval_episodes": 50})  # the defaults
+    train_ppo("basic", PPOOptions(**{**options.__dict__, "steps": 32, "eval_episodes": 0}), tmp_path / "run",
+              progress=False)  # fmt: skip
+    config = runs.read_saved(tmp_path / "run")
+    for name in ("envs", "eval_every", "eval_episodes"):
+        del config["options"][name]
+    config["options"]["steps"], config["data"]["steps"], config["complete"] = 64, 64, False
+    (tmp_path / "run" / runs.CONFIG_FILE).write_text(json.dumps(config))
+    rows = train_ppo("basic", options, tmp_path / "run", resume=True, progress=False)
+    assert [row["steps"] for row in rows] == [32, 64] and 0.0 <= rows[-1]["heldout_success"] <= 1.0
+    with pytest.raises(runs.RunFolderError, match="other options"):
+        train_ppo("basic", PPOOptions(**{**options.__dict__, "eval_episodes": 3}), tmp_path / "run", resume=True)
+
+
+def test_rows_written_before_the_heldout_columns_gain_them() -> None:
+    from training.learners.ppo_curves import _with_heldout_columns
+
+    rows = [{"steps": 32, "seconds": 1.0}]
+    _with_heldout_columns(rows)
+    assert math.isnan(rows[0]["heldout_success"]) and math.isnan(rows[0]["heldout_cost"])
+    assert rows[0]["eval_seconds"] == 0.0
