@@ -51,21 +51,18 @@ class FreeSpace:
         return None
 
     def _flood(self, seed: tuple[int, int] | None) -> np.ndarray:
-        """The free cells 4-connected to ``seed`` (repeated dilation, whole-array steps)."""
-        reached = np.zeros_like(self.free)
+        """The free cells 4-connected to ``seed``: its component of the free grid (``scipy.ndimage.label``).
+
+        The components of the 4-neighbourhood, as a flood fill by repeated dilation finds
+        them (cell for cell the same: ``tests/env/test_speed_reachability.py``), in about
+        0.1 ms instead of 7-13 ms per scenario.
+        """
         if seed is None:
-            return reached
-        reached[seed] = True
-        while True:
-            grown = reached.copy()
-            grown[1:, :] |= reached[:-1, :]
-            grown[:-1, :] |= reached[1:, :]
-            grown[:, 1:] |= reached[:, :-1]
-            grown[:, :-1] |= reached[:, 1:]
-            grown &= self.free
-            if np.array_equal(grown, reached):
-                return reached
-            reached = grown
+            return np.zeros_like(self.free)
+        from scipy import ndimage  # here: the env's import does not need it
+
+        labels, _count = ndimage.label(self.free)  # the default structure of 2-D arrays: the 4-neighbourhood
+        return labels == labels[seed]
 
     def reachable(self, base: Point) -> bool:
         """True when the base can stand at ``base`` and get there from the start."""

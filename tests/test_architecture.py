@@ -32,6 +32,7 @@ HEAVY = {
     "PIL",
     "pyscipopt",
     "pybullet",
+    "scipy",
 }
 """Third-party packages that are slow to import or optional: the only reason for an import inside a function."""
 LONGEST_FUNCTION = 100  # lines, docstring included

@@ -19,7 +19,7 @@ TWO_ENVS = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32
 
 
 def _rows(rows: list[dict]) -> str:
-    return json.dumps([{k: v for k, v in row.items() if k != "seconds"} for row in rows])
+    return json.dumps([{k: v for k, v in row.items() if k not in ("seconds", "eval_seconds")} for row in rows])
 
 
 def _weights(folder: Path) -> dict[str, torch.Tensor]:

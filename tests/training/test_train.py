@@ -57,7 +57,7 @@ def _same_weights(a: Path, b: Path) -> bool:
 
 def _without_seconds(rows: list[dict]) -> str:
     """The rows without their wall-clock seconds, as text (so that NaN equals NaN)."""
-    return json.dumps([{k: v for k, v in row.items() if k != "seconds"} for row in rows])
+    return json.dumps([{k: v for k, v in row.items() if k not in ("seconds", "eval_seconds")} for row in rows])
 
 
 # ---------------------------------------------------------------------------- datasets in the phases interface

@@ -10,8 +10,9 @@ Each writes a run folder (``config.json``, ``metrics.csv``, ``checkpoint.pt``,
 ``fetchcarry rollout --policy RUN_DIR`` take, and ``training.load_policy(path)`` loads.
 
 Exit statuses: 0 trained (also when the run folder already held the complete run);
-2 bad input; 130 interrupted (the last checkpoint is kept: the same command with
-``--resume`` finishes the run).
+2 bad input (also training data of the benchmark's evaluation seeds or split scenarios
+without ``--allow-evaluation-seeds``: :mod:`training.cli.refusals`); 130 interrupted (the
+last checkpoint is kept: the same command with ``--resume`` finishes the run).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from typing import Any
 from fetchcarry_env.errors import InputError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
+from training.cli.refusals import CHECKS, add_refusal_option, refuse_evaluation_data
 from training.cli.text import echo
 from training.learners import registry
 
@@ -54,6 +56,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         command = kinds.add_parser(learner.kind, help=learner.help, description=learner.description, epilog=epilog)
         add_options(command, learner.options)
         add_run_options(command, resumable=learner.resumable, pool=learner.pool)
+        if learner.kind in CHECKS:
+            add_refusal_option(command)
         command.set_defaults(handler=run_train)
 
 
@@ -166,6 +170,7 @@ def run_train(args: argparse.Namespace) -> int:
     """Train the options of ``args`` with its learner; print what was trained (Ctrl-C keeps the checkpoint)."""
     learner = registry.get(args.kind)
     options = read_options(learner.options, vars(args))
+    refuse_evaluation_data(learner.kind, options, getattr(args, "allow_evaluation_seeds", False))
     try:
         registry.train(learner.kind, options, args.out, resume=getattr(args, "resume", False),
                        progress=not getattr(args, "no_progress", False), workers=getattr(args, "workers", 1),

@@ -2,8 +2,10 @@
 
 :func:`evaluate` runs a policy (stable-baselines3's ``predict`` protocol, given the
 masks as ``action_masks=``) for one episode per seed on ``FetchCarryPushPhases-v0``
-and reports success, the paper's travel cost, phases and refusals; :func:`expert_costs`
-runs the expert on the same seeds so that costs compare scenario by scenario.
+and reports success, the paper's travel cost, phases and refusals; :func:`heldout_success`
+gives a learner's success rate and mean cost on the held-out seeds (PPO's learning
+curves); :func:`expert_costs` runs the expert on the same seeds so that costs compare
+scenario by scenario.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 from expert import ExpertPolicy
 from training.data.expert_labels import expert_episode
 from training.envs import make_env
+from training.learners.options import HELDOUT_SEED_BASE
 from training.rollout import EpisodeRecord, run_episode
 from training.stats import wilson
 
@@ -81,6 +84,18 @@ def _result(seed: int, episode: EpisodeRecord) -> EpisodeResult:
     figures, info = episode.figures, episode.info
     return EpisodeResult(seed, bool(info["is_success"]), float(info["travel_cost"]), figures.steps,
                          figures.invalid_actions, figures.policy_s)  # fmt: skip
+
+
+def heldout_success(policy: Any, family: str, episodes: int) -> tuple[float, float]:
+    """Success rate and mean travel cost (metres) of ``policy`` on ``episodes`` held-out seeds of ``family``.
+
+    The seeds are ``HELDOUT_SEED_BASE + k`` (:mod:`training.learners.options`), which no
+    training episode of a learner uses; ``(nan, nan)`` for no episode.
+    """
+    if episodes < 1:
+        return math.nan, math.nan
+    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
+    return float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results]))
 
 
 def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:

@@ -159,10 +159,19 @@ class PPOOptions:
         f"episode from seed --seed + i; at most {MAX_ENVS})",
         positive=True,
     )
+    eval_every: int = option(
+        2048, "env steps between evaluations on held-out seeds (default {default}; also after the last rollout)",
+        positive=True,
+    )  # fmt: skip
+    eval_episodes: int = option(
+        50, f"held-out episodes per evaluation, seeds from {HELDOUT_SEED_BASE}; 0: none (default {{default}})"
+    )
 
     def __post_init__(self) -> None:
-        if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every) < 1:
-            raise InputError("steps, n_steps, batch_size, n_epochs and checkpoint_every must be positive")
+        if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every, self.eval_every) < 1:
+            raise InputError("steps, n_steps, batch_size, n_epochs, checkpoint_every and eval_every must be positive")
+        if self.eval_episodes < 0:
+            raise InputError(f"eval_episodes must be 0 or more, got {self.eval_episodes}")
         if not 1 <= self.envs <= min(MAX_ENVS, self.n_steps):
             raise InputError(f"envs must be from 1 to {MAX_ENVS} and at most n_steps, got {self.envs}")
         if self.learning_rate <= 0 or not 0 < self.gamma <= 1:

@@ -154,7 +154,8 @@ def _dagger_summary(options: DaggerRun, rows: list[dict[str, float]], out: str) 
 def _ppo_summary(options: PPORun, rows: list[dict[str, float]], out: str) -> str:
     last = rows[-1] if rows else {}
     return (f"ppo ({options.options.encoder}) on {options.family}: {int(last.get('steps', 0))} env steps, recent "
-            f"training success {last.get('success', float('nan')):.1%}\nrun folder {out}")  # fmt: skip
+            f"training success {last.get('success', float('nan')):.1%}, held-out success "
+            f"{last.get('heldout_success', float('nan')):.1%}\nrun folder {out}")  # fmt: skip
 
 
 def _ensemble_summary(options: EnsembleRun, rows: list[dict[str, float]], out: str) -> str:
@@ -185,7 +186,9 @@ register(Learner(
     description="sb3-contrib's MaskablePPO on FetchCarryPushPhases-v0 with the learning reward (potential-shaped "
     "progress, refusals cost more than moving). The actor is the BC network of --encoder, so --init RUN_DIR (a bc "
     "or dagger run of the same encoder) starts it from those weights. metrics.csv: one row per rollout with env "
-    "steps, wall-clock seconds, and the training episodes' success, return and the paper's travel cost.",
+    "steps, wall-clock seconds of training (evaluations left out), the training episodes' success, return and the "
+    "paper's travel cost, and every --eval-every steps and at the end the success and travel cost on "
+    "--eval-episodes held-out seeds (heldout_success, heldout_cost).",
     summary=_ppo_summary,
 ))  # fmt: skip
 register(Learner(

@@ -207,36 +207,44 @@ def plot_demonstrations(records: Sequence[dict[str, Any]], path: str | Path) -> 
 
 
 def plot_ppo_curves(curves: Sequence[tuple[str, Sequence[list[dict[str, float]]]]], path: str | Path) -> Path:
-    """Training success and return of PPO runs against env steps and wall-clock seconds, as one PNG.
+    """Held-out success, training success and return of PPO runs against env steps and wall-clock seconds, one PNG.
 
     ``curves`` holds, per baseline, its label and the ``metrics.csv`` rows of each of its
-    runs (``steps``, ``seconds``, ``success``, ``return``; an empty list for a run without
-    metrics). One colour per baseline, one line per run, each point marked (a run with
-    one row, as a smoke run has, is a dot); the legend names a baseline by its first run's line.
+    runs (``steps``, ``seconds``, ``success``, ``return``, and ``heldout_success`` where the
+    run was evaluated on held-out seeds: the rows without it, or with NaN, are left out of
+    the top panels; an empty list for a run without metrics). One colour per baseline, one
+    line per run, each point marked (a run with one row, as a smoke run has, is a dot); the
+    legend names a baseline by its first run's line.
     """
     plt = pyplot()
-    figure, axes = plt.subplots(2, 2, figsize=(10, 7), squeeze=False)
+    figure, axes = plt.subplots(3, 2, figsize=(10, 10), squeeze=False)
     colours = policy_colours([label for label, _ in curves])
     for label, runs in curves:
         for j, rows in enumerate(runs):
-            if not rows:
-                continue
-            for r, key in enumerate(("success", "return")):
+            for r, key in enumerate(("heldout_success", "success", "return")):
+                shown = [row for row in rows if row.get(key, math.nan) == row.get(key, math.nan)]
                 for c, x in enumerate(("steps", "seconds")):
-                    axes[r][c].plot(
-                        [row[x] for row in rows],
-                        [row[key] for row in rows],
-                        color=colours[label],
-                        alpha=0.8,
-                        marker="o",
-                        markersize=MARKER_SIZE,
-                        label=label if j == 0 else None,
-                    )  # fmt: skip  (markers: one row shows too)
-    for r, key in enumerate(("training success (episodes of the rollout)", "return (learning reward)")):
-        for c, x in enumerate(("env steps", "wall-clock seconds")):
+                    if shown:
+                        axes[r][c].plot(
+                            [row[x] for row in shown],
+                            [row[key] for row in shown],
+                            color=colours[label],
+                            alpha=0.8,
+                            marker="o",
+                            markersize=MARKER_SIZE,
+                            label=label if j == 0 else None,
+                        )  # fmt: skip  (markers: one row shows too)
+    names = ("held-out success (seeds never trained on)", "training success (episodes of the rollout)",
+             "return (learning reward)")  # fmt: skip
+    for r, key in enumerate(names):
+        for c, x in enumerate(("env steps", "wall-clock seconds of training")):
             axes[r][c].set_xlabel(x)
             axes[r][c].set_ylabel(key)
-    axes[0][0].legend(fontsize="small")
+            if r < 2:
+                axes[r][c].set_ylim(-0.03, 1.03)  # success rates on one scale: 98 % does not look like a fall
+    for r, c in ((0, 0), (1, 0)):
+        if axes[r][c].get_legend_handles_labels()[0]:
+            axes[r][c].legend(fontsize="small")
     figure.suptitle("MaskablePPO learning curves (one line per training seed)")
     figure.tight_layout()
     figure.savefig(path, dpi=DPI)
