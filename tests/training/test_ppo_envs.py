@@ -15,7 +15,9 @@ from training.learners import runs
 from training.learners.options import PPOOptions
 from training.learners.ppo import make_training_env, make_vec_env, train_ppo
 
-TWO_ENVS = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32, checkpoint_every=32, seed=1, envs=2)
+TWO_ENVS = PPOOptions(
+    steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32, checkpoint_every=32, seed=1, envs=2, eval_episodes=2
+)
 
 
 def _rows(rows: list[dict]) -> str:
@@ -64,7 +66,8 @@ def test_ppo_on_two_envs_differs_from_one_env(tmp_path: Path) -> None:
 
 def test_ppo_on_two_envs_resumes_after_ctrl_c(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     args = ["train", "ppo", "--family", "basic", "--steps", "96", "--n-steps", "32", "--hidden", "16", "--envs", "2",
-            "--checkpoint-every", "32", "--out", str(tmp_path / "run"), "--no-progress"]  # fmt: skip
+            "--checkpoint-every", "32", "--eval-episodes", "2", "--out", str(tmp_path / "run"),
+            "--no-progress"]  # fmt: skip
     real, calls = runs.write_metrics, []
 
     def interrupt_third_rollout(folder: Path, rows: list) -> None:
@@ -91,7 +94,9 @@ def test_impossible_env_counts_are_bad_input(envs: int) -> None:
 
 def test_a_run_folder_from_before_envs_resumes_with_one_env(tmp_path: Path) -> None:
     """A config.json whose options lack ``envs`` (written before the option existed) is a one-env run."""
-    options = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32)
+    options = PPOOptions(
+        steps=64, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32, eval_episodes=2
+    )
     train_ppo("basic", PPOOptions(**{**options.__dict__, "steps": 32}), tmp_path / "run", progress=False)
     config = runs.read_saved(tmp_path / "run")
     del config["options"]["envs"]

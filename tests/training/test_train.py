@@ -381,7 +381,9 @@ def test_dagger_resumes_after_an_interruption(tmp_path: Path, monkeypatch: pytes
 
 
 # ---------------------------------------------------------------------------- ppo
-TINY_PPO = PPOOptions(steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32, checkpoint_every=32, seed=1)
+TINY_PPO = PPOOptions(
+    steps=64, n_steps=32, batch_size=16, n_epochs=2, hidden=32, checkpoint_every=32, seed=1, eval_episodes=2
+)
 
 
 def test_ppo_is_deterministic_and_logs_learning_curves(tmp_path: Path) -> None:
@@ -399,7 +401,7 @@ def test_ppo_is_deterministic_and_logs_learning_curves(tmp_path: Path) -> None:
 def test_ppo_starts_from_a_bc_run(phases_dataset: str, tmp_path: Path) -> None:
     assert _bc(phases_dataset, tmp_path / "bc") == 0
     options = PPOOptions(
-        steps=32, n_steps=32, batch_size=16, n_epochs=1, learning_rate=1e-12, init=str(tmp_path / "bc")
+        steps=32, n_steps=32, batch_size=16, n_epochs=1, learning_rate=1e-12, init=str(tmp_path / "bc"), eval_episodes=2
     )
     train_ppo("basic", options, tmp_path / "ppo", progress=False)
     bc, ppo = _weights(tmp_path / "bc"), _weights(tmp_path / "ppo")
@@ -408,9 +410,12 @@ def test_ppo_starts_from_a_bc_run(phases_dataset: str, tmp_path: Path) -> None:
 
 
 def test_ppo_interrupted_by_ctrl_c_resumes_to_completion(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    options = PPOOptions(steps=96, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32)
+    options = PPOOptions(
+        steps=96, n_steps=32, batch_size=16, n_epochs=1, hidden=16, checkpoint_every=32, eval_episodes=2
+    )
     args = ["train", "ppo", "--family", "basic", "--steps", "96", "--n-steps", "32", "--hidden", "16",
-            "--checkpoint-every", "32", "--out", str(tmp_path / "run"), "--no-progress"]  # fmt: skip
+            "--checkpoint-every", "32", "--eval-episodes", "2", "--out", str(tmp_path / "run"),
+            "--no-progress"]  # fmt: skip
     real, calls = runs.write_metrics, []
 
     def interrupt_third_rollout(folder: Path, rows: list) -> None:

@@ -48,6 +48,8 @@ class Budget:
     time_limit: float = 10.0  # seconds per planning call of the expert (datasets and DAgger's labels)
     aimed_iterations: int = 0  # dagger-aimed: BC on the whole dataset, then this many DAgger iterations; 0: none
     aimed_families: tuple[str, ...] = ("push", "multi-2")  # dagger-aimed's learner episodes draw from these in turn
+    ppo_eval_every: int = 5120  # env steps between PPO's held-out evaluations (its curve of held-out success)
+    ppo_eval: int = 50  # held-out episodes of each of those evaluations
 
     def __post_init__(self) -> None:
         counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
@@ -89,6 +91,8 @@ class Budget:
             checkpoint_every=self.ppo_rollout * 4,
             seed=seed,
             init=init,
+            eval_every=self.ppo_eval_every,
+            eval_episodes=self.ppo_eval,
         )
 
 
@@ -125,5 +129,7 @@ SMOKE = Budget(
     ppo_batch=32,
     episodes=2,
     aimed_iterations=1,
+    ppo_eval_every=32,
+    ppo_eval=2,
 )
 BUDGETS = {budget.name: budget for budget in (FULL, SMOKE)}
