@@ -8,7 +8,13 @@ name, which the protocol's guard compares), and the MILP expert's episode on
 it in the physics env, computed once with a generous planning limit
 (:data:`REFERENCE_TIME_LIMIT` seconds per planning call): success, cost (metres),
 return, phases, pushes, delivered, the planning calls and whether every one was proven
-optimal (``proven``; ``status`` is the first call's SCIP status).
+optimal (``proven``; ``status`` is the first call's SCIP status). The episode runs in the
+env the benchmark gives every policy on that split: the split's capacity and physics
+(:attr:`~training.evaluation.splits.EvalScenario.env_options`; ``perturbed``'s clutter
+masses and frictions are drawn from the reset seed, so the reference meets the same ones).
+A split whose plans are slow may be computed with another limit (``time_limit_s`` of its
+file says which); a scenario with no plan proven within it is recorded all the same
+(``proven`` false; ``success`` false when no plan was found).
 
 The benchmark reads the cost ratio, SPL and the score's 100 from here, never from the
 expert's run, whose wall-clock limit moves with the machine's load; the expert still
