@@ -10,7 +10,7 @@ import pytest
 from fetchcarry_env.families import OBJECT_COUNTS, get_family
 from fetchcarry_env.observation import Capacity
 from training.errors import BenchmarkError
-from training.evaluation import episodes, runner
+from training.evaluation import episodes, references, runner
 from training.evaluation.references import part_references
 from training.evaluation.splits import (
     APARTMENT_EPISODES,
@@ -112,3 +112,17 @@ def test_a_folder_env_holds_every_file_of_the_folder(tmp_path: Path) -> None:
         item.scenario.save(tmp_path / f"{item.source}.json")
     items = folder_scenarios(tmp_path)
     assert {i.capacity.objects for i in items} == {6} and {i.physics for i in items} == {None}
+
+
+def test_extending_a_reference_file_keeps_its_records_and_runs_only_the_new_episodes(monkeypatch) -> None:
+    calls = []
+    original = references._reference_task
+    monkeypatch.setattr(references, "_reference_task", lambda task: calls.append(task[1].index) or original(task))
+    first = part_references("iid-v1:dev")[0]
+    kept = {"split": "iid-v1", "time_limit_s": 5.0, "parts": {"dev": [first, {**first, "index": 1}]}}
+    content = references.compute_references("iid-v1", episodes={"dev": 2, "test": 1}, time_limit=5.0, keep=kept)
+    assert content["parts"]["dev"][0] == first  # kept as it was, planning time and all
+    assert calls == [1, 0]  # dev episode 1 (the kept record is another scenario's), then test episode 0
+    assert content["parts"]["dev"][1]["seed"] == first["seed"] + 1
+    with pytest.raises(references.ReferenceError, match="6 s limit, not of iid-v1 with 5.0 s"):
+        references.compute_references("iid-v1", episodes={"dev": 1, "test": 1}, time_limit=6.0, keep=kept)
