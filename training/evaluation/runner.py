@@ -4,7 +4,9 @@
 planner: on a published split's part, checked against the split's fixed reference,
 which every cost ratio is to; elsewhere every cost ratio is to its cost on the same
 scenario) and ``random-phases`` (the normalised score's zero), next to the policies
-asked for. Episodes run in this process
+asked for. Every policy acts in an env of the split's capacity and physics
+(:func:`acting_spec`: ``objects`` has room for eight objects, ``perturbed`` varies the
+clutter's mass and friction), as the split's reference was computed. Episodes run in this process
 (``workers=1``), on a process pool or on Ray (:mod:`training.evaluation.tasks`), with the worker set-up of
 ``fetchcarry generate`` (:mod:`training.data.generate`): workers ignore Ctrl-C and die with
 their parent.
