@@ -171,7 +171,7 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
 def test_resume_keeps_the_records_of_other_policies_and_splits(tiny: Path, tmp_path: Path):
     shutil.copy(tiny / "results.json", tmp_path / "results.json")
     before = read_results(tmp_path / "results.json")
-    benchmark.run_benchmark(["random"], split="layouts", episodes=1, out=tmp_path, resume=True)
+    benchmark.run_benchmark(["random"], split="layouts-v1", episodes=1, out=tmp_path, resume=True)
     records = read_results(tmp_path / "results.json")
     assert [(r["policy"], r["split"]) for r in records[: -len(before)]] == [
         ("expert", "layouts-v1:test"),
@@ -355,7 +355,7 @@ def test_a_split_version_never_changes():
 
 
 def test_several_splits_in_one_run(tmp_path: Path):
-    report = benchmark.run_benchmark(["random"], split=["layouts", "push-required"], episodes=1, out=tmp_path)
+    report = benchmark.run_benchmark(["random"], split=["layouts-v1", "push-required"], episodes=1, out=tmp_path)
     assert [(r["policy"], r["split"]) for r in report.records] == [
         ("expert", "layouts-v1:test"),
         ("expert", "push-required-v1:test"),
@@ -380,7 +380,7 @@ def test_layouts_are_held_out_of_training():
     for name in (*TRAINING_FAMILIES, "multi", "mixed", "training"):
         for seed in range(30):
             assert FAMILIES[name].sample(np.random.default_rng(seed)).robot.start[0] < 1.0, (name, seed)
-    layouts = benchmark.split_scenarios("layouts", 20)
+    layouts = benchmark.split_scenarios("layouts-v1", 20)
     assert {item.source for item in layouts} == set(HELD_OUT_FAMILIES)
     for item in layouts:
         assert item.scenario.robot.start[0] > 4.0

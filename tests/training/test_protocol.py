@@ -16,7 +16,7 @@ def test_dev_and_test_parts_have_disjoint_seeds_and_test_is_the_default() -> Non
     assert get_split("iid").name == "iid-v1:test" and get_split("iid-v1").name == "iid-v1:test"
     assert get_split("iid:dev").name == "iid-v1:dev" and get_split("iid-v0").name == "iid-v0"
     for base in ("iid", "more-objects", "layouts", "push-required"):
-        dev, test = get_split(f"{base}:dev"), get_split(f"{base}:test")
+        dev, test = get_split(f"{base}-v1:dev"), get_split(f"{base}-v1:test")
         dev_seeds = {dev.seed(k) for k in range(dev.episodes)}
         test_seeds = {test.seed(k) for k in range(test.episodes)}
         assert not dev_seeds & test_seeds and test.episodes >= 300

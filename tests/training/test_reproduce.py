@@ -18,7 +18,7 @@ from training.reproduce.budgets import FULL
 from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings, training_jobs
 from training.reproduce.table import REFERENCES, baselines
 
-SPLITS = ("iid-v1:test", "more-objects-v1:test", "layouts-v1:test", "push-required-v1:test")
+SPLITS = ("iid-v1:test", "more-objects-v1:test", "layouts-v2:test", "push-required-v1:test")
 MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 
 
@@ -83,7 +83,7 @@ def test_a_second_call_skips_every_finished_stage(smoke: Path, tmp_path: Path, c
     everywhere = 4 + sum(len(b.runs) for b in baselines(1, SMOKE) if not b.label.startswith("bc-mlp-n"))
     assert f"benchmark iid-v1:test: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
     assert "benchmark more-objects-v1:test: already complete" in stdout
-    assert f"benchmark layouts-v1:test: {everywhere * n} episodes (0 resumed)" in stdout
+    assert f"benchmark layouts-v2:test: {everywhere * n} episodes (0 resumed)" in stdout
     assert f"benchmark push-required-v1:test: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
     records = read_results(out / "results.json")
     assert len(records) == len(read_results(smoke / "results.json"))

@@ -21,7 +21,7 @@ from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 from training.evaluation.runner import RESULTS, SUMMARY, run_benchmark
-from training.evaluation.splits import SPLITS
+from training.evaluation.splits import SPLITS, get_split
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -73,7 +73,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 def _description() -> str:
     """``fetchcarry benchmark --help``'s description: what it measures and writes, and the splits."""
-    splits = ", ".join(f"{s.base_name} ({s.description})" for s in SPLITS.values())
+    names = dict.fromkeys(s.base_name for s in SPLITS.values())  # each split once, described by its newest version
+    splits = ", ".join(f"{name} ({get_split(name).description})" for name in names)
     return (
         "Run every policy on the same scenarios and compare it with the MILP expert on each: "
         "success with a 95 % Wilson interval, objects delivered, cost ratio to the expert, a cost-weighted "

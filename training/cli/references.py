@@ -18,6 +18,7 @@ from training.evaluation.references import (
     REFERENCE_TIME_LIMIT,
     compute_references,
     digest_mismatches,
+    load_references,
     part_references,
     write_references,
 )
@@ -62,6 +63,11 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="folder of the reference files (default: the package's own)",
     )
     add_worker_options(parser)
+    parser.add_argument(
+        "--extend",
+        action="store_true",
+        help="keep the records of the existing file (same scenario, same --time-limit) and compute only the others",
+    )
     parser.add_argument("--check", action="store_true", help="only compare every digest with its split, sampled again")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -86,6 +92,7 @@ def run_references(args: argparse.Namespace) -> int:
             ray_address=args.ray_address,
             time_limit=args.time_limit,
             progress=not args.no_progress,
+            keep=load_references(version, args.out) if args.extend else None,
         )
         path = write_references(content, args.out)
         echo(f"{path}: {_summary(content)}, {time.perf_counter() - started:.0f} s")

@@ -8,7 +8,13 @@ name, which the protocol's guard compares), and the MILP expert's episode on
 it in the physics env, computed once with a generous planning limit
 (:data:`REFERENCE_TIME_LIMIT` seconds per planning call): success, cost (metres),
 return, phases, pushes, delivered, the planning calls and whether every one was proven
-optimal (``proven``; ``status`` is the first call's SCIP status).
+optimal (``proven``; ``status`` is the first call's SCIP status). The episode runs in the
+env the benchmark gives every policy on that split: the split's capacity and physics
+(:attr:`~training.evaluation.splits.EvalScenario.env_options`; ``perturbed``'s clutter
+masses and frictions are drawn from the reset seed, so the reference meets the same ones).
+A split whose plans are slow may be computed with another limit (``time_limit_s`` of its
+file says which); a scenario with no plan proven within it is recorded all the same
+(``proven`` false; ``success`` false when no plan was found).
 
 The benchmark reads the cost ratio, SPL and the score's 100 from here, never from the
 expert's run, whose wall-clock limit moves with the machine's load; the expert still
@@ -114,7 +120,8 @@ class _Recorder:
 
 def reference_episode(item: EvalScenario, time_limit: float = REFERENCE_TIME_LIMIT) -> dict[str, Any]:
     """The expert's episode on ``item`` with ``time_limit`` seconds per plan: one reference record."""
-    env = make_env("env", family="basic")  # the benchmark's env: the lattice of the families' extent
+    # The benchmark's env: the lattice of the families' extent, the split's capacity and physics.
+    env = make_env("env", family="basic", **item.env_options)
     try:
         policy = _Recorder(env, time_limit)
         episode = run_episode(env, policy, item.seed, options={"scenario": item.scenario}, stop_on_failure=False)
@@ -150,13 +157,22 @@ def compute_references(
     ray_address: str | None = None,
     time_limit: float = REFERENCE_TIME_LIMIT,
     progress: bool = False,
+    keep: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The reference file's content for split version ``version`` (``iid-v1``): every part's references.
 
     ``episodes`` maps a part to its episode count (default: each part's own). Episodes run
     here, on the process pool or on Ray (:func:`training.evaluation.tasks.run_all`);
     records are put in index order, so every backend gives the same file, planning times aside.
+    ``keep`` is an earlier content of the same file (:func:`load_references`): its records
+    whose seed and scenario digest are the episode's are kept, and only the other episodes
+    run (a part grown by more episodes); it must have been made with ``time_limit``.
     """
+    if keep is not None and (keep.get("split") != version or keep.get("time_limit_s") != time_limit):
+        raise ReferenceError(
+            f"the records kept must be of {version} with a {time_limit:g} s limit, "
+            f"not of {keep.get('split')} with {keep.get('time_limit_s')} s"
+        )
     parts = [s for s in SPLITS.values() if s.version == version and s.part]
     if not parts:
         known = ", ".join(sorted({s.version for s in SPLITS.values() if s.part}))
@@ -164,14 +180,26 @@ def compute_references(
     content: dict[str, Any] = {"format": FORMAT, "split": version, "time_limit_s": time_limit, "parts": {}}
     for part in parts:
         items = split_scenarios(part, (episodes or {}).get(part.part))
-        tasks = [(time_limit, item) for item in items]
-        records = []
+        records = _kept(items, (keep or {}).get("parts", {}).get(part.part, []))
+        done = {r["index"] for r in records}
+        tasks = [(time_limit, item) for item in items if item.index not in done]
         with progress_bar(len(tasks), f"references {part.name}", enabled=progress) as bar:
             for record in run_all(tasks, _reference_task, workers=workers, backend=backend, ray_address=ray_address):
                 records.append(record)
                 bar.update(1)
         content["parts"][part.part] = sorted(records, key=lambda r: r["index"])
     return content
+
+
+def _kept(items: Sequence[EvalScenario], records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The ``records`` that are references of ``items``: same index, seed and scenario digest."""
+    by_index = {r.get("index"): r for r in records}
+    out = []
+    for item in items:
+        record = by_index.get(item.index)
+        if record is not None and record["seed"] == item.seed and record["digest"] == scenario_digest(item.scenario):
+            out.append(record)
+    return out
 
 
 def _reference_task(task: tuple[float, EvalScenario]) -> dict[str, Any]:

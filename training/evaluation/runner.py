@@ -4,7 +4,9 @@
 planner: on a published split's part, checked against the split's fixed reference,
 which every cost ratio is to; elsewhere every cost ratio is to its cost on the same
 scenario) and ``random-phases`` (the normalised score's zero), next to the policies
-asked for. Episodes run in this process
+asked for. Every policy acts in an env of the split's capacity and physics
+(:func:`acting_spec`: ``objects`` has room for eight objects, ``perturbed`` varies the
+clutter's mass and friction), as the split's reference was computed. Episodes run in this process
 (``workers=1``), on a process pool or on Ray (:mod:`training.evaluation.tasks`), with the worker set-up of
 ``fetchcarry generate`` (:mod:`training.data.generate`): workers ignore Ctrl-C and die with
 their parent.
@@ -34,6 +36,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, replace
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -115,8 +118,8 @@ def run_benchmark(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     with ResultsLock(out):
-        return _run([(spec, item) for spec in specs for item in items], out, workers, backend, ray_address,
-                    progress, resume)  # fmt: skip
+        return _run([(acting_spec(spec, item), item) for spec in specs for item in items], out, workers, backend,
+                    ray_address, progress, resume)  # fmt: skip
 
 
 def _run(
@@ -201,20 +204,63 @@ def with_observations(specs: list[PolicySpec], obs_mode: str) -> list[PolicySpec
             for s in specs]  # fmt: skip
 
 
+def acting_spec(spec: PolicySpec, item: EvalScenario) -> PolicySpec:
+    """``spec`` with the env options it acts in on ``item``: the split's physics, and a capacity.
+
+    The capacity is the split's (:attr:`EvalScenario.capacity`, which holds every scenario of
+    the split), unless ``spec`` is a run folder with its own: then its own when that holds the
+    split's, or when its network acts only at its own (a flat network; :func:`check_fits`
+    refuses the scenarios that do not fit), else the split's (a set encoder acts at any capacity).
+    """
+    options = {**spec.env_options, **item.env_options}
+    own = spec.env_options.get("capacity")
+    if own is not None:
+        own = own if isinstance(own, Capacity) else Capacity(**own)
+        if own.covers(item.capacity) or not acts_at_any_capacity(spec):
+            options["capacity"] = own
+    return replace(spec, env_options=options)
+
+
+def acts_at_any_capacity(spec: PolicySpec) -> bool:
+    """True unless ``spec`` is a run folder of a flat network (one input per feature of its trained capacity).
+
+    A run whose network is a set encoder (every member of an ensemble) acts at any capacity,
+    as does a policy that is no run folder (it is built for the env it is given).
+    """
+    return spec.run is None or _set_encoder_run(spec.run)
+
+
+@cache
+def _set_encoder_run(run: str) -> bool:
+    """True when the run folder ``run`` holds a set encoder (every member's, for an ensemble)."""
+    from training.learners.runs import network_config, read_saved  # torch at its top
+
+    try:
+        saved = read_saved(run)
+        members = saved["options"]["members"] if saved.get("kind") == "ensemble" else [saved]
+        return all(network_config(member).encoder == "set" for member in members)
+    except (KeyError, TypeError, ValueError, OSError):
+        return False  # not a network run this can read: keep the capacity it was trained with
+
+
 def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:
-    """Every scenario fits the observation capacity of every policy; :class:`BenchmarkError` names what does not."""
+    """Every scenario fits the capacity every policy acts at there; :class:`BenchmarkError` names what does not."""
     problems = []
     for spec in specs:
-        capacity = spec.env_options.get("capacity")
-        if capacity is None:
-            continue
+        if spec.env_options.get("capacity") is None:
+            continue  # it acts at the split's capacity, which holds every scenario of the split
         for item in items:
             try:
-                Capacity(**capacity).check(item.scenario)
+                _capacity(acting_spec(spec, item)).check(item.scenario)
             except ValueError as error:
                 problems.append(f"{spec.name} cannot act in {item.source} ({item.scenario.name}): {error}")
     if problems:
         raise BenchmarkError("\n".join(problems[:10]))
+
+
+def _capacity(spec: PolicySpec) -> Capacity:
+    capacity = spec.env_options["capacity"]
+    return capacity if isinstance(capacity, Capacity) else Capacity(**capacity)
 
 
 def write_results(

@@ -23,6 +23,20 @@ split                  scenarios
                        turn, which no training family draws)
 ``push-required-v0``   the five Table I push patterns A-E in turn; every scenario
                        has clutter on a goal, so every solution pushes at least once
+``objects-v1``         the graded worlds ``objects-1`` .. ``objects-8`` in turn (episode
+                       ``k`` has ``k % 8 + 1`` objects, on several tables, clutter on the
+                       goals in half): success and cost ratio against the object count,
+                       past the four a training family holds (capacity 8 objects)
+``layouts-v2``         ``unseen-layouts``: topologies no training family draws, not even
+                       turned (a T-junction, a U corridor, rooms in a row, a table in a
+                       dead end); tests layouts, where ``layouts-v0``/``-v1`` test a turn
+``apartment-v1``       ``apartment``: two to four rooms joined by doors and corridors of
+                       varied width, three to six tables, two to five objects (capacity 5):
+                       long horizons in a procedural home
+``perturbed-v1``       ``perturbed``: ``iid`` scenarios with the tables and start moved a
+                       little, one to three distractors, and the physics variation
+                       ``home`` (each piece of clutter's mass and friction drawn per
+                       episode, so a push lands elsewhere than planned): robustness
 =====================  ===========================================================
 
 A name without a version (``iid``) means the newest version. A new version gets a new
@@ -36,19 +50,40 @@ version 1) for reporting, 300 episodes by default. A version without a part
 (``iid-v1``, ``iid``) means its ``test`` part; ``iid:dev`` is the newest version's
 ``dev`` part. Each part's scenarios are pinned by the digest of every scenario in the
 split's reference file (:mod:`training.evaluation.references`).
+
+The splits over the graded worlds (``objects-v1``, ``layouts-v2``, ``apartment-v1``,
+``perturbed-v1``) have the same two parts, both on fresh seeds of their own block
+(``dev``: ``offset + k``, ``test``: ``offset + TEST_SHIFT + k``). Their test parts are
+smaller than 300 where the reference did not fit the time there was (``objects-v1``:
+16 dev and 160 test episodes, ``apartment-v1``: 10 and 30; docs/protocol.md).
+
+Every policy acts in an env of the split's capacity (:attr:`Split.capacity`, the largest
+of its families', which holds every scenario the split draws) and physics
+(:attr:`Split.physics`, its families' variation): :attr:`EvalScenario.env_options`.
+A name without a version means the newest: ``layouts`` is ``layouts-v2:test``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from fetchcarry_env.families import EXTENT, HELD_OUT_FAMILIES, Family, draw_push, get_family
+from fetchcarry_env.families import (
+    EXTENT,
+    HELD_OUT_FAMILIES,
+    OBJECT_COUNTS,
+    UNSEEN_LAYOUT_FAMILIES,
+    Family,
+    draw_push,
+    get_family,
+)
 from fetchcarry_env.geometry import Rect
+from fetchcarry_env.observation import Capacity
 from fetchcarry_env.scenario import Scenario, ScenarioError
+from fetchcarry_env.worlds.physics import NO_VARIATION
 from training.data.generate import EVAL_SEED_BASE  # first evaluation seed; training and dataset seeds stay below it
 from training.errors import BenchmarkError
 
@@ -78,6 +113,22 @@ class Split:
     episodes: int = 100  # the default number of episodes
 
     part: str = ""  # "dev" or "test" for a v1 split's part, "" for a v0 split (one part)
+
+    def __post_init__(self) -> None:
+        physics = {source.family.physics for source in self.sources}
+        if len(physics) > 1:
+            raise ValueError(f"split {self.name!r}: its sources name different physics variations")
+
+    @property
+    def capacity(self) -> Capacity:
+        """The observation capacity that holds every scenario of the split: the largest of its sources' families'."""
+        return largest(source.family.capacity for source in self.sources)
+
+    @property
+    def physics(self) -> str | None:
+        """The physics variation the split's envs apply (its families', e.g. ``home``), ``None`` for none."""
+        variation = self.sources[0].family.physics
+        return variation.name if variation is not None else None
 
     @property
     def base_name(self) -> str:
@@ -111,6 +162,21 @@ class EvalScenario:
     source: str  # the family it was drawn from, or the file it was read from
     seed: int  # the env's reset seed (and the random policy's)
     scenario: Scenario
+    capacity: Capacity = field(default_factory=Capacity)  # the env's capacity: holds the whole split
+    physics: str | None = None  # the env's physics variation (a name of fetchcarry_env.worlds.physics), or none
+
+    @property
+    def env_options(self) -> dict[str, object]:
+        """The ``gym.make`` options of the env every policy acts in on this scenario: capacity and physics."""
+        return {"capacity": self.capacity, "physics": self.physics or NO_VARIATION}
+
+
+def largest(capacities: Iterable[Capacity]) -> Capacity:
+    """The smallest capacity that covers every one of ``capacities`` (the default's for none)."""
+    fields = [asdict(c) for c in capacities]
+    if not fields:
+        return Capacity()
+    return Capacity(**{key: max(f[key] for f in fields) for key in fields[0]})
 
 
 def _families(*names: str) -> tuple[Source, ...]:
@@ -145,7 +211,57 @@ def _parts(v0: Split) -> tuple[Split, Split]:
     )
 
 
-SPLITS: dict[str, Split] = {split.name: split for split in (*_V0, *(p for v0 in _V0 for p in _parts(v0)))}
+def _graded(
+    version: str, description: str, sources: tuple[Source, ...], block: int, dev: int, test: int
+) -> tuple[Split, Split]:
+    """The dev and test parts of a split over the graded worlds: fresh seeds in block ``block``, both parts."""
+    offset = block * SPLIT_BLOCK
+    return (
+        Split(f"{version}:{DEV}", description, sources, offset, dev, DEV),
+        Split(f"{version}:{TEST}", description, sources, offset + TEST_SHIFT, test, TEST),
+    )
+
+
+# Fewer than 300 test episodes where the reference could not be computed in the time there was: the expert
+# needs up to its 60 s limit for a plan of six to eight objects or of an apartment (docs/protocol.md).
+OBJECTS_EPISODES = {DEV: 16, TEST: 160}  # 2 and 20 per object count
+APARTMENT_EPISODES = {DEV: 10, TEST: 30}
+_GRADED = (
+    *_graded(
+        "objects-v1",
+        "k objects for k = 1..8 (objects-1 .. objects-8 in turn): success and cost ratio against k",
+        _families(*(f"objects-{k}" for k in OBJECT_COUNTS)),
+        4,
+        OBJECTS_EPISODES[DEV],
+        OBJECTS_EPISODES[TEST],
+    ),
+    *_graded(
+        "layouts-v2",
+        "topologies no training family draws: T-junction, U corridor, rooms in a row, table in a dead end",
+        _families(*UNSEEN_LAYOUT_FAMILIES),
+        5,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    *_graded(
+        "apartment-v1",
+        "2-4 rooms joined by doors and corridors, 3-6 tables, 2-5 objects",
+        _families("apartment"),
+        6,
+        APARTMENT_EPISODES[DEV],
+        APARTMENT_EPISODES[TEST],
+    ),
+    *_graded(
+        "perturbed-v1",
+        "iid scenarios moved a little, with distractors and clutter mass and friction varied (physics home)",
+        _families("perturbed"),
+        7,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+)
+
+SPLITS: dict[str, Split] = {split.name: split for split in (*_V0, *(p for v0 in _V0 for p in _parts(v0)), *_GRADED)}
 """Every split (and part) by its full name: ``iid-v0``, ``iid-v1:dev``, ``iid-v1:test``, ..."""
 
 
@@ -182,11 +298,12 @@ def split_scenarios(split: Split | str, episodes: int | None = None) -> list[Eva
     if count < 1:
         raise BenchmarkError(f"the number of episodes must be at least 1, got {count}")
     out = []
+    capacity, physics = split.capacity, split.physics
     for index in range(count):
         source = split.sources[index % len(split.sources)]
         seed = split.seed(index)
         scenario = source.family.sample(np.random.default_rng(seed))
-        out.append(EvalScenario(index, split.name, source.name, seed, scenario))
+        out.append(EvalScenario(index, split.name, source.name, seed, scenario, capacity, physics))
     return out
 
 
@@ -202,6 +319,9 @@ def folder_scenarios(
     folder: str | Path, episodes: int | None = None, learned: Sequence[str] = ()
 ) -> list[EvalScenario]:
     """The scenario files (``*.json``, in name order) of ``folder``, the first ``episodes`` of them.
+
+    Their env's capacity is the default's, grown to hold every file's scenario; no physics variation
+    (the scenario format has no masses or frictions).
 
     Every file must be a valid scenario whose area lies inside the families' extent
     (``EXTENT``, the floor the benchmark's action lattice covers, for every policy);
@@ -227,6 +347,10 @@ def folder_scenarios(
             problems.append(f"{path.name}: its area ({extent_text(scenario.area)}) {_outside(learned)}")
             continue
         out.append(EvalScenario(index, f"scenarios:{folder.name}", path.name, EVAL_SEED_BASE + index, scenario))
+    capacity = Capacity()
+    for item in out:
+        capacity = capacity.holding(item.scenario)
+    out = [replace(item, capacity=capacity) for item in out]
     if problems:
         shown = problems[:SHOWN_PROBLEMS]
         if len(problems) > SHOWN_PROBLEMS:
