@@ -56,9 +56,14 @@ class Summary:
         )
 
 
-def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
-    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
-    return _episodes(policy, make_env("phases", family=family), seeds, deterministic)
+def evaluate(
+    policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True, **env_options: Any
+) -> list[EpisodeResult]:
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it).
+
+    ``env_options``: more ``gym.make`` keywords (the observation mode and image options of an image network).
+    """
+    return _episodes(policy, make_env("phases", family=family, **env_options), seeds, deterministic)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
