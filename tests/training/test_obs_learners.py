@@ -156,3 +156,8 @@ def test_an_other_obs_mode_given_for_an_image_run_is_refused(dagger_run: Path, c
     status, _, err = run(capsys, "benchmark", "--policies", dagger_run, "--split", "iid:dev", "--episodes", "1",
                          "--obs-mode", "state", "--out", dagger_run.parent / "bench")  # fmt: skip
     assert status == 2 and "trained on obs_mode 'topdown'" in err
+
+
+def test_bench_learned_evaluates_an_image_run_in_its_own_mode(dagger_run: Path, capsys: pytest.CaptureFixture):
+    status, out, _ = run(capsys, "bench", "learned", "--family", "basic", "--episodes", "1", dagger_run)
+    assert status == 0 and "success" in out and "1 held-out seeds" in out
