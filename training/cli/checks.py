@@ -16,6 +16,7 @@ from training.cli.arguments import positive_int, whole_number
 from training.cli.seeds import seed
 from training.cli.text import echo
 from training.learners.options import HELDOUT_SEED_BASE, BCConfig, check_family
+from training.resolve import run_image_options
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -83,7 +84,6 @@ def run_bench_learned(args: argparse.Namespace) -> int:
 
     from training.learners.heldout import evaluate, expert_costs, summarise
     from training.learners.runs import read_saved
-    from training.resolve import run_image_options
 
     _check_families(args.family)
     torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
