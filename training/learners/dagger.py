@@ -26,6 +26,10 @@ After each iteration the learner is measured on held-out seeds (from
 :data:`HELDOUT_SEED_BASE`, never trained on) and ``metrics.csv`` gains a row: the
 expert labels so far and the held-out success. A checkpoint after every iteration
 (the aggregate, the weights, the metrics) lets an interrupted run resume.
+
+With ``config.obs_mode`` ``topdown`` or ``rgbd`` (the cnn encoder), every env of the run
+is made in that mode: the expert still plans from the state the observation holds, and
+the labelled states stored for the learner are its images (uint8, flattened).
 """
 
 from __future__ import annotations

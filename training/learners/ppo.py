@@ -2,7 +2,9 @@
 
 The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shaped
 progress; refusals cost more than moving), its flat observation vector
-(``observation["observation"]``) as the policy's input, ``envs`` of them side by side
+(``observation["observation"]``) as the policy's input (with ``obs_mode`` ``topdown`` or
+``rgbd``, that mode's images flattened instead, and a cnn actor and a cnn value over them),
+``envs`` of them side by side
 (:func:`make_vec_env`: SB3's ``DummyVecEnv`` for one, ``SubprocVecEnv`` with one forked
 worker per env for more; MaskablePPO reads their masks with ``env_method("action_masks")``).
 Env ``i``'s first episode is drawn with seed ``seed + i`` (SB3's ``VecEnv.seed``), its
