@@ -225,7 +225,8 @@ def train_ppo(
     features = int(probe.observation_space.shape[0])
     probe.close()
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
-        raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
+        raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates, "
+                             f"{init['features']} inputs; its images: config.json's observation)")  # fmt: skip
     # The init run's weights are read and checked before the run folder is made: a bad one leaves nothing behind.
     init_weights = None
     if options.init is not None:
