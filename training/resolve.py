@@ -157,18 +157,51 @@ def _run_spec(path: Path) -> PolicySpec:
 
 
 def run_image_options(config: dict[str, Any]) -> dict[str, Any]:
-    """The env's observation options a run folder's network needs (``{}`` for the state; from its input size).
+    """The env's observation options a run folder's network needs (``{}`` for the state).
 
-    ``config`` is the run folder's ``config.json`` (as read).
+    ``config`` is the run folder's ``config.json`` (as read): its ``observation`` (the
+    mode and image options it was trained with, :mod:`training.learners.runs`), or, for a
+    run folder written before it was recorded, the image size read from the network's
+    input (the map's frame the default, ``world``).
     """
     network = config.get("config")
     obs_mode = network.get("obs_mode", "state") if isinstance(network, dict) else "state"
     if obs_mode == "state" or obs_mode not in OBS_MODES or not isinstance(config.get("features"), int):
         return {}  # an unknown mode is refused when the run folder loads
+    recorded = config.get("observation")
+    if isinstance(recorded, dict) and recorded.get("obs_mode") == obs_mode:
+        return dict(recorded)  # checked when the run folder loads
     try:
         return image_options(obs_mode, config["features"])
     except ValueError:
         return {}
+
+
+def run_obs_mode(spec: PolicySpec) -> str | None:
+    """The observation mode the network of run folder ``spec`` sees (``topdown``, ``rgbd``), or None.
+
+    None for a state network (it reads the state vector, which every mode's observation
+    holds) and for a policy that is not a run folder.
+    """
+    return spec.env_options.get("obs_mode") if spec.run is not None else None
+
+
+def check_obs_mode(spec: PolicySpec, obs_mode: str | None) -> None:
+    """``BenchmarkError`` when ``obs_mode`` (given on the command line; None: not given) is not what ``spec`` sees.
+
+    A run folder of an image network acts only in the mode it was trained in; a state
+    network or a named policy acts in any mode (the state vector is in every one).
+    """
+    check_run_obs_mode(spec.name, run_obs_mode(spec), obs_mode)
+
+
+def check_run_obs_mode(name: str, own: str | None, obs_mode: str | None) -> None:
+    """``BenchmarkError`` unless run folder ``name`` (its network sees ``own``; None: state) acts in ``obs_mode``."""
+    if obs_mode is not None and own is not None and own != obs_mode:
+        raise BenchmarkError(
+            f"run folder {name} was trained on obs_mode {own!r}, not {obs_mode!r}: leave --obs-mode out "
+            f"(a run folder's env is made in its own mode) or give --obs-mode {own}"
+        )
 
 
 def resolve_all(names: list[str]) -> list[PolicySpec]:

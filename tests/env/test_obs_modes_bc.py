@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import gymnasium as gym
@@ -60,6 +61,8 @@ def test_bc_cnn_trains_on_a_rendered_dataset_and_acts_in_a_topdown_env(tmp_path)
     render_dataset(SOURCE, "topdown", TOPDOWN, progress=False)
     train_bc_run(TOPDOWN, config, tmp_path / "bc", progress=False)
     rows = (tmp_path / "bc" / "metrics.csv").read_text().splitlines()
+    saved = json.loads((tmp_path / "bc" / "config.json").read_text())
+    assert saved["observation"] == {"obs_mode": "topdown", "topdown_size": 64, "topdown_frame": "world"}
     assert float(rows[-1].split(",")[2]) == 1.0  # it fits its few labels
     env = gym.make("FetchCarryPushPhases-v0", family="basic", obs_mode="topdown")
     policy = load_policy(tmp_path / "bc", env)
@@ -76,7 +79,7 @@ def test_bc_cnn_trains_on_a_rendered_dataset_and_acts_in_a_topdown_env(tmp_path)
 
 
 def test_configurations_that_cannot_work_are_refused():
-    from training.learners.options import BCConfig, DaggerRun
+    from training.learners.options import BCConfig
 
     with pytest.raises(InputError, match="cnn"):
         BCConfig(encoder="cnn")  # the state vector is no image
@@ -84,5 +87,3 @@ def test_configurations_that_cannot_work_are_refused():
         BCConfig(encoder="mlp", obs_mode="topdown")
     with pytest.raises(InputError, match="state vector"):
         BCConfig(encoder="cnn", obs_mode="topdown", avoid_returns=True)
-    with pytest.raises(InputError, match="dagger"):
-        DaggerRun(family="basic", config=BCConfig(encoder="cnn", obs_mode="topdown"))

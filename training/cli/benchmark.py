@@ -66,7 +66,12 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "changed runs again); its records of other policies and splits stay (one folder can grow a policy at a time)",
     )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
-    add_obs_mode_argument(parser, "the observation the policies get (a run folder of an image network gets its own)")
+    add_obs_mode_argument(
+        parser,
+        "the observation the policies get (default: state; a run folder of an image network gets its own, "
+        "and another mode given for it is refused)",
+        default=None,
+    )
     parser.set_defaults(handler=run_benchmark_command)
     references.register(commands)
 

@@ -16,6 +16,7 @@ from training.cli.arguments import positive_int, whole_number
 from training.cli.seeds import seed
 from training.cli.text import echo
 from training.learners.options import HELDOUT_SEED_BASE, BCConfig, check_family
+from training.resolve import run_image_options
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -82,6 +83,7 @@ def run_bench_learned(args: argparse.Namespace) -> int:
     import torch
 
     from training.learners.heldout import evaluate, expert_costs, summarise
+    from training.learners.runs import read_saved
 
     _check_families(args.family)
     torch.set_num_threads(1)  # one decision at a time: a second thread made it about 60x slower here
@@ -90,7 +92,8 @@ def run_bench_learned(args: argparse.Namespace) -> int:
     expert = expert_costs(args.family, seeds)
     echo(f"{args.family}: {args.episodes} held-out seeds from {args.first_seed}; the expert solves {len(expert)}")
     for run, policy in policies.items():
-        echo(summarise(evaluate(policy, args.family, seeds), expert).line(run))
+        images = run_image_options(read_saved(run))  # an image network's env: its own observation mode
+        echo(summarise(evaluate(policy, args.family, seeds, **images), expert).line(run))
     return 0
 
 

@@ -31,7 +31,7 @@ from training.evaluation.expert import (
     results_table,
 )
 from training.pictures.files import render_size
-from training.resolve import run_image_options
+from training.resolve import check_run_obs_mode, run_image_options
 from training.rollout import run_episode
 
 DEFAULT_DEMO_PICTURE = "episode.png"
@@ -85,15 +85,20 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
         "clutter 8, tables 6, obstacles 12, postures 4); default: the family's, which holds every scenario it "
         "draws, or for --scenario the default grown to hold it",
     )
-    add_obs_mode_argument(parser)
+    add_obs_mode_argument(parser, default=None if runs else "state")  # None: a run folder's own mode
 
 
-def add_obs_mode_argument(parser: argparse.ArgumentParser, meaning: str = "the env's observation") -> None:
-    """``--obs-mode``: ``state`` (default), ``topdown`` or ``rgbd`` (docs/observations.md)."""
+def add_obs_mode_argument(
+    parser: argparse.ArgumentParser, meaning: str = "the env's observation", default: str | None = "state"
+) -> None:
+    """``--obs-mode``: ``state`` (default), ``topdown`` or ``rgbd`` (docs/observations.md).
+
+    ``default`` None tells a command that the option was left out (a run folder's own mode applies).
+    """
     parser.add_argument(
         "--obs-mode",
         choices=OBS_MODES,
-        default="state",
+        default=default,
         help=f"{meaning}: state (the geometry vector, default), topdown (plus a semantic map drawn from the "
         "geometry) or rgbd (plus head and overhead RGB-D camera images)",
     )
@@ -113,7 +118,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
         time_limit=args.time_limit,
         interface=getattr(args, "interface", "env"),
         capacity=getattr(args, "capacity", None),
-        obs_mode=getattr(args, "obs_mode", "state"),
+        obs_mode=getattr(args, "obs_mode", None) or "state",
     )
 
 
@@ -175,11 +180,16 @@ def failure_reason(failure: str, time_limit: float) -> str | None:
     return None
 
 
-def _run_one(source: Any, picture: Path | None, run: Path | None = None) -> Any:
-    """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases)."""
+def _run_one(source: Any, picture: Path | None, run: Path | None = None, obs_mode: str | None = None) -> Any:
+    """One episode of ``source`` (or of the run folder ``run``'s policy, in the candidate phases).
+
+    ``obs_mode``: the ``--obs-mode`` given (None: left out); a run folder of an image network
+    trained on another mode is refused (``BenchmarkError``, bad input).
+    """
     options: dict[str, Any] = {}
     if run is not None:  # the run's network sees its own obs_mode
         options = dict(_run_spec_options(run))
+        check_run_obs_mode(str(run), options.get("obs_mode"), obs_mode)
         source = replace(source, interface="phases", obs_mode=options.pop("obs_mode", source.obs_mode))
     if picture is None:
         env = source.build_env(**options)
@@ -247,7 +257,7 @@ def run_rollout(args: argparse.Namespace) -> int:
     picture = check_picture(args.render)
     run = _run_folder(args.policy)
     source = episode_source(args, policy="expert" if run is not None else None)
-    record = _run_one(source, picture, run)
+    record = _run_one(source, picture, run, args.obs_mode)
     if args.json:
         print(json.dumps({**record.figures.to_dict(), "picture": str(picture) if picture else None}, indent=2))
     else:

@@ -53,7 +53,7 @@ from training.evaluation.results import write_results as write_results_file
 from training.evaluation.splits import EvalScenario, folder_scenarios, split_scenarios
 from training.evaluation.tasks import run_all
 from training.pictures.benchmark import plot_splits
-from training.resolve import EXPERT, RANDOM, PolicySpec, resolve, resolve_all
+from training.resolve import EXPERT, RANDOM, PolicySpec, check_obs_mode, resolve, resolve_all
 
 SUMMARY, PLOT, OBJECTS_PLOT = "summary.md", "splits.png", "objects.png"
 WRITE_EVERY_S = 1.0  # seconds between rewrites of results.json while episodes finish
@@ -83,7 +83,7 @@ def run_benchmark(
     ray_address: str | None = None,
     progress: bool = False,
     resume: bool = False,
-    obs_mode: str = "state",
+    obs_mode: str | None = None,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
 
@@ -194,10 +194,18 @@ def with_references(policies: list[str]) -> list[PolicySpec]:
     return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != SCORE_ZERO))  # stable: the rest keep their order
 
 
-def with_observations(specs: list[PolicySpec], obs_mode: str) -> list[PolicySpec]:
-    """``specs`` acting in envs of ``obs_mode``, but for run folders of an image network (they keep their own mode)."""
+def with_observations(specs: list[PolicySpec], obs_mode: str | None) -> list[PolicySpec]:
+    """``specs`` acting in envs of ``obs_mode``, but for run folders of an image network (they keep their own mode).
+
+    ``obs_mode`` None (not given): the state, and each image network's own mode; a run
+    folder of an image network trained on another mode than a given one is refused.
+    """
+    if obs_mode is None:
+        return specs
     if obs_mode not in OBS_MODES:
         raise BenchmarkError(f"unknown observation mode {obs_mode!r}; known: {', '.join(OBS_MODES)}")
+    for spec in specs:
+        check_obs_mode(spec, obs_mode)
     if obs_mode == "state":
         return specs
     return [s if "obs_mode" in s.env_options else replace(s, env_options={**s.env_options, "obs_mode": obs_mode})

@@ -26,12 +26,16 @@ After each iteration the learner is measured on held-out seeds (from
 :data:`HELDOUT_SEED_BASE`, never trained on) and ``metrics.csv`` gains a row: the
 expert labels so far and the held-out success. A checkpoint after every iteration
 (the aggregate, the weights, the metrics) lets an interrupted run resume.
+
+With ``config.obs_mode`` ``topdown`` or ``rgbd`` (the cnn encoder), every env of the run
+is made in that mode: the expert still plans from the state the observation holds, and
+the labelled states stored for the learner are its images (uint8, flattened).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -46,9 +50,9 @@ from fetchcarry_env.observation import Capacity
 from training.envs import make_env
 from training.learners import runs
 from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
-from training.learners.encoders import build_network
-from training.learners.heldout import evaluate
-from training.learners.options import HELDOUT_SEED_BASE, DaggerOptions
+from training.learners.encoders import build_network, input_size, network_input
+from training.learners.heldout import heldout_success
+from training.learners.options import DaggerOptions, ImageOptions
 from training.policies.phase_expert import nearest_move
 from training.rollout import run_episode
 
@@ -65,6 +69,7 @@ class LabelTask:
     network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
     families: tuple[str, ...] = ()  # episode k draws from families[k % len(families)]; () = family
+    env_options: dict[str, Any] = field(default_factory=dict)  # the observation mode and image options ({}: state)
 
     def family_of(self, index: int) -> str:
         """The family episode ``index`` draws from."""
@@ -86,16 +91,17 @@ class LabelledEpisode:
 def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
     torch.set_num_threads(1)
-    env = make_env("phases", family=task.family_of(index))
+    env = make_env("phases", family=task.family_of(index), **task.env_options)
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit)
-        labeller = _Labeller(env, expert, task.nearest_moves, acting=task.network is None)
+        obs_mode = task.env_options.get("obs_mode", "state")
+        labeller = _Labeller(env, expert, task.nearest_moves, acting=task.network is None, obs_mode=obs_mode)
         if task.network is None:  # the expert's own episode, whether or not a candidate expresses its action
             policy, step = expert, env.get_wrapper_attr("step_env_action")
         else:
             policy, step = _learner(task.network), None
         record = run_episode(env, policy, task.seed_base + index, stop_on_failure=False, step=step, observe=labeller)
-        size, features = env.action_space.n, env.observation_space["observation"].shape[0]
+        size, features = env.action_space.n, input_size(env.observation_space, obs_mode)
     finally:
         env.close()
     return labeller.episode(size, features, record.figures.steps, bool(record.info.get("is_success", False)))
@@ -108,11 +114,15 @@ class _Labeller:
     to label; otherwise it is asked here. An action no allowed candidate expresses (or the
     expert's idle fallback) gives no label, unless ``nearest_moves`` labels an inexpressible
     move with the allowed move nearest it. A state visited again in the same episode (a
-    learner going round in circles) is labelled once.
+    learner going round in circles) is labelled once. The expert plans from the state; what is
+    stored for the learner is what its network reads in ``obs_mode`` (the state vector, or
+    the images flattened: :func:`~training.learners.encoders.network_input`).
     """
 
-    def __init__(self, env: Any, expert: ExpertPolicy, nearest_moves: bool, *, acting: bool) -> None:
+    def __init__(self, env: Any, expert: ExpertPolicy, nearest_moves: bool, *, acting: bool,
+                 obs_mode: str = "state") -> None:  # fmt: skip
         self.env, self.expert, self.nearest_moves, self.acting = env, expert, nearest_moves, acting
+        self.obs_mode = obs_mode
         self.index_of = env.get_wrapper_attr("index_of")
         self.observations: list[np.ndarray] = []
         self.masks: list[np.ndarray] = []
@@ -134,23 +144,25 @@ class _Labeller:
             self.unexpressible += 1
         elif key not in self.seen:
             self.seen.add(key)
-            self.observations.append(np.asarray(observation["observation"], np.float32))
+            self.observations.append(network_input(observation, self.obs_mode))
             self.masks.append(mask)
             self.labels.append(int(label))
 
     def episode(self, size: int, features: int, steps: int, success: bool) -> LabelledEpisode:
         """The labelled states (``size`` candidates, ``features`` observation entries: also an episode with none)."""
         n = len(self.labels)
-        return LabelledEpisode(np.asarray(self.observations, np.float32).reshape(n, features),
+        dtype = np.float32 if self.obs_mode == "state" else np.uint8
+        return LabelledEpisode(np.asarray(self.observations, dtype).reshape(n, features),
                                np.asarray(self.masks, bool).reshape(n, size), np.asarray(self.labels, np.int64),
                                steps, success, self.unexpressible)  # fmt: skip
 
 
-def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int) -> LabelledEpisode:
+def _dataset_episodes(dataset: str, episodes: int, candidates: int, features: int,
+                      obs_mode: str = "state") -> LabelledEpisode:  # fmt: skip
     """The labelled states of the first ``episodes`` of the phases dataset ``dataset``, as one block."""
     from training.learners.imitation import demonstrations_from_dataset
 
-    demonstrations, _ = demonstrations_from_dataset(dataset, episodes)
+    demonstrations, _ = demonstrations_from_dataset(dataset, episodes, obs_mode)
     if demonstrations.masks.shape[1] != candidates or demonstrations.observations.shape[1] != features:
         raise ValueError(f"dataset {dataset!r} was recorded with another capacity than the family's env")
     stats = demonstrations.stats
@@ -170,12 +182,6 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
     weights = {k: v.detach().numpy().copy() for k, v in model.state_dict().items()}
     return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates, "features": features,
             "weights": weights}  # fmt: skip
-
-
-def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
-    """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
-    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
-    return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
 
 
 def _resumed(
@@ -206,31 +212,59 @@ def _resumed(
     return aggregate, rows, network
 
 
+def _probe(family: str, env_options: dict[str, Any]) -> tuple[Capacity, int, int]:
+    """The capacity, candidates and network input size of ``family``'s phases env in ``env_options``."""
+    probe = gym.make(runs.ENV_ID, family=family, **env_options)
+    try:
+        space = probe.observation_space
+        return probe.unwrapped.capacity, int(probe.action_space.n), input_size(space, config_mode(env_options))
+    finally:
+        probe.close()
+
+
+def config_mode(env_options: dict[str, Any]) -> str:
+    """The observation mode ``env_options`` (``gym.make`` keywords) name: ``state`` without one."""
+    return env_options.get("obs_mode", "state")
+
+
+def _empty(features: int, candidates: int, obs_mode: str) -> Demonstrations:
+    dtype = np.float32 if obs_mode == "state" else np.uint8
+    return Demonstrations(np.zeros((0, features), dtype), np.zeros((0, candidates), bool), np.zeros(0, np.int64))
+
+
 def train_dagger(
     family: str,
     options: DaggerOptions,
     config: BCConfig,
     out: str | Path,
+    images: ImageOptions | None = None,
     *,
     workers: int = 1,
     backend: str = "process",
     resume: bool = False,
     progress: bool = True,
 ) -> list[dict[str, Any]]:
-    """DAgger into the run folder ``out``; its metrics rows (one per iteration, 0 first). The dagger learner's train."""
+    """DAgger into the run folder ``out``; its metrics rows (one per iteration, 0 first). The dagger learner's train.
+
+    The expert always plans from the state; the learner sees ``config.obs_mode`` (with
+    ``images``' options for topdown or rgbd): its episodes, the labelled states it trains
+    on and its held-out episodes run in envs of that mode.
+    """
     from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
-    probe = gym.make(runs.ENV_ID, family=family)
-    capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
-    features = int(probe.observation_space["observation"].shape[0])
-    probe.close()
+    env_options = (images or ImageOptions()).env_options(config.obs_mode)
+    capacity, candidates, features = _probe(family, env_options)
     from_dataset = None  # read before the run folder is made: a bad dataset leaves nothing behind
     if options.dataset is not None:
-        from_dataset = _dataset_episodes(options.dataset, options.demonstrations, candidates, features)
+        from_dataset = _dataset_episodes(options.dataset, options.demonstrations, candidates, features,
+                                         config.obs_mode)  # fmt: skip
     run_options = {"family": family, **asdict(options), **asdict(config)}
     run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
-    config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
+    if env_options:
+        run_options["images"] = {k: v for k, v in env_options.items() if k != "obs_mode"}
+    config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {},
+                                  observation=env_options or {"obs_mode": "state"})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
@@ -240,21 +274,19 @@ def train_dagger(
         aggregate, rows, network = _resumed(folder, checkpoint, options.iterations + 1, config, capacity,
                                             (candidates, features))  # fmt: skip
     else:
-        aggregate = Demonstrations(np.zeros((0, features), np.float32), np.zeros((0, candidates), bool),
-                                   np.zeros(0, np.int64))  # fmt: skip
-        rows, episodes_done, network = [], 0, None
+        aggregate, rows, episodes_done, network = _empty(features, candidates, config.obs_mode), [], 0, None
     started = time.perf_counter() - (rows[-1]["seconds"] if rows else 0.0)
     with tqdm(total=total, initial=episodes_done, desc=f"dagger {folder.name}", unit="episode",
               disable=not progress) as bar:  # fmt: skip
         for iteration in range(len(rows), options.iterations + 1):
             if iteration == 0:
-                task = LabelTask(family, 0, options.time_limit)
+                task = LabelTask(family, 0, options.time_limit, env_options=env_options)
                 count = options.demonstrations
             else:
                 base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
                 task = LabelTask(family, base, options.time_limit,
                                  _network_task(network, config, capacity, candidates, features),
-                                 options.nearest_moves, options.learner_families)  # fmt: skip
+                                 options.nearest_moves, options.learner_families, env_options)  # fmt: skip
                 count = options.episodes_per_iteration
             if iteration == 0 and from_dataset is not None:
                 bar.update(count)
@@ -266,29 +298,12 @@ def train_dagger(
                     labelled[index] = episode
                     bar.update(1)
                 ordered = [labelled[k] for k in range(count)]
-            aggregate = Demonstrations(
-                np.concatenate([aggregate.observations, *(e.observations for e in ordered)]),
-                np.concatenate([aggregate.masks, *(e.masks for e in ordered)]),
-                np.concatenate([aggregate.labels, *(e.labels for e in ordered)]),
-            )
+            aggregate = _joined(aggregate, ordered)
             episodes_done += count
             network, fit_rows = fit(aggregate, config, capacity)
-            policy = BCPolicy(network, config, capacity)
-            success, cost = heldout_success(policy, family, options.eval_episodes)
-            rows.append(
-                {
-                    "iteration": iteration,
-                    "episodes": episodes_done,
-                    "expert_labels": len(aggregate),
-                    "unexpressible": sum(e.unexpressible for e in ordered),
-                    "learner_success": float(np.mean([e.success for e in ordered])) if iteration else float("nan"),
-                    "loss": fit_rows[-1]["loss"],
-                    "accuracy": fit_rows[-1]["accuracy"],
-                    "heldout_success": success,
-                    "heldout_cost": cost,
-                    "seconds": time.perf_counter() - started,
-                }
-            )
+            success, cost = heldout_success(BCPolicy(network, config, capacity), family, options.eval_episodes,
+                                            **env_options)  # fmt: skip
+            rows.append(_row(iteration, episodes_done, aggregate, ordered, fit_rows[-1], success, cost, started))
             runs.save_checkpoint(folder, {
                 "observations": torch.as_tensor(aggregate.observations), "masks": torch.as_tensor(aggregate.masks),
                 "labels": torch.as_tensor(aggregate.labels), "network": network.state_dict(), "metrics": rows,
@@ -299,3 +314,29 @@ def train_dagger(
     config_json["data"] = {"expert_labels": len(aggregate), "episodes": episodes_done}
     runs.finish_run(folder, network, config_json)
     return rows
+
+
+def _joined(aggregate: Demonstrations, episodes: list[LabelledEpisode]) -> Demonstrations:
+    """``aggregate`` with the labelled states of ``episodes`` appended."""
+    return Demonstrations(
+        np.concatenate([aggregate.observations, *(e.observations for e in episodes)]),
+        np.concatenate([aggregate.masks, *(e.masks for e in episodes)]),
+        np.concatenate([aggregate.labels, *(e.labels for e in episodes)]),
+    )
+
+
+def _row(iteration: int, episodes: int, aggregate: Demonstrations, ordered: list[LabelledEpisode],
+         fitted: dict[str, Any], success: float, cost: float, started: float) -> dict[str, Any]:  # fmt: skip
+    """The metrics row of one iteration (the last epoch's loss and accuracy; the held-out success and cost)."""
+    return {
+        "iteration": iteration,
+        "episodes": episodes,
+        "expert_labels": len(aggregate),
+        "unexpressible": sum(e.unexpressible for e in ordered),
+        "learner_success": float(np.mean([e.success for e in ordered])) if iteration else float("nan"),
+        "loss": fitted["loss"],
+        "accuracy": fitted["accuracy"],
+        "heldout_success": success,
+        "heldout_cost": cost,
+        "seconds": time.perf_counter() - started,
+    }

@@ -79,6 +79,13 @@ def network_input(observation: dict[str, np.ndarray], obs_mode: str) -> np.ndarr
     return image.reshape(len(image), -1) if batched else image.reshape(-1)
 
 
+def input_size(space: Any, obs_mode: str) -> int:
+    """The length of :func:`network_input`'s row for an env's ``Dict`` observation ``space`` in ``obs_mode``."""
+    if obs_mode == "state":
+        return int(space["observation"].shape[0])
+    return sum(int(np.prod(space[key].shape)) for key in IMAGE_KEYS[obs_mode])
+
+
 def image_shape(obs_mode: str, features: int) -> tuple[int, int, int]:
     """``(channels, side, side)`` of the images of ``obs_mode`` whose flattened row has ``features`` values.
 

@@ -59,9 +59,14 @@ class Summary:
         )
 
 
-def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
-    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
-    return _episodes(policy, make_env("phases", family=family), seeds, deterministic)
+def evaluate(
+    policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True, **env_options: Any
+) -> list[EpisodeResult]:
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it).
+
+    ``env_options``: more ``gym.make`` keywords (the observation mode and image options of an image network).
+    """
+    return _episodes(policy, make_env("phases", family=family, **env_options), seeds, deterministic)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:
@@ -86,15 +91,16 @@ def _result(seed: int, episode: EpisodeRecord) -> EpisodeResult:
                          figures.invalid_actions, figures.policy_s)  # fmt: skip
 
 
-def heldout_success(policy: Any, family: str, episodes: int) -> tuple[float, float]:
+def heldout_success(policy: Any, family: str, episodes: int, **env_options: Any) -> tuple[float, float]:
     """Success rate and mean travel cost (metres) of ``policy`` on ``episodes`` held-out seeds of ``family``.
 
     The seeds are ``HELDOUT_SEED_BASE + k`` (:mod:`training.learners.options`), which no
-    training episode of a learner uses; ``(nan, nan)`` for no episode.
+    training episode of a learner uses; ``(nan, nan)`` for no episode. ``env_options``: as for
+    :func:`evaluate` (an image network's observation mode).
     """
     if episodes < 1:
         return math.nan, math.nan
-    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
+    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes), **env_options)
     return float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results]))
 
 

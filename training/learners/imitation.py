@@ -91,6 +91,7 @@ def demonstrations_from_dataset(
         {"dataset_id": dataset_id, "episodes": episodes, "steps": steps, "labelled": steps - dropped,
          "dropped": dropped, "terminated": successes},
     )  # fmt: skip
+    demonstrations.stats["observation"] = runs.observation_of(obs_mode, dict(env.spec.kwargs))  # the images' options
     return demonstrations, capacity
 
 
@@ -112,7 +113,9 @@ def train_bc_run(
     demonstrations, capacity = demonstrations_from_dataset(dataset, episodes, config.obs_mode)
     options = {"dataset": dataset, **({} if episodes is None else {"episodes": episodes}), **asdict(config)}
     candidates, features = demonstrations.masks.shape[1], demonstrations.observations.shape[1]
-    config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats)
+    observation = demonstrations.stats.pop("observation")
+    config_json = runs.run_config("bc", options, config, capacity, candidates, features, demonstrations.stats,
+                                  observation=observation if config.obs_mode != "state" else None)  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.load_policy(folder)

@@ -96,6 +96,40 @@ def family_names(text: str) -> tuple[str, ...]:
     return names
 
 
+OBS_MODE_CHOICES = ("state", "topdown", "rgbd")
+TOPDOWN_FRAMES = ("world", "robot")
+
+
+@dataclass(frozen=True)
+class ImageOptions:
+    """The env's image options of a run that learns from pixels (``dagger``, ``ppo``; ``bc`` reads its dataset's).
+
+    Only the options of the run's ``obs_mode`` reach the env (:meth:`env_options`) and the
+    run folder's ``config.json`` (its ``observation``).
+    """
+
+    topdown_size: int = option(64, "topdown map pixels a side, 8 to 1024 (default {default})", metavar="PX",
+                               positive=True)  # fmt: skip
+    topdown_frame: str = option("world", "topdown map centred on the world or on the robot (default {default})",
+                                choices=TOPDOWN_FRAMES)  # fmt: skip
+    camera_size: int = option(128, "rgbd camera pixels a side, 8 to 1024 (default {default})", metavar="PX",
+                              positive=True)  # fmt: skip
+
+    def __post_init__(self) -> None:
+        if not (8 <= self.topdown_size <= 1024 and 8 <= self.camera_size <= 1024):
+            raise InputError(f"image sizes must be 8 to 1024 pixels, got {self.topdown_size} and {self.camera_size}")
+        if self.topdown_frame not in TOPDOWN_FRAMES:
+            raise InputError(f"topdown_frame must be one of {', '.join(TOPDOWN_FRAMES)}, got {self.topdown_frame!r}")
+
+    def env_options(self, obs_mode: str) -> dict[str, Any]:
+        """``gym.make``'s observation keywords for ``obs_mode``: ``{}`` for ``state``, else the mode and its options."""
+        if obs_mode == "topdown":
+            return {"obs_mode": obs_mode, "topdown_size": self.topdown_size, "topdown_frame": self.topdown_frame}
+        if obs_mode == "rgbd":
+            return {"obs_mode": obs_mode, "camera_size": self.camera_size}
+        return {}
+
+
 @dataclass(frozen=True)
 class BCConfig:
     """What a BC run trains (every field is saved in the run folder's ``config.json``)."""
@@ -120,7 +154,7 @@ class BCConfig:
         "state",
         "what the network sees: state (the observation vector: mlp, set) or the images of topdown or rgbd "
         "(cnn; the dataset must hold them: fetchcarry dataset render) (default {default})",
-        choices=("state", "topdown", "rgbd"),
+        choices=OBS_MODE_CHOICES,
     )
 
     def __post_init__(self) -> None:
@@ -148,8 +182,8 @@ class PPOOptions:
     learning_rate: float = option(3e-4, STEP_SIZE_HELP, metavar="LR", positive=True)
     gamma: float = 0.99
     checkpoint_every: int = option(1024, "env steps between checkpoints (default {default})", positive=True)
-    encoder: str = option("mlp", "the actor's network (default {default}; with --init, the init run's)",
-                          choices=("mlp", "set"))  # fmt: skip
+    encoder: str = option("mlp", "the actor's network: cnn for --obs-mode topdown or rgbd (default {default}; "
+                          "with --init, the init run's)", choices=("mlp", "set", "cnn"))  # fmt: skip
     hidden: int = option(256, HIDDEN_HELP, positive=True)
     seed: int = seed_option()
     init: str | None = option(None, "a bc or dagger run folder whose network starts the actor", metavar="RUN_DIR")
@@ -166,6 +200,12 @@ class PPOOptions:
     eval_episodes: int = option(
         50, f"held-out episodes per evaluation, seeds from {HELDOUT_SEED_BASE}; 0: none (default {{default}})"
     )
+    obs_mode: str = option(
+        "state",
+        "what the actor and the value see: state (the observation vector) or the images of topdown or rgbd "
+        "(with --encoder cnn) (default {default})",
+        choices=OBS_MODE_CHOICES,
+    )
 
     def __post_init__(self) -> None:
         if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every, self.eval_every) < 1:
@@ -176,7 +216,7 @@ class PPOOptions:
             raise InputError(f"envs must be from 1 to {MAX_ENVS} and at most n_steps, got {self.envs}")
         if self.learning_rate <= 0 or not 0 < self.gamma <= 1:
             raise InputError("learning_rate must be positive and gamma in (0, 1]")
-        BCConfig(encoder=self.encoder, hidden=self.hidden)
+        BCConfig(encoder=self.encoder, hidden=self.hidden, obs_mode=self.obs_mode)
 
 
 @dataclass(frozen=True)
@@ -233,12 +273,11 @@ class DaggerRun:
 
     family: str = option(help=FAMILY_HELP, metavar="NAME")
     options: DaggerOptions = field(default_factory=DaggerOptions, metadata=nested())
-    config: BCConfig = field(default_factory=BCConfig, metadata=nested(omit=("epochs", "obs_mode")))
+    config: BCConfig = field(default_factory=BCConfig, metadata=nested(omit=("epochs",)))
+    images: ImageOptions = field(default_factory=ImageOptions, metadata=nested())
 
     def __post_init__(self) -> None:
         check_family(self.family)
-        if self.config.obs_mode != "state":
-            raise InputError("dagger labels the state only (obs_mode state); train bc learns from topdown or rgbd")
 
 
 @dataclass(frozen=True)
@@ -247,6 +286,7 @@ class PPORun:
 
     family: str = option(help=FAMILY_HELP, metavar="NAME")
     options: PPOOptions = field(default_factory=PPOOptions, metadata=nested())
+    images: ImageOptions = field(default_factory=ImageOptions, metadata=nested())
 
     def __post_init__(self) -> None:
         check_family(self.family)

@@ -2,7 +2,9 @@
 
 The env is ``FetchCarryPushPhases-v0`` with the learning reward (potential-shaped
 progress; refusals cost more than moving), its flat observation vector
-(``observation["observation"]``) as the policy's input, ``envs`` of them side by side
+(``observation["observation"]``) as the policy's input (with ``obs_mode`` ``topdown`` or
+``rgbd``, that mode's images flattened instead, and a cnn actor and a cnn value over them),
+``envs`` of them side by side
 (:func:`make_vec_env`: SB3's ``DummyVecEnv`` for one, ``SubprocVecEnv`` with one forked
 worker per env for more; MaskablePPO reads their masks with ``env_method("action_masks")``,
 which answers from the masks each step's results bring along: :class:`MaskInInfo`).
@@ -46,8 +48,8 @@ import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
 from training.learners.allowed import AllowedCategorical, allowed_distribution
-from training.learners.encoders import build_network
-from training.learners.options import BCConfig, PPOOptions
+from training.learners.encoders import ImageScorer, build_network, image_shape, input_size, network_input
+from training.learners.options import BCConfig, ImageOptions, PPOOptions
 from training.learners.ppo_curves import curves_callback, heldout_evaluator
 from training.learners.runs import RunFolderError
 
@@ -60,14 +62,23 @@ per-tensor loop (2.4 ms against 17 ms a step for the actor's and critic's 1.2 M 
 
 
 class FlatObservation(gym.ObservationWrapper):
-    """The env's flat observation vector (``observation["observation"]``) as the observation."""
+    """The env's flat observation vector (``observation["observation"]``) as the observation.
 
-    def __init__(self, env: gym.Env) -> None:
+    With ``obs_mode`` ``topdown`` or ``rgbd``, the mode's images flattened instead (uint8,
+    :func:`~training.learners.encoders.network_input`): the cnn actor and value see pixels only.
+    """
+
+    def __init__(self, env: gym.Env, obs_mode: str = "state") -> None:
         super().__init__(env)
-        self.observation_space = env.observation_space["observation"]
+        self.obs_mode = obs_mode
+        if obs_mode == "state":
+            self.observation_space = env.observation_space["observation"]
+        else:
+            size = input_size(env.observation_space, obs_mode)
+            self.observation_space = gym.spaces.Box(0, 255, shape=(size,), dtype=np.uint8)
 
     def observation(self, observation: dict[str, np.ndarray]) -> np.ndarray:
-        return observation["observation"]
+        return observation["observation"] if self.obs_mode == "state" else network_input(observation, self.obs_mode)
 
 
 class MaskInInfo(gym.Wrapper):
@@ -90,12 +101,17 @@ class MaskInInfo(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
 
-def make_training_env(family: str) -> gym.Env:
-    """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations."""
-    return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
+def make_training_env(family: str, env_options: dict[str, Any] | None = None) -> gym.Env:
+    """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations.
+
+    ``env_options``: the observation mode and image options (``{}`` or None: the state).
+    """
+    env_options = env_options or {}
+    env = gym.make(runs.ENV_ID, family=family, reward="learning", **env_options)
+    return FlatObservation(env, env_options.get("obs_mode", "state"))
 
 
-def make_vec_env(family: str, envs: int) -> Any:
+def make_vec_env(family: str, envs: int, env_options: dict[str, Any] | None = None) -> Any:
     """SB3's vector env of ``envs`` training envs: in this process for one, one forked worker each for more.
 
     Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
@@ -104,7 +120,7 @@ def make_vec_env(family: str, envs: int) -> Any:
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    makers = [lambda: MaskInInfo(make_training_env(family))] * envs
+    makers = [lambda: MaskInInfo(make_training_env(family, env_options))] * envs
     if envs == 1:
         return _masks_from_infos(DummyVecEnv(makers))
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
@@ -154,9 +170,10 @@ def _policy_class() -> type:
             super()._build(lr_schedule)
             spec = self.actor_spec
             scale = torch.as_tensor(np.asarray(spec["scale"], np.float32))
-            self.action_net = build_network(
-                BCConfig(**spec["config"]), Capacity(**spec["capacity"]), spec["candidates"], scale
-            )
+            config = BCConfig(**spec["config"])
+            self.action_net = build_network(config, Capacity(**spec["capacity"]), spec["candidates"], scale)
+            if config.encoder == "cnn":  # the value: a cnn of its own over the pixels (no value MLP before it)
+                self.value_net = ImageScorer(image_shape(config.obs_mode, scale.shape[1]), 1, config.hidden)
             self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
 
         def _latents(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -219,13 +236,16 @@ def _init_weights(init: Path, config: BCConfig, capacity: Capacity, candidates: 
 
 
 def train_ppo(
-    family: str, options: PPOOptions, out: str | Path, *, resume: bool = False, progress: bool = True
-) -> list[dict[str, Any]]:
+    family: str, options: PPOOptions, out: str | Path, images: ImageOptions | None = None, *, resume: bool = False,
+    progress: bool = True,
+) -> list[dict[str, Any]]:  # fmt: skip
     """Train MaskablePPO on ``family`` into the run folder ``out``; return the learning-curve rows.
 
     The ``train`` of the ``ppo`` learner (:mod:`training.learners.registry`: the fields of
     :class:`~training.learners.options.PPORun` as keyword arguments). An ``options.init``
     that is not a bc or dagger run of this interface is a :class:`RunFolderError`.
+    ``options.obs_mode`` ``topdown`` or ``rgbd`` (``images``: the image options) trains a
+    cnn actor and a cnn value on the images alone.
     """
     torch.set_num_threads(1)
     if options.init is not None:
@@ -235,37 +255,44 @@ def train_ppo(
                 f"a PPO actor starts from a bc or dagger run; {options.init} holds a {init['kind']!r} run"
             )
         options = PPOOptions(**{**asdict(options), "encoder": init["config"]["encoder"],
-                                "hidden": init["config"]["hidden"]})  # fmt: skip
-    config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed)
+                                "hidden": init["config"]["hidden"],
+                                "obs_mode": init["config"].get("obs_mode", "state")})  # fmt: skip
+    config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed, obs_mode=options.obs_mode)
+    env_options = (images or ImageOptions()).env_options(options.obs_mode)
     if options.init is not None:  # the init run's network features too, so that its weights fit
         start = runs.network_config(init)
         config = replace(config, relative=start.relative, push_scores=start.push_scores)
-    probe = make_training_env(family)  # its spaces and capacity (it connects to no physics server)
+    probe = make_training_env(family, env_options)  # its spaces and capacity (it connects to no physics server)
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space.shape[0])
     probe.close()
     if options.init is not None and (init["candidates"], init["features"]) != (candidates, features):
-        raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates)")
+        raise RunFolderError(f"{options.init} was trained for another interface size ({init['candidates']} candidates, "
+                             f"{init['features']} inputs; its images: config.json's observation)")  # fmt: skip
     # The init run's weights are read and checked before the run folder is made: a bad one leaves nothing behind.
     init_weights = None
     if options.init is not None:
         init_weights = _init_weights(Path(options.init), config, capacity, candidates, features)
     run_options = {"family": family, **asdict(options)}
+    if options.obs_mode == "state":
+        del run_options["obs_mode"]  # a state run's options as before observation modes (its --resume too)
+    else:
+        run_options["images"] = {k: v for k, v in env_options.items() if k != "obs_mode"}
     if resume:
         _drop_legacy_options(Path(out), run_options)
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
-                             {"init": options.init, "steps": options.steps})  # fmt: skip
+                             {"init": options.init, "steps": options.steps}, env_options or None)  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
     torch.manual_seed(options.seed)
     actor = actor_spec(family, config, capacity, candidates, features)
-    env = make_vec_env(family, options.envs)
+    env = make_vec_env(family, options.envs, env_options)
     try:
         model = make_model(env, options, actor)
         rows = _restore(model, folder, checkpoint, options, init_weights)
         done = model.num_timesteps
-        evaluate = heldout_evaluator(folder, family, capacity, options.eval_episodes)
+        evaluate = heldout_evaluator(folder, family, capacity, options.eval_episodes, env_options)
         with tqdm(total=options.steps, initial=done, desc=f"ppo {folder.name}", unit="step",
                   disable=not progress) as bar:  # fmt: skip
             if done < options.steps:
@@ -301,8 +328,9 @@ def _drop_legacy_options(out: Path, run_options: dict[str, Any]) -> None:
 
 def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
     """How :class:`CandidateActorCritic` builds its actor: the network's settings and its input scale (``family``'s)."""
+    scale = np.zeros((1, features)) if config.encoder == "cnn" else _scale_observations(family, features)  # cnn: unused
     return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
-            "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+            "scale": scale.tolist()}  # fmt: skip
 
 
 def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
@@ -310,6 +338,7 @@ def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
     from sb3_contrib import MaskablePPO
     from stable_baselines3.common.logger import Logger
 
+    cnn = actor["config"]["encoder"] == "cnn"  # the value is a cnn over the pixels, not a value MLP
     model = MaskablePPO(
         _policy_class(),
         env,
@@ -323,7 +352,7 @@ def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
         verbose=0,
         policy_kwargs={
             "actor": actor,
-            "net_arch": {"pi": [], "vf": list(VALUE_LAYERS)},
+            "net_arch": {"pi": [], "vf": [] if cnn else list(VALUE_LAYERS)},
             "optimizer_kwargs": ADAM_OPTIONS,
         },
     )

@@ -33,14 +33,19 @@ from training.learners.options import PPOOptions
 HELDOUT_COLUMNS = ("heldout_success", "heldout_cost", "eval_seconds")  # columns every row has (NaN: no evaluation)
 
 
-def heldout_evaluator(folder: Path, family: str, capacity: Capacity, episodes: int) -> Callable[[Any], dict]:
-    """A function of a MaskablePPO model: its actor's held-out success and cost, as ``metrics.csv`` columns."""
+def heldout_evaluator(
+    folder: Path, family: str, capacity: Capacity, episodes: int, env_options: dict[str, Any] | None = None
+) -> Callable[[Any], dict]:
+    """A function of a MaskablePPO model: its actor's held-out success and cost, as ``metrics.csv`` columns.
+
+    ``env_options``: the run's observation mode and image options (None: the state).
+    """
     from training.learners.bc import BCPolicy
 
     def evaluate(model: Any) -> dict[str, float]:
         config = runs.network_config(runs.read_config(folder))  # what the finished run folder loads with
         policy = BCPolicy(copy.deepcopy(model.policy.action_net), config, capacity)  # (BCPolicy edits its network)
-        success, cost = heldout_success(policy, family, episodes)
+        success, cost = heldout_success(policy, family, episodes, **(env_options or {}))
         return {"heldout_success": success, "heldout_cost": cost}
 
     return evaluate

@@ -7,7 +7,11 @@ A run folder holds
   the policy acts in ``FetchCarryPushPhases-v0``'s candidate phases), ``env_id``,
   ``options`` (every option of the run, as given), ``config`` (the network:
   :class:`~training.learners.bc.BCConfig`), ``capacity`` (the observation's slots),
-  ``candidates`` (K) and ``features`` (the observation vector's length), ``data``
+  ``candidates`` (K) and ``features`` (the length of the network's input row: the
+  observation vector, or the images flattened), ``observation`` (the env's observation
+  keywords the network was trained in: ``obs_mode`` and, for ``topdown`` or ``rgbd``, the
+  image options, e.g. ``{"obs_mode": "topdown", "topdown_size": 64, "topdown_frame":
+  "world"}``; the env a loaded run acts in is made with them), ``data``
   (what it was trained on) and ``complete`` (whether the run finished);
 - ``metrics.csv``: one row per epoch (bc), iteration (dagger) or rollout (ppo);
 - ``checkpoint.pt``: the training state to resume from (weights, optimiser, counters);
@@ -64,7 +68,10 @@ CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metri
 INTERFACE = "phases"
 ENV_ID = "FetchCarryPushPhases-v0"
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
-OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete")
+OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete", "observation")
+OBSERVATION_OPTIONS = {"state": (), "topdown": ("topdown_size", "topdown_frame", "topdown_span"),
+                       "rgbd": ("camera_size", "renderer")}  # fmt: skip
+"""The env options ``config.json``'s ``observation`` may hold beside ``obs_mode``, per mode."""
 
 MAX_CONFIG_BYTES = 4 * 2**20  # a config.json is a few kB (an ensemble's some 10 kB)
 MAX_POSTURES = 64  # a capacity's posture slots (the env's default has 4)
@@ -147,10 +154,39 @@ def read_config(path: str | Path) -> dict[str, Any]:
             image_shape(obs_mode, saved["features"])
         except ValueError as error:
             raise RunFolderError(f"{file}: features: {error}") from None
+    if "observation" in saved:
+        _check_observation(file, saved)
     weights = sum(network_parameters(saved, config) for config in configs.values())
     if weights > MAX_PARAMETERS:
         raise RunFolderError(f"{file}: its networks would hold {weights:,} weights, more than {MAX_PARAMETERS:,}")
     return saved
+
+
+def _check_observation(file: Path, saved: dict[str, Any]) -> None:
+    """``observation``: a JSON object of the network's ``obs_mode`` and that mode's image options (in range)."""
+    observation = saved["observation"]
+    mode = saved["config"].get("obs_mode", "state")
+    if not isinstance(observation, dict) or observation.get("obs_mode") != mode:
+        raise RunFolderError(f"{file}: observation must be a JSON object whose obs_mode is the network's ({mode!r})")
+    unknown = sorted(set(observation) - {"obs_mode", *OBSERVATION_OPTIONS[mode]})
+    if unknown:
+        raise RunFolderError(f"{file}: observation: unknown keys for obs_mode {mode!r}: {', '.join(unknown)}")
+    for key in ("topdown_size", "camera_size"):
+        value = observation.get(key, 64)
+        if not isinstance(value, int) or isinstance(value, bool) or not 8 <= value <= 1024:
+            raise RunFolderError(f"{file}: observation.{key} must be 8 to 1024 pixels, got {describe(value)}")
+    side = observation.get("topdown_size" if mode == "topdown" else "camera_size")
+    if mode != "state" and side is not None and image_shape(mode, saved["features"])[1] != side:
+        raise RunFolderError(f"{file}: observation: images of {side} pixels a side are not the network's input")
+    frame, span = observation.get("topdown_frame", "world"), observation.get("topdown_span")
+    if frame not in ("world", "robot") or (span is not None and not _positive_number(span)):
+        raise RunFolderError(f"{file}: observation: topdown_frame world or robot, topdown_span metres > 0")
+    if observation.get("renderer", "tiny") not in ("tiny", "egl"):
+        raise RunFolderError(f"{file}: observation.renderer must be tiny or egl")
+
+
+def _positive_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value) and value > 0
 
 
 def _check_network_config(file: Path, key: str, config: dict[str, Any]) -> None:
@@ -420,9 +456,20 @@ def start_run(out: str | Path, config: dict[str, Any], *, resume: bool) -> tuple
 
 
 def run_config(kind: str, options: dict[str, Any], config: Any, capacity: Capacity,
-               candidates: int, features: int, data: dict[str, Any]) -> dict[str, Any]:  # fmt: skip
-    """The ``config.json`` of a run (see above)."""
+               candidates: int, features: int, data: dict[str, Any],
+               observation: dict[str, Any] | None = None) -> dict[str, Any]:  # fmt: skip
+    """The ``config.json`` of a run (see above); ``observation``: the env's observation keywords.
+
+    Without ``observation``, an image network's is its mode with the env's default image
+    options (:func:`observation_of`) and a state network's is not written (its run folders
+    stay as they were).
+    """
+    mode = getattr(config, "obs_mode", "state")
+    if observation is None and mode != "state":
+        observation = observation_of(mode, {})
+    extra = {} if observation is None else {"observation": dict(observation)}
     return {
+        **extra,
         "kind": kind,
         "interface": INTERFACE,
         "env_id": ENV_ID,
@@ -433,6 +480,17 @@ def run_config(kind: str, options: dict[str, Any], config: Any, capacity: Capaci
         "features": features,
         "data": data,
     }
+
+
+def observation_of(obs_mode: str, env_options: dict[str, Any]) -> dict[str, Any]:
+    """``config.json``'s ``observation`` for a network of ``obs_mode`` trained in an env made with ``env_options``.
+
+    The mode and that mode's image options among ``env_options`` (a dataset's env
+    keywords, say); the options not given are the env's defaults, written out.
+    """
+    defaults = {"topdown_size": 64, "topdown_frame": "world", "camera_size": 128}
+    kept = {key: env_options.get(key, defaults.get(key)) for key in OBSERVATION_OPTIONS[obs_mode]}
+    return {"obs_mode": obs_mode, **{key: value for key, value in kept.items() if value is not None}}
 
 
 def finish_run(folder: Path, network: torch.nn.Module, config_json: dict[str, Any]) -> None:
