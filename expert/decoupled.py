@@ -33,6 +33,7 @@ from fetchcarry_env.scenario import Scenario
 
 Planner = Callable[..., Plan]
 SHORTER_SUB_PLAN_S = 1.0  # seconds the fallback gives the optimal sub-plan after a first solution of more than one step
+WHOLE_LEGS_S = 5.0  # seconds, at most, for the fallback's second try (the MILP for each whole delivery)
 PLACE_KEEP = 1.0  # metres of path before the goal where the fallback's moves stop and the MILP takes over
 
 
@@ -197,20 +198,28 @@ def fallback_plan(
     claimed optimal (``stats["optimality"]``). ``planner`` should stop at its sub-plans'
     first solutions (SCIP's ``limits/solutions = 1``); each gets the time left before
     ``deadline``. ``order``: the objects still to deliver (the held one included).
+    Two tries, the plan with fewer phases kept: :func:`decoupled_apart` (long legs without
+    the MILP: comes in a few seconds in an apartment), then, in what is left of at most
+    ``WHOLE_LEGS_S``, :func:`decoupled_plan` (the MILP for each whole delivery: fewer
+    phases where the objects are a few phases apart, too slow across rooms).
     ``status`` is ``infeasible`` when some object has no single-object plan.
     """
     started = time.perf_counter()
     stats: dict[str, object] = {}
     phases, status = None, "infeasible"
-    for how, make in (("apart", decoupled_apart), ("whole legs", _nearest_first)):
+    attempts = (("apart", decoupled_apart, deadline), ("whole legs", _nearest_first, None))
+    for how, make, budget in attempts:
+        if budget is None:  # the second try: a shorter plan, in what is left of WHOLE_LEGS_S
+            budget = Deadline(min(deadline.at, time.perf_counter() + WHOLE_LEGS_S))
         try:
-            phases = make(scenario, order, lattice, deadline, planner, holding=holding)
+            found = make(scenario, order, lattice, budget, planner, holding=holding)
         except TimeUp:
-            phases, status = None, "time_limit"
-            break
-        if phases is not None:
+            found = None
+            status = status if phases is not None or budget is not deadline else "time_limit"
+        if found is not None and (phases is None or len(found) < len(phases)):
+            phases, status = found, "feasible"
             stats["decoupled"] = f"fallback, nearest object first, {how}"
-            status = "feasible"
+        if deadline.left() <= 0:
             break
     stats["total_s"] = time.perf_counter() - started
     if phases is None:
