@@ -16,7 +16,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from training.cli import references
-from training.cli.arguments import add_worker_options, positive_int
+from training.cli.arguments import add_worker_options, capacity_text, positive_int
 from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
@@ -67,6 +67,14 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     )
     parser.add_argument("--json", action="store_true", help="print the table's rows as one JSON list")
     add_obs_mode_argument(parser, "the observation the policies get (a run folder of an image network gets its own)")
+    parser.add_argument(
+        "--capacity",
+        type=capacity_text,
+        metavar="K=N,...",
+        help="the observation's slots every policy acts with, e.g. objects=8 (the other counts the default's); "
+        "a set-encoder run acts at any capacity, a flat network only at its own (refused otherwise); default: "
+        "each run folder's own, the references the scenario's",
+    )
     parser.set_defaults(handler=run_benchmark_command)
     references.register(commands)
 
@@ -101,6 +109,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             resume=args.resume,
             obs_mode=args.obs_mode,
+            capacity=args.capacity,
         )
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command

@@ -65,6 +65,7 @@ class LabelTask:
     network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
     families: tuple[str, ...] = ()  # episode k draws from families[k % len(families)]; () = family
+    capacity: str | None = None  # the observation's slots ("objects=8,..."); None: each family's
 
     def family_of(self, index: int) -> str:
         """The family episode ``index`` draws from."""
@@ -86,7 +87,7 @@ class LabelledEpisode:
 def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
     torch.set_num_threads(1)
-    env = make_env("phases", family=task.family_of(index))
+    env = make_env("phases", family=task.family_of(index), **_capacity(task.capacity))
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit)
         labeller = _Labeller(env, expert, task.nearest_moves, acting=task.network is None)
@@ -172,9 +173,15 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
             "weights": weights}  # fmt: skip
 
 
-def heldout_success(policy: BCPolicy, family: str, episodes: int) -> tuple[float, float]:
-    """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family``."""
-    results = evaluate(policy, family, range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes))
+def _capacity(capacity: str | None) -> dict[str, str]:
+    """``make_env``'s keyword for an observation capacity: none for the family's."""
+    return {} if capacity is None else {"capacity": capacity}
+
+
+def heldout_success(policy: BCPolicy, family: str, episodes: int, capacity: str | None = None) -> tuple[float, float]:
+    """Success rate and mean travel cost of ``policy`` on the held-out seeds of ``family`` (``capacity``: its)."""
+    seeds = range(HELDOUT_SEED_BASE, HELDOUT_SEED_BASE + episodes)
+    results = evaluate(policy, family, seeds, **_capacity(capacity))
     return (float(np.mean([r.success for r in results])), float(np.mean([r.travel_cost for r in results])))
 
 
@@ -221,7 +228,7 @@ def train_dagger(
     from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
-    probe = gym.make(runs.ENV_ID, family=family)
+    probe = gym.make(runs.ENV_ID, family=family, **_capacity(options.capacity))
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space["observation"].shape[0])
     probe.close()
@@ -230,6 +237,8 @@ def train_dagger(
         from_dataset = _dataset_episodes(options.dataset, options.demonstrations, candidates, features)
     run_options = {"family": family, **asdict(options), **asdict(config)}
     run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
+    if options.capacity is None:
+        del run_options["capacity"]  # the family's: config.json as before --capacity existed
     config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {})
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
@@ -248,13 +257,13 @@ def train_dagger(
               disable=not progress) as bar:  # fmt: skip
         for iteration in range(len(rows), options.iterations + 1):
             if iteration == 0:
-                task = LabelTask(family, 0, options.time_limit)
+                task = LabelTask(family, 0, options.time_limit, capacity=options.capacity)
                 count = options.demonstrations
             else:
                 base = LEARNER_SEED_BASE + (iteration - 1) * options.episodes_per_iteration
                 task = LabelTask(family, base, options.time_limit,
                                  _network_task(network, config, capacity, candidates, features),
-                                 options.nearest_moves, options.learner_families)  # fmt: skip
+                                 options.nearest_moves, options.learner_families, options.capacity)  # fmt: skip
                 count = options.episodes_per_iteration
             if iteration == 0 and from_dataset is not None:
                 bar.update(count)
@@ -274,7 +283,7 @@ def train_dagger(
             episodes_done += count
             network, fit_rows = fit(aggregate, config, capacity)
             policy = BCPolicy(network, config, capacity)
-            success, cost = heldout_success(policy, family, options.eval_episodes)
+            success, cost = heldout_success(policy, family, options.eval_episodes, options.capacity)
             rows.append(
                 {
                     "iteration": iteration,

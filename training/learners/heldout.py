@@ -56,9 +56,14 @@ class Summary:
         )
 
 
-def evaluate(policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True) -> list[EpisodeResult]:
-    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it)."""
-    return _episodes(policy, make_env("phases", family=family), seeds, deterministic)
+def evaluate(
+    policy: Any, family: str, seeds: Iterable[int], deterministic: bool = True, capacity: Any = None
+) -> list[EpisodeResult]:
+    """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it).
+
+    ``capacity``: the observation's slots, as :func:`training.envs.make_env` takes them (None: the family's).
+    """
+    return _episodes(policy, make_env("phases", family=family, capacity=capacity), seeds, deterministic)
 
 
 def evaluate_env_actions(policy: Any, family: str, seeds: Iterable[int]) -> list[EpisodeResult]:

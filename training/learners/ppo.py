@@ -58,12 +58,13 @@ class FlatObservation(gym.ObservationWrapper):
         return observation["observation"]
 
 
-def make_training_env(family: str) -> gym.Env:
-    """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations."""
-    return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning"))
+def make_training_env(family: str, capacity: Capacity | str | None = None) -> gym.Env:
+    """``FetchCarryPushPhases-v0`` of ``family``: learning reward, flat observations (default: its capacity)."""
+    extra = {} if capacity is None else {"capacity": capacity}
+    return FlatObservation(gym.make(runs.ENV_ID, family=family, reward="learning", **extra))
 
 
-def make_vec_env(family: str, envs: int) -> Any:
+def make_vec_env(family: str, envs: int, capacity: Capacity | str | None = None) -> Any:
     """SB3's vector env of ``envs`` training envs: in this process for one, one forked worker each for more.
 
     Fork starts a worker in about 0.05 s and needs no importable ``__main__``; where the
@@ -71,7 +72,7 @@ def make_vec_env(family: str, envs: int) -> Any:
     """
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
-    makers = [lambda: make_training_env(family)] * envs
+    makers = [lambda: make_training_env(family, capacity)] * envs
     if envs == 1:
         return DummyVecEnv(makers)
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
@@ -100,9 +101,9 @@ def _policy_class() -> type:
     return CandidateActorCritic
 
 
-def _scale_observations(family: str, features: int) -> np.ndarray:
+def _scale_observations(family: str, features: int, capacity: Capacity | None = None) -> np.ndarray:
     """Observations of a few resets (seeds 0..), to standardise a scratch MLP's input."""
-    env = make_training_env(family)
+    env = make_training_env(family, capacity)
     try:
         rows = [env.reset(seed=seed)[0] for seed in range(SCALE_RESETS)]
     finally:
@@ -198,7 +199,7 @@ def train_ppo(
     if options.init is not None:  # the init run's network features too, so that its weights fit
         start = runs.network_config(init)
         config = replace(config, relative=start.relative, push_scores=start.push_scores)
-    probe = make_training_env(family)  # its spaces and capacity (it connects to no physics server)
+    probe = make_training_env(family, options.capacity)  # its spaces and capacity (it connects to no physics server)
     capacity, candidates = probe.unwrapped.capacity, int(probe.action_space.n)
     features = int(probe.observation_space.shape[0])
     probe.close()
@@ -209,6 +210,8 @@ def train_ppo(
     if options.init is not None:
         init_weights = _init_weights(Path(options.init), config, capacity, candidates, features)
     run_options = {"family": family, **asdict(options)}
+    if options.capacity is None:
+        del run_options["capacity"]  # the family's: config.json as before --capacity existed
     if resume and options.envs == 1 and _saved_without_envs(Path(out)):
         del run_options["envs"]  # a run folder from before --envs existed: it ran one env
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
@@ -218,7 +221,7 @@ def train_ppo(
         return runs.read_metrics(folder)
     torch.manual_seed(options.seed)
     actor = actor_spec(family, config, capacity, candidates, features)
-    env = make_vec_env(family, options.envs)
+    env = make_vec_env(family, options.envs, capacity)
     try:
         model = make_model(env, options, actor)
         rows = _restore(model, folder, checkpoint, options, init_weights)
@@ -247,7 +250,7 @@ def _saved_without_envs(out: Path) -> bool:
 def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
     """How :class:`CandidateActorCritic` builds its actor: the network's settings and its input scale (``family``'s)."""
     return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
-            "scale": _scale_observations(family, features).tolist()}  # fmt: skip
+            "scale": _scale_observations(family, features, capacity).tolist()}  # fmt: skip
 
 
 def make_model(env: Any, options: PPOOptions, actor: dict[str, Any]) -> Any:
