@@ -41,6 +41,7 @@ class FreeLattice:
     def __init__(self, scenario: Scenario, lattice: Lattice) -> None:
         self.scenario, self.lattice = scenario, lattice
         self.blockers = [rect for _, rect in base_blockers(scenario)]
+        self.bounds = np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in self.blockers], dtype=float)
         self.clearance = scenario.robot.radius + MARGIN
         xs = lattice.axis_points(0)[::STRIDE]
         ys = lattice.axis_points(1)[::STRIDE]
@@ -63,7 +64,12 @@ class FreeLattice:
         """
         if exact:
             return move_stop(self.scenario, a, b)[1] is None
-        return first_contact(a, b, self.scenario.robot.radius + MARGIN / 2, self.blockers) >= 1.0
+        radius = self.scenario.robot.radius + MARGIN / 2
+        lo_x, hi_x = min(a[0], b[0]) - radius, max(a[0], b[0]) + radius
+        lo_y, hi_y = min(a[1], b[1]) - radius, max(a[1], b[1]) + radius
+        bounds = self.bounds
+        near = (bounds[:, 0] <= hi_x) & (bounds[:, 2] >= lo_x) & (bounds[:, 1] <= hi_y) & (bounds[:, 3] >= lo_y)
+        return first_contact(a, b, radius, [self.blockers[k] for k in np.flatnonzero(near)]) >= 1.0
 
     def distances(self, start: Point) -> tuple[dict, dict]:
         """Path lengths (metres) from the searched points straight-line clear of ``start``, and each point's parent."""
@@ -108,16 +114,19 @@ class FreeLattice:
         return [self.point(c) for c in reversed(cells)]
 
     def straight_moves(self, start: Point, path: Sequence[Point]) -> list[Point]:
-        """``path`` cut into straight clear moves from ``start``: the end points, the last one ``path[-1]``."""
+        """``path`` cut into straight clear moves from ``start``: the end points, the last one ``path[-1]``.
+
+        Each move goes as far along the path as the straight line stays clear (scanning forwards).
+        """
         ends: list[Point] = []
         at, k = start, 0
         while k < len(path):
             far = k
             exact = at == start  # the start may stand closer to a table than the searched points
-            for m in range(len(path) - 1, k, -1):
-                if self.clear(at, path[m], exact):
-                    far = m
+            for m in range(k + 1, len(path)):
+                if not self.clear(at, path[m], exact):
                     break
+                far = m
             if not self.clear(at, path[far], exact):
                 return []
             at, k = path[far], far + 1
@@ -168,9 +177,13 @@ def pick_leg(
     near = sorted((c for c in cost if math.dist(space.point(c), spot) <= PICK_RADIUS), key=lambda c: cost[c])
     world = WorldState(phase.base, phase.heading, None, dict(objects3), dict(phase.clutter))
     for cell in near[:40]:
+        around = _poses_around(lattice, space.point(cell))
+        poses = [p for p in around if _pick_at(scenario, world, lattice, None, p, target)]
+        if not poses:
+            continue
         path = space.path_to(parent, cell)
         ends = space.straight_moves(phase.base, path[:-1]) if len(path) > 1 else []
-        for pose in _poses_around(lattice, space.point(cell)):
+        for pose in poses:
             found = _pick_at(scenario, world, lattice, ends[-1] if ends else phase.base, pose, target)
             if found is None:
                 continue
@@ -190,9 +203,12 @@ def _poses_around(lattice: Lattice, point: Point) -> list[Point]:
     return [lattice.point(i + a, j + b) for a in range(STRIDE) for b in range(STRIDE)]
 
 
-def _pick_at(scenario, world, lattice, before: Point, pose: Point, target: str) -> tuple[str, str] | None:
-    """The (heading, posture name) picking ``target`` at ``pose`` after a clear slide from ``before``, or None."""
-    if move_stop(scenario, before, pose)[1] is not None:
+def _pick_at(scenario, world, lattice, before: Point | None, pose: Point, target: str) -> tuple[str, str] | None:
+    """The (heading, posture name) picking ``target`` at ``pose`` after a clear slide from ``before``, or None.
+
+    ``before`` None: the pick alone, whatever the slide to ``pose``.
+    """
+    if before is not None and move_stop(scenario, before, pose)[1] is not None:
         return None
     cell = lattice.index(pose)
     for heading in HEADINGS:
@@ -211,6 +227,32 @@ def _moved(phase: Phase, end: Point) -> Phase:
         x, y = objects[phase.holding][:2]
         objects[phase.holding] = (x + dx, y + dy)
     return Phase(end, phase.heading, "move", None, None, phase.holding, objects, dict(phase.clutter))
+
+
+SHORTCUT_MARGIN = 0.01  # metres beyond the base's radius that a move dropped by shortcut() leaves clear
+
+
+def shortcut(scenario: Scenario, phases: Sequence[Phase]) -> tuple[Phase, ...]:
+    """``phases`` without the moves that the next phase's own slide makes unnecessary.
+
+    A move followed by a move, a pick or a place (whose arm acts from the phase's own
+    base) is dropped when the straight slide from the phase before it to the next one's
+    base stays ``SHORTCUT_MARGIN`` clear of every blocker; a move before a push is kept
+    (the push starts where that move ends). Nothing else changes: moves move no item
+    but the held object, which goes with the base.
+    """
+    blockers = [rect for _, rect in base_blockers(scenario)]
+    radius = scenario.robot.radius + SHORTCUT_MARGIN
+    out = list(phases)
+    k = 1
+    while k < len(out) - 1:
+        here, after = out[k], out[k + 1]
+        droppable = here.action == "move" and after.action in ("move", "pick", "place")
+        if droppable and first_contact(out[k - 1].base, after.base, radius, blockers) >= 1.0:
+            del out[k]
+            continue
+        k += 1
+    return tuple(out)
 
 
 def moves_along(phase: Phase, ends: Sequence[Point]) -> list[Phase]:

@@ -22,7 +22,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 
-from expert.approach import FreeLattice, approach, moves_along, pick_leg
+from expert.approach import FreeLattice, approach, moves_along, pick_leg, shortcut
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase
 from expert.milp.problem import Problem
@@ -170,11 +170,15 @@ def _sub_plan(scenario, current: Phase, targets, lattice, deadline, planner) -> 
     if left <= 0:
         raise TimeUp
     sub = _sub_problem(scenario, targets, current.base, current.heading, current.objects, current.clutter)
-    result = planner(sub, time_limit=left, lattice=lattice, holding=current.holding)
+    # With the object in the hand (a short leg) no relaxation bound: on an apartment's lattice it outlasts the
+    # leg's own solves; a whole delivery keeps it (deepening from 3 phases would prove too many counts infeasible).
+    bound = current.holding is None
+    result = planner(sub, time_limit=left, lattice=lattice, holding=current.holding, lower_bound=bound)
     if not result.found:
         return None
     if len(result.phases) > 2 and deadline.left() > SHORTER_SUB_PLAN_S:  # the optimal sub-plan, if it comes quickly
-        shorter = planner(sub, time_limit=SHORTER_SUB_PLAN_S, lattice=lattice, holding=current.holding, first=False)
+        limit, held = SHORTER_SUB_PLAN_S, current.holding
+        shorter = planner(sub, time_limit=limit, lattice=lattice, holding=held, first=False, lower_bound=bound)
         if shorter.found and len(shorter.phases) <= len(result.phases):
             result = shorter
     kept = _through_first_place(result.phases)
@@ -201,7 +205,8 @@ def fallback_plan(
     Two tries, the plan with fewer phases kept: :func:`decoupled_apart` (long legs without
     the MILP: comes in a few seconds in an apartment), then, in what is left of at most
     ``WHOLE_LEGS_S``, :func:`decoupled_plan` (the MILP for each whole delivery: fewer
-    phases where the objects are a few phases apart, too slow across rooms).
+    phases where the objects are a few phases apart, too slow across rooms); each without
+    the moves a straight slide makes unnecessary (:func:`expert.approach.shortcut`).
     ``status`` is ``infeasible`` when some object has no single-object plan.
     """
     started = time.perf_counter()
@@ -213,6 +218,7 @@ def fallback_plan(
             budget = Deadline(min(deadline.at, time.perf_counter() + WHOLE_LEGS_S))
         try:
             found = make(scenario, order, lattice, budget, planner, holding=holding)
+            found = None if found is None else shortcut(scenario, found)
         except TimeUp:
             found = None
             status = status if phases is not None or budget is not deadline else "time_limit"

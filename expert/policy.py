@@ -24,12 +24,15 @@ stuck. A base that stopped in a corner gap the MILP cannot plan from first moves
 it (:mod:`expert.escape`).
 
 When a planning call runs out of time without a plan (``time_limit``: the whole problem's
-bounds alone can outlast the limit from seven or eight objects), the expert makes the
-decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a time, nearest
-first, SCIP's first solution of each single-object MILP) within ``fallback_time_limit``
-more seconds, and follows it: a valid plan, status ``feasible``, never claimed optimal;
-it replans in closed loop as after any plan. A call that finds a plan is answered as
-before, so the expert's plans where it succeeded within its limit do not change.
+bounds alone can outlast the limit from seven or eight objects, and in an apartment), the
+expert makes the decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a
+time, nearest first: the long legs by a lattice search and the env's own rules,
+:mod:`expert.approach`, the rest by single-object MILPs) within ``fallback_time_limit``
+more seconds (by default twice ``time_limit``: on a loaded machine the fallback took
+8-15 s of wall clock in an apartment), and follows it: a valid plan, status ``feasible``,
+never claimed optimal; it replans in closed loop as after any plan. A call that finds a
+plan is answered as before, so the expert's plans where it succeeded within its limit do
+not change.
 
 When it cannot act (the planner and the fallback find no plan, or the env would refuse a fresh plan's
 action) the policy returns the idle action (a ``move`` to the lattice point nearest the
@@ -65,6 +68,7 @@ from fetchcarry_env.scenario import Scenario
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
+FALLBACK_FACTOR = 2.0  # the decoupled fallback plan's seconds, by default, per second of the planner's time limit
 
 
 @dataclass(frozen=True)
@@ -126,7 +130,7 @@ class ExpertPolicy:
     explicitly to use the policy without an env). ``time_limit`` (seconds) bounds each
     planning call; ``base_tolerance`` and ``item_tolerance`` (metres) say how far the state
     may drift from the plan before the expert replans. ``fallback_time_limit`` (seconds,
-    default ``time_limit``; 0 turns the fallback off) bounds the decoupled plan made when a
+    default ``FALLBACK_FACTOR * time_limit``; 0 turns the fallback off) bounds the decoupled plan made when a
     planning call ran out of time without a plan. ``planner_options`` go to
     :func:`expert.planner.plan`.
     """
@@ -152,7 +156,7 @@ class ExpertPolicy:
         self.lattice: Lattice = lattice if lattice is not None else _env_attribute(env, "lattice")
         self.capacity: Capacity = capacity if capacity is not None else _env_attribute(env, "capacity")
         self.time_limit = time_limit
-        self.fallback_time_limit = time_limit if fallback_time_limit is None else fallback_time_limit
+        self.fallback_time_limit = FALLBACK_FACTOR * time_limit if fallback_time_limit is None else fallback_time_limit
         self.base_tolerance = base_tolerance
         self.item_tolerance = item_tolerance
         self.planner_options = planner_options
