@@ -16,6 +16,7 @@ Every move keeps the heading. Units are metres.
 
 from __future__ import annotations
 
+import dataclasses
 import heapq
 import math
 from collections.abc import Sequence
@@ -24,7 +25,8 @@ import numpy as np
 
 from expert.plans import Phase
 from fetchcarry_env.actions import Action, Lattice, Mode
-from fetchcarry_env.geometry import HEADINGS, Point, first_contact
+from fetchcarry_env.geometry import HEADINGS, Point, first_contact, to_world_frame
+from fetchcarry_env.kinematics import hand_offset
 from fetchcarry_env.observation import WorldState
 from fetchcarry_env.rules import base_blockers, check_action, move_stop
 from fetchcarry_env.scenario import Scenario
@@ -176,7 +178,7 @@ def pick_leg(
     spot = scenario.object(target).start if target not in objects3 else objects3[target][:2]
     near = sorted((c for c in cost if math.dist(space.point(c), spot) <= PICK_RADIUS), key=lambda c: cost[c])
     world = WorldState(phase.base, phase.heading, None, dict(objects3), dict(phase.clutter))
-    for cell in near[:40]:
+    for cell in near:
         around = _poses_around(lattice, space.point(cell))
         poses = [p for p in around if _pick_at(scenario, world, lattice, None, p, target)]
         if not poses:
@@ -252,6 +254,30 @@ def shortcut(scenario: Scenario, phases: Sequence[Phase]) -> tuple[Phase, ...]:
             del out[k]
             continue
         k += 1
+    return tuple(out)
+
+
+def carry(phases: Sequence[Phase]) -> tuple[Phase, ...]:
+    """``phases`` with the held object where the hand holds it: at the robot-frame offset it was picked with.
+
+    The plan's record of a held object (its phases' ``objects``) is bookkeeping (the
+    expert never compares a held object with the plan), but a plan file must have it
+    right (:func:`expert.validate.validate_plan`, rule 7); a sub-plan solved with the
+    object already in the hand does not know that offset.
+    """
+    out: list[Phase] = []
+    held, offset = None, None
+    for phase in phases:
+        if phase.action == "pick" or (not out and phase.holding is not None):
+            held = phase.target if phase.action == "pick" else phase.holding
+            offset = hand_offset(phase.base, phase.heading, phase.objects[held][:2])
+        elif held is not None and phase.holding == held and phase.action != "place":
+            dx, dy = to_world_frame(phase.heading, *offset)
+            hand = (phase.base[0] + dx, phase.base[1] + dy)
+            phase = dataclasses.replace(phase, objects={**phase.objects, held: hand})
+        if phase.action == "place":
+            held = offset = None
+        out.append(phase)
     return tuple(out)
 
 

@@ -22,7 +22,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 
-from expert.approach import FreeLattice, approach, moves_along, pick_leg, shortcut
+from expert.approach import FreeLattice, approach, carry, moves_along, pick_leg, shortcut
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase
 from expert.milp.problem import Problem
@@ -218,7 +218,7 @@ def fallback_plan(
             budget = Deadline(min(deadline.at, time.perf_counter() + WHOLE_LEGS_S))
         try:
             found = make(scenario, order, lattice, budget, planner, holding=holding)
-            found = None if found is None else shortcut(scenario, found)
+            found = None if found is None else carry(shortcut(scenario, found))
         except TimeUp:
             found = None
             status = status if phases is not None or budget is not deadline else "time_limit"
