@@ -23,7 +23,18 @@ expert plans again from this state; if the fresh plan's action is refused too, i
 stuck. A base that stopped in a corner gap the MILP cannot plan from first moves out of
 it (:mod:`expert.escape`).
 
-When it cannot act (the planner finds no plan, or the env would refuse a fresh plan's
+When a planning call runs out of time without a plan (``time_limit``: the whole problem's
+bounds alone can outlast the limit from seven or eight objects, and in an apartment), the
+expert makes the decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a
+time, nearest first: the long legs by a lattice search and the env's own rules,
+:mod:`expert.approach`, the rest by single-object MILPs) within ``fallback_time_limit``
+more seconds (by default three times ``time_limit``: at a load of 12 on two cores the
+fallback took 8-30 s of wall clock in an apartment), and follows it: a valid plan, status ``feasible``,
+never claimed optimal; it replans in closed loop as after any plan. A call that finds a
+plan is answered as before, so the expert's plans where it succeeded within its limit do
+not change.
+
+When it cannot act (the planner and the fallback find no plan, or the env would refuse a fresh plan's
 action) the policy returns the idle action (a ``move`` to the lattice point nearest the
 base, keeping the heading: it does nothing useful and breaks nothing), says why in
 :attr:`ExpertPolicy.last_decision` (``failure``), and does not plan again until the state
@@ -36,6 +47,7 @@ simulation), so it works on a plain env, a wrapped env or an SB3 ``VecEnv``.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import asdict, dataclass, replace
 from typing import Any
@@ -43,7 +55,9 @@ from typing import Any
 import numpy as np
 
 from expert import planner
+from expert.decoupled import fallback_plan
 from expert.escape import corner_gap, escape_move
+from expert.milp.deadline import Deadline
 from expert.plans import Plan
 from expert.tracking import PlannedAction, Track, departure, on_lattice, solved
 from fetchcarry_env.actions import Action, Lattice, Mode
@@ -54,6 +68,7 @@ from fetchcarry_env.scenario import Scenario
 DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
+FALLBACK_FACTOR = 3.0  # the decoupled fallback plan's seconds, by default, per second of the planner's time limit
 
 
 @dataclass(frozen=True)
@@ -62,11 +77,12 @@ class ExpertStats:
 
     plans: int = 0  # planning calls
     replans: int = 0  # planning calls other than the first of an episode
-    failures: int = 0  # planning calls that found no plan (infeasible, time limit)
+    failures: int = 0  # planning calls that found no plan (infeasible, time limit), the fallback included
+    decoupled: int = 0  # planning calls answered by the decoupled fallback plan (the planner's time ran out)
     repairs: int = 0  # actions the expert added to its plan: escape moves out of a corner gap
     stuck: int = 0  # freshly planned actions the env would refuse
     fallbacks: int = 0  # idle actions returned because the expert could not act
-    planning_s: float = 0.0  # seconds spent in the planner
+    planning_s: float = 0.0  # seconds spent in the planner (and the fallback plan)
     last_status: str | None = None  # status of the last planning call
     last_objective: float | None = None  # objective (Eq. 1) of the last plan found
 
@@ -113,7 +129,9 @@ class ExpertPolicy:
     ``lattice`` and ``capacity`` fix how actions and observations are laid out (pass them
     explicitly to use the policy without an env). ``time_limit`` (seconds) bounds each
     planning call; ``base_tolerance`` and ``item_tolerance`` (metres) say how far the state
-    may drift from the plan before the expert replans. ``planner_options`` go to
+    may drift from the plan before the expert replans. ``fallback_time_limit`` (seconds,
+    default ``FALLBACK_FACTOR * time_limit``; 0 turns the fallback off) bounds the decoupled plan made when a
+    planning call ran out of time without a plan. ``planner_options`` go to
     :func:`expert.planner.plan`.
     """
 
@@ -126,15 +144,19 @@ class ExpertPolicy:
         item_tolerance: float = ITEM_TOLERANCE,
         lattice: Lattice | None = None,
         capacity: Capacity | None = None,
+        fallback_time_limit: float | None = None,
         **planner_options: Any,
     ) -> None:
         if time_limit <= 0:
             raise ValueError(f"time_limit must be positive (seconds), got {time_limit}")
+        if fallback_time_limit is not None and fallback_time_limit < 0:
+            raise ValueError(f"fallback_time_limit must not be negative (seconds), got {fallback_time_limit}")
         if base_tolerance < 0 or item_tolerance < 0:
             raise ValueError("tolerances must not be negative")
         self.lattice: Lattice = lattice if lattice is not None else _env_attribute(env, "lattice")
         self.capacity: Capacity = capacity if capacity is not None else _env_attribute(env, "capacity")
         self.time_limit = time_limit
+        self.fallback_time_limit = FALLBACK_FACTOR * time_limit if fallback_time_limit is None else fallback_time_limit
         self.base_tolerance = base_tolerance
         self.item_tolerance = item_tolerance
         self.planner_options = planner_options
@@ -242,9 +264,16 @@ class ExpertPolicy:
         result = planner.plan(
             scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, **self.planner_options
         )
+        decoupled = result.status == "time_limit" and self.fallback_time_limit > 0
+        if decoupled:
+            result = self._fallback(scenario, world, result)
         seconds = time.perf_counter() - started
         self._stats = self._stats.plus(
-            plans=1, replans=int(replanned), failures=int(not result.found), planning_s=seconds
+            plans=1,
+            replans=int(replanned),
+            failures=int(not result.found),
+            decoupled=int(decoupled and result.found),
+            planning_s=seconds,
         )
         self._stats = replace(self._stats, last_status=result.status)
         if result.found:
@@ -252,6 +281,22 @@ class ExpertPolicy:
             self._stats = replace(self._stats, last_objective=result.objective)
         track.follow(result, scenario, self.lattice)
         return _Planned(result, seconds, replanned)
+
+    def _fallback(self, scenario: Scenario, world: WorldState, timed_out: Plan) -> Plan:
+        """The decoupled plan (:func:`expert.decoupled.fallback_plan`) after a call that ran out of time.
+
+        Its stats keep the timed-out call's under ``stats["planner"]``; without a plan the
+        answer is the timed-out call's status (``time_limit``) with both stats.
+        """
+        delivered = set(world.delivered(scenario))
+        order = [o.id for o in scenario.objects if o.id not in delivered or o.id == world.holding]
+        budget = Deadline.after(self.fallback_time_limit)
+        sub_planner = functools.partial(_sub_plan, self.planner_options)
+        result = fallback_plan(scenario, order, self.lattice, budget, sub_planner, holding=world.holding)
+        stats = {**result.stats, "planner": timed_out.stats}
+        if not result.found:
+            return replace(timed_out, stats=stats)
+        return replace(result, stats=stats)
 
     def _escape(self, track: Track, scenario: Scenario, world: WorldState, corner: str, reason: str) -> Decision:
         """Leave the corner gap of ``corner`` with one straight move (:mod:`expert.escape`), then plan."""
@@ -279,6 +324,14 @@ class ExpertPolicy:
     def _idle(self, world: WorldState) -> Action:
         """A move to the lattice point nearest the base, keeping the heading: the do-nothing action."""
         return Action(self.lattice.index(world.base), world.heading, 0, Mode.MOVE)
+
+
+_FIRST_SOLUTION = {"presolving": "fast", "heuristics": "fast", "params": {"limits/solutions": 1}}  # SCIP, sub-plans
+
+
+def _sub_plan(options: dict[str, Any], scenario: Scenario, *, first: bool = True, **kwargs: Any) -> Plan:
+    """:func:`expert.planner.plan` for the fallback's sub-plans: SCIP's first solution, or (``first=False``) optimal."""
+    return planner.plan(scenario, **{**options, **(_FIRST_SOLUTION if first else {})}, **kwargs)
 
 
 def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:

@@ -16,7 +16,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from training.cli import references
-from training.cli.arguments import add_worker_options, positive_int
+from training.cli.arguments import add_worker_options, capacity_text, positive_int
 from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
@@ -72,6 +72,14 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "and another mode given for it is refused)",
         default=None,
     )
+    parser.add_argument(
+        "--capacity",
+        type=capacity_text,
+        metavar="K=N,...",
+        help="the observation's slots every policy acts with, e.g. objects=8 (the other counts the default's); "
+        "a set-encoder run acts at any capacity, a flat network only at its own (refused otherwise); default: "
+        "each run folder's own where it holds the split's scenarios, else the split's",
+    )
     parser.set_defaults(handler=run_benchmark_command)
     references.register(commands)
 
@@ -107,6 +115,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             resume=args.resume,
             obs_mode=args.obs_mode,
+            capacity=args.capacity,
         )
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -84,6 +84,7 @@ def run_benchmark(
     progress: bool = False,
     resume: bool = False,
     obs_mode: str | None = None,
+    capacity: str | None = None,
 ) -> BenchmarkReport:
     """Evaluate ``policies`` (registry names or run folders) on ``split`` or the scenario files in ``scenarios``.
 
@@ -91,6 +92,9 @@ def run_benchmark(
     ``resume`` keeps the records of ``out/results.json`` that belong to this run's
     episodes (same policy, split, seed and scenario digest) and runs only the others; the
     file's other records (other policies or splits) are written back after this run's.
+    ``capacity`` (``"objects=8,..."``) is the observation's slots every policy acts with
+    (:func:`with_capacity`); None: each run folder's own where it holds the split's scenarios, else the
+    split's (:func:`acting_spec`).
 
     Raises :class:`BenchmarkError` for bad input before any episode runs (a results file
     that breaks its schema, another benchmark writing to ``out``); a
@@ -104,7 +108,7 @@ def run_benchmark(
         raise BenchmarkError(f"unknown backend {backend!r}; known: {', '.join(BACKENDS)}")
     if episodes is not None and episodes < 1:
         raise BenchmarkError(f"the number of episodes must be at least 1, got {episodes}")
-    specs = with_observations(with_references(policies), obs_mode)
+    specs = with_capacity(with_observations(with_references(policies), obs_mode), capacity)
     if split is not None:
         names = [split] if isinstance(split, str) else list(split)
         if not names:
@@ -249,6 +253,35 @@ def _set_encoder_run(run: str) -> bool:
         return all(network_config(member).encoder == "set" for member in members)
     except (KeyError, TypeError, ValueError, OSError):
         return False  # not a network run this can read: keep the capacity it was trained with
+
+
+def with_capacity(specs: list[PolicySpec], capacity: str | None) -> list[PolicySpec]:
+    """``specs`` acting at the observation ``capacity`` (None: unchanged); :class:`BenchmarkError` if one cannot.
+
+    A run folder of the set encoder acts at any capacity; one of a flat network only at
+    the capacity it was trained with, so another is refused here, before any episode runs.
+    """
+    if capacity is None:
+        return specs
+    try:
+        wanted = asdict(Capacity.parse(capacity))
+    except ValueError as error:
+        raise BenchmarkError(str(error)) from None
+    out = []
+    for spec in specs:
+        own = spec.env_options.get("capacity")
+        own = asdict(own) if isinstance(own, Capacity) else own
+        if spec.run is not None and own is not None and own != wanted and not acts_at_any_capacity(spec):
+            raise BenchmarkError(
+                f"{spec.name} was trained with the capacity {_capacity_text(own)} and its network (not the set "
+                f"encoder) acts at no other: give --capacity {_capacity_text(own)} or leave it out"
+            )
+        out.append(replace(spec, env_options={**spec.env_options, "capacity": wanted}))
+    return out
+
+
+def _capacity_text(capacity: dict[str, int]) -> str:
+    return ",".join(f"{k}={v}" for k, v in capacity.items())
 
 
 def check_fits(specs: list[PolicySpec], items: list[EvalScenario]) -> None:

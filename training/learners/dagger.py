@@ -69,7 +69,7 @@ class LabelTask:
     network: dict[str, Any] | None = None  # None: the expert acts; else config, capacity, candidates, features, weights
     nearest_moves: bool = False  # label an expert move no candidate expresses with the nearest allowed move
     families: tuple[str, ...] = ()  # episode k draws from families[k % len(families)]; () = family
-    env_options: dict[str, Any] = field(default_factory=dict)  # the observation mode and image options ({}: state)
+    env_options: dict[str, Any] = field(default_factory=dict)  # gym.make's: obs mode, images, capacity ({}: state)
 
     def family_of(self, index: int) -> str:
         """The family episode ``index`` draws from."""
@@ -184,6 +184,11 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
             "weights": weights}  # fmt: skip
 
 
+def _capacity(capacity: str | None) -> dict[str, str]:
+    """``make_env``'s keyword for an observation capacity: none for the family's."""
+    return {} if capacity is None else {"capacity": capacity}
+
+
 def _resumed(
     folder: Path,
     checkpoint: dict[str, Any],
@@ -253,7 +258,8 @@ def train_dagger(
     from training.data.generate import run_episodes
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
-    env_options = (images or ImageOptions()).env_options(config.obs_mode)
+    image_options = (images or ImageOptions()).env_options(config.obs_mode)  # what the run records
+    env_options = {**image_options, **_capacity(options.capacity)}  # what its envs are made with
     capacity, candidates, features = _probe(family, env_options)
     from_dataset = None  # read before the run folder is made: a bad dataset leaves nothing behind
     if options.dataset is not None:
@@ -261,10 +267,12 @@ def train_dagger(
                                          config.obs_mode)  # fmt: skip
     run_options = {"family": family, **asdict(options), **asdict(config)}
     run_options["learner_families"] = list(options.learner_families)  # as config.json reads back, for --resume
-    if env_options:
-        run_options["images"] = {k: v for k, v in env_options.items() if k != "obs_mode"}
+    if options.capacity is None:
+        del run_options["capacity"]  # the family's: config.json as before --capacity existed
+    if image_options:
+        run_options["images"] = {k: v for k, v in image_options.items() if k != "obs_mode"}
     config_json = runs.run_config("dagger", run_options, config, capacity, candidates, features, {},
-                                  observation=env_options or {"obs_mode": "state"})  # fmt: skip
+                                  observation=image_options or {"obs_mode": "state"})  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)

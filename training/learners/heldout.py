@@ -64,7 +64,9 @@ def evaluate(
 ) -> list[EpisodeResult]:
     """One episode per seed of ``policy`` on ``family`` through the candidate phases (masks given to it).
 
-    ``env_options``: more ``gym.make`` keywords (the observation mode and image options of an image network).
+    ``env_options``: more ``gym.make`` keywords: the observation mode and image options of an image
+    network, ``capacity`` (the observation's slots, as :func:`training.envs.make_env` takes them; None or
+    absent: the family's).
     """
     return _episodes(policy, make_env("phases", family=family, **env_options), seeds, deterministic)
 

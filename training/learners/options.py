@@ -16,6 +16,7 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
+from fetchcarry_env.observation import Capacity
 from training.envs import MAX_SEED
 
 MAX_ENVS = 64  # vector envs of a PPO run (one process each beyond the first)
@@ -25,6 +26,11 @@ EPOCHS_HELP = "epochs (per iteration for dagger; default {default})"
 HIDDEN_HELP = "units per hidden layer / token width (default {default})"
 STEP_SIZE_HELP = "Adam step size (default {default})"
 FAMILY_HELP = "scenario family (basic, push, ...)"
+CAPACITY_HELP = (
+    "the observation's slots the learner is trained with, e.g. objects=8,clutter=12 (the other counts the "
+    "default's: objects 4, clutter 8, tables 6, obstacles 12, postures 4; recorded in config.json; "
+    "default: the family's, which holds every scenario it draws)"
+)
 
 
 def option(
@@ -72,6 +78,30 @@ def read_seed(text: str) -> int:
     if not 0 <= value <= MAX_SEED:
         raise InputError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {text[:40]}")
     return value
+
+
+def read_capacity(text: str) -> str:
+    """An observation capacity ``KEY=N,...`` as text with every count (:class:`InputError` if it is not one)."""
+    capacity = Capacity.parse(text)  # a CapacityError (an InputError) says what is wrong
+    return ",".join(f"{name}={getattr(capacity, name)}" for name in Capacity.__dataclass_fields__)
+
+
+def capacity_option() -> Any:
+    """The ``capacity`` field of the learners that make their own envs (``--capacity``; None: the family's)."""
+    return option(None, CAPACITY_HELP, metavar="K=N,...", parse=read_capacity)
+
+
+def check_capacity_holds(capacity: str | None, families: tuple[str, ...]) -> None:
+    """:class:`InputError` unless ``capacity`` (None: each family's own) holds every scenario of ``families``."""
+    if capacity is None:
+        return
+    room = Capacity.parse(capacity)
+    for name in families:
+        need = get_family(name).capacity
+        short = [f"{k} {getattr(need, k)} (room for {getattr(room, k)})" for k in Capacity.__dataclass_fields__
+                 if getattr(need, k) > getattr(room, k)]  # fmt: skip
+        if short:
+            raise InputError(f"capacity {capacity} does not hold family {name}'s scenarios: {', '.join(short)}")
 
 
 def check_family(name: str) -> None:
@@ -206,8 +236,11 @@ class PPOOptions:
         "(with --encoder cnn) (default {default})",
         choices=OBS_MODE_CHOICES,
     )
+    capacity: str | None = capacity_option()
 
     def __post_init__(self) -> None:
+        if self.capacity is not None:
+            object.__setattr__(self, "capacity", read_capacity(self.capacity))
         if min(self.steps, self.n_steps, self.batch_size, self.n_epochs, self.checkpoint_every, self.eval_every) < 1:
             raise InputError("steps, n_steps, batch_size, n_epochs, checkpoint_every and eval_every must be positive")
         if self.eval_episodes < 0:
@@ -246,9 +279,12 @@ class DaggerOptions:
         "expert again (default: new expert episodes)",
         metavar="ID",
     )
+    capacity: str | None = capacity_option()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "learner_families", tuple(self.learner_families))  # a list from config.json too
+        if self.capacity is not None:
+            object.__setattr__(self, "capacity", read_capacity(self.capacity))
         if min(self.demonstrations, self.iterations, self.episodes_per_iteration, self.eval_episodes, self.epochs) < 1:
             raise InputError("demonstrations, iterations, episodes per iteration, eval episodes, epochs must be >= 1")
         if self.time_limit <= 0:
@@ -278,6 +314,7 @@ class DaggerRun:
 
     def __post_init__(self) -> None:
         check_family(self.family)
+        check_capacity_holds(self.options.capacity, (self.family, *self.options.learner_families))
 
 
 @dataclass(frozen=True)
@@ -290,6 +327,7 @@ class PPORun:
 
     def __post_init__(self) -> None:
         check_family(self.family)
+        check_capacity_holds(self.options.capacity, (self.family,))
 
 
 @dataclass(frozen=True)

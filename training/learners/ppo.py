@@ -104,7 +104,8 @@ class MaskInInfo(gym.Wrapper):
 def make_training_env(family: str, env_options: dict[str, Any] | None = None) -> gym.Env:
     """``FetchCarryPushPhases-v0`` of ``family`` with the learning reward, flat observations.
 
-    ``env_options``: the observation mode and image options (``{}`` or None: the state).
+    ``env_options``: ``gym.make``'s observation mode, image options and ``capacity`` (``{}`` or None:
+    the state at the family's capacity).
     """
     env_options = env_options or {}
     env = gym.make(runs.ENV_ID, family=family, reward="learning", **env_options)
@@ -211,9 +212,9 @@ def _policy_class() -> type:
     return CandidateActorCritic
 
 
-def _scale_observations(family: str, features: int) -> np.ndarray:
+def _scale_observations(family: str, features: int, capacity: Capacity | None = None) -> np.ndarray:
     """Observations of a few resets (seeds 0..), to standardise a scratch MLP's input."""
-    env = make_training_env(family)
+    env = make_training_env(family, None if capacity is None else {"capacity": capacity})
     try:
         rows = [env.reset(seed=seed)[0] for seed in range(SCALE_RESETS)]
     finally:
@@ -258,7 +259,8 @@ def train_ppo(
                                 "hidden": init["config"]["hidden"],
                                 "obs_mode": init["config"].get("obs_mode", "state")})  # fmt: skip
     config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed, obs_mode=options.obs_mode)
-    env_options = (images or ImageOptions()).env_options(options.obs_mode)
+    image_options = (images or ImageOptions()).env_options(options.obs_mode)  # what the run records
+    env_options = {**image_options, **({} if options.capacity is None else {"capacity": options.capacity})}
     if options.init is not None:  # the init run's network features too, so that its weights fit
         start = runs.network_config(init)
         config = replace(config, relative=start.relative, push_scores=start.push_scores)
@@ -277,11 +279,13 @@ def train_ppo(
     if options.obs_mode == "state":
         del run_options["obs_mode"]  # a state run's options as before observation modes (its --resume too)
     else:
-        run_options["images"] = {k: v for k, v in env_options.items() if k != "obs_mode"}
+        run_options["images"] = {k: v for k, v in image_options.items() if k != "obs_mode"}
+    if options.capacity is None:
+        del run_options["capacity"]  # the family's: config.json as before --capacity existed
     if resume:
         _drop_legacy_options(Path(out), run_options)
     config_json = runs.run_config("ppo", run_options, config, capacity, candidates, features,
-                             {"init": options.init, "steps": options.steps}, env_options or None)  # fmt: skip
+                             {"init": options.init, "steps": options.steps}, image_options or None)  # fmt: skip
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.read_metrics(folder)
@@ -328,7 +332,7 @@ def _drop_legacy_options(out: Path, run_options: dict[str, Any]) -> None:
 
 def actor_spec(family: str, config: BCConfig, capacity: Capacity, candidates: int, features: int) -> dict[str, Any]:
     """How :class:`CandidateActorCritic` builds its actor: the network's settings and its input scale (``family``'s)."""
-    scale = np.zeros((1, features)) if config.encoder == "cnn" else _scale_observations(family, features)  # cnn: unused
+    scale = np.zeros((1, features)) if config.encoder == "cnn" else _scale_observations(family, features, capacity)
     return {"config": asdict(config), "capacity": asdict(capacity), "candidates": candidates,
             "scale": scale.tolist()}  # fmt: skip
 
