@@ -142,25 +142,34 @@ def decoupled_apart(
     return tuple(phases)
 
 
-def _one_object(scenario, space, current: Phase, target: str, lattice, deadline, planner) -> list[Phase] | None:
+def _one_object(
+    scenario: Scenario, space: FreeLattice, current: Phase, target: str, lattice: Lattice, deadline: Deadline,
+    planner: Planner,
+) -> list[Phase] | None:  # fmt: skip
     """The phases after ``current`` that deliver ``target`` (see :func:`decoupled_apart`); None if none found."""
     picked: list[Phase] = []
     if current.holding is None:
         objects3 = {k: (v[0], v[1], 0.0) for k, v in current.objects.items()}
         picked = pick_leg(space, current, target, objects3) or []
         if not picked:  # (a push first, say): moves towards the object, then the MILP for the whole delivery
-            ends = approach(space, current.base, current.objects[target], PLACE_KEEP)
-            for start in (moves_along(current, ends), []) if ends else ([],):
-                rest = _sub_plan(scenario, start[-1] if start else current, [target], lattice, deadline, planner)
-                if rest is not None:
-                    return [*start, *rest]
-            return None
+            return _towards_then_plan(scenario, space, current, current.objects[target], target, lattice, deadline,
+                                      planner)  # fmt: skip
     at = picked[-1] if picked else current
-    ends = approach(space, at.base, scenario.object(target).goal, PLACE_KEEP)
+    rest = _towards_then_plan(scenario, space, at, scenario.object(target).goal, target, lattice, deadline, planner)
+    return None if rest is None else [*picked, *rest]
+
+
+def _towards_then_plan(
+    scenario: Scenario, space: FreeLattice, at: Phase, point: tuple[float, float], target: str, lattice: Lattice,
+    deadline: Deadline, planner: Planner,
+) -> list[Phase] | None:  # fmt: skip
+    """Moves from ``at`` towards ``point`` (stopping ``PLACE_KEEP`` metres of path before it), then the MILP for
+    ``target`` from there; from ``at`` itself when that finds nothing; None if neither does."""
+    ends = approach(space, at.base, point, PLACE_KEEP)
     for start in (moves_along(at, ends), []) if ends else ([],):
         rest = _sub_plan(scenario, start[-1] if start else at, [target], lattice, deadline, planner)
         if rest is not None:
-            return [*picked, *start, *rest]
+            return [*start, *rest]
     return None
 
 

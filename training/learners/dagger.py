@@ -184,11 +184,6 @@ def _network_task(model: torch.nn.Module, config: BCConfig, capacity: Capacity, 
             "weights": weights}  # fmt: skip
 
 
-def _capacity(capacity: str | None) -> dict[str, str]:
-    """``make_env``'s keyword for an observation capacity: none for the family's."""
-    return {} if capacity is None else {"capacity": capacity}
-
-
 def _resumed(
     folder: Path,
     checkpoint: dict[str, Any],
@@ -259,7 +254,7 @@ def train_dagger(
 
     config = BCConfig(**{**asdict(config), "epochs": options.epochs})
     image_options = (images or ImageOptions()).env_options(config.obs_mode)  # what the run records
-    env_options = {**image_options, **_capacity(options.capacity)}  # what its envs are made with
+    env_options = {**image_options, "capacity": options.capacity}  # what its envs are made with (None: the family's)
     capacity, candidates, features = _probe(family, env_options)
     from_dataset = None  # read before the run folder is made: a bad dataset leaves nothing behind
     if options.dataset is not None:

@@ -214,7 +214,7 @@ def _policy_class() -> type:
 
 def _scale_observations(family: str, features: int, capacity: Capacity | None = None) -> np.ndarray:
     """Observations of a few resets (seeds 0..), to standardise a scratch MLP's input."""
-    env = make_training_env(family, None if capacity is None else {"capacity": capacity})
+    env = make_training_env(family, {"capacity": capacity})
     try:
         rows = [env.reset(seed=seed)[0] for seed in range(SCALE_RESETS)]
     finally:
@@ -260,7 +260,7 @@ def train_ppo(
                                 "obs_mode": init["config"].get("obs_mode", "state")})  # fmt: skip
     config = BCConfig(encoder=options.encoder, hidden=options.hidden, seed=options.seed, obs_mode=options.obs_mode)
     image_options = (images or ImageOptions()).env_options(options.obs_mode)  # what the run records
-    env_options = {**image_options, **({} if options.capacity is None else {"capacity": options.capacity})}
+    env_options = {**image_options, "capacity": options.capacity}  # what its envs are made with (None: the family's)
     if options.init is not None:  # the init run's network features too, so that its weights fit
         start = runs.network_config(init)
         config = replace(config, relative=start.relative, push_scores=start.push_scores)
