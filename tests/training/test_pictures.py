@@ -129,3 +129,26 @@ def test_ppo_curves_with_one_point_per_run_show_the_points(tmp_path: Path) -> No
     height, width = near.shape
     panels = [near[: height // 2, width // 2 :], near[height // 2 :, : width // 2], near[height // 2 :, width // 2 :]]
     assert all(panel.sum() > 20 for panel in panels)  # the top-left panel holds the legend's sample line too
+
+
+def test_success_against_objects_draws_every_policy_in_its_colour(tmp_path: Path) -> None:
+    """The graded worlds' curve: one line per policy over k = 1..8, each policy's colour present in both panels."""
+    from training.evaluation.metrics import by_objects
+    from training.pictures.benchmark import plot_against_objects, policy_colours
+
+    def record(policy: str, k: int, seed: int, success: bool) -> dict:
+        return {"policy": policy, "split": "objects-v1:test", "source": f"objects-{k}", "seed": seed, "objects": k,
+                "success": success, "delivered": k if success else 0, "cost": 10.0 + k, "expert_cost": 10.0,
+                "return": 1.0, "phases": 4, "pushes": 0, "invalid_actions": 0, "contacts": 0, "decision_ms": 1.0,
+                "mask_ms": 0.5, "digest": f"d{seed}"}  # fmt: skip
+
+    records = [
+        record(p, k, 100 * k + s, s < 10 - k) for p in ("expert", "bc-set") for k in range(1, 9) for s in range(8)
+    ]
+    picture = plot_against_objects(by_objects(records), tmp_path / "objects.png", title="objects-v1:test")
+    pixels = np.asarray(Image.open(picture).convert("RGB")).astype(float)
+    height, width, _ = pixels.shape
+    orange = np.array(colors.to_rgb(policy_colours(["expert", "bc-set"])["bc-set"])) * 255
+    near = np.abs(pixels - orange).max(axis=2) < 40
+    plots = near[height // 5 : height * 9 // 10]  # below the legend, above the caption
+    assert plots[:, : width // 2].sum() > 100 and plots[:, width // 2 :].sum() > 100

@@ -10,15 +10,26 @@ from pathlib import Path
 
 import pytest
 
+from fetchcarry_env.errors import InputError
+from fetchcarry_env.observation import Capacity
 from tests.cli_run import run
 from training.cli import main
 from training.evaluation.results import read_results, write_results
+from training.evaluation.splits import get_split
 from training.reproduce import SMOKE, pipeline
 from training.reproduce.budgets import FULL
 from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings, training_jobs
 from training.reproduce.table import REFERENCES, baselines
 
-SPLITS = ("iid-v1:test", "more-objects-v1:test", "layouts-v2:test", "push-required-v1:test")
+SPLITS = (
+    "iid-v1:test",
+    "more-objects-v1:test",
+    "layouts-v2:test",
+    "push-required-v1:test",
+    "objects-v1:test",
+    "apartment-v1:test",
+    "perturbed-v1:test",
+)
 MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 
 
@@ -199,3 +210,16 @@ def test_the_summary_names_its_commit_and_the_table_publishes_under_50_mb(smoke:
     assert not (published / "datasets").exists()
     with pytest.raises(PublishError, match="no finished table"):
         publish(tmp_path / "published" / "runs", tmp_path / "nowhere")
+
+
+def test_the_table_capacity_holds_every_split_so_flat_networks_act_on_all() -> None:
+    for budget in (FULL, SMOKE):
+        room = Capacity.parse(budget.capacity)
+        for split in budget.splits:
+            assert room.covers(get_split(split).capacity), (budget.name, split)
+        assert pipeline.split_episodes("apartment", budget) <= get_split("apartment").episodes
+
+
+def test_a_budget_with_repeated_splits_is_refused() -> None:
+    with pytest.raises(InputError, match="distinct"):
+        replace(SMOKE, splits=("iid", "iid"))

@@ -16,9 +16,10 @@ from training.cli.text import echo
 from training.reproduce import BUDGETS, FULL, reproduce
 from training.reproduce.publish import publish
 
-FULL_ESTIMATE = "about 3 hours for three seeds"
+FULL_ESTIMATE = "about 4 to 5 hours for three seeds"
 # An estimate from measured stages (docs/benchmarks/learning.md, "The published table"): training 83 min, the
-# benchmark 30 min at 100 episodes per split, times three at the test parts' 300; not yet measured end to end.
+# benchmark 30 min for four splits at 100 episodes, times three at the test parts' 300, plus the graded worlds
+# (the expert's planning alone: 40 min for objects and apartment); not yet measured end to end.
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -32,8 +33,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "multi-2 from the whole dataset (dagger-aimed), MaskablePPO from scratch and from the BC weights, and BC "
         "on fewer demonstrations, each a run folder in DIR/runs, then the ensemble of the seeds' dagger-aimed "
         "runs; (3) the benchmark "
-        "of expert, random, random-phases, greedy and every run on the splits iid, more-objects, layouts and "
-        "push-required (DIR/benchmark/SPLIT); (4) DIR/summary.md (per split, each baseline's mean over the "
+        "of expert, random, random-phases, greedy and every run on the test parts of the splits iid, "
+        "more-objects, layouts, push-required and the graded worlds objects (1-8 objects), apartment and "
+        "perturbed (DIR/benchmark/SPLIT; every learner is trained at the capacity objects=8, which holds them "
+        "all); (4) DIR/summary.md (per split, each baseline's mean over the "
         "seeds with its range, success pooled over seeds with a 95 % bootstrap interval over scenarios; the "
         "commit of the code that made it), DIR/results.json and plots. --publish DEST copies the table, every run's "
         "config and metrics, and the best run's weights of each learner into DEST (refused above 50 MB). "

@@ -3,6 +3,7 @@
 :func:`plot_splits` draws success and cost ratio per split (or per object count) with
 their 95 % intervals, a distinct colour for every policy (:func:`policy_colours`) and n in
 the caption;
+:func:`plot_against_objects` draws success and cost ratio against the object count, one line per policy;
 :func:`plot_learning_curve` draws a run folder's ``metrics.csv`` (any numeric columns
 against its first); :func:`plot_demonstrations` draws success against the number of
 demonstrations from records that carry a ``demonstrations`` count;
@@ -58,17 +59,18 @@ def policy_colours(policies: Sequence[str]) -> dict[str, Any]:
     return {**{p: REFERENCE_COLOURS[p] for p in policies if p in REFERENCE_COLOURS}, **out}
 
 
-def _caption(rows: Sequence[Row]) -> str:
-    """``n = 300 episodes per policy and split (100 scenarios x 3 seeds pooled)``: what the bars are made of."""
+def _caption(rows: Sequence[Row], bars: bool = True) -> str:
+    """``n = 300 episodes per bar (seeds pooled over 100 scenarios ...)``: what the bars (or points) are made of."""
     counts = sorted({r.episodes for r in rows})
     scenarios = sorted({r.scenarios for r in rows if r.scenarios and r.scenarios != r.episodes})
-    text = f"n = {', '.join(map(str, counts))} episodes per bar"
+    text = f"n = {', '.join(map(str, counts))} episodes per {'bar' if bars else 'point'}"
     if scenarios:
         text += f" (seeds pooled over {', '.join(map(str, scenarios))} scenarios; intervals resample scenarios)"
     zero = sorted({r.score_zero for r in rows})
     kinds = sorted({r.reference for r in rows})
     reference = "the split's fixed reference" if kinds == ["fixed"] else f"the reference ({', '.join(kinds)})"
-    return text + f"; hatched stub marked 0: no success; cost ratio to {reference}; score zero {'/'.join(zero)}"
+    stub = "; hatched stub marked 0: no success" if bars else ""
+    return text + f"{stub}; cost ratio to {reference}; score zero {'/'.join(zero)}"
 
 
 def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, Any]) -> None:
@@ -134,6 +136,47 @@ def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None 
     figure.text(0.5, 0.01, _caption(rows), ha="center", fontsize="x-small", wrap=True)
     rows_of_legend = math.ceil(len(policies) / 6)
     figure.tight_layout(rect=(0, 0.05, 1, 1 - 0.06 * rows_of_legend))
+    figure.savefig(path, dpi=DPI)
+    plt.close(figure)
+    return Path(path)
+
+
+def plot_against_objects(rows: Sequence[Row], path: str | Path, title: str = "") -> Path:
+    """Success and cost ratio against the number of objects (``row.split`` is the count), one line per policy.
+
+    The graded worlds' headline curve: a line per policy (its own colour) with its 95 %
+    intervals as error bars, the policies side by side around each count so that the bars
+    do not hide one another; n in the caption. A count where a policy solved nothing has
+    no cost ratio, so its cost line skips it.
+    """
+    plt = pyplot()
+    policies = list(dict.fromkeys(r.policy for r in rows))
+    colours = policy_colours(policies)
+    figure, (left, right) = plt.subplots(1, 2, figsize=(12.0, 4.8))
+    spread = 0.6  # objects: the width of one count's group of policies
+    for n, policy in enumerate(policies):
+        shift = spread * (n / max(1, len(policies) - 1) - 0.5)
+        own = sorted((r for r in rows if r.policy == policy), key=lambda r: int(r.split))
+        style = {"color": colours[policy], "marker": "o", "markersize": MARKER_SIZE, "linewidth": 1.0, "capsize": 2}
+        k = [int(r.split) + shift for r in own]
+        low = [r.success - r.success_low for r in own]
+        high = [r.success_high - r.success for r in own]
+        left.errorbar(k, [r.success for r in own], yerr=[low, high], label=policy, **style)
+        solved = [r for r in own if not math.isnan(r.cost_ratio)]
+        errors = [[r.cost_ratio - r.cost_ratio_low for r in solved], [r.cost_ratio_high - r.cost_ratio for r in solved]]
+        right.errorbar([int(r.split) + shift for r in solved], [r.cost_ratio for r in solved], yerr=errors, **style)
+    counts = sorted({int(r.split) for r in rows})
+    for axis, label in ((left, "success rate (95 % CI)"), (right, "cost ratio to the reference (95 % CI)")):
+        axis.set_xticks(counts)
+        axis.set_xlabel("objects in the scenario" + (f" ({title})" if title else ""))
+        axis.set_ylabel(label)
+        axis.grid(alpha=0.3)
+    left.set_ylim(-0.02, 1.02)
+    right.axhline(1.0, color="grey", linewidth=0.8)
+    handles, labels = left.get_legend_handles_labels()
+    figure.legend(handles, labels, loc="upper center", ncol=min(len(policies), 6), fontsize="small", frameon=False)
+    figure.text(0.5, 0.01, _caption(rows, bars=False), ha="center", fontsize="x-small", wrap=True)
+    figure.tight_layout(rect=(0, 0.05, 1, 1 - 0.06 * math.ceil(len(policies) / 6)))
     figure.savefig(path, dpi=DPI)
     plt.close(figure)
     return Path(path)

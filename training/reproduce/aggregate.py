@@ -9,7 +9,8 @@ holds every episode record of every split, with two keys added to the benchmark'
 ``baseline`` (the label without the seed) and ``training_seed`` (``null`` for the
 references and for ``dagger-aimed-ensemble``, which is made of every seed's runs).
 Plots: ``splits.png`` (success and cost ratio per split, pooled over the
-seeds, with 95 % intervals), ``ppo_curves.png`` (MaskablePPO's training success and
+seeds, with 95 % intervals), ``objects.png`` (the same against the object count on the
+graded worlds, ``objects``), ``ppo_curves.png`` (MaskablePPO's training success and
 return against env steps and wall-clock seconds, one line per run) and
 ``demonstrations.png`` (BC's success on ``iid`` against its expert episodes), drawn by
 :mod:`training.pictures.benchmark`.
@@ -24,25 +25,25 @@ from typing import Any
 
 import numpy as np
 
-from training.evaluation.metrics import Row, summarise
+from training.evaluation.metrics import Row, by_objects, summarise
 from training.evaluation.report import source_table
 from training.evaluation.results import RESULTS, read_results, write_results
 from training.learners.runs import read_saved
-from training.pictures.benchmark import plot_demonstrations, plot_ppo_curves, plot_splits
+from training.pictures.benchmark import plot_against_objects, plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
 from training.reproduce.publish import commit_line
-from training.reproduce.table import CURVE_SPLIT, SPLIT_NAMES, Baseline
+from training.reproduce.table import CURVE_SPLIT, OBJECTS_SPLIT, Baseline
 
-SUMMARY, SPLITS_PLOT = "summary.md", "splits.png"
+SUMMARY, SPLITS_PLOT, OBJECTS_PLOT = "summary.md", "splits.png", "objects.png"
 CURVES_PLOT, DEMONSTRATIONS_PLOT = "ppo_curves.png", "demonstrations.png"
 PPO_BASELINES = ("ppo-scratch", "ppo-bc")
 
 
-def collect(out: Path, baselines: Sequence[Baseline]) -> list[dict[str, Any]]:
-    """Every benchmark record of the reproduction in ``out``, with ``baseline`` and ``training_seed``."""
+def collect(out: Path, baselines: Sequence[Baseline], splits: Sequence[str]) -> list[dict[str, Any]]:
+    """Every benchmark record of ``splits`` in the reproduction ``out``, with ``baseline`` and ``training_seed``."""
     owner = {name: (b.label, seed if b.per_seed else None) for b in baselines for seed, name in enumerate(b.runs)}
     records = []
-    for split in SPLIT_NAMES:
+    for split in splits:
         for record in read_results(out / "benchmark" / split / RESULTS):
             label, seed = owner.get(record["policy"], (record["policy"], None))
             records.append({**record, "baseline": label, "training_seed": seed})
@@ -66,7 +67,7 @@ def write_published(
     ``commits`` are the commits of the code that made the folder (:func:`training.reproduce.publish.record_commit`):
     the summary names them.
     """
-    records = collect(out, baselines)
+    records = collect(out, baselines, budget.splits)
     write_results(out / RESULTS, records)
     per_run = {(row.policy, row.split): row for row in summarise(records)}
     pooled = {(row.policy, row.split): row for row in summarise([{**r, "policy": r["baseline"]} for r in records])}
@@ -79,8 +80,11 @@ def write_published(
         "",
         commit_line(commits) if commits else "Commit not recorded.",
         "",
-        f"Budget `{budget.name}`, {seeds} training seed(s), {budget.episodes} episodes per split (the test parts); "
-        "learners trained on the `training` family (basic, push, corridor, multi-2). Learned baselines: the mean "
+        f"Budget `{budget.name}`, {seeds} training seed(s), {budget.episodes} episodes per split (the test parts; "
+        "fewer where a split's test part has fewer references: the count is in each section's title); "
+        "learners trained on the `training` family (basic, push, corridor, multi-2)"
+        + (f" at the observation capacity {budget.capacity}" if budget.capacity else "")
+        + ". Learned baselines: the mean "
         "over training seeds with the range (min-max) in brackets; success also pooled over the seeds' episodes "
         "with a 95 % bootstrap interval over scenarios (each scenario's seeds kept together: they are not "
         "independent trials). Cost ratio: travel cost over the split's fixed reference on the same scenario "
@@ -89,7 +93,9 @@ def write_published(
         "",
     ]
     for split in dict.fromkeys(r["split"] for r in records):
-        lines += [f"## {split}", "", *_table(split, references, main, per_run, pooled, labels), ""]
+        scenarios = len({r["seed"] for r in records if r["split"] == split})
+        lines += [f"## {split} ({scenarios} scenarios)", ""]
+        lines += [*_table(split, references, main, per_run, pooled, labels), ""]
         caption = f"Per scenario source ({split}): success pooled over the seeds [95 % CI], cost ratio in brackets."
         by_baseline = [{**r, "policy": r["baseline"]} for r in records]
         lines += source_table(by_baseline, split, caption, references + [b.label for b in main], first="baseline")
@@ -104,10 +110,15 @@ def write_published(
     for name, entry in timings.get("stages", {}).items():
         if isinstance(entry, dict):
             lines.append(f"| {name} | {entry['wall']:.0f} | {entry['cpu']:.0f} |")
-    lines += ["", f"Plots: {SPLITS_PLOT}, {CURVES_PLOT}, {DEMONSTRATIONS_PLOT}; every record: {RESULTS}.", ""]
+    graded = [{**r, "policy": r["baseline"]} for r in records if r["split"].startswith(f"{OBJECTS_SPLIT}-")]
+    plots = [SPLITS_PLOT, *([OBJECTS_PLOT] if graded else []), CURVES_PLOT, DEMONSTRATIONS_PLOT]
+    lines += ["", f"Plots: {', '.join(plots)}; every record: {RESULTS}.", ""]
     (out / SUMMARY).write_text("\n".join(lines))
     shown = references + [b.label for b in main]
     plot_splits([row for key, row in pooled.items() if key[0] in shown], out / SPLITS_PLOT)
+    if graded:  # success and cost ratio against the object count, k = 1..8
+        rows = by_objects([r for r in graded if r["policy"] in shown])
+        plot_against_objects(rows, out / OBJECTS_PLOT, title=graded[0]["split"])
     plot_ppo_curves(ppo_metrics(out / "runs", [b for b in baselines if b.label in PPO_BASELINES]), out / CURVES_PLOT)
     points = [{**r, "policy": "bc-mlp", "demonstrations": _demonstrations(r, curve)} for r in records
               if curve_split is not None and r["split"] == curve_split and _demonstrations(r, curve)]  # fmt: skip

@@ -13,9 +13,13 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from fetchcarry_env.errors import InputError
-from training.learners.options import BCConfig, DaggerOptions, PPOOptions
+from training.learners.options import BCConfig, DaggerOptions, PPOOptions, read_capacity
 
 TRAINING_FAMILY = "training"  # basic, push, corridor or multi-2, uniformly: the iid split's families
+FIRST_SPLITS = ("iid", "more-objects", "layouts", "push-required")  # the table's splits before the graded worlds
+# The graded worlds too: k = 1..8 objects, a procedural apartment, iid scenarios perturbed (docs/families.md)
+TABLE_SPLITS = (*FIRST_SPLITS, "objects", "apartment", "perturbed")
+TABLE_CAPACITY = "objects=8"  # holds every scenario of TABLE_SPLITS, so every learner (a flat network too) acts on all
 # DaggerOptions' field -> the Budget field it is taken from
 DAGGER_FIELDS = {
     "demonstrations": "dagger_demonstrations",
@@ -50,11 +54,17 @@ class Budget:
     aimed_families: tuple[str, ...] = ("push", "multi-2")  # dagger-aimed's learner episodes draw from these in turn
     ppo_eval_every: int = 5120  # env steps between PPO's held-out evaluations (its curve of held-out success)
     ppo_eval: int = 50  # held-out episodes of each of those evaluations
+    splits: tuple[str, ...] = FIRST_SPLITS  # the benchmark's splits (the newest version of each, its test part)
+    capacity: str | None = None  # the observation's room (--capacity) of the dataset and every run; None: the env's
 
     def __post_init__(self) -> None:
         counts = (self.demonstrations, self.bc_epochs, self.set_epochs, self.ppo_steps, self.episodes)
         if min(counts) < 1 or any(n < 1 or n > self.demonstrations for n in self.curve):
             raise InputError("a budget's counts must be positive and its curve within its demonstrations")
+        if not self.splits or len(set(self.splits)) < len(self.splits):
+            raise InputError(f"a budget's splits must be distinct and at least one, got {self.splits}")
+        if self.capacity is not None:
+            object.__setattr__(self, "capacity", read_capacity(self.capacity))  # every count, as run folders save it
         if self.aimed_iterations < 0:
             raise InputError(f"aimed_iterations must be >= 0, got {self.aimed_iterations}")
         self.dagger_options()  # their own checks
@@ -69,7 +79,8 @@ class Budget:
 
     def dagger_options(self) -> DaggerOptions:
         """The DAgger run of the table: the budget's fields named in :data:`DAGGER_FIELDS`, the rest defaulted."""
-        return DaggerOptions(**{option: getattr(self, field) for option, field in DAGGER_FIELDS.items()})
+        fields = {option: getattr(self, field) for option, field in DAGGER_FIELDS.items()}
+        return DaggerOptions(**fields, capacity=self.capacity)
 
     def aimed_options(self, dataset: str) -> DaggerOptions:
         """dagger-aimed: iteration 0 is BC on all of ``dataset`` (the flat MLP's epochs: the same network as
@@ -93,6 +104,7 @@ class Budget:
             init=init,
             eval_every=self.ppo_eval_every,
             eval_episodes=self.ppo_eval,
+            capacity=self.capacity,
         )
 
 
@@ -112,6 +124,8 @@ FULL = Budget(
     ppo_batch=64,
     episodes=300,  # the test part of every split: docs/protocol.md's minimum for a published table
     aimed_iterations=3,
+    splits=TABLE_SPLITS,
+    capacity=TABLE_CAPACITY,
 )
 SMOKE = Budget(
     name="smoke",
@@ -131,5 +145,7 @@ SMOKE = Budget(
     aimed_iterations=1,
     ppo_eval_every=32,
     ppo_eval=2,
+    splits=TABLE_SPLITS,
+    capacity=TABLE_CAPACITY,
 )
 BUDGETS = {budget.name: budget for budget in (FULL, SMOKE)}

@@ -55,7 +55,6 @@ from training.reproduce.table import (
     CURVE_SPLIT,
     ENSEMBLE,
     REFERENCES,
-    SPLIT_NAMES,
     baselines,
     curve_label,
     has_ensemble,
@@ -253,7 +252,9 @@ def reproduce(
 
 
 def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable) -> None:
-    source = EpisodeSource(family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit)
+    source = EpisodeSource(
+        family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit, capacity=budget.capacity
+    )
     config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
     say(f"[1/4] datasets: {DATASET_ID}, {budget.demonstrations} expert episodes of family {TRAINING_FAMILY}")
     started, cpu = time.perf_counter(), cpu_seconds()
@@ -284,14 +285,15 @@ def _stage_benchmark(
 ) -> None:
     references = [name for name in REFERENCES if name in available()]
     runs = out / "runs"
-    for split in SPLIT_NAMES:
+    for split in budget.splits:
         learned = [b for b in baselines(seeds, budget) if split == CURVE_SPLIT or not b.label.startswith("bc-mlp-n")]
         policies = references + [str(runs / name) for b in learned for name in b.runs]
         folder = out / "benchmark" / split
-        total = len(policies) * budget.episodes
+        episodes = split_episodes(split, budget)
+        total = len(policies) * episodes
         started, cpu = time.perf_counter(), cpu_seconds()
         forget_retrained(folder, [runs / name for b in learned for name in b.runs])
-        report = run_benchmark(policies, out=folder, split=split, episodes=budget.episodes, workers=workers,
+        report = run_benchmark(policies, out=folder, split=split, episodes=episodes, workers=workers,
                                progress=progress, resume=True)  # fmt: skip
         if report.resumed == total:
             say(f"[3/4] benchmark {get_split(split).name}: already complete ({total} episodes)")
@@ -299,6 +301,11 @@ def _stage_benchmark(
         timings.add("stages", f"benchmark {split}", time.perf_counter() - started, cpu_seconds() - cpu)
         say(f"[3/4] benchmark {get_split(split).name}: {total} episodes ({report.resumed} resumed) "
             f"in {time.perf_counter() - started:.0f} s")  # fmt: skip
+
+
+def split_episodes(split: str, budget: Budget) -> int:
+    """The benchmark episodes of ``split``: the budget's, or fewer where the split's test part has fewer references."""
+    return min(budget.episodes, get_split(split).episodes)
 
 
 def forget_retrained(folder: Path, runs: list[Path]) -> None:

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 from training.reproduce.budgets import Budget
 
-SPLIT_NAMES = ("iid", "more-objects", "layouts", "push-required")
 CURVE_SPLIT = "iid"  # where the demonstrations curve is measured
+OBJECTS_SPLIT = "objects"  # the graded worlds objects-1 .. objects-8: success and cost ratio against k
 REFERENCES = ("expert", "random", "random-phases", "greedy")
 ENSEMBLE = "dagger-aimed-ensemble"  # the run combining every seed's dagger-aimed network
 
