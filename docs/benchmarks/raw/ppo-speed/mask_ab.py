@@ -20,7 +20,7 @@ import gymnasium as gym
 import numpy as np
 
 
-def _module(checkout: str, name: str):  # noqa: ANN202
+def _module(checkout: str, name: str) -> object:
     spec = importlib.util.spec_from_file_location(name, f"{checkout}/fetchcarry_env/candidate_mask.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
