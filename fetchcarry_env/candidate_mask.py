@@ -83,11 +83,12 @@ def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: np.ndarray) -> np.ndarra
 
 
 def sweep_table(blockers: np.ndarray, radius: float) -> np.ndarray:
-    """``(2 M, 22)``: what the swept-disc test needs of each blocker, for ``radius - CONTACT_SLACK`` then ``radius``.
+    """``(22, 2 M)``: what the swept-disc test needs of each blocker, for ``radius - CONTACT_SLACK`` then ``radius``.
 
-    Per row: the rectangle (4), the disc's ``radius - EPS`` and ``radius ** 2`` (computed as
+    Per column: the rectangle (4), the disc's ``radius - EPS`` and ``radius ** 2`` (computed as
     ``radius * radius``), the two grown rectangles' ``min_x`` (2), ``min_y`` (2), ``max_x`` (2),
     ``max_y`` (2), and the four corners' x (4) and y (4), in the scalar code's order (metres).
+    One row per quantity, so that the columns of the pairs tested gather into contiguous rows.
     """
     rows = []
     for r in (radius - CONTACT_SLACK, radius):
@@ -98,30 +99,29 @@ def sweep_table(blockers: np.ndarray, radius: float) -> np.ndarray:
                     *(x0, y0, x1, y1, np.full(x0.shape, r - EPS), np.full(x0.shape, r * r)),
                     *(x0 - r, x0, y0, y0 - r, x1 + r, x1, y1, y1 + r),
                     *(x0, x1, x1, x0, y0, y0, y1, y1),
-                ],
-                axis=1,
+                ]
             )
         )
-    return np.concatenate(rows).reshape(-1, 22)
+    return np.ascontiguousarray(np.concatenate(rows, axis=1).reshape(22, -1))
 
 
-def _sweep_hits(px: np.ndarray, py: np.ndarray, qx: np.ndarray, qy: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """True where the disc of row ``n`` of a :func:`sweep_table` sliding ``p`` -> ``q`` touches its rectangle.
+def _sweep_hits(px: ArrayLike, py: ArrayLike, qx: np.ndarray, qy: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """True where the disc of column ``n`` of a :func:`sweep_table` sliding ``p`` -> ``q`` touches its rectangle.
 
-    geometry._sweep_disc_rect(...) < 1.0, operation for operation (1-D arrays, metres):
-    the start inside the rounded rectangle, an entry into one of the two grown
-    rectangles or the four corner circles before ``t = 1``. The two rectangles, and the
-    four circles, go through one array pass each.
+    geometry._sweep_disc_rect(...) < 1.0, operation for operation (1-D arrays, or one start
+    point as numbers, metres): the start inside the rounded rectangle, an entry into one of
+    the two grown rectangles or the four corner circles before ``t = 1``. The two
+    rectangles, and the four circles, go through one array pass each.
     """
-    x0, y0, x1, y1, limit, r2 = rows[:, :6].T
+    x0, y0, x1, y1, limit, r2 = rows[:6]
     hit = _hypot_below(
         np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), limit
     )
     dx, dy = qx - px, qy - py
-    grown = rows[:, 6:8].T, rows[:, 8:10].T, rows[:, 10:12].T, rows[:, 12:14].T  # (2, n) each
+    grown = rows[6:8], rows[8:10], rows[10:12], rows[12:14]  # (2, n) each
     valid, t0, t1 = _clip(px, py, dx, dy, grown)
     hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).any(axis=0)
-    fx, fy = px - rows[:, 14:18].T, py - rows[:, 18:22].T  # (4, n): from each corner
+    fx, fy = px - rows[14:18], py - rows[18:22]  # (4, n): from each corner
     a = dx * dx + dy * dy
     b = 2 * (fx * dx + fy * dy)
     disc = b * b - 4 * a * (fx * fx + fy * fy - r2)
@@ -146,20 +146,33 @@ def moves_free(
     max_x, max_y`` (metres); ``table`` their :func:`sweep_table` (built here if not
     given). A blocker stops a move when the box around the move overlaps it and the
     swept discs of ``radius - CONTACT_SLACK`` and of ``radius`` both touch it (one array
-    pass for the two).
+    pass for the two). One start point (two numbers) is used as it is, not repeated per move.
     """
-    sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
     table = sweep_table(blockers, radius) if table is None else table
+    if np.ndim(start_x) == 0 and np.ndim(start_y) == 0:  # one start: every move leaves from it
+        sx, sy = float(start_x), float(start_y)
+        ex, ey = np.asarray(end_x, dtype=float), np.asarray(end_y, dtype=float)
+        ex, ey = (ex, ey) if ex.shape == ey.shape else np.broadcast_arrays(ex, ey)
+        starts = sx, sy
+    else:
+        sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
+        starts = None
     n, m = np.nonzero(
         _box_overlaps(
-            sx[:, None], sy[:, None], ex[:, None], ey[:, None], radius, *(blockers[None, :, i] for i in range(4))
+            sx if starts else sx[:, None],
+            sy if starts else sy[:, None],
+            ex[:, None],
+            ey[:, None],
+            radius,
+            *(blockers[None, :, i] for i in range(4)),
         )
     )
-    free = np.ones(sx.shape, dtype=bool)
+    free = np.ones(ex.shape, dtype=bool)
     if n.size:
         both = np.concatenate((n, n))
-        rows = table[np.concatenate((m, m + blockers.shape[0]))]
-        touch = _sweep_hits(sx[both], sy[both], ex[both], ey[both], rows).reshape(2, -1)
+        rows = table[:, np.concatenate((m, m + blockers.shape[0]))]
+        px, py = starts if starts else (sx[both], sy[both])
+        touch = _sweep_hits(px, py, ex[both], ey[both], rows).reshape(2, -1)
         free[n[touch.all(axis=0)]] = False
     return free
 
@@ -320,6 +333,7 @@ class FastPhases:
         self._stops: dict = {}  # move_stop of a zero-length move at off-lattice points (push ends)
         self._waypoints = self._waypoint_cells()
         self._edges = self._edge_lines()
+        self._edge_cells = self._edge_line_cells()
         self._items: dict = {}
         c, d, k = (a.ravel() for a in np.indices((len(scenario.clutter), 4, 3)))
         self._push_grid = (c, d, PUSH_HEADING[d, k])
@@ -524,15 +538,17 @@ class FastPhases:
     def _moves(self, state: WorldState, approaches: _Offers, heading: int) -> _Offers:
         """Approach, waypoint and edge moves allowed but for the swept-disc test and the one-per-action rule."""
         bx, by = state.base
-        ex, ey, eindex = self._edges
-        x = np.where(np.isnan(ex), bx, ex)
-        y = np.where(np.isnan(ey), by, ey)
-        inside = (x >= self._inside[0]) & (x <= self._inside[2]) & (y >= self._inside[1]) & (y <= self._inside[3])
-        x, y, eindex = x[inside], y[inside], eindex[inside]
-        nx, ny = self.lattice.shape
-        res, (ox, oy) = self.lattice.resolution, self.lattice.origin
-        ei = np.minimum(np.maximum(np.rint((x - ox) / res), 0), nx - 1).astype(np.int64)
-        ej = np.minimum(np.maximum(np.rint((y - oy) / res), 0), ny - 1).astype(np.int64)
+        fixed_x, ix, in_x, jy, in_y, eindex = self._edge_cells
+        ci_b, in_bx = self._cell_of(bx, 0)
+        cj_b, in_by = self._cell_of(by, 1)
+        inside = np.zeros(eindex.size, dtype=bool)  # the end (line's x, base's y) or (base's x, line's y) inside
+        if in_by:
+            inside |= in_x
+        if in_bx:
+            inside |= in_y
+        ei = np.where(fixed_x, ix, ci_b)[inside]
+        ej = np.where(fixed_x, cj_b, jy)[inside]
+        eindex = eindex[inside]
         keep = self._fits(ei, ej) & self._stand_at(ei, ej)
         wi, wj, windex = self._waypoints
         index = np.concatenate([approaches.index, windex, eindex[keep]])
@@ -759,6 +775,34 @@ class FastPhases:
                     rows.append((*line, start + (slot * 4 + side) * layout.corner_cells + i))
         x, y, index = (np.array(v, dtype=float) for v in zip(*rows, strict=True)) if rows else (np.zeros(0),) * 3
         return x, y, index.astype(np.int64)
+
+    def _edge_line_cells(self) -> tuple:
+        """What of the edge moves depends on their lines alone: ``(fixed_x, i, in_x, j, in_y, candidate)``.
+
+        ``fixed_x``: the line is across x (else across y); ``i``: the x lines' lattice column,
+        ``in_x``: an x line within the lattice's cells; ``j``, ``in_y`` the same of the y lines.
+        An edge move ends on its line at the base's other coordinate: the lattice cell along
+        the line's own axis and whether it lies within the lattice's cells there are the
+        line's (``_moves`` completes them with the base's).
+        """
+        ex, ey, eindex = self._edges
+        fixed_x = ~np.isnan(ex)  # a line across x: the end's x is the line's, its y the base's
+        lo_x, lo_y, hi_x, hi_y = self._inside
+        x, y = np.where(fixed_x, ex, 0.0), np.where(fixed_x, 0.0, ey)
+        i, j = self._cells(x, 0), self._cells(y, 1)
+        in_x = fixed_x & (x >= lo_x) & (x <= hi_x)
+        in_y = ~fixed_x & (y >= lo_y) & (y <= hi_y)
+        return fixed_x, i, in_x, j, in_y, eindex
+
+    def _cells(self, values: np.ndarray, axis: int) -> np.ndarray:
+        """The lattice index along ``axis`` of each coordinate (metres): nearest, clipped (as Lattice.index)."""
+        origin, res, count = self.lattice.origin[axis], self.lattice.resolution, self.lattice.shape[axis]
+        return np.minimum(np.maximum(np.rint((values - origin) / res), 0), count - 1).astype(np.int64)
+
+    def _cell_of(self, value: float, axis: int) -> tuple[int, bool]:
+        """:meth:`_cells` of one coordinate (metres), and whether it lies within the lattice's cells on that axis."""
+        low, high = self._inside[axis], self._inside[axis + 2]
+        return int(self._cells(np.array([value], dtype=float), axis)[0]), bool(low <= value <= high)
 
     def _blocker_slots(self) -> list:
         """``(slot, rectangle)`` of every table and obstacle (``_Enumerator._blockers``)."""

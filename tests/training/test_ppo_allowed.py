@@ -90,3 +90,31 @@ def test_an_action_outside_the_allowed_columns_is_refused() -> None:
     network = torch.nn.Linear(flat.shape[1], candidates)
     with pytest.raises(ValueError, match="outside the candidates"):
         allowed_distribution(network, flat, masks, candidates).log_prob(torch.tensor([3, 4]))
+
+
+def test_the_traced_rollout_scores_are_the_eager_ones_bit_for_bit() -> None:
+    """TracedScores (a rollout step's scores) equals the network's own, through weight updates and batch sizes."""
+    from training.learners.allowed import TracedScores
+    from training.learners.encoders import candidate_scores
+
+    candidates = PhaseLayout.for_postures(capacity=Capacity()).size
+    flat, masks, actions = _batch(7, 8, candidates, 30)
+    network = _network("mlp", candidates, flat)
+    traced = TracedScores(network)
+    optimiser = torch.optim.SGD(network.parameters(), lr=0.1)
+    for step in range(4):  # the trace shares the parameters: it follows every update
+        for rows in (1, 2, 1):
+            batch, mask = flat[step : step + rows], torch.as_tensor(masks[step : step + rows])
+            columns = torch.nonzero(mask.any(dim=0)).squeeze(1)
+            with torch.no_grad():
+                assert torch.equal(traced(batch, columns), candidate_scores(network, batch, columns))
+                mine = allowed_distribution(network, batch, mask, candidates, traced)
+                eager = allowed_distribution(network, batch, mask, candidates)
+                drawn, log_p = mine.actions_and_log_prob(deterministic=True)
+                assert torch.equal(drawn, eager.get_actions(deterministic=True))
+                assert torch.equal(log_p, eager.log_prob(drawn))
+        loss = allowed_distribution(network, flat, masks, candidates, traced).log_prob(actions).sum()
+        optimiser.zero_grad()
+        (-loss).backward()  # with gradients the eager network runs (TracedScores falls back to it)
+        optimiser.step()
+    assert set(traced.traces) == {1, 2}

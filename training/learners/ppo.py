@@ -16,9 +16,11 @@ action head is the BC network of the chosen encoder (:mod:`training.learners.enc
 the observation goes straight to it (no shared layers), and a separate two-layer MLP
 gives the value. Given masks, it scores only the candidates some state of the batch
 allows (:mod:`training.learners.allowed`: the same distribution and gradients as
-sb3-contrib's masked one, in a fraction of the time), and Adam runs as one fused
-kernel. So a BC or DAgger run of the same encoder initialises the actor (``init``), and a
-finished PPO run's actor loads as any other run's network.
+sb3-contrib's masked one, in a fraction of the time; a rollout step's scores of the
+flat MLP through a TorchScript trace, :class:`~training.learners.allowed.TracedScores`,
+the same numbers), and Adam runs as one fused kernel. So a BC or DAgger run of the same
+encoder initialises the actor (``init``), and a finished PPO run's actor loads as any
+other run's network.
 
 Learning curves (:mod:`training.learners.ppo_curves`): after every rollout,
 ``metrics.csv`` gains a row with the env steps, the wall-clock seconds of training
@@ -47,8 +49,8 @@ from tqdm import tqdm
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.observation import Capacity
 from training.learners import runs
-from training.learners.allowed import AllowedCategorical, allowed_distribution
-from training.learners.encoders import ImageScorer, build_network, image_shape, input_size, network_input
+from training.learners.allowed import AllowedCategorical, TracedScores, allowed_distribution
+from training.learners.encoders import FlatMLP, ImageScorer, build_network, image_shape, input_size, network_input
 from training.learners.options import BCConfig, ImageOptions, PPOOptions
 from training.learners.ppo_curves import curves_callback, heldout_evaluator
 from training.learners.runs import RunFolderError
@@ -176,6 +178,8 @@ def _policy_class() -> type:
             if config.encoder == "cnn":  # the value: a cnn of its own over the pixels (no value MLP before it)
                 self.value_net = ImageScorer(image_shape(config.obs_mode, scale.shape[1]), 1, config.hidden)
             self.optimizer = self.optimizer_class(self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs)
+            flat = isinstance(self.action_net, FlatMLP) and self.action_net.push is None
+            self.rollout_scores = TracedScores(self.action_net) if flat else None  # a rollout step's scores, traced
 
         def _latents(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
             features = self.extract_features(obs)
@@ -183,17 +187,18 @@ def _policy_class() -> type:
                 return self.mlp_extractor(features)
             return self.mlp_extractor.forward_actor(features[0]), self.mlp_extractor.forward_critic(features[1])
 
-        def _allowed(self, latent_pi: torch.Tensor, action_masks: Any) -> AllowedCategorical:
-            return allowed_distribution(self.action_net, latent_pi, action_masks, int(self.action_space.n))
+        def _allowed(self, latent_pi: torch.Tensor, action_masks: Any, traced: bool = False) -> AllowedCategorical:
+            scorer = self.rollout_scores if traced else None
+            return allowed_distribution(self.action_net, latent_pi, action_masks, int(self.action_space.n), scorer)
 
         def forward(self, obs: torch.Tensor, deterministic: bool = False, action_masks: Any = None) -> Any:
             """Actions, values and log-probabilities; with masks, only the allowed candidates are scored."""
             if action_masks is None:
                 return super().forward(obs, deterministic, action_masks)
             latent_pi, latent_vf = self._latents(obs)
-            distribution = self._allowed(latent_pi, action_masks)
-            actions = distribution.get_actions(deterministic=deterministic)
-            return actions, self.value_net(latent_vf), distribution.log_prob(actions)
+            distribution = self._allowed(latent_pi, action_masks, traced=True)
+            actions, log_prob = distribution.actions_and_log_prob(deterministic=deterministic)
+            return actions, self.value_net(latent_vf), log_prob
 
         def evaluate_actions(self, obs: torch.Tensor, actions: torch.Tensor, action_masks: Any = None) -> Any:
             """Values, log-probabilities and entropies of a minibatch (scored over its allowed candidates)."""
