@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 from expert.milp.area import area_is_empty
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import Grid
+from expert.milp.grid import Grid, pose_normals
 from expert.milp.options import PoseOption, pose_options
 from expert.milp.strokes import PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
@@ -61,10 +61,15 @@ def prepare(
     deadline: Deadline = NEVER,
     corner_detail: int = 1,
     first_move_tangents: bool = False,
+    corner_poses: bool = False,
+    pose_tangents: bool = False,
 ) -> Problem:
     """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
 
-    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`).
+    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`);
+    ``corner_poses``: poses in a table's or obstacle's corner zone are offered
+    (:func:`expert.milp.options.pose_options`); ``pose_tangents``: every rectangle also gets
+    the corner tangents seen from the pose options' lattice points (:func:`pose_grid`).
 
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
@@ -87,7 +92,9 @@ def prepare(
     start_index = lattice.index(robot.start) if lattice.on_lattice(robot.start) else None
     if start_index is not None and not grid.domain.contains(*start_index):
         start_index = None
-    options = pose_options(scenario, grid, deliver, holding, pushes, deadline)
+    options = pose_options(scenario, grid, deliver, holding, pushes, deadline, corner_poses)
+    if pose_tangents:
+        grid = pose_grid(scenario, grid, options, deadline)
     problem = Problem(
         scenario=scenario,
         grid=grid,
@@ -104,6 +111,29 @@ def prepare(
     if reason is not None:
         problem = dataclasses.replace(problem, infeasible=reason)
     return problem
+
+
+def pose_grid(scenario: Scenario, grid: Grid, options: list[PoseOption], deadline: Deadline = NEVER) -> Grid:
+    """``grid`` with, per table and obstacle, the corner tangents seen from every lattice point of every option box.
+
+    A move from a pose to a point beyond such a tangent clears the rectangle exactly
+    (:func:`expert.milp.grid.pose_normals`); the number of phases an exact plan needs through
+    a gap or along a corridor often rests on such a move (``docs/formulation.md``).
+    """
+    points = sorted(
+        {
+            grid.point(i, j)
+            for o in options
+            for box in {o.box, o.end_box}
+            for i in range(box.i_lo, box.i_hi + 1)
+            for j in range(box.j_lo, box.j_hi + 1)
+        }
+    )
+    extra = []
+    for rect in (*(t.rect for t in scenario.tables), *(o.rect for o in scenario.obstacles)):
+        deadline.check()
+        extra.append((rect, pose_normals(grid, points, rect, scenario.robot.radius)))
+    return dataclasses.replace(grid, extra_normals=tuple(extra))
 
 
 def _blocking_objects(scenario: Scenario, deliver: tuple[str, ...], holding: str | None) -> tuple[tuple[str, str], ...]:
