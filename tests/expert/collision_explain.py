@@ -39,7 +39,7 @@ def _holds(plane, index: tuple[int, int]) -> bool:
 
 
 def move_refused_by(grid: Grid, scenario: Scenario, a: Point, b: Point, first: bool) -> list[str]:
-    """The rectangles of which no region of Eq. 18 holds both ends of the move ``a -> b`` (``a``: the start if ``first``)."""
+    """The rectangles no region of Eq. 18 of which holds both ends of ``a -> b`` (``a``: the start if ``first``)."""
     radius, out = scenario.robot.radius, []
     rects: list[tuple[str, Rect]] = [(t.id, t.rect) for t in scenario.tables]
     rects += [(o.id, o.rect) for o in scenario.obstacles]

@@ -6,9 +6,10 @@ Run from the project root (it prints one line per scenario and a summary per cho
 
 Each single-object scenario is solved by the exhaustive search of the exact rule
 (``lattice_search.search``, on a 0.1 m lattice) and by the planner on the same lattice
-with each set of corner tangents (``plan(..., corner_detail=d)``,
-:func:`expert.milp.grid.corner_directions`): the octagon (1), a 16-gon (2), a 32-gon (3)
-and a 48-gon (4). Scenarios: 3 x 3 m rooms with random walls
+with each choice of :data:`CHOICES`: the octagon (``corner_detail=1``, the default), the
+48-gon (``corner_detail=4``, :func:`expert.milp.grid.corner_directions`), and the octagon
+with the poses in corner zones and the tangents seen from the poses (``corner_poses``,
+``pose_tangents``), also with the start's tangents (``first_move_tangents``). Scenarios: 3 x 3 m rooms with random walls
 (``test_lattice_search.random_room``), L-shaped corridors and diagonal gaps between two
 walls' corners drawn on purpose (below). Units: metres and seconds.
 """
@@ -34,7 +35,13 @@ from fetchcarry_env.families import get_family
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
 
-CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}  # name: corner_detail
+CHOICES = {  # name: plan()'s options
+    "octagon": {"corner_detail": 1},
+    "48-gon": {"corner_detail": 4},
+    "poses": {"corner_poses": True, "pose_tangents": True},
+    "poses+start": {"corner_poses": True, "pose_tangents": True, "first_move_tangents": True},
+}
+AUDIT = ("corridor", 504)  # the audit's corridor: the exact rule needs 4 phases, the octagon 6
 ROOM = Rect(0.0, 0.0, 3.0, 3.0)
 
 
@@ -79,12 +86,16 @@ FAMILIES = ("basic", "corridor", "turned-room", "turned-corridor")  # the single
 
 def scenarios(count: int, per_family: int = 0) -> list[Scenario]:
     """``count`` of each kind, seeded by their index (rooms from seed 100 on: the test uses 0-20), and
-    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ..."""
+    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ...,
+    and then the audit's corridor (:data:`AUDIT`)."""
     out = [
         dataclasses.replace(get_family(f).sample(np.random.default_rng(s)), name=f"{f}-{s}")
         for f in FAMILIES
         for s in range(per_family)
     ]
+    if per_family:
+        family, seed = AUDIT
+        out.append(dataclasses.replace(get_family(family).sample(np.random.default_rng(seed)), name=f"{family}-{seed}"))
     out += [random_room(np.random.default_rng(100 + s), f"room-{100 + s}") for s in range(count)]
     out += [corridor_room(np.random.default_rng(s), f"corridor-{s}") for s in range(count)]
     out += [diagonal_room(np.random.default_rng(s), f"diagonal-{s}") for s in range(count)]
@@ -97,8 +108,8 @@ def run(scenario: Scenario) -> dict:
     t0 = time.perf_counter()
     exact = search(scenario, lattice, max_phases=8)
     row = {"scenario": scenario.name, "exact": [exact.phases, exact.objective], "search_s": time.perf_counter() - t0}
-    for name, detail in CHOICES.items():
-        result = plan(scenario, lattice=lattice, time_limit=60.0, corner_detail=detail)
+    for name, options in CHOICES.items():
+        result = plan(scenario, lattice=lattice, time_limit=60.0, **options)
         valid = not result.found or validate_plan(scenario, result) == []
         row[name] = {
             "status": result.status,
