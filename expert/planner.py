@@ -157,7 +157,7 @@ def plan(
             ``corner_poses`` (bool, default False: poses in a table's or obstacle's corner
             zone, off its rounded corner, are offered) and ``pose_tangents`` (bool, default
             False: Eq. 18 also gets the corner tangents seen from every pose's lattice point,
-            :func:`expert.milp.problem.pose_grid`): closer to the exact rule where a gap or a
+            :func:`expert.milp.pose_tangents.pose_grid`): closer to the exact rule where a gap or a
             corridor is passed on the way to or from a pose, slower; off by default as above
             (``docs/formulation.md``, "Poses in corner zones, tangents from the poses"),
             ``guide_branching`` (bool, default False: see ``guide``),
@@ -251,7 +251,7 @@ class _Run:
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
     first_move_tangents: bool = False  # the start's tangents for the first move (expert.milp.grid.start_tangents)
     corner_poses: bool = False  # poses in corner zones (expert.milp.options.pose_options)
-    pose_tangents: bool = False  # the corner tangents seen from the poses (expert.milp.problem.pose_grid)
+    pose_tangents: bool = False  # the corner tangents seen from the poses (expert.milp.pose_tangents.pose_grid)
     guide_plan: Plan | None = None  # plan()'s guide
     guides: list[list[SolvedPhase]] = dataclasses.field(default_factory=list)  # the guide as MILP steps, compact too
     guide_branching: bool = False  # the guide's option binaries branched on first

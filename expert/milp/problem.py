@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 
 from expert.milp.area import area_is_empty
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import Grid, pose_normals
+from expert.milp.grid import Grid
 from expert.milp.options import PoseOption, pose_options
+from expert.milp.pose_tangents import pose_grid
 from expert.milp.strokes import PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import discs_overlap
@@ -69,7 +70,7 @@ def prepare(
     ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`);
     ``corner_poses``: poses in a table's or obstacle's corner zone are offered
     (:func:`expert.milp.options.pose_options`); ``pose_tangents``: every rectangle also gets
-    the corner tangents seen from the pose options' lattice points (:func:`pose_grid`).
+    the corner tangents seen from the pose options' lattice points (:func:`expert.milp.pose_tangents.pose_grid`).
 
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
@@ -111,29 +112,6 @@ def prepare(
     if reason is not None:
         problem = dataclasses.replace(problem, infeasible=reason)
     return problem
-
-
-def pose_grid(scenario: Scenario, grid: Grid, options: list[PoseOption], deadline: Deadline = NEVER) -> Grid:
-    """``grid`` with, per table and obstacle, the corner tangents seen from every lattice point of every option box.
-
-    A move from a pose to a point beyond such a tangent clears the rectangle exactly
-    (:func:`expert.milp.grid.pose_normals`); the number of phases an exact plan needs through
-    a gap or along a corridor often rests on such a move (``docs/formulation.md``).
-    """
-    points = sorted(
-        {
-            grid.point(i, j)
-            for o in options
-            for box in {o.box, o.end_box}
-            for i in range(box.i_lo, box.i_hi + 1)
-            for j in range(box.j_lo, box.j_hi + 1)
-        }
-    )
-    extra = []
-    for rect in (*(t.rect for t in scenario.tables), *(o.rect for o in scenario.obstacles)):
-        deadline.check()
-        extra.append((rect, pose_normals(grid, points, rect, scenario.robot.radius)))
-    return dataclasses.replace(grid, extra_normals=tuple(extra))
 
 
 def _blocking_objects(scenario: Scenario, deliver: tuple[str, ...], holding: str | None) -> tuple[tuple[str, str], ...]:

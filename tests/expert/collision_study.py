@@ -139,12 +139,51 @@ def summary(rows: list[dict], name: str) -> str:
     )
 
 
+BENCH_GROUPS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the benchmark's cases up to three objects
+
+
+def bench_rows(scale: float, time_limit: float = 10.0) -> list[dict]:
+    """The benchmark's own scenarios (``training.speed.planner.cases(scale)``, its seed) with every choice.
+
+    Interleaved per scenario, so the load moves all choices alike; on the env's 0.05 m
+    lattice (the plan() default). Times in seconds.
+    """
+    from training.speed.planner import DEFAULT_SEED, cases
+
+    rows = []
+    for case in (c for c in cases(scale) if c.group in BENCH_GROUPS):
+        rng = np.random.default_rng(DEFAULT_SEED)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict = {"group": case.group, "case": case.name}
+            for name, options in CHOICES.items():
+                result = plan(scenario, time_limit=time_limit, **options)
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "valid": not result.found or validate_plan(scenario, result) == [],
+                }
+            rows.append(row)
+            print(row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in CHOICES))
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=10, help="scenarios of each kind")
     parser.add_argument("--families", type=int, default=0, help="scenarios of each single-object family")
+    parser.add_argument(
+        "--bench", type=float, help="instead: the benchmark's cases at this scale (0.25: its speed run)"
+    )
     parser.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args()
+    if args.bench is not None:
+        rows = bench_rows(args.bench)
+        if args.out:
+            Path(args.out).write_text(json.dumps(rows, indent=1), encoding="utf-8")
+        return
     rows = []
     for scenario in scenarios(args.count, args.families):
         row = run(scenario)

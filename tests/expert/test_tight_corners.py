@@ -17,7 +17,8 @@ from lattice_search import _travel, search
 from test_lattice_search import RESOLUTION, random_room
 
 from expert.milp.grid import Grid, move_regions, rect_normals
-from expert.milp.problem import pose_grid, prepare
+from expert.milp.pose_tangents import pose_grid
+from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
