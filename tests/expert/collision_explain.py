@@ -9,9 +9,10 @@ For each named scenario of ``collision_study.scenarios`` (or ``corridor-504``: t
 (``lattice_search.search``) gives one optimal plan; each of its moves is tested against
 Eq. 18 as the planner writes it (``plan(..., corner_detail=d)``: some region of every
 rectangle holds both ends, :func:`expert.milp.grid.move_regions`, and the start's tangents
-for the first move with ``--tangents``), and each pick and place pose against the pose
-options' boxes (:func:`expert.milp.options.pose_options`). It prints what is refused and
-by which rectangle. Units: metres.
+for the first move with ``--tangents``; ``--poses``: with ``corner_poses`` and
+``pose_tangents``), and each pick and place pose against the pose options' boxes
+(:func:`expert.milp.options.pose_options`). It prints what is refused and by which
+rectangle. Units: metres.
 """
 
 from __future__ import annotations
@@ -64,11 +65,13 @@ def pose_refused(problem: Problem, kind: str, target: str, b: Point) -> bool:
     return not any(o.box.contains(i, j) for o in problem.options if o.kind == kind and o.target == target)
 
 
-def explain(scenario: Scenario, detail: int, tangents: bool) -> list[str]:
+def explain(scenario: Scenario, detail: int, tangents: bool, poses: bool = False) -> list[str]:
     """One line per phase of the exact rule's optimal plan: base, action and what the model refuses there."""
     lattice = Lattice.over(scenario.area, RESOLUTION)
     exact = search(scenario, lattice, max_phases=8)
-    problem = prepare(scenario, lattice, corner_detail=detail, first_move_tangents=tangents)
+    problem = prepare(
+        scenario, lattice, corner_detail=detail, first_move_tangents=tangents, corner_poses=poses, pose_tangents=poses
+    )
     (obj,) = scenario.objects
     lines = [f"{scenario.name}: exact {exact.phases} phases, Eq. 1 {exact.objective}"]
     previous = scenario.robot.start
@@ -95,9 +98,10 @@ def main() -> None:
     parser.add_argument("names", nargs="+")
     parser.add_argument("--detail", type=int, default=4, help="corner_detail of the model tested")
     parser.add_argument("--tangents", action="store_true", help="with the start's tangents (first_move_tangents)")
+    parser.add_argument("--poses", action="store_true", help="with corner_poses and pose_tangents")
     args = parser.parse_args()
     for name in args.names:
-        print("\n".join(explain(named(name), args.detail, args.tangents)), flush=True)
+        print("\n".join(explain(named(name), args.detail, args.tangents, args.poses)), flush=True)
 
 
 if __name__ == "__main__":

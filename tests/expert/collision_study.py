@@ -170,6 +170,37 @@ def bench_rows(scale: float, time_limit: float = 10.0) -> list[dict]:
     return rows
 
 
+def bench_summary(rows: list[dict]) -> list[str]:
+    """Per group: median plan() time per choice (and its ratio to the octagon's), plans better and worse than the
+    octagon's (fewer phases, or equal phases and Eq. 1 lower by over 1 mm), unproven (time limit) and invalid plans."""
+    out = []
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        base = statistics.median(r["octagon"]["total_s"] for r in mine)
+        cells = []
+        for name in CHOICES:
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            better = sum(_better(r[name], r["octagon"]) for r in mine)
+            worse = sum(_better(r["octagon"], r[name]) for r in mine)
+            unproven = sum(r[name]["status"] != "optimal" for r in mine)
+            invalid = sum(not r[name]["valid"] for r in mine)
+            cells.append(
+                f"{name} {median:.3f} s ({median / base:.1f}x, max {max(r[name]['total_s'] for r in mine):.2f} s, "
+                f"better {better}, worse {worse}, unproven {unproven}, invalid {invalid})"
+            )
+        out.append(f"{group} n={len(mine)}: " + "; ".join(cells))
+    return out
+
+
+def _better(a: dict, b: dict) -> bool:
+    """Plan ``a`` beats ``b``: a plan where ``b`` has none, fewer phases, or equal phases and Eq. 1 lower by 1 mm."""
+    if a["objective"] is None:
+        return False
+    if b["objective"] is None:
+        return True
+    return a["phases"] < b["phases"] or (a["phases"] == b["phases"] and a["objective"] < b["objective"] - 1e-3)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=10, help="scenarios of each kind")
@@ -178,7 +209,11 @@ def main() -> None:
         "--bench", type=float, help="instead: the benchmark's cases at this scale (0.25: its speed run)"
     )
     parser.add_argument("--out", help="write the rows as JSON here")
+    parser.add_argument("--summary", help="instead: summarise the --bench rows in this JSON file")
     args = parser.parse_args()
+    if args.summary:
+        print("\n".join(bench_summary(json.loads(Path(args.summary).read_text(encoding="utf-8")))))
+        return
     if args.bench is not None:
         rows = bench_rows(args.bench)
         if args.out:
