@@ -34,7 +34,7 @@ from dataclasses import dataclass
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import GEOM_TOL, Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
-from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance, to_world_frame
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
 from fetchcarry_env.scenario import Posture, Scenario
 
@@ -157,14 +157,14 @@ class _Blockers:
         self.solid = [*(t.rect for t in scenario.tables), *self._obstacles(scenario)]
 
     def clear(self, box: IndexBox, cells: tuple[int, int]) -> list[IndexBox]:
-        """The lattice points of ``box`` whose base disc (and, after the stroke ``cells``, again) is off every table
-        and obstacle, exactly (a corner zone's points included), as boxes."""
+        """The lattice points of ``box`` whose base disc, swept along the stroke ``cells`` (none for a pick or place),
+        stays off every table and obstacle, exactly (a corner zone's points included), as boxes."""
         radius, keep = self.scenario.robot.radius, set()
         near = [r for r in self.solid if _near(self.grid, box, cells, r, radius)]
         for i in range(box.i_lo, box.i_hi + 1):
             for j in range(box.j_lo, box.j_hi + 1):
-                ends = (self.grid.point(i, j), self.grid.point(i + cells[0], j + cells[1]))
-                if all(r.distance_to_point(e) >= radius - GEOM_TOL for r in near for e in ends):
+                a, b = self.grid.point(i, j), self.grid.point(i + cells[0], j + cells[1])
+                if all(segment_rect_distance(a, b, r) >= radius - GEOM_TOL for r in near):  # the stroke's sweep
                     keep.add((i, j))
         return _rectangles(keep)
 
