@@ -92,3 +92,23 @@ def test_exact_path_is_a_plan_of_the_search():
     bases = np.array([scenario.robot.start, *(base for base, _ in exact.path)])
     travel = float(_travel(bases[:-1], bases[1:]).sum())
     assert travel - DELIVERY_BONUS == pytest.approx(exact.objective, abs=1e-9)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_corner_poses_of_pushes_keep_the_swept_disc_clear(seed):
+    """A push's pose with ``corner_poses``: the base disc swept along the stroke stays off every table and obstacle."""
+    from fetchcarry_env.families import get_family
+    from fetchcarry_env.geometry import segment_rect_distance
+
+    scenario = get_family("push").sample(np.random.default_rng(seed))
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05), corner_poses=True)
+    solid = [t.rect for t in scenario.tables] + [o.rect for o in scenario.obstacles]
+    radius, grid = scenario.robot.radius, problem.grid
+    pushes = [o for o in problem.options if o.kind == "push"]
+    assert pushes
+    for option in pushes:
+        di, dj = option.push.cells
+        for i in range(option.box.i_lo, option.box.i_hi + 1):
+            for j in range(option.box.j_lo, option.box.j_hi + 1):
+                a, b = grid.point(i, j), grid.point(i + di, j + dj)
+                assert all(segment_rect_distance(a, b, r) >= radius - 1e-9 for r in solid)
