@@ -102,12 +102,23 @@ def scenarios(count: int, per_family: int = 0) -> list[Scenario]:
     return out
 
 
-def run(scenario: Scenario) -> dict:
-    """The exact search and every choice of corner tangents on one scenario."""
+def run(scenario: Scenario, known: dict | None = None) -> dict:
+    """The exact search and every choice of corner tangents on one scenario.
+
+    ``known``: rows of an earlier run by scenario name; a scenario found there takes its
+    exact result from it (the search is deterministic; ``search_s`` is then None).
+    """
     lattice = Lattice.over(scenario.area, RESOLUTION)
-    t0 = time.perf_counter()
-    exact = search(scenario, lattice, max_phases=8)
-    row = {"scenario": scenario.name, "exact": [exact.phases, exact.objective], "search_s": time.perf_counter() - t0}
+    if known and scenario.name in known:
+        row = {"scenario": scenario.name, "exact": known[scenario.name]["exact"], "search_s": None}
+    else:
+        t0 = time.perf_counter()
+        exact = search(scenario, lattice, max_phases=8)
+        row = {
+            "scenario": scenario.name,
+            "exact": [exact.phases, exact.objective],
+            "search_s": time.perf_counter() - t0,
+        }
     for name, options in CHOICES.items():
         result = plan(scenario, lattice=lattice, time_limit=60.0, **options)
         valid = not result.found or validate_plan(scenario, result) == []
@@ -142,7 +153,9 @@ def summary(rows: list[dict], name: str) -> str:
 BENCH_GROUPS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the benchmark's cases up to three objects
 
 
-def bench_rows(scale: float, time_limit: float = 10.0) -> list[dict]:
+def bench_rows(
+    scale: float, time_limit: float = 10.0, groups: tuple[str, ...] = BENCH_GROUPS, choices: tuple[str, ...] = ()
+) -> list[dict]:
     """The benchmark's own scenarios (``training.speed.planner.cases(scale)``, its seed) with every choice.
 
     Interleaved per scenario, so the load moves all choices alike; on the env's 0.05 m
@@ -151,13 +164,13 @@ def bench_rows(scale: float, time_limit: float = 10.0) -> list[dict]:
     from training.speed.planner import DEFAULT_SEED, cases
 
     rows = []
-    for case in (c for c in cases(scale) if c.group in BENCH_GROUPS):
+    for case in (c for c in cases(scale) if c.group in groups):
         rng = np.random.default_rng(DEFAULT_SEED)
         for _ in range(case.repeats):
             scenario = get_family(case.family).sample(rng)
             row: dict = {"group": case.group, "case": case.name}
-            for name, options in CHOICES.items():
-                result = plan(scenario, time_limit=time_limit, **options)
+            for name in choices or tuple(CHOICES):
+                result = plan(scenario, time_limit=time_limit, **CHOICES[name])
                 row[name] = {
                     "status": result.status,
                     "phases": len(result.phases),
@@ -166,7 +179,9 @@ def bench_rows(scale: float, time_limit: float = 10.0) -> list[dict]:
                     "valid": not result.found or validate_plan(scenario, result) == [],
                 }
             rows.append(row)
-            print(row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in CHOICES))
+            print(
+                row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in row if n in CHOICES)
+            )
     return rows
 
 
@@ -178,7 +193,7 @@ def bench_summary(rows: list[dict]) -> list[str]:
         mine = [r for r in rows if r["group"] == group]
         base = statistics.median(r["octagon"]["total_s"] for r in mine)
         cells = []
-        for name in CHOICES:
+        for name in (n for n in CHOICES if n in mine[0]):
             median = statistics.median(r[name]["total_s"] for r in mine)
             better = sum(_better(r[name], r["octagon"]) for r in mine)
             worse = sum(_better(r["octagon"], r[name]) for r in mine)
@@ -209,19 +224,27 @@ def main() -> None:
         "--bench", type=float, help="instead: the benchmark's cases at this scale (0.25: its speed run)"
     )
     parser.add_argument("--out", help="write the rows as JSON here")
+    parser.add_argument("--groups", nargs="*", help="with --bench: only these groups (default: all up to 3 objects)")
+    parser.add_argument("--choices", nargs="*", choices=list(CHOICES), help="with --bench: only these")
+    parser.add_argument("--time-limit", type=float, default=10.0, help="with --bench: seconds per plan() call")
+    parser.add_argument("--exact-from", help="take the exact search's results from these rows where they have them")
     parser.add_argument("--summary", help="instead: summarise the --bench rows in this JSON file")
     args = parser.parse_args()
     if args.summary:
         print("\n".join(bench_summary(json.loads(Path(args.summary).read_text(encoding="utf-8")))))
         return
     if args.bench is not None:
-        rows = bench_rows(args.bench)
+        groups, choices = tuple(args.groups or BENCH_GROUPS), tuple(args.choices or CHOICES)
+        rows = bench_rows(args.bench, args.time_limit, groups, choices)
         if args.out:
             Path(args.out).write_text(json.dumps(rows, indent=1), encoding="utf-8")
         return
+    known = None
+    if args.exact_from:
+        known = {r["scenario"]: r for r in json.loads(Path(args.exact_from).read_text(encoding="utf-8"))}
     rows = []
     for scenario in scenarios(args.count, args.families):
-        row = run(scenario)
+        row = run(scenario, known)
         rows.append(row)
         cells = "  ".join(f"{n}: {row[n]['phases']} {row[n]['objective']}" for n in CHOICES)
         print(f"{row['scenario']:<14} exact {row['exact']}  {cells}", flush=True)
