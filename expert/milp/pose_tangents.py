@@ -10,8 +10,11 @@ on the 0.05 m lattice), and each costs a binary per move; most add nothing. One 
 when some pose point ``w`` in its region and some free lattice point ``q`` in it are not
 already in one common region of that rectangle (the sides and ``corner_detail``'s
 tangents), and ``q`` is allowed from ``w`` by every other rectangle with all its
-candidate directions: a move the model did not have, and one the others let pass.
-Dropping a direction only removes moves, so the model stays safe either way.
+candidate directions: a move the model did not have, and one the others let pass. Of
+those, every one is kept at a tight corner (closer than ``2 r + TIGHT_MARGIN`` to another
+rectangle or the area's edge: a gap or a corridor, where the exact direction decides
+whether the base passes), and one per :data:`BIN` of angle elsewhere. Dropping a
+direction only removes moves, so the model stays safe either way.
 
 Units: lattice indices.
 """
@@ -48,16 +51,16 @@ def _shared(at_pose: np.ndarray, at_point: np.ndarray) -> np.ndarray:
 
 
 BIN = 0.1  # radians: at an open corner, of the useful directions in one bin this wide only the one holding most poses
-TIGHT = 1.0  # metres: a corner this close to another table, obstacle or the area's edge is tight: all directions kept
+TIGHT_MARGIN = 0.3  # metres: a corner closer than 2 radius + this to another rect or the edge is tight: all kept
 
 
 def _tight(scenario: Scenario, rect: Rect, normal: tuple[int, int]) -> bool:
-    """Whether the corner of ``rect`` that ``normal`` touches lies within :data:`TIGHT` of another rect or an edge."""
+    """Whether the corner of ``rect`` that ``normal`` touches is tight (:data:`TIGHT_MARGIN`): a gap or a corridor."""
     corner = (rect.max_x if normal[0] > 0 else rect.min_x, rect.max_y if normal[1] > 0 else rect.min_y)
     area = scenario.area
     edge = min(corner[0] - area.min_x, area.max_x - corner[0], corner[1] - area.min_y, area.max_y - corner[1])
     others = [r for r in (*(t.rect for t in scenario.tables), *(o.rect for o in scenario.obstacles)) if r != rect]
-    return min([edge, *(r.distance_to_point(corner) for r in others)]) < TIGHT
+    return min([edge, *(r.distance_to_point(corner) for r in others)]) < 2 * scenario.robot.radius + TIGHT_MARGIN
 
 
 def _binned(normals: list[tuple[tuple[int, int], int]]) -> tuple[tuple[int, int], ...]:
