@@ -112,3 +112,42 @@ def test_corner_poses_of_pushes_keep_the_swept_disc_clear(seed):
             for j in range(option.box.j_lo, option.box.j_hi + 1):
                 a, b = grid.point(i, j), grid.point(i + di, j + dj)
                 assert all(segment_rect_distance(a, b, r) >= radius - 1e-9 for r in solid)
+
+
+def _family(name: str, seed: int):
+    from fetchcarry_env.families import get_family
+
+    return get_family(name).sample(np.random.default_rng(seed))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: diagonal_room(np.random.default_rng(3), "diagonal-3"),
+        lambda: random_room(np.random.default_rng(105), "room-105"),
+        lambda: _family("corridor", 1),
+        lambda: _family("push", 0),
+    ],
+    ids=["diagonal-3", "room-105", "corridor-1", "push-0"],
+)
+def test_tight_plans_run_in_the_env(make):
+    """A plan with both options, on the env's own lattice, is valid and executes: no invalid action, delivered."""
+    import gymnasium as gym
+
+    import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
+    from expert.to_actions import plan_to_actions
+
+    scenario = make()
+    env = gym.make("FetchCarryPush-v0", scenario=scenario)
+    try:
+        env.reset(seed=0)
+        lattice = env.unwrapped.lattice
+        result = plan(scenario, lattice=lattice, time_limit=60.0, corner_poses=True, pose_tangents=True)
+        assert result.found and validate_plan(scenario, result) == []
+        actions = plan_to_actions(result, scenario, lattice)
+        for action in actions:
+            _, _, terminated, truncated, info = env.step(action.to_array())
+            assert info["invalid_action"] is None and not truncated
+        assert terminated and info["is_success"]
+    finally:
+        env.close()
