@@ -9,9 +9,14 @@ Each single-object scenario is solved by the exhaustive search of the exact rule
 with each choice of :data:`CHOICES`: the octagon (``corner_detail=1``, the default), the
 48-gon (``corner_detail=4``, :func:`expert.milp.grid.corner_directions`), and the octagon
 with the poses in corner zones and the tangents seen from the poses (``corner_poses``,
-``pose_tangents``), also with the start's tangents (``first_move_tangents``). Scenarios: 3 x 3 m rooms with random walls
-(``test_lattice_search.random_room``), L-shaped corridors and diagonal gaps between two
-walls' corners drawn on purpose (below). Units: metres and seconds.
+``pose_tangents``), also with the start's tangents (``first_move_tangents``). Scenarios:
+3 x 3 m rooms with random walls (``test_lattice_search.random_room``), L-shaped corridors
+and diagonal gaps between two walls' corners drawn on purpose (below), and with
+``--families`` the single-object families and the audit's corridor.
+
+``--bench SCALE`` plans the benchmark's own cases up to three objects with the choices
+instead (no exact search: time and plan per choice); ``--summary FILE`` summarises such
+rows per group. Units: metres and seconds.
 """
 
 from __future__ import annotations
