@@ -67,6 +67,8 @@ _PLANNER_OPTIONS = {
     "corner_detail",
     "guide_branching",
     "first_move_tangents",
+    "corner_poses",
+    "pose_tangents",
 }
 
 
@@ -152,6 +154,12 @@ def plan(
             never worse, one phase fewer on some diagonal gaps, 1.0-1.3x time; off by default
             so that the expert's plans, and so the datasets and split references made with
             it, stay those of the model they were made with),
+            ``corner_poses`` (bool, default False: poses in a table's or obstacle's corner
+            zone, off its rounded corner, are offered) and ``pose_tangents`` (bool, default
+            False: Eq. 18 also gets the corner tangents seen from every pose's lattice point,
+            :func:`expert.milp.pose_tangents.pose_grid`): closer to the exact rule where a gap or a
+            corridor is passed on the way to or from a pose, slower; off by default as above
+            (``docs/formulation.md``, "Poses in corner zones, tangents from the poses"),
             ``guide_branching`` (bool, default False: see ``guide``),
             ``separating`` / ``presolving`` / ``heuristics`` (``default``, ``off``,
             ``fast``, ``aggressive``), ``params`` (a dict of SCIP parameters), ``seed``.
@@ -182,6 +190,7 @@ def plan(
     run.export_dir = None if export_models is None else Path(export_models)
     run.corner_detail = options.corner_detail
     run.first_move_tangents = options.first_move_tangents
+    run.corner_poses, run.pose_tangents = options.corner_poses, options.pose_tangents
     run.guide_plan, run.guide_branching = guide, options.guide_branching
     try:
         return run.plan(lattice, holding, options.integral, options.lower_bound, max_phases)
@@ -201,6 +210,8 @@ class _Options:
     corner_detail: int = 1
     guide_branching: bool = False
     first_move_tangents: bool = False
+    corner_poses: bool = False
+    pose_tangents: bool = False
 
     @classmethod
     def parse(cls, solver_options: dict[str, Any], extra_phases: int) -> _Options:
@@ -214,10 +225,11 @@ class _Options:
         detail = options.pop("corner_detail", 1)
         guide_branching = bool(options.pop("guide_branching", False))
         tangents = bool(options.pop("first_move_tangents", False))
+        corners = bool(options.pop("corner_poses", False)), bool(options.pop("pose_tangents", False))
         if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
             raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         own = [bool(options.pop(name, True)) for name in ("integral", "lower_bound", "fewest_cuts", "conditional")]
-        return cls(*own, SolverSettings(**options), detail, guide_branching, tangents)
+        return cls(*own, SolverSettings(**options), detail, guide_branching, tangents, *corners)
 
 
 @dataclasses.dataclass
@@ -238,6 +250,8 @@ class _Run:
     export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
     first_move_tangents: bool = False  # the start's tangents for the first move (expert.milp.grid.start_tangents)
+    corner_poses: bool = False  # poses in corner zones (expert.milp.options.pose_options)
+    pose_tangents: bool = False  # the corner tangents seen from the poses (expert.milp.pose_tangents.pose_grid)
     guide_plan: Plan | None = None  # plan()'s guide
     guides: list[list[SolvedPhase]] = dataclasses.field(default_factory=list)  # the guide as MILP steps, compact too
     guide_branching: bool = False  # the guide's option binaries branched on first
@@ -292,6 +306,8 @@ class _Run:
             deadline=deadline,
             corner_detail=self.corner_detail,
             first_move_tangents=self.first_move_tangents,
+            corner_poses=self.corner_poses,
+            pose_tangents=self.pose_tangents,
         )
         stats["prepare_s"] = time.perf_counter() - self.started
         stats["options"] = len(problem.options)

@@ -170,6 +170,8 @@ class Grid:
     integral: bool = True
     corner_detail: int = 1  # the corner tangents of Eq. 18: corner_directions(corner_detail)
     first_move_tangents: bool = False  # the first move also gets the start's tangents (start_tangents)
+    # Further corner tangents per rectangle, (rect, normals): the directions seen from pose points (pose_normals).
+    extra_normals: tuple[tuple[Rect, tuple[tuple[int, int], ...]], ...] = ()
 
     @classmethod
     def for_area(
@@ -299,21 +301,34 @@ def corner_normals(detail: int) -> tuple[tuple[int, int], ...]:
     return tuple((su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail))
 
 
+def rect_normals(grid: Grid, rect: Rect) -> tuple[tuple[int, int], ...]:
+    """The normals of ``rect``'s corner tangents: :func:`corner_normals` and the grid's ``extra_normals`` for it."""
+    extra = next((normals for r, normals in grid.extra_normals if r == rect), ())
+    regular = corner_normals(grid.corner_detail)
+    return regular + tuple(n for n in extra if n not in regular)
+
+
+def _tangent_value(rect: Rect, radius: float, a: int, b: int) -> float:
+    """``a cx + b cy + radius |(a, b)|`` at the corner ``(cx, cy)`` the normal points from (metres)."""
+    cx = rect.max_x if a > 0 else rect.min_x
+    cy = rect.max_y if b > 0 else rect.min_y
+    return a * cx + b * cy + radius * math.hypot(a, b)
+
+
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
     """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
 
     The first four are :func:`base_regions` (the sides of the grown rectangle); the
-    others cut its corners (NE, NW, SW, SE), one per normal of :func:`corner_directions` (``grid.corner_detail``):
+    others cut its corners, one per normal of :func:`rect_normals` (by default those of
+    :func:`corner_directions`, ``grid.corner_detail``, NE, NW, SW, SE):
     ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
     the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
     cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
     outside it is ``radius`` or more from ``rect``) and touches it on every side.
     """
     out: list[Plane] = list(base_regions(grid, rect, radius))
-    for a, b in corner_normals(grid.corner_detail):
-        cx = rect.max_x if a > 0 else rect.min_x
-        cy = rect.max_y if b > 0 else rect.min_y
-        out.append(grid.diagonal_at_least(a, b, a * cx + b * cy + radius * math.hypot(a, b)))
+    for a, b in rect_normals(grid, rect):
+        out.append(grid.diagonal_at_least(a, b, _tangent_value(rect, radius, a, b)))
     return tuple(out)
 
 
@@ -364,14 +379,35 @@ def start_tangents(grid: Grid, point: Point, rect: Rect, radius: float) -> tuple
     return tuple(out)
 
 
+POSE_NORMAL_MERGE = 2e-3  # radians: a pose tangent this close in angle to one kept already is left out
+
+
+def pose_normals(grid: Grid, points: Iterable[Point], rect: Rect, radius: float) -> tuple[tuple[int, int], ...]:
+    """Corner tangent normals of ``rect`` seen from ``points`` (pose bases): those of :func:`start_tangents`.
+
+    Each is the normal of a line through a point that separates it from ``rect`` grown by
+    ``radius`` (turned 3 mrad into the point's side), so the tangent of ``rect``'s rounded
+    corner with that normal (a region of :func:`move_regions`) holds the point: a move from
+    the point to any lattice point beyond that tangent clears ``rect`` exactly. Normals
+    within :data:`POSE_NORMAL_MERGE` of one kept (in angle) are left out (the kept one still
+    holds the point: it is at least 1 mrad inside the point's side). Ordered by angle.
+    """
+    found = {(p.su, p.sv) for point in points for p in start_tangents(grid, point, rect, radius)}
+    ordered = sorted(found, key=lambda n: math.atan2(n[1], n[0]))
+    kept: list[tuple[int, int]] = []
+    for normal in ordered:
+        angle = math.atan2(normal[1], normal[0])
+        if not kept or angle - math.atan2(kept[-1][1], kept[-1][0]) > POSE_NORMAL_MERGE:
+            kept.append(normal)
+    return tuple(kept)
+
+
 def point_in_move_region(grid: Grid, point: Point, rect: Rect, radius: float, region: int) -> bool:
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
     if region < 4:
         return point_in_region(point, rect, radius, region)
-    a, b = corner_normals(grid.corner_detail)[region - 4]
-    cx = rect.max_x if a > 0 else rect.min_x
-    cy = rect.max_y if b > 0 else rect.min_y
-    return a * point[0] + b * point[1] >= a * cx + b * cy + radius * math.hypot(a, b) - GEOM_TOL
+    a, b = rect_normals(grid, rect)[region - 4]
+    return a * point[0] + b * point[1] >= _tangent_value(rect, radius, a, b) - GEOM_TOL
 
 
 def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:

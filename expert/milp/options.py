@@ -32,9 +32,9 @@ import math
 from dataclasses import dataclass
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
+from expert.milp.grid import GEOM_TOL, Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
-from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, to_world_frame
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance, to_world_frame
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
 from fetchcarry_env.scenario import Posture, Scenario
 
@@ -103,6 +103,16 @@ def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[i
     return tuple(out)
 
 
+def _near(grid: Grid, box: IndexBox, cells: tuple[int, int], rect: Rect, radius: float) -> bool:
+    """Whether ``rect`` grown by ``radius`` meets the world box of ``box`` or of ``box`` moved by ``cells``."""
+    grown = rect.inflate(radius)
+    for b in (box, box.shifted(*cells)):
+        lo, hi = grid.point(b.i_lo, b.j_lo), grid.point(b.i_hi, b.j_hi)
+        if lo[0] <= grown.max_x and hi[0] >= grown.min_x and lo[1] <= grown.max_y and hi[1] >= grown.min_y:
+            return True
+    return False
+
+
 def _hand_in(rect: Rect, hand: Point, region: int) -> bool:
     x, y = hand
     return (
@@ -123,8 +133,15 @@ class _Blockers:
     """The regions of every table, obstacle and piece of clutter, computed once per problem."""
 
     def __init__(
-        self, scenario: Scenario, grid: Grid, pushes: PushPlan, deliver: tuple[str, ...], holding: str | None
+        self,
+        scenario: Scenario,
+        grid: Grid,
+        pushes: PushPlan,
+        deliver: tuple[str, ...],
+        holding: str | None,
+        corner_poses: bool = False,
     ) -> None:
+        self.corner_poses = corner_poses  # the base disc tested per point (clear), not by the grown rectangle
         radius = scenario.robot.radius
         self.grid = grid
         self.scenario = scenario
@@ -137,13 +154,29 @@ class _Blockers:
         pushable = set(pushes.pushable)
         self.arm_static = [*self._obstacles(scenario), *(c.rect for c in scenario.clutter if c.id not in pushable)]
         self.arm_dynamic = {c: pushes.positions(c) for c in pushes.pushable}
+        self.solid = [*(t.rect for t in scenario.tables), *self._obstacles(scenario)]
+
+    def clear(self, box: IndexBox, cells: tuple[int, int]) -> list[IndexBox]:
+        """The lattice points of ``box`` whose base disc, swept along the stroke ``cells`` (none for a pick or place),
+        stays off every table and obstacle, exactly (a corner zone's points included), as boxes."""
+        radius, keep = self.scenario.robot.radius, set()
+        near = [r for r in self.solid if _near(self.grid, box, cells, r, radius)]
+        for i in range(box.i_lo, box.i_hi + 1):
+            for j in range(box.j_lo, box.j_hi + 1):
+                a, b = self.grid.point(i, j), self.grid.point(i + cells[0], j + cells[1])
+                if all(segment_rect_distance(a, b, r) >= radius - GEOM_TOL for r in near):  # the stroke's sweep
+                    keep.add((i, j))
+        return _rectangles(keep)
 
     @staticmethod
     def _obstacles(scenario: Scenario) -> list[Rect]:
         return [o.rect for o in scenario.obstacles]
 
-    def conditions(self, hands: tuple[Point, ...], cells: tuple[int, int], pushed: str | None) -> list[Condition]:
-        out = [Condition(tuple(_with_stroke(p, cells) for p in planes)) for planes in self.base]
+    def conditions(
+        self, hands: tuple[Point, ...], cells: tuple[int, int], pushed: str | None, base: bool = True
+    ) -> list[Condition]:
+        """The static rules as box conditions; ``base`` False: without the base disc's four sides (tested per point)."""
+        out = [Condition(tuple(_with_stroke(p, cells) for p in planes)) for planes in self.base] if base else []
         out += [Condition(arm_regions(self.grid, rect, hands, cells)) for rect in self.arm_static]
         for clutter_id, positions in self.arm_dynamic.items():
             if clutter_id == pushed:
@@ -239,9 +272,15 @@ def pose_options(
     holding: str | None,
     pushes: PushPlan,
     deadline: Deadline = NEVER,
+    corner_poses: bool = False,
 ) -> list[PoseOption]:
-    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``."""
-    blockers = _Blockers(scenario, grid, pushes, deliver, holding)
+    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``.
+
+    ``corner_poses``: the base disc is tested exactly per lattice point (a pose in the corner
+    zone of a table or obstacle, off its rounded corner, is offered) instead of by the four
+    sides of the rectangle grown by the radius.
+    """
+    blockers = _Blockers(scenario, grid, pushes, deliver, holding, corner_poses)
     out: list[PoseOption] = []
     for obj in scenario.objects:
         if obj.id not in deliver:
@@ -281,8 +320,9 @@ def _options(
             if box.empty:
                 continue
             if conditions is None:
-                conditions = blockers.conditions(hands, cells, target if push else None)
-            for piece, blocked in split_box(box, conditions):
+                conditions = blockers.conditions(hands, cells, target if push else None, not blockers.corner_poses)
+            clear = blockers.clear(box, cells) if blockers.corner_poses else [box]
+            for piece, blocked in (cut for part in clear for cut in split_box(part, conditions)):
                 for part, tags in split_by_choice(grid, piece, hand, heading, posture, others):
                     forbidden = blocked | frozenset(t for t in tags if not isinstance(t, ObjectAt))
                     confusers = frozenset(t for t in tags if isinstance(t, ObjectAt))

@@ -21,6 +21,7 @@ from expert.milp.area import area_is_empty
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Grid
 from expert.milp.options import PoseOption, pose_options
+from expert.milp.pose_tangents import pose_grid
 from expert.milp.strokes import PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import discs_overlap
@@ -61,10 +62,15 @@ def prepare(
     deadline: Deadline = NEVER,
     corner_detail: int = 1,
     first_move_tangents: bool = False,
+    corner_poses: bool = False,
+    pose_tangents: bool = False,
 ) -> Problem:
     """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
 
-    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`).
+    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`);
+    ``corner_poses``: poses in a table's or obstacle's corner zone are offered
+    (:func:`expert.milp.options.pose_options`); ``pose_tangents``: every rectangle also gets
+    the corner tangents seen from the pose options' lattice points (:func:`expert.milp.pose_tangents.pose_grid`).
 
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
@@ -87,7 +93,9 @@ def prepare(
     start_index = lattice.index(robot.start) if lattice.on_lattice(robot.start) else None
     if start_index is not None and not grid.domain.contains(*start_index):
         start_index = None
-    options = pose_options(scenario, grid, deliver, holding, pushes, deadline)
+    options = pose_options(scenario, grid, deliver, holding, pushes, deadline, corner_poses)
+    if pose_tangents:
+        grid = pose_grid(scenario, grid, options, deadline)
     problem = Problem(
         scenario=scenario,
         grid=grid,

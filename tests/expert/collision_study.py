@@ -6,11 +6,17 @@ Run from the project root (it prints one line per scenario and a summary per cho
 
 Each single-object scenario is solved by the exhaustive search of the exact rule
 (``lattice_search.search``, on a 0.1 m lattice) and by the planner on the same lattice
-with each set of corner tangents (``plan(..., corner_detail=d)``,
-:func:`expert.milp.grid.corner_directions`): the octagon (1), a 16-gon (2), a 32-gon (3)
-and a 48-gon (4). Scenarios: 3 x 3 m rooms with random walls
-(``test_lattice_search.random_room``), L-shaped corridors and diagonal gaps between two
-walls' corners drawn on purpose (below). Units: metres and seconds.
+with each choice of :data:`CHOICES`: the octagon (``corner_detail=1``, the default), the
+48-gon (``corner_detail=4``, :func:`expert.milp.grid.corner_directions`), and the octagon
+with the poses in corner zones and the tangents seen from the poses (``corner_poses``,
+``pose_tangents``), also with the start's tangents (``first_move_tangents``). Scenarios:
+3 x 3 m rooms with random walls (``test_lattice_search.random_room``), L-shaped corridors
+and diagonal gaps between two walls' corners drawn on purpose (below), and with
+``--families`` the single-object families and the audit's corridor.
+
+``--bench SCALE`` plans the benchmark's own cases up to three objects with the choices
+instead (no exact search: time and plan per choice); ``--summary FILE`` summarises such
+rows per group. Units: metres and seconds.
 """
 
 from __future__ import annotations
@@ -34,7 +40,13 @@ from fetchcarry_env.families import get_family
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
 
-CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}  # name: corner_detail
+CHOICES = {  # name: plan()'s options
+    "octagon": {"corner_detail": 1},
+    "48-gon": {"corner_detail": 4},
+    "poses": {"corner_poses": True, "pose_tangents": True},
+    "poses+start": {"corner_poses": True, "pose_tangents": True, "first_move_tangents": True},
+}
+AUDIT = ("corridor", 504)  # the audit's corridor: the exact rule needs 4 phases, the octagon 6
 ROOM = Rect(0.0, 0.0, 3.0, 3.0)
 
 
@@ -79,26 +91,41 @@ FAMILIES = ("basic", "corridor", "turned-room", "turned-corridor")  # the single
 
 def scenarios(count: int, per_family: int = 0) -> list[Scenario]:
     """``count`` of each kind, seeded by their index (rooms from seed 100 on: the test uses 0-20), and
-    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ..."""
+    ``per_family`` of each of :data:`FAMILIES` (7 x 7 m rooms: about a minute of search each), seeds 0, 1, ...,
+    and then the audit's corridor (:data:`AUDIT`)."""
     out = [
         dataclasses.replace(get_family(f).sample(np.random.default_rng(s)), name=f"{f}-{s}")
         for f in FAMILIES
         for s in range(per_family)
     ]
+    if per_family:
+        family, seed = AUDIT
+        out.append(dataclasses.replace(get_family(family).sample(np.random.default_rng(seed)), name=f"{family}-{seed}"))
     out += [random_room(np.random.default_rng(100 + s), f"room-{100 + s}") for s in range(count)]
     out += [corridor_room(np.random.default_rng(s), f"corridor-{s}") for s in range(count)]
     out += [diagonal_room(np.random.default_rng(s), f"diagonal-{s}") for s in range(count)]
     return out
 
 
-def run(scenario: Scenario) -> dict:
-    """The exact search and every choice of corner tangents on one scenario."""
+def run(scenario: Scenario, known: dict | None = None) -> dict:
+    """The exact search and every choice of corner tangents on one scenario.
+
+    ``known``: rows of an earlier run by scenario name; a scenario found there takes its
+    exact result from it (the search is deterministic; ``search_s`` is then None).
+    """
     lattice = Lattice.over(scenario.area, RESOLUTION)
-    t0 = time.perf_counter()
-    exact = search(scenario, lattice, max_phases=8)
-    row = {"scenario": scenario.name, "exact": [exact.phases, exact.objective], "search_s": time.perf_counter() - t0}
-    for name, detail in CHOICES.items():
-        result = plan(scenario, lattice=lattice, time_limit=60.0, corner_detail=detail)
+    if known and scenario.name in known:
+        row = {"scenario": scenario.name, "exact": known[scenario.name]["exact"], "search_s": None}
+    else:
+        t0 = time.perf_counter()
+        exact = search(scenario, lattice, max_phases=8)
+        row = {
+            "scenario": scenario.name,
+            "exact": [exact.phases, exact.objective],
+            "search_s": time.perf_counter() - t0,
+        }
+    for name, options in CHOICES.items():
+        result = plan(scenario, lattice=lattice, time_limit=60.0, **options)
         valid = not result.found or validate_plan(scenario, result) == []
         row[name] = {
             "status": result.status,
@@ -128,15 +155,101 @@ def summary(rows: list[dict], name: str) -> str:
     )
 
 
+BENCH_GROUPS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the benchmark's cases up to three objects
+
+
+def bench_rows(
+    scale: float, time_limit: float = 10.0, groups: tuple[str, ...] = BENCH_GROUPS, choices: tuple[str, ...] = ()
+) -> list[dict]:
+    """The benchmark's own scenarios (``training.speed.planner.cases(scale)``, its seed) with every choice.
+
+    Interleaved per scenario, so the load moves all choices alike; on the env's 0.05 m
+    lattice (the plan() default). Times in seconds.
+    """
+    from training.speed.planner import DEFAULT_SEED, cases
+
+    rows = []
+    for case in (c for c in cases(scale) if c.group in groups):
+        rng = np.random.default_rng(DEFAULT_SEED)
+        for _ in range(case.repeats):
+            scenario = get_family(case.family).sample(rng)
+            row: dict = {"group": case.group, "case": case.name}
+            for name in choices or tuple(CHOICES):
+                result = plan(scenario, time_limit=time_limit, **CHOICES[name])
+                row[name] = {
+                    "status": result.status,
+                    "phases": len(result.phases),
+                    "objective": result.objective,
+                    "total_s": result.stats["total_s"],
+                    "valid": not result.found or validate_plan(scenario, result) == [],
+                }
+            rows.append(row)
+            print(
+                row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in row if n in CHOICES)
+            )
+    return rows
+
+
+def bench_summary(rows: list[dict]) -> list[str]:
+    """Per group: median plan() time per choice (and its ratio to the octagon's), plans better and worse than the
+    octagon's (fewer phases, or equal phases and Eq. 1 lower by over 1 mm), unproven (time limit) and invalid plans."""
+    out = []
+    for group in dict.fromkeys(r["group"] for r in rows):
+        mine = [r for r in rows if r["group"] == group]
+        base = statistics.median(r["octagon"]["total_s"] for r in mine)
+        cells = []
+        for name in (n for n in CHOICES if n in mine[0]):
+            median = statistics.median(r[name]["total_s"] for r in mine)
+            better = sum(_better(r[name], r["octagon"]) for r in mine)
+            worse = sum(_better(r["octagon"], r[name]) for r in mine)
+            unproven = sum(r[name]["status"] != "optimal" for r in mine)
+            invalid = sum(not r[name]["valid"] for r in mine)
+            cells.append(
+                f"{name} {median:.3f} s ({median / base:.1f}x, max {max(r[name]['total_s'] for r in mine):.2f} s, "
+                f"better {better}, worse {worse}, unproven {unproven}, invalid {invalid})"
+            )
+        out.append(f"{group} n={len(mine)}: " + "; ".join(cells))
+    return out
+
+
+def _better(a: dict, b: dict) -> bool:
+    """Plan ``a`` beats ``b``: a plan where ``b`` has none, fewer phases, or equal phases and Eq. 1 lower by 1 mm."""
+    if a["objective"] is None:
+        return False
+    if b["objective"] is None:
+        return True
+    return a["phases"] < b["phases"] or (a["phases"] == b["phases"] and a["objective"] < b["objective"] - 1e-3)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--count", type=int, default=10, help="scenarios of each kind")
     parser.add_argument("--families", type=int, default=0, help="scenarios of each single-object family")
+    parser.add_argument(
+        "--bench", type=float, help="instead: the benchmark's cases at this scale (0.25: its speed run)"
+    )
     parser.add_argument("--out", help="write the rows as JSON here")
+    parser.add_argument("--groups", nargs="*", help="with --bench: only these groups (default: all up to 3 objects)")
+    parser.add_argument("--choices", nargs="*", choices=list(CHOICES), help="with --bench: only these")
+    parser.add_argument("--time-limit", type=float, default=10.0, help="with --bench: seconds per plan() call")
+    parser.add_argument("--exact-from", help="take the exact search's results from these rows where they have them")
+    parser.add_argument("--summary", help="instead: summarise the --bench rows in this JSON file")
     args = parser.parse_args()
+    if args.summary:
+        print("\n".join(bench_summary(json.loads(Path(args.summary).read_text(encoding="utf-8")))))
+        return
+    if args.bench is not None:
+        groups, choices = tuple(args.groups or BENCH_GROUPS), tuple(args.choices or CHOICES)
+        rows = bench_rows(args.bench, args.time_limit, groups, choices)
+        if args.out:
+            Path(args.out).write_text(json.dumps(rows, indent=1), encoding="utf-8")
+        return
+    known = None
+    if args.exact_from:
+        known = {r["scenario"]: r for r in json.loads(Path(args.exact_from).read_text(encoding="utf-8"))}
     rows = []
     for scenario in scenarios(args.count, args.families):
-        row = run(scenario)
+        row = run(scenario, known)
         rows.append(row)
         cells = "  ".join(f"{n}: {row[n]['phases']} {row[n]['objective']}" for n in CHOICES)
         print(f"{row['scenario']:<14} exact {row['exact']}  {cells}", flush=True)

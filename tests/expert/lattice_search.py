@@ -33,6 +33,7 @@ TERNARY_STEPS = 60  # iterations of the ternary search for the segment-rectangle
 class SearchResult:
     phases: int | None  # the fewest phases (the start included), None: no plan within max_phases
     objective: float | None  # the least Eq. 1 with that many phases
+    path: tuple[tuple[tuple[float, float], str | None], ...] = ()  # one optimal plan: (base, action) per phase
 
 
 def _rect_distance(x: np.ndarray, y: np.ndarray, rect) -> np.ndarray:
@@ -112,13 +113,32 @@ def search(scenario: Scenario, lattice: Lattice, max_phases: int = 8) -> SearchR
     )
     # best[stage][point]: least travel to stand at the point after the phase, in that stage.
     best = [from_start, np.where(pick, from_start, math.inf), np.full(n, math.inf)]
+    parents: list = [None]  # parents[phase][stage]: (previous point, previous stage) per point
     for steps in range(2, max_phases):
         arrived = [np.min(b[:, None] + cost, axis=0) for b in best]
+        came = [np.argmin(b[:, None] + cost, axis=0) for b in best]
+        picked = pick & (arrived[0] < arrived[1])
         best = [
             arrived[0],
             np.minimum(arrived[1], np.where(pick, arrived[0], math.inf)),
             np.where(place, arrived[1], math.inf),
         ]
+        parents.append([(came[0], 0), (np.where(picked, came[0], came[1]), np.where(picked, 0, 1)), (came[1], 1)])
         if np.isfinite(best[2]).any():
-            return SearchResult(steps + 1, float(best[2].min()) - DELIVERY_BONUS)
+            path = _path(points, parents, int(np.argmin(best[2])))
+            return SearchResult(steps + 1, float(best[2].min()) - DELIVERY_BONUS, path)
     return SearchResult(None, None)
+
+
+def _path(points: np.ndarray, parents: list, last: int) -> tuple:
+    """Walk the parents back from ``last`` (stage 2 at the last phase): ``(base, action)`` per phase after the start."""
+    out = []
+    point, stage = last, 2
+    for phase in range(len(parents) - 1, 0, -1):
+        previous, stages = parents[phase][stage]
+        before = int(stages if np.ndim(stages) == 0 else stages[point])
+        action = None if stage == before else ("pick", "place")[before]
+        out.append(((float(points[point, 0]), float(points[point, 1])), action))
+        point, stage = int(previous[point]), before
+    out.append(((float(points[point, 0]), float(points[point, 1])), "pick" if stage == 1 else None))
+    return tuple(reversed(out))

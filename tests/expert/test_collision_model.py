@@ -116,7 +116,7 @@ def test_clip_of_a_steep_plane_is_the_bounding_box_of_its_part():
 
 
 def diagonal_room_3() -> Scenario:
-    """A diagonal gap of 0.60 m at 59 degrees between two walls' corners (``collision_study.diagonal_room`` seed 3)."""
+    """A diagonal gap of 0.467 m at 37 degrees between two walls' corners (``collision_study.diagonal_room`` seed 3)."""
     import numpy as np
     from collision_study import diagonal_room
 
