@@ -37,7 +37,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "benchmark",
         help="evaluate policies against the MILP expert on a split or a folder of scenarios",
         description=_description(),
-        epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
+        epilog="Exit status: 0 done (--check: every record identical), 1 (--check) a record came out differently, "
+        "2 bad input (unknown policy or split, missing run folder, unusable "
         "scenario file, a results.json that breaks its schema, another benchmark writing to OUT_DIR), "
         "130 interrupted (the finished episodes are kept in results.json).",
     )
