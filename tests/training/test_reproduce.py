@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import shutil
@@ -14,12 +15,14 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
 from tests.cli_run import run
 from training.cli import main
+from training.evaluation.recheck import differences, wall_clock_bound
 from training.evaluation.results import read_results, write_results
 from training.evaluation.splits import get_split
 from training.reproduce import SMOKE, pipeline
 from training.reproduce.budgets import FULL
 from training.reproduce.pipeline import SETTINGS_FILE, ReproduceError, check_settings, training_jobs
 from training.reproduce.table import REFERENCES, baselines
+from training.reproduce.weights import weights_digest
 
 SPLITS = (
     "iid-v1:test",
@@ -223,3 +226,41 @@ def test_the_table_capacity_holds_every_split_so_flat_networks_act_on_all() -> N
 def test_a_budget_with_repeated_splits_is_refused() -> None:
     with pytest.raises(InputError, match="distinct"):
         replace(SMOKE, splits=("iid", "iid"))
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="Ray is not installed")
+def test_on_ray_the_smoke_gives_the_pools_records_and_weights(smoke: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "on-ray"
+    status, stdout, _ = run(capsys, "reproduce", "--out", out, "--seeds", 1, "--budget", "smoke", "--backend", "ray",
+                            "--workers", 2, "--no-progress")  # fmt: skip
+    assert status == 0 and "[4/4] report" in stdout
+    pool, ray = read_results(smoke / "results.json"), read_results(out / "results.json")
+    assert [(r["policy"], r["split"], r["seed"]) for r in ray] == [(r["policy"], r["split"], r["seed"]) for r in pool]
+    # every field but the timings; the expert's own run only where its 10 s planning limit cannot bind
+    bound = [a for a in pool if wall_clock_bound(a)]
+    assert 0 < len(bound) <= 4 and {a["policy"] for a in bound} == {"expert"}
+    for a, b in zip(pool, ray, strict=True):
+        assert wall_clock_bound(a) or differences(a, b) == {}, (a["policy"], a["split"], a["seed"])
+    for job in training_jobs(smoke, 1, SMOKE):  # the same weights, tensor for tensor
+        name = Path(job.out).name
+        assert weights_digest(Path(job.out) / "model.pt") == weights_digest(out / "runs" / name / "model.pt"), name
+    digests = json.loads((out / "benchmark" / "iid" / "weights.json").read_text())
+    assert digests == json.loads((smoke / "benchmark" / "iid" / "weights.json").read_text())
+    assert all(d.startswith("tensors:") for d in digests.values())
+
+
+def test_benchmark_check_reproduces_a_runs_records_and_finds_a_tampered_one(smoke: Path, tmp_path, capsys) -> None:
+    runs = [smoke / "runs" / name for name in ("bc-mlp-s0", "ppo-bc-s0", "dagger-aimed-s0")]
+    argv = ["--policies", *runs, "greedy", "--split", "iid", "push-required", "--workers", 2, "--no-progress"]
+    status, out, _ = run(capsys, "benchmark", "--check", smoke / "results.json", *argv)
+    assert status == 0, out
+    others = len(read_results(smoke / "results.json")) - 16
+    assert f"16 of 16 records identical (timings aside: decision_ms, mask_ms, step_ms); {others} records" in out
+    records = read_results(smoke / "results.json")
+    (k,) = [k for k, r in enumerate(records) if r["policy"] == "bc-mlp-s0" and r["seed"] == 1003500001]
+    records[k] = {**records[k], "success": not records[k]["success"], "cost": records[k]["cost"] + 1.0}
+    write_results(tmp_path / "results.json", records)
+    status, out, _ = run(capsys, "benchmark", "--check", tmp_path / "results.json", *argv)
+    assert status == 1
+    assert "15 of 16 records identical" in out
+    assert "bc-mlp-s0 push-required-v1:test seed 1003500001: success" in out and "; cost" in out

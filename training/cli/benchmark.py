@@ -1,6 +1,11 @@
 """The ``fetchcarry benchmark`` command: learned policies against the MILP expert on a split or a folder.
 
-Exit statuses: 0 done; 2 bad input (an unknown policy or split, a missing or broken run
+With ``--check RESULTS.json`` it runs the episodes of the file's records of the given
+policies again and says how many came out identical, timings aside
+(:mod:`training.evaluation.recheck`).
+
+Exit statuses: 0 done (with ``--check``: every record identical); 1 (``--check``) a
+record came out differently; 2 bad input (an unknown policy or split, a missing or broken run
 folder, an unusable scenario file, a ``results.json`` that breaks its schema, another
 benchmark writing to the same ``OUT_DIR``); 130 interrupted (the finished episodes are kept in
 ``OUT_DIR/results.json``).
@@ -20,6 +25,8 @@ from training.cli.arguments import add_worker_options, capacity_text, positive_i
 from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
+from training.errors import BenchmarkError
+from training.evaluation.recheck import recheck
 from training.evaluation.runner import RESULTS, SUMMARY, run_benchmark
 from training.evaluation.splits import SPLITS, get_split
 
@@ -30,7 +37,8 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "benchmark",
         help="evaluate policies against the MILP expert on a split or a folder of scenarios",
         description=_description(),
-        epilog="Exit status: 0 done, 2 bad input (unknown policy or split, missing run folder, unusable "
+        epilog="Exit status: 0 done (--check: every record identical), 1 (--check) a record came out differently, "
+        "2 bad input (unknown policy or split, missing run folder, unusable "
         "scenario file, a results.json that breaks its schema, another benchmark writing to OUT_DIR), "
         "130 interrupted (the finished episodes are kept in results.json).",
     )
@@ -41,12 +49,13 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         metavar="POLICY",
         help="expert, random, random-phases, greedy (where installed) or run folders (as fetchcarry train writes)",
     )
-    where = parser.add_mutually_exclusive_group(required=True)
+    where = parser.add_mutually_exclusive_group()
     where.add_argument(
         "--split",
         nargs="+",
         metavar="NAME",
-        help="one or more split names, e.g. iid or iid-v0 (the newest version if none is given)",
+        help="one or more split names, e.g. iid or iid-v0 (the newest version if none is given); with --check, "
+        "only the records of these splits",
     )
     where.add_argument(
         "--scenarios",
@@ -54,10 +63,19 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="a folder of scenario files (*.json) whose areas fit inside the families' extent",
     )
     parser.add_argument(
+        "--check",
+        metavar="RESULTS.json",
+        help="instead of a benchmark: run the episodes of this file's records of the given policies again (a run "
+        "folder's records are those of its folder's name) and report how many are identical apart from the timing "
+        "fields (decision_ms, mask_ms, step_ms); exit 0 only when all are, 1 otherwise",
+    )
+    parser.add_argument(
         "--episodes", type=positive_int, metavar="N", help="episodes (default: the split's 100, or every file)"
     )
     add_worker_options(parser)
-    parser.add_argument("--out", required=True, metavar="OUT_DIR", help="folder for results.json, summary.md, plots")
+    parser.add_argument(
+        "--out", metavar="OUT_DIR", help="folder for results.json, summary.md, plots (required, but with --check)"
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument(
         "--resume",
@@ -102,6 +120,10 @@ def _description() -> str:
 
 def run_benchmark_command(args: argparse.Namespace) -> int:
     """``fetchcarry benchmark``: 0 done, 130 interrupted (bad input is a ``BenchmarkError``, an ``InputError``)."""
+    if args.check is not None:
+        return run_check(args)
+    if args.out is None or (args.split is None and args.scenarios is None):
+        raise BenchmarkError("give --out and one of --split and --scenarios (or --check RESULTS.json)")
     try:
         report = run_benchmark(
             args.policies,
@@ -136,3 +158,24 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 def _json_row(row: dict) -> dict:
     """A row with ``null`` for figures that do not exist (nan: a cost ratio without a success)."""
     return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()}
+
+
+def run_check(args: argparse.Namespace) -> int:
+    """``fetchcarry benchmark --check RESULTS.json``: 0 every record identical (timings aside), 1 not, 130 stopped."""
+    options = {"--scenarios": args.scenarios, "--episodes": args.episodes, "--resume": args.resume,
+               "--json": args.json, "--out": args.out}  # fmt: skip
+    given = [flag for flag, value in options.items() if value]
+    if given:
+        raise BenchmarkError(f"--check re-runs the file's own episodes and writes nothing: leave out {given[0]}")
+    try:
+        report = recheck(args.check, args.policies, splits=args.split, workers=args.workers, backend=args.backend,
+                         ray_address=args.ray_address, obs_mode=args.obs_mode, capacity=args.capacity,
+                         progress=not args.no_progress)  # fmt: skip
+    except KeyboardInterrupt:
+        sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
+        say("interrupted: nothing was compared")
+        return INTERRUPTED
+    for mismatch in report.mismatches:
+        echo(mismatch.line())
+    echo(report.line())
+    return 0 if report.all_identical else 1

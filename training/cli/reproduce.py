@@ -13,6 +13,7 @@ import sys
 from training.cli.arguments import positive_int
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
+from training.data.generate import BACKENDS
 from training.reproduce import BUDGETS, FULL, reproduce
 from training.reproduce.publish import publish
 
@@ -63,6 +64,19 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         help="processes for expert episodes and benchmark episodes, and training runs at a time (default 2)",
     )
     parser.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default="process",
+        help="a local process pool (default) or Ray (optional extra: pip install ray): the expert episodes, each "
+        "training run (one Ray task) and the benchmark's episodes, the same records either way",
+    )
+    parser.add_argument(
+        "--ray-address",
+        metavar="ADDR",
+        help="a Ray cluster to join (default: start a local one of W CPUs); DIR and --datasets must be on a file "
+        "system every node sees",
+    )
+    parser.add_argument(
         "--datasets", metavar="PATH", help="the Minari datasets folder for the expert dataset (default DIR/datasets)"
     )
     parser.add_argument(
@@ -83,7 +97,8 @@ def run_reproduce(args: argparse.Namespace) -> int:
     """
     try:
         summary = reproduce(args.out, seeds=args.seeds, budget=BUDGETS[args.budget], workers=args.workers,
-                            progress=not args.no_progress, datasets=args.datasets, say=echo)  # fmt: skip
+                            backend=args.backend, ray_address=args.ray_address, progress=not args.no_progress,
+                            datasets=args.datasets, say=echo)  # fmt: skip
     except KeyboardInterrupt:
         sys.unraisablehook = ignore_unraisable  # see training.cli.exits.run_command
         say(f"interrupted: what finished is kept in {args.out}; run the same command again to continue")

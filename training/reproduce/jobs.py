@@ -5,9 +5,12 @@ its options dataclass (:mod:`training.learners.registry`), plain and picklable;
 :func:`run_job` trains it through the registry, as the command does, with ``resume=True``
 (a complete run folder is left as it is; an interrupted one continues from its
 checkpoint) and torch on one thread. :func:`run_jobs` runs jobs in this process (one
-worker) or on a spawned process pool (the worker set-up of ``fetchcarry generate``:
-workers ignore Ctrl-C and die with their parent), starting a job once the jobs it needs
-(a PPO run's BC init) are done.
+worker), on a spawned process pool (the worker set-up of ``fetchcarry generate``:
+workers ignore Ctrl-C and die with their parent) or as Ray tasks (one task per run
+folder, on a local Ray instance or the cluster ``ray_address`` names: the run folders
+and the Minari datasets must then be on a file system every node sees), starting a job
+once the jobs it needs (a PPO run's BC init) are done. On Ctrl-C the running jobs are
+stopped at once; what finished stays, and their checkpoints let the same call continue.
 """
 
 from __future__ import annotations
@@ -21,7 +24,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from training.data.generate import BACKENDS, _terminate_workers, worker_setup
 from training.learners import registry
+from training.reproduce.cluster import ray_session
+
+MINARI_ENV = "MINARI_DATASETS_PATH"  # where a job's datasets are: handed to every Ray task
 
 
 @dataclass(frozen=True)
@@ -62,12 +69,29 @@ def run_job(job: TrainJob) -> tuple[float, float]:
     return time.perf_counter() - started, time.process_time() - cpu
 
 
-def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
-    """Train ``jobs`` (in list order, each after its ``needs``); yield each with its wall and CPU seconds."""
+def run_job_with(job: TrainJob, environment: dict[str, str]) -> tuple[float, float]:
+    """:func:`run_job` with ``environment`` set first (a Ray worker does not inherit this process's)."""
+    os.environ.update(environment)
+    return run_job(job)
+
+
+def run_jobs(
+    jobs: list[TrainJob], workers: int = 1, backend: str = "process", ray_address: str | None = None
+) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
+    """Train ``jobs`` (in list order, each after its ``needs``); yield each with its wall and CPU seconds.
+
+    ``backend`` is ``process`` (this process with one worker, else a process pool) or
+    ``ray`` (Ray tasks, ``workers`` at a time, on ``ray_address`` if given).
+    """
     names = {job.name for job in jobs}
     unknown = sorted({need for job in jobs for need in job.needs} - names)
     if unknown:
         raise ValueError(f"training jobs need jobs that are not given: {', '.join(unknown)}")
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+    if backend == "ray":
+        yield from _run_ray(jobs, workers, ray_address)
+        return
     if workers == 1:
         done: set[str] = set()
         while len(done) < len(jobs):
@@ -79,8 +103,6 @@ def run_jobs(jobs: list[TrainJob], workers: int = 1) -> Iterator[tuple[TrainJob,
 
 
 def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
-    from training.data.generate import _terminate_workers, worker_setup
-
     pool = ProcessPoolExecutor(
         max_workers=workers,
         mp_context=multiprocessing.get_context("spawn"),
@@ -111,3 +133,28 @@ def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tu
         if not finished_cleanly:  # Ctrl-C or an error: stop the running jobs now (their checkpoints stay)
             _terminate_workers(pool)
         pool.shutdown(wait=finished_cleanly, cancel_futures=True)
+
+
+def _run_ray(jobs: list[TrainJob], workers: int, address: str | None) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
+    """One Ray task per job, ``workers`` at a time, each started once its ``needs`` are done."""
+    environment = {MINARI_ENV: os.environ[MINARI_ENV]} if MINARI_ENV in os.environ else {}
+    with ray_session(workers, address) as ray:
+        remote = ray.remote(num_cpus=1, max_retries=0)(run_job_with)
+        waiting, done = list(jobs), set()
+        running: dict[Any, TrainJob] = {}
+        try:
+            while waiting or running:
+                for job in [j for j in waiting if set(j.needs) <= done][: workers - len(running)]:
+                    waiting.remove(job)
+                    running[remote.remote(job, environment)] = job
+                if not running:
+                    raise ValueError(f"training jobs wait for each other: {', '.join(j.name for j in waiting)}")
+                finished, _ = ray.wait(list(running), num_returns=1)
+                for ref in finished:
+                    job = running.pop(ref)
+                    seconds = ray.get(ref)
+                    done.add(job.name)
+                    yield job, seconds
+        finally:
+            for ref in running:  # Ctrl-C or an error: stop the running jobs now (their checkpoints stay)
+                ray.cancel(ref, force=True)

@@ -20,6 +20,13 @@
 4. **report**: ``DIR/summary.md``, ``DIR/results.json`` and the plots
    (:mod:`training.reproduce.aggregate`).
 
+Every stage runs on a local process pool (``backend="process"``) or on Ray (``"ray"``:
+one Ray session for the three stages, a local instance of ``workers`` CPUs or the cluster
+``ray_address`` names; each training run is one Ray task), with the same records and
+weights either way (``tests/training/test_reproduce.py``). On Ray, a stage's CPU seconds
+in ``timings.json`` count this process only (Ray's workers are not its children); each
+run's own CPU seconds are measured where it trains, on either backend.
+
 Every stage is skipped when complete, and each run folder, dataset and benchmark
 resumes where it stopped, so running the same call again after an interruption loses
 nothing finished. ``DIR/reproduce.json`` holds the budget (a folder is never continued
@@ -28,20 +35,19 @@ with another) and ``DIR/timings.json`` the seconds of every stage and run.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import resource
 import time
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
-from dataclasses import MISSING, asdict, fields, replace
+from contextlib import contextmanager, nullcontext
+from dataclasses import MISSING, asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, read_json
-from training.data.generate import generate
+from training.data.generate import BACKENDS, generate
 from training.data.sources import EpisodeSource, GenerationConfig
 from training.evaluation.results import RESULTS, read_results, write_results
 from training.evaluation.runner import run_benchmark
@@ -49,6 +55,7 @@ from training.evaluation.splits import get_split
 from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 from training.reproduce.aggregate import write_published
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
+from training.reproduce.cluster import ray_session
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
 from training.reproduce.publish import record_commit
 from training.reproduce.table import (
@@ -61,18 +68,28 @@ from training.reproduce.table import (
     run_name,
     run_names,
 )
+from training.reproduce.weights import same_weights, weights_digest
 from training.resolve import available
 
 DATASET_ID = "fetchcarry/training-phases-v0"
 SETTINGS_FILE, TIMINGS_FILE = "reproduce.json", "timings.json"
 MAX_TIMINGS_BYTES = 10_000_000  # timings.json: seconds per stage and run
 MAX_DIGESTS_BYTES = 10_000_000  # weights.json: one digest per run
-WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's model.pt as benchmarked
+WEIGHTS_DIGESTS = "weights.json"  # per benchmark folder: the digest of each run's weights as benchmarked (by content)
 MINARI_ENV = "MINARI_DATASETS_PATH"
 
 
 class ReproduceError(InputError):
     """A reproduction cannot start or continue with what it was given (its folder, seeds, workers)."""
+
+
+@dataclass(frozen=True)
+class Backend:
+    """Where a reproduction's episodes and training runs go: ``workers`` at a time, on a pool or on Ray."""
+
+    workers: int
+    backend: str = "process"  # "process" or "ray"
+    ray_address: str | None = None  # the Ray cluster to join; None: a local instance
 
 
 def training_jobs(out: Path, seeds: int, budget: Budget) -> list[TrainJob]:
@@ -223,12 +240,16 @@ def reproduce(
     seeds: int = 3,
     budget: Budget,
     workers: int = 2,
+    backend: str = "process",
+    ray_address: str | None = None,
     progress: bool = True,
     datasets: str | Path | None = None,
     say: Callable[[str], None] = print,
 ) -> Path:
     """Run (or finish) the published table into ``out``; return the path of its ``summary.md``.
 
+    ``backend`` is ``process`` (a local pool of ``workers``) or ``ray`` (Ray, ``workers``
+    tasks at a time; on the cluster ``ray_address`` if given, else a local instance).
     ``datasets`` is the Minari root for the expert dataset (default ``out/datasets``).
     ``say`` gets one line per stage and per finished run. Bad input raises
     :class:`ReproduceError` (a ``ValueError``); any other exception is a bug;
@@ -236,29 +257,33 @@ def reproduce(
     """
     if workers < 1:
         raise ReproduceError(f"the number of workers must be at least 1, got {workers}")
+    if backend not in BACKENDS:
+        raise ReproduceError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     out = Path(out)
     check_settings(out, seeds, budget)
     commits = record_commit(out)
     timings = Timings(out)
     root = Path(datasets) if datasets is not None else out / "datasets"
-    with minari_root(root.resolve()):
-        _stage_datasets(budget, workers, progress, timings, say)
-        _stage_training(out, seeds, budget, workers, timings, say)
-        _stage_benchmark(out, seeds, budget, workers, progress, timings, say)
+    where = Backend(workers, backend, ray_address)
+    with minari_root(root.resolve()), ray_session(workers, ray_address) if backend == "ray" else nullcontext():
+        _stage_datasets(budget, where, progress, timings, say)
+        _stage_training(out, seeds, budget, where, timings, say)
+        _stage_benchmark(out, seeds, budget, where, progress, timings, say)
     with timings.stage("report"):
         summary = write_published(out, baselines(seeds, budget), budget, seeds, timings.data, commits)
     say(f"[4/4] report: {summary}, {out / 'results.json'} and the plots in {out}")
     return summary
 
 
-def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable) -> None:
+def _stage_datasets(budget: Budget, where: Backend, progress: bool, timings: Timings, say: Callable) -> None:
     source = EpisodeSource(
         family=TRAINING_FAMILY, interface="phases", time_limit=budget.time_limit, capacity=budget.capacity
     )
     config = GenerationConfig(DATASET_ID, budget.demonstrations, source)
     say(f"[1/4] datasets: {DATASET_ID}, {budget.demonstrations} expert episodes of family {TRAINING_FAMILY}")
     started, cpu = time.perf_counter(), cpu_seconds()
-    report = generate(config, workers=workers, progress=progress)
+    report = generate(config, workers=where.workers, backend=where.backend, ray_address=where.ray_address,
+                      progress=progress)  # fmt: skip
     if report.already_complete:
         say("[1/4] datasets: already complete")
         return
@@ -266,7 +291,7 @@ def _stage_datasets(budget: Budget, workers: int, progress: bool, timings: Timin
     say(f"[1/4] datasets: done in {report.wall_s:.0f} s ({report.resumed} episodes resumed)")
 
 
-def _stage_training(out: Path, seeds: int, budget: Budget, workers: int, timings: Timings, say: Callable) -> None:
+def _stage_training(out: Path, seeds: int, budget: Budget, where: Backend, timings: Timings, say: Callable) -> None:
     jobs = training_jobs(out, seeds, budget)
     todo = [job for job in jobs if not is_complete(job)]
     say(f"[2/4] training: {len(jobs)} runs in {out / 'runs'}, {len(jobs) - len(todo)} already complete")
@@ -275,13 +300,14 @@ def _stage_training(out: Path, seeds: int, budget: Budget, workers: int, timings
     complete = {job.name for job in jobs} - {job.name for job in todo}
     todo = [replace(job, needs=tuple(n for n in job.needs if n not in complete)) for job in todo]
     with timings.stage("training"):
-        for count, (job, (wall, cpu)) in enumerate(run_jobs(todo, workers), start=1):
+        finished = run_jobs(todo, where.workers, where.backend, where.ray_address)
+        for count, (job, (wall, cpu)) in enumerate(finished, start=1):
             timings.add("runs", job.name, wall, cpu)
             say(f"[2/4] training {count}/{len(todo)}: {job.name} done in {wall:.0f} s ({cpu:.0f} CPU s)")
 
 
 def _stage_benchmark(
-    out: Path, seeds: int, budget: Budget, workers: int, progress: bool, timings: Timings, say: Callable
+    out: Path, seeds: int, budget: Budget, where: Backend, progress: bool, timings: Timings, say: Callable
 ) -> None:
     references = [name for name in REFERENCES if name in available()]
     runs = out / "runs"
@@ -293,8 +319,9 @@ def _stage_benchmark(
         total = len(policies) * episodes
         started, cpu = time.perf_counter(), cpu_seconds()
         forget_retrained(folder, [runs / name for b in learned for name in b.runs])
-        report = run_benchmark(policies, out=folder, split=split, episodes=episodes, workers=workers,
-                               progress=progress, resume=True)  # fmt: skip
+        report = run_benchmark(policies, out=folder, split=split, episodes=episodes, workers=where.workers,
+                               backend=where.backend, ray_address=where.ray_address, progress=progress,
+                               resume=True)  # fmt: skip
         if report.resumed == total:
             say(f"[3/4] benchmark {get_split(split).name}: already complete ({total} episodes)")
             continue
@@ -311,9 +338,11 @@ def split_episodes(split: str, budget: Budget) -> int:
 def forget_retrained(folder: Path, runs: list[Path]) -> None:
     """Drop from ``folder/results.json`` the episodes of runs whose weights changed since they were benchmarked.
 
-    ``folder/weights.json`` keeps a digest of each run's ``model.pt`` as benchmarked, so
-    a run folder trained again (deleted and retrained with other weights) is benchmarked
-    again rather than kept with the episodes of its former weights.
+    ``folder/weights.json`` keeps a digest of each run's weights as benchmarked
+    (:func:`~training.reproduce.weights.weights_digest`, by content: a run retrained to the
+    same tensors keeps its episodes; an older folder's file hash is still read), so a run
+    folder trained again with other weights is benchmarked again rather than kept with
+    the episodes of its former weights.
     """
     file = folder / WEIGHTS_DIGESTS
     try:
@@ -322,8 +351,8 @@ def forget_retrained(folder: Path, runs: list[Path]) -> None:
         before = {}
     if not isinstance(before, dict):
         before = {}
-    now = {run.name: hashlib.sha256((run / "model.pt").read_bytes()).hexdigest() for run in runs}
-    changed = {name for name in now if before.get(name) != now[name]}
+    changed = {run.name for run in runs if not same_weights(run / "model.pt", before.get(run.name))}
+    now = {run.name: weights_digest(run / "model.pt") for run in runs}
     results = folder / RESULTS
     if changed and results.is_file():
         records = read_results(results)
