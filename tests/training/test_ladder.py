@@ -81,3 +81,32 @@ def test_run_resumes_without_running_again_what_it_holds(tmp_path, monkeypatch):
     assert calls == [("greedy", 1, [5, 6]), ("greedy", 2, [5, 6]), ("greedy", 3, [5, 6])]
     assert len(ladder.read_records(tmp_path)) == 6
     assert all(r["delivered"] == 1 for r in ladder.read_records(tmp_path))
+
+
+@pytest.mark.parametrize("rule", [False, True])
+def test_skip_delivered_leaves_out_the_picks_of_a_delivered_object(rule: bool):
+    import torch
+
+    from fetchcarry_env.observation import Capacity, observation_layout, observation_size
+    from fetchcarry_env.phases import PhaseLayout
+    from training.learners.bc import BCConfig, BCPolicy
+
+    capacity = Capacity()
+    layout, slots = PhaseLayout.for_postures(capacity=capacity), observation_layout(capacity)
+    flat = np.zeros(observation_size(capacity), np.float32)
+    flat[slots["object_0"]] = [1, 0.0, 0.0, 0.8, 1.0, 1.0, 0.8, 0.035, 0.2, 0, 0]  # still to deliver
+    flat[slots["object_1"]] = [1, 1.0, 1.0, 0.8, 1.0, 1.0, 0.8, 0.035, 0.2, 0, 1]  # delivered
+    again, other = layout.index("pick", 1, 0, 0, 0), layout.index("pick", 0, 2, 1, 0)
+    scores = torch.full((layout.size,), -10.0)
+    scores[[again, other]] = torch.tensor([3.0, 1.0])
+
+    class Fixed(torch.nn.Module):
+        def forward(self, rows: torch.Tensor) -> torch.Tensor:
+            return scores.expand(len(rows), -1)
+
+    policy = BCPolicy(Fixed(), BCConfig(avoid_repeats=False, skip_delivered=rule), capacity)
+    mask = np.zeros(layout.size, bool)
+    mask[[again, other]] = True
+    assert int(policy.predict(flat, action_masks=mask)[0]) == (other if rule else again)
+    mask[other] = False  # nothing else allowed: the delivered object's pick after all
+    assert int(policy.predict(flat, action_masks=mask)[0]) == again

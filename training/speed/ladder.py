@@ -35,6 +35,7 @@ from training.data.expert_labels import expert_episode
 from training.envs import make_env
 from training.evaluation.splits import EVAL_SEED_BASE, SPLIT_BLOCK
 from training.learners.heldout import EpisodeResult, Summary, summarise
+from training.learners.runs import load_checkpoint, write_metrics
 from training.resolve import build, resolve
 from training.rollout import run_episode
 
@@ -229,6 +230,61 @@ def report(out: Path, also: Sequence[Path] = ()) -> str:
     return text
 
 
+ACTING_OPTIONS = ("avoid_repeats", "avoid_returns", "push_after_approach", "skip_delivered")
+"""The BC policy's acting options (:class:`training.learners.options.BCConfig`): they change no weight."""
+
+
+def variant(run: Path, out: Path, settings: dict[str, bool]) -> Path:
+    """A copy of the run folder ``run`` at ``out`` (a new folder) acting with ``settings`` (acting options only).
+
+    The weights and metrics are copied as they are; ``config.json``'s ``config`` gains the
+    settings, so the same network acts with other episode rules (``avoid_returns``,
+    ``skip_delivered``, ...). A DAgger run stopped before its last iteration (no weights yet)
+    gives the network of its last finished iteration (its ``checkpoint.pt``): the copy is
+    complete, its ``data`` saying so. ``ValueError`` for another option or an existing ``out``.
+    """
+    import shutil
+
+    import torch
+
+    unknown = sorted(set(settings) - set(ACTING_OPTIONS))
+    if unknown:
+        raise ValueError(f"not acting options: {', '.join(unknown)} (choose from {', '.join(ACTING_OPTIONS)})")
+    if out.exists():
+        raise ValueError(f"{out} exists already")
+    config = json.loads((run / "config.json").read_text())
+    config["config"].update(settings)
+    checkpoint = None
+    if not config.get("complete"):
+        checkpoint = load_checkpoint(run)
+        if config["kind"] != "dagger" or checkpoint is None or not checkpoint.get("metrics"):
+            raise ValueError(f"{run} is not finished, and is not a DAgger run with a finished iteration")
+        rows = checkpoint["metrics"]
+        config["data"] = {"expert_labels": int(rows[-1]["expert_labels"]), "episodes": int(checkpoint["episodes"]),
+                          "stopped_after_iteration": int(rows[-1]["iteration"])}  # fmt: skip
+        config["complete"] = True
+    out.mkdir(parents=True)
+    if checkpoint is not None:
+        torch.save(checkpoint["network"], out / "model.pt")
+        write_metrics(out, [dict(row) for row in checkpoint["metrics"]])
+    for name in ("model.pt", "metrics.csv") if checkpoint is None else ():
+        if (run / name).exists():
+            shutil.copyfile(run / name, out / name)
+    (out / "config.json").write_text(json.dumps(config, indent=2) + "\n")
+    return out
+
+
+def _settings(pairs: Sequence[str]) -> dict[str, bool]:
+    """``["skip_delivered=true", ...]`` -> ``{"skip_delivered": True, ...}`` (``ValueError`` on other text)."""
+    settings = {}
+    for pair in pairs:
+        name, _, value = pair.partition("=")
+        if value.lower() not in ("true", "false"):
+            raise ValueError(f"expected NAME=true or NAME=false, got {pair!r}")
+        settings[name] = value.lower() == "true"
+    return settings
+
+
 def _ks(text: str) -> list[int]:
     """``1-8`` or ``5,6`` -> the list of k."""
     if "-" in text:
@@ -252,7 +308,17 @@ def main(argv: Sequence[str] | None = None) -> None:
     reporting = commands.add_parser("report", help="write OUT/summary.md and OUT/ladder.png")
     reporting.add_argument("out", type=Path, help="results folder")
     reporting.add_argument("--also", type=Path, nargs="*", default=[], help="folders whose records to merge into OUT")
+    varying = commands.add_parser("variant", help="copy a run folder, acting with other episode rules")
+    varying.add_argument("run", type=Path, help="a finished bc or dagger run folder")
+    varying.add_argument("out", type=Path, help="the new run folder")
+    varying.add_argument("settings", nargs="+", metavar="NAME=true|false", help=", ".join(ACTING_OPTIONS))
     args = parser.parse_args(argv)
+    if args.command == "variant":
+        try:
+            print(variant(args.run, args.out, _settings(args.settings)))
+        except (ValueError, OSError) as error:
+            parser.exit(2, f"error: {error}\n")
+        return
     if args.command == "run":
         seeds = seeds_of(args.seeds, args.episodes)
         run(args.policies, _ks(args.ks), seeds, args.out, progress=not args.no_progress)
