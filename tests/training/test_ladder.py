@@ -110,3 +110,33 @@ def test_skip_delivered_leaves_out_the_picks_of_a_delivered_object(rule: bool):
     assert int(policy.predict(flat, action_masks=mask)[0]) == (other if rule else again)
     mask[other] = False  # nothing else allowed: the delivered object's pick after all
     assert int(policy.predict(flat, action_masks=mask)[0]) == again
+
+
+def test_variant_copies_a_run_with_other_acting_rules_or_a_dagger_runs_last_iteration(tmp_path):
+    import torch
+
+    from training.learners.runs import save_checkpoint
+
+    run = tmp_path / "bc"
+    run.mkdir()
+    config = {"kind": "bc", "config": {"avoid_returns": False}, "data": {}, "complete": True}
+    (run / "config.json").write_text(json.dumps(config))
+    (run / "model.pt").write_bytes(b"weights")
+    copy = ladder.variant(run, tmp_path / "copy", {"skip_delivered": True, "avoid_returns": True})
+    assert json.loads((copy / "config.json").read_text())["config"] == {"avoid_returns": True, "skip_delivered": True}
+    assert (copy / "model.pt").read_bytes() == b"weights"
+    with pytest.raises(ValueError, match="not acting options"):
+        ladder.variant(run, tmp_path / "other", {"hidden": True})
+    with pytest.raises(ValueError, match="exists"):
+        ladder.variant(run, copy, {"skip_delivered": True})
+    dagger = tmp_path / "dagger"
+    dagger.mkdir()
+    (dagger / "config.json").write_text(json.dumps({**config, "kind": "dagger", "complete": False}))
+    with pytest.raises(ValueError, match="not finished"):
+        ladder.variant(dagger, tmp_path / "none", {})
+    rows = [{"iteration": 0, "expert_labels": 5}, {"iteration": 1, "expert_labels": 9}]
+    save_checkpoint(dagger, {"network": {"w": torch.ones(2)}, "metrics": rows, "episodes": 12})
+    snapshot = ladder.variant(dagger, tmp_path / "snapshot", {"skip_delivered": True})
+    saved = json.loads((snapshot / "config.json").read_text())
+    assert saved["complete"] and saved["data"] == {"expert_labels": 9, "episodes": 12, "stopped_after_iteration": 1}
+    assert torch.equal(torch.load(snapshot / "model.pt")["w"], torch.ones(2))
