@@ -140,3 +140,13 @@ def test_variant_copies_a_run_with_other_acting_rules_or_a_dagger_runs_last_iter
     saved = json.loads((snapshot / "config.json").read_text())
     assert saved["complete"] and saved["data"] == {"expert_labels": 9, "episodes": 12, "stopped_after_iteration": 1}
     assert torch.equal(torch.load(snapshot / "model.pt")["w"], torch.ones(2))
+
+
+def test_trace_gives_one_word_per_phase_with_the_hand_and_the_deliveries():
+    line = ladder.trace("random-phases", 1, 100_000)
+    seed, outcome, phases, *words = line.split()
+    assert (seed, outcome in ("success", "failure")) == ("100000", True)
+    assert len(words) == int(phases) >= 1
+    assert all(word[:4] in ("pick", "plac", "push", "appr", "wayp", "edge") and "[d" in word for word in words)
+    if outcome == "success":
+        assert words[-1].startswith("plac0(h0)[d0|")  # the last phase places the one object, not delivered before
