@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shutil
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -33,6 +34,8 @@ from tqdm import tqdm
 
 from expert import ExpertPolicy
 from fetchcarry_env.jsontext import read_json
+from fetchcarry_env.observation import FIELDS, observation_layout
+from fetchcarry_env.phases import PhaseLayout
 from training.data.expert_labels import expert_episode
 from training.envs import make_env
 from training.errors import BenchmarkError
@@ -243,9 +246,6 @@ def trace(name: str, k: int, seed: int) -> str:
     """
     import torch
 
-    from fetchcarry_env.observation import FIELDS, observation_layout
-    from fetchcarry_env.phases import PhaseLayout
-
     torch.set_num_threads(1)
     spec = resolve(name)
     env = make_env(spec.interface, family=family(k))
@@ -286,8 +286,6 @@ def variant(run: Path, out: Path, settings: dict[str, bool]) -> Path:
     gives the network of its last finished iteration (its ``checkpoint.pt``): the copy is
     complete, its ``data`` saying so. ``ValueError`` for another option or an existing ``out``.
     """
-    import shutil
-
     import torch
 
     unknown = sorted(set(settings) - set(ACTING_OPTIONS))
