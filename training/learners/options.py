@@ -190,10 +190,10 @@ class BCConfig:
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set", "cnn"):
-            raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {self.encoder!r}")
+            raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {str(self.encoder)[:40]!r}")
         if (self.encoder == "cnn") != (self.obs_mode != "state"):
             raise InputError(
-                f"encoder {self.encoder!r} with obs_mode {self.obs_mode!r}: the cnn encoder reads the images of "
+                f"encoder {self.encoder!r} with obs_mode {str(self.obs_mode)[:40]!r}: the cnn encoder reads the images of "
                 "obs_mode topdown or rgbd, the mlp and set encoders the state"
             )
         if self.encoder == "cnn" and (self.avoid_returns or self.push_scores or self.skip_delivered):
