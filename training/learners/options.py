@@ -193,8 +193,8 @@ class BCConfig:
             raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {str(self.encoder)[:40]!r}")
         if (self.encoder == "cnn") != (self.obs_mode != "state"):
             raise InputError(
-                f"encoder {self.encoder!r} with obs_mode {str(self.obs_mode)[:40]!r}: the cnn encoder reads the images of "
-                "obs_mode topdown or rgbd, the mlp and set encoders the state"
+                f"encoder {self.encoder!r} with obs_mode {str(self.obs_mode)[:40]!r}: the cnn encoder reads the "
+                "images of obs_mode topdown or rgbd, the mlp and set encoders the state"
             )
         if self.encoder == "cnn" and (self.avoid_returns or self.push_scores or self.skip_delivered):
             raise InputError(
