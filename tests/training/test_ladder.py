@@ -81,3 +81,72 @@ def test_run_resumes_without_running_again_what_it_holds(tmp_path, monkeypatch):
     assert calls == [("greedy", 1, [5, 6]), ("greedy", 2, [5, 6]), ("greedy", 3, [5, 6])]
     assert len(ladder.read_records(tmp_path)) == 6
     assert all(r["delivered"] == 1 for r in ladder.read_records(tmp_path))
+
+
+@pytest.mark.parametrize("rule", [False, True])
+def test_skip_delivered_leaves_out_the_picks_of_a_delivered_object(rule: bool):
+    import torch
+
+    from fetchcarry_env.observation import Capacity, observation_layout, observation_size
+    from fetchcarry_env.phases import PhaseLayout
+    from training.learners.bc import BCConfig, BCPolicy
+
+    capacity = Capacity()
+    layout, slots = PhaseLayout.for_postures(capacity=capacity), observation_layout(capacity)
+    flat = np.zeros(observation_size(capacity), np.float32)
+    flat[slots["object_0"]] = [1, 0.0, 0.0, 0.8, 1.0, 1.0, 0.8, 0.035, 0.2, 0, 0]  # still to deliver
+    flat[slots["object_1"]] = [1, 1.0, 1.0, 0.8, 1.0, 1.0, 0.8, 0.035, 0.2, 0, 1]  # delivered
+    again, other = layout.index("pick", 1, 0, 0, 0), layout.index("pick", 0, 2, 1, 0)
+    scores = torch.full((layout.size,), -10.0)
+    scores[[again, other]] = torch.tensor([3.0, 1.0])
+
+    class Fixed(torch.nn.Module):
+        def forward(self, rows: torch.Tensor) -> torch.Tensor:
+            return scores.expand(len(rows), -1)
+
+    policy = BCPolicy(Fixed(), BCConfig(avoid_repeats=False, skip_delivered=rule), capacity)
+    mask = np.zeros(layout.size, bool)
+    mask[[again, other]] = True
+    assert int(policy.predict(flat, action_masks=mask)[0]) == (other if rule else again)
+    mask[other] = False  # nothing else allowed: the delivered object's pick after all
+    assert int(policy.predict(flat, action_masks=mask)[0]) == again
+
+
+def test_variant_copies_a_run_with_other_acting_rules_or_a_dagger_runs_last_iteration(tmp_path):
+    import torch
+
+    from training.learners.runs import save_checkpoint
+
+    run = tmp_path / "bc"
+    run.mkdir()
+    config = {"kind": "bc", "config": {"avoid_returns": False}, "data": {}, "complete": True}
+    (run / "config.json").write_text(json.dumps(config))
+    (run / "model.pt").write_bytes(b"weights")
+    copy = ladder.variant(run, tmp_path / "copy", {"skip_delivered": True, "avoid_returns": True})
+    assert json.loads((copy / "config.json").read_text())["config"] == {"avoid_returns": True, "skip_delivered": True}
+    assert (copy / "model.pt").read_bytes() == b"weights"
+    with pytest.raises(ValueError, match="not acting options"):
+        ladder.variant(run, tmp_path / "other", {"hidden": True})
+    with pytest.raises(ValueError, match="exists"):
+        ladder.variant(run, copy, {"skip_delivered": True})
+    dagger = tmp_path / "dagger"
+    dagger.mkdir()
+    (dagger / "config.json").write_text(json.dumps({**config, "kind": "dagger", "complete": False}))
+    with pytest.raises(ValueError, match="not finished"):
+        ladder.variant(dagger, tmp_path / "none", {})
+    rows = [{"iteration": 0, "expert_labels": 5}, {"iteration": 1, "expert_labels": 9}]
+    save_checkpoint(dagger, {"network": {"w": torch.ones(2)}, "metrics": rows, "episodes": 12})
+    snapshot = ladder.variant(dagger, tmp_path / "snapshot", {"skip_delivered": True})
+    saved = json.loads((snapshot / "config.json").read_text())
+    assert saved["complete"] and saved["data"] == {"expert_labels": 9, "episodes": 12, "stopped_after_iteration": 1}
+    assert torch.equal(torch.load(snapshot / "model.pt")["w"], torch.ones(2))
+
+
+def test_trace_gives_one_word_per_phase_with_the_hand_and_the_deliveries():
+    line = ladder.trace("random-phases", 1, 100_000)
+    seed, outcome, phases, *words = line.split()
+    assert (seed, outcome in ("success", "failure")) == ("100000", True)
+    assert len(words) == int(phases) >= 1
+    assert all(word[:4] in ("pick", "plac", "push", "appr", "wayp", "edge") and "[d" in word for word in words)
+    if outcome == "success":
+        assert words[-1].startswith("plac0(h0)[d0|")  # the last phase places the one object, not delivered before

@@ -21,6 +21,7 @@ import warnings
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import asdict
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +66,13 @@ class BCPolicy(MaskedPolicy):
     followed by a push (176 of 176 approaches in the 1,000 episodes of the ``training``
     family), while a learner was seen hopping from one approach pose to the next, up to
     ten times in a row, each hop adding travel.
+
+    With ``config.skip_delivered``, a pick of an object whose ``delivered`` flag is set is
+    left out, as long as any other candidate is allowed: the expert never picks a delivered
+    object, while a set-encoder learner trained on ``objects-1-4`` was seen picking the
+    object it had just delivered and placing it back, until the env's 50 phases ran out
+    (the object lands a little elsewhere each time, so ``avoid_repeats`` never meets the
+    same state again).
 
     The memory is per episode: it is cleared by :meth:`reset` and by ``episode_start``
     true; batched calls (one row per env) do not use it.
@@ -149,6 +157,8 @@ class BCPolicy(MaskedPolicy):
             left_out += self.chosen.get(flat.tobytes(), ())
         if self.config.avoid_returns:
             left_out += self.returns.arrive(flat, len(mask))
+        if self.config.skip_delivered:
+            left_out += delivered_picks(self.capacity, flat, len(mask)).tolist()
         if self.config.push_after_approach and self.last is not None:
             approaches = self._approach_indices(len(mask))
             if self.last in approaches:
@@ -271,6 +281,21 @@ class ReturnMemory:
         held = world[self._held] > 0.5
         world[self._position[held].reshape(-1)] = 0.0
         return world.tobytes()
+
+
+def delivered_picks(capacity: Capacity, flat: np.ndarray, candidates: int) -> np.ndarray:
+    """The indices of the pick candidates of the objects that ``flat`` (one observation vector) shows delivered."""
+    objects = flat[observation_layout(capacity)["objects"]].reshape(capacity.objects, len(FIELDS["object"]))
+    fields = FIELDS["object"]
+    delivered = (objects[:, fields.index("present")] > 0.5) & (objects[:, fields.index("delivered")] > 0.5)
+    return _picks_per_object(capacity, candidates)[delivered].reshape(-1)
+
+
+@lru_cache(maxsize=8)
+def _picks_per_object(capacity: Capacity, candidates: int) -> np.ndarray:
+    """(objects, picks per object): the pick candidates' indices, one row per object slot."""
+    picks = np.flatnonzero(candidates_of_kinds(capacity, candidates, ("pick",)))
+    return picks.reshape(capacity.objects, -1)
 
 
 def candidates_of_kinds(capacity: Capacity, candidates: int, kinds: tuple[str, ...]) -> np.ndarray:

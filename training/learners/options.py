@@ -180,6 +180,7 @@ class BCConfig:
     avoid_repeats: bool = True  # acting: in a state met before this episode, not the candidates chosen there
     avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
     push_after_approach: bool = False  # acting: no approach right after an approach (the expert's data never has one)
+    skip_delivered: bool = False  # acting: no pick of an object that stands delivered on its goal
     obs_mode: str = option(
         "state",
         "what the network sees: state (the observation vector: mlp, set) or the images of topdown or rgbd "
@@ -189,14 +190,16 @@ class BCConfig:
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set", "cnn"):
-            raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {self.encoder!r}")
+            raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {str(self.encoder)[:40]!r}")
         if (self.encoder == "cnn") != (self.obs_mode != "state"):
             raise InputError(
-                f"encoder {self.encoder!r} with obs_mode {self.obs_mode!r}: the cnn encoder reads the images of "
-                "obs_mode topdown or rgbd, the mlp and set encoders the state"
+                f"encoder {self.encoder!r} with obs_mode {str(self.obs_mode)[:40]!r}: the cnn encoder reads the "
+                "images of obs_mode topdown or rgbd, the mlp and set encoders the state"
             )
-        if self.encoder == "cnn" and (self.avoid_returns or self.push_scores):  # (relative: unused by the cnn)
-            raise InputError("avoid_returns and push_scores read the state vector: not with the cnn encoder")
+        if self.encoder == "cnn" and (self.avoid_returns or self.push_scores or self.skip_delivered):
+            raise InputError(
+                "avoid_returns, push_scores and skip_delivered read the state vector: not with the cnn encoder"
+            )
         if min(self.hidden, self.epochs, self.batch_size) < 1 or self.learning_rate <= 0:
             raise InputError("hidden, epochs and batch_size must be positive, learning_rate > 0")
 

@@ -8,7 +8,9 @@ so an interrupted run resumes where it stopped); ``--expert-ks`` runs the MILP e
 too on those k, for the cost ratio to the expert. ``python -m training.speed.ladder
 report DIR`` writes ``DIR/summary.md`` (success with its 95 % Wilson interval, cost
 ratio to greedy and to the expert, the share of objects delivered, per policy and k; the
-issue's goals met or missed) and ``DIR/ladder.png``.
+issue's goals met or missed) and ``DIR/ladder.png``. ``variant RUN OUT NAME=true ...`` copies
+a run folder acting with other episode rules (:data:`ACTING_OPTIONS`); ``trace RUN --k K
+--seeds ...`` prints what a run chose at every phase of some episodes.
 
 Seeds (``--seeds``): ``dev`` counts up from :data:`DEV_FIRST_SEED` (the held-out seeds no
 dataset is made from; recipes are chosen there, on ``objects-5`` and ``objects-6``),
@@ -21,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import shutil
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -31,10 +34,14 @@ from tqdm import tqdm
 
 from expert import ExpertPolicy
 from fetchcarry_env.jsontext import read_json
+from fetchcarry_env.observation import FIELDS, observation_layout
+from fetchcarry_env.phases import PhaseLayout
 from training.data.expert_labels import expert_episode
 from training.envs import make_env
+from training.errors import BenchmarkError
 from training.evaluation.splits import EVAL_SEED_BASE, SPLIT_BLOCK
 from training.learners.heldout import EpisodeResult, Summary, summarise
+from training.learners.runs import load_checkpoint, write_metrics
 from training.resolve import build, resolve
 from training.rollout import run_episode
 
@@ -229,6 +236,96 @@ def report(out: Path, also: Sequence[Path] = ()) -> str:
     return text
 
 
+def trace(name: str, k: int, seed: int) -> str:
+    """One episode of the run folder ``name`` on ``objects-k``, one word per phase: what it chose, in what state.
+
+    Each word is the candidate's kind (four letters) and slot, ``(hN)`` while object N is in
+    the hand, and ``[dD|A]``: D objects delivered and A candidates allowed in the state it
+    chose in. For example ``pick1[d1|36] plac1(h1)[d0|41]`` is a delivered object picked up
+    and placed back. The line starts with the seed, the success and the phases.
+    """
+    import torch
+
+    torch.set_num_threads(1)
+    spec = resolve(name)
+    env = make_env(spec.interface, family=family(k))
+    try:
+        policy, capacity = build(spec, env), env.unwrapped.capacity
+        layout, objects, fields = (
+            PhaseLayout.for_postures(capacity=capacity),
+            observation_layout(capacity)["objects"],
+            FIELDS["object"],
+        )
+        words: list[str] = []
+
+        def observe(observation: dict[str, np.ndarray], action: Any, mask: np.ndarray) -> None:
+            rows = np.asarray(observation["observation"])[objects].reshape(capacity.objects, len(fields))
+            present = rows[:, fields.index("present")] > 0.5
+            held = np.flatnonzero(present & (rows[:, fields.index("held")] > 0.5))
+            delivered = int(rows[present, fields.index("delivered")].sum())
+            candidate = layout.describe(int(action))
+            hand = f"(h{held[0]})" if len(held) else ""
+            words.append(f"{candidate.kind[:4]}{candidate.slot}{hand}[d{delivered}|{int(mask.sum())}]")
+
+        episode = run_episode(env, policy, seed, deterministic=True, stop_on_failure=False, observe=observe)
+    finally:
+        env.close()
+    return f"{seed} {'success' if episode.info['is_success'] else 'failure'} {episode.figures.steps} " + " ".join(words)
+
+
+ACTING_OPTIONS = ("avoid_repeats", "avoid_returns", "push_after_approach", "skip_delivered")
+"""The BC policy's acting options (:class:`training.learners.options.BCConfig`): they change no weight."""
+
+
+def variant(run: Path, out: Path, settings: dict[str, bool]) -> Path:
+    """A copy of the run folder ``run`` at ``out`` (a new folder) acting with ``settings`` (acting options only).
+
+    The weights and metrics are copied as they are; ``config.json``'s ``config`` gains the
+    settings, so the same network acts with other episode rules (``avoid_returns``,
+    ``skip_delivered``, ...). A DAgger run stopped before its last iteration (no weights yet)
+    gives the network of its last finished iteration (its ``checkpoint.pt``): the copy is
+    complete, its ``data`` saying so. ``ValueError`` for another option or an existing ``out``.
+    """
+    import torch
+
+    unknown = sorted(set(settings) - set(ACTING_OPTIONS))
+    if unknown:
+        raise ValueError(f"not acting options: {', '.join(unknown)} (choose from {', '.join(ACTING_OPTIONS)})")
+    if out.exists():
+        raise ValueError(f"{out} exists already")
+    config = json.loads((run / "config.json").read_text())
+    config["config"].update(settings)
+    checkpoint = None
+    if not config.get("complete"):
+        checkpoint = load_checkpoint(run)
+        if config["kind"] != "dagger" or checkpoint is None or not checkpoint.get("metrics"):
+            raise ValueError(f"{run} is not finished, and is not a DAgger run with a finished iteration")
+        rows = checkpoint["metrics"]
+        config["data"] = {"expert_labels": int(rows[-1]["expert_labels"]), "episodes": int(checkpoint["episodes"]),
+                          "stopped_after_iteration": int(rows[-1]["iteration"])}  # fmt: skip
+        config["complete"] = True
+    out.mkdir(parents=True)
+    if checkpoint is not None:
+        torch.save(checkpoint["network"], out / "model.pt")
+        write_metrics(out, [dict(row) for row in checkpoint["metrics"]])
+    for name in ("model.pt", "metrics.csv") if checkpoint is None else ():
+        if (run / name).exists():
+            shutil.copyfile(run / name, out / name)
+    (out / "config.json").write_text(json.dumps(config, indent=2) + "\n")
+    return out
+
+
+def _settings(pairs: Sequence[str]) -> dict[str, bool]:
+    """``["skip_delivered=true", ...]`` -> ``{"skip_delivered": True, ...}`` (``ValueError`` on other text)."""
+    settings = {}
+    for pair in pairs:
+        name, _, value = pair.partition("=")
+        if value.lower() not in ("true", "false"):
+            raise ValueError(f"expected NAME=true or NAME=false, got {pair!r}")
+        settings[name] = value.lower() == "true"
+    return settings
+
+
 def _ks(text: str) -> list[int]:
     """``1-8`` or ``5,6`` -> the list of k."""
     if "-" in text:
@@ -252,7 +349,30 @@ def main(argv: Sequence[str] | None = None) -> None:
     reporting = commands.add_parser("report", help="write OUT/summary.md and OUT/ladder.png")
     reporting.add_argument("out", type=Path, help="results folder")
     reporting.add_argument("--also", type=Path, nargs="*", default=[], help="folders whose records to merge into OUT")
+    varying = commands.add_parser("variant", help="copy a run folder, acting with other episode rules")
+    varying.add_argument("run", type=Path, help="a finished bc or dagger run folder")
+    varying.add_argument("out", type=Path, help="the new run folder")
+    varying.add_argument("settings", nargs="+", metavar="NAME=true|false", help=", ".join(ACTING_OPTIONS))
+    tracing = commands.add_parser("trace", help="print one word per phase of a run's episodes (what it chose)")
+    tracing.add_argument("run", help="a run folder")
+    tracing.add_argument("--k", type=int, required=True, help="objects (the family objects-K)")
+    tracing.add_argument("--seeds", type=int, nargs="+", required=True, help="episode seeds")
     args = parser.parse_args(argv)
+    if args.command == "trace":
+        if not 1 <= args.k <= max(KS):
+            parser.exit(2, f"error: --k must be 1 to {max(KS)}, got {args.k}\n")
+        try:
+            for seed in args.seeds:
+                print(trace(args.run, args.k, seed), flush=True)
+        except BenchmarkError as error:
+            parser.exit(2, f"error: {error}\n")
+        return
+    if args.command == "variant":
+        try:
+            print(variant(args.run, args.out, _settings(args.settings)))
+        except (ValueError, OSError) as error:
+            parser.exit(2, f"error: {error}\n")
+        return
     if args.command == "run":
         seeds = seeds_of(args.seeds, args.episodes)
         run(args.policies, _ks(args.ks), seeds, args.out, progress=not args.no_progress)
