@@ -35,6 +35,7 @@ from typing import Any
 from tqdm import tqdm
 
 from fetchcarry_env.errors import UsageError
+from training.cluster import ray_session
 from training.data.datasets import (
     REPLACED_FOLDER,
     assemble,
@@ -330,33 +331,22 @@ def _terminate_workers(pool: ProcessPoolExecutor) -> None:
 def _run_ray(
     source: Any, indices: list[int], workers: int, address: str | None, episode: Callable[[Any, int], Any]
 ) -> Iterator[tuple[int, Any]]:
-    try:
-        import ray  # an optional extra
-    except ModuleNotFoundError:
-        raise UsageError("the Ray backend needs Ray: pip install 'fetchcarry[ray]' (or pip install ray)") from None
-    started_here = not ray.is_initialized()
-    if started_here:
-        if address is None:
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-        else:
-            ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(episode)
-    in_flight_limit = 2 * workers  # keep few episodes in flight: an interruption loses only those
-    queue = list(indices)
-    pending: dict[Any, int] = {}
-    try:
-        while queue or pending:
-            while queue and len(pending) < in_flight_limit:
-                index = queue.pop(0)
-                pending[remote.remote(source, index)] = index
-            finished, _ = ray.wait(list(pending), num_returns=1)
-            for ref in finished:
-                yield pending.pop(ref), ray.get(ref)
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started_here:
-            ray.shutdown()
+    with ray_session(workers, address) as ray:
+        remote = ray.remote(num_cpus=1)(episode)
+        in_flight_limit = 2 * workers  # keep few episodes in flight: an interruption loses only those
+        queue = list(indices)
+        pending: dict[Any, int] = {}
+        try:
+            while queue or pending:
+                while queue and len(pending) < in_flight_limit:
+                    index = queue.pop(0)
+                    pending[remote.remote(source, index)] = index
+                finished, _ = ray.wait(list(pending), num_returns=1)
+                for ref in finished:
+                    yield pending.pop(ref), ray.get(ref)
+        finally:
+            for ref in pending:
+                ray.cancel(ref)
 
 
 def _postfix(figures: list[dict[str, Any]]) -> str:

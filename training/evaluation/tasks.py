@@ -14,8 +14,8 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
+from training.cluster import ray_session
 from training.data.generate import _terminate_workers, worker_setup
-from training.errors import BenchmarkError
 
 
 def run_all(
@@ -65,26 +65,16 @@ def _run_pool(function: Callable[[Any], dict], tasks: list[Any], workers: int) -
 def _run_ray(
     function: Callable[[Any], dict], tasks: list[Any], workers: int, address: str | None
 ) -> Iterator[dict[str, Any]]:
-    try:
-        import ray
-    except ModuleNotFoundError:
-        raise BenchmarkError("the Ray backend needs Ray (pip install ray)") from None
-    started_here = not ray.is_initialized()
-    if started_here and address is None:
-        ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-    elif started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False)
-    remote = ray.remote(num_cpus=1)(function)
-    queue, pending = list(tasks), []
-    try:
-        while queue or pending:
-            while queue and len(pending) < 2 * workers:  # few in flight: an interruption loses only those
-                pending.append(remote.remote(queue.pop(0)))
-            finished, pending = ray.wait(pending, num_returns=1)
-            for ref in finished:
-                yield ray.get(ref)
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started_here:
-            ray.shutdown()
+    with ray_session(workers, address) as ray:
+        remote = ray.remote(num_cpus=1)(function)
+        queue, pending = list(tasks), []
+        try:
+            while queue or pending:
+                while queue and len(pending) < 2 * workers:  # few in flight: an interruption loses only those
+                    pending.append(remote.remote(queue.pop(0)))
+                finished, pending = ray.wait(pending, num_returns=1)
+                for ref in finished:
+                    yield ray.get(ref)
+        finally:
+            for ref in pending:
+                ray.cancel(ref)

@@ -24,9 +24,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from training.cluster import ray_session
 from training.data.generate import BACKENDS, _terminate_workers, worker_setup
 from training.learners import registry
-from training.reproduce.cluster import ray_session
 
 MINARI_ENV = "MINARI_DATASETS_PATH"  # where a job's datasets are: handed to every Ray task
 

@@ -47,6 +47,7 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, read_json
+from training.cluster import ray_session
 from training.data.generate import BACKENDS, generate
 from training.data.sources import EpisodeSource, GenerationConfig
 from training.evaluation.results import RESULTS, read_results, write_results
@@ -55,7 +56,6 @@ from training.evaluation.splits import get_split
 from training.learners.options import BCRun, DaggerRun, EnsembleRun, PPORun
 from training.reproduce.aggregate import write_published
 from training.reproduce.budgets import TRAINING_FAMILY, Budget
-from training.reproduce.cluster import ray_session
 from training.reproduce.jobs import TrainJob, is_complete, run_jobs
 from training.reproduce.publish import record_commit
 from training.reproduce.table import (

@@ -1,10 +1,11 @@
-"""One Ray session for a whole reproduction (``--backend ray``): its stages share it, so Ray starts once.
+"""The one way this project connects to Ray (``--backend ray``).
 
 :func:`ray_session` connects to Ray, a local instance of ``workers`` CPUs or the cluster
 ``address`` names, unless this process is already connected; it shuts Ray down at the
-end only when it connected here. The stages' own Ray code (``fetchcarry generate``'s,
-the benchmark's, :func:`training.reproduce.jobs.run_jobs`') finds Ray connected and
-neither starts nor stops it. Ray is an optional extra, imported only here.
+end only when it connected here. So ``fetchcarry generate``'s episodes, the benchmark's
+and :func:`training.reproduce.jobs.run_jobs`' each open a session, and a reproduction
+opens one around its stages, which then find Ray connected: Ray starts once. Ray is an
+optional extra, imported only here.
 """
 
 from __future__ import annotations
