@@ -166,28 +166,13 @@ def bench_rows(
     Interleaved per scenario, so the load moves all choices alike; on the env's 0.05 m
     lattice (the plan() default). Times in seconds.
     """
-    from training.speed.planner import DEFAULT_SEED, cases
+    from training.speed.planner import choice_rows
 
-    rows = []
-    for case in (c for c in cases(scale) if c.group in groups):
-        rng = np.random.default_rng(DEFAULT_SEED)
-        for _ in range(case.repeats):
-            scenario = get_family(case.family).sample(rng)
-            row: dict = {"group": case.group, "case": case.name}
-            for name in choices or tuple(CHOICES):
-                result = plan(scenario, time_limit=time_limit, **CHOICES[name])
-                row[name] = {
-                    "status": result.status,
-                    "phases": len(result.phases),
-                    "objective": result.objective,
-                    "total_s": result.stats["total_s"],
-                    "valid": not result.found or validate_plan(scenario, result) == [],
-                }
-            rows.append(row)
-            print(
-                row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in row if n in CHOICES)
-            )
-    return rows
+    def show(row: dict) -> None:
+        print(row["case"], "  ".join(f"{n}: {row[n]['phases']} {row[n]['total_s']:.3f}" for n in row if n in CHOICES))
+
+    picked = {name: CHOICES[name] for name in choices or tuple(CHOICES)}
+    return choice_rows(scale, picked, time_limit=time_limit, groups=groups, each=show)
 
 
 def bench_summary(rows: list[dict]) -> list[str]:

@@ -19,7 +19,7 @@ import itertools
 import json
 import math
 import statistics
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -231,20 +231,38 @@ CORNER_CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}
 """Corner tangents compared by :func:`corner_rows`: name -> ``plan(..., corner_detail=...)``."""
 
 
-def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
-    """Each benchmark scenario (``cases(scale)`` up to three objects) planned with every choice of corner tangents.
+UP_TO_THREE_OBJECTS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the groups of cases(scale)
 
-    Interleaved per scenario, so the load moves all choices alike. Times in seconds.
+
+def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
+    """Each benchmark scenario (``cases(scale)`` up to three objects) planned with every choice of corner tangents."""
+    choices = {name: {"corner_detail": detail} for name, detail in CORNER_CHOICES.items()}
+    return choice_rows(scale, choices, seed=seed, time_limit=time_limit)
+
+
+def choice_rows(
+    scale: float,
+    choices: dict[str, dict[str, Any]],
+    *,
+    seed: int = DEFAULT_SEED,
+    time_limit: float = DEFAULT_TIME_LIMIT,
+    groups: Sequence[str] = UP_TO_THREE_OBJECTS,
+    each: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict]:
+    """Each benchmark scenario of ``groups`` (``cases(scale)``) planned with every choice of ``plan()`` options.
+
+    ``choices`` maps a name to ``plan()``'s keyword arguments; ``each`` is given every row
+    when it is made. Interleaved per scenario, so the load moves all choices alike. Times
+    in seconds.
     """
-    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
     rows = []
-    for case in chosen:
+    for case in (c for c in cases(scale) if c.group in groups):
         rng = np.random.default_rng(seed)
         for _ in range(case.repeats):
             scenario = get_family(case.family).sample(rng)
             row: dict[str, Any] = {"group": case.group, "case": case.name}
-            for name, detail in CORNER_CHOICES.items():
-                result = expert.plan(scenario, time_limit=time_limit, corner_detail=detail)
+            for name, options in choices.items():
+                result = expert.plan(scenario, time_limit=time_limit, **options)
                 row[name] = {
                     "status": result.status,
                     "phases": len(result.phases),
@@ -253,6 +271,8 @@ def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFA
                     "valid": not result.found or validate_plan(scenario, result) == [],
                 }
             rows.append(row)
+            if each is not None:
+                each(row)
     return rows
 
 
