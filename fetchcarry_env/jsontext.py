@@ -4,7 +4,9 @@ Scenario and plan files go through :func:`read_json` (:func:`read_json_or`): a f
 UTF-8 text (binary, UTF-16), not JSON, nested too deeply or holding a number literal
 too long to convert raises :class:`JsonInputError` (a ``ValueError``) with a short
 message, never ``UnicodeDecodeError``, ``RecursionError`` or ``OverflowError``. The
-caller wraps it in its own error (``ScenarioError``, ``PlanFormatError``).
+caller wraps it in its own error (``ScenarioError``, ``PlanFormatError``). A gzip file
+(what the repository stores of a large results file) is read as the JSON text it holds,
+its decompressed size bounded as the plain file's is.
 
 :func:`describe` shows a value in a message without printing megabytes of it or
 recursing into deep nesting.
@@ -17,12 +19,14 @@ import math
 import os
 import reprlib
 import stat
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.errors import InputError
 
+GZIP_MAGIC = b"\x1f\x8b"  # the first two bytes of every gzip file
 MAX_INT_DIGITS = 300  # digits: a longer integer literal is read as a float (inf beyond about 1e308)
 
 
@@ -56,7 +60,27 @@ def read_json(path: str | Path, max_bytes: int) -> Any:
         os.close(descriptor)
     if len(raw) > max_bytes:  # a special file whose size stat did not report
         raise JsonInputError(f"the file is more than the {max_bytes:,} bytes a file of this kind may have")
+    if raw.startswith(GZIP_MAGIC):
+        raw = gunzip(raw, max_bytes)
     return parse_json(decode_text(raw))
+
+
+def gunzip(raw: bytes, max_bytes: int) -> bytes:
+    """The one gzip member ``raw`` decompressed; :class:`JsonInputError` if broken or above ``max_bytes`` bytes.
+
+    Decompression stops at ``max_bytes + 1`` bytes, so a small file that would inflate
+    to gigabytes costs no more memory than a plain file of the limit's size.
+    """
+    inflater = zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)  # 16 +: a gzip header and trailer
+    try:
+        text = inflater.decompress(raw, max_bytes + 1)
+    except zlib.error as error:
+        raise JsonInputError(f"a broken gzip file ({error})") from None
+    if len(text) > max_bytes:
+        raise JsonInputError(f"the file decompresses to more than the {max_bytes:,} bytes a file of this kind may have")
+    if not inflater.eof or inflater.unused_data:
+        raise JsonInputError("a gzip file cut short or followed by other data: give one whole gzip member")
+    return text
 
 
 def _kind(mode: int) -> str:

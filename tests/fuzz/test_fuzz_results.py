@@ -15,6 +15,7 @@ file of another kind (a FIFO, a folder, a link to a device). Then:
 
 from __future__ import annotations
 
+import gzip
 import json
 import os
 import shutil
@@ -30,7 +31,15 @@ from mutations import file_bytes, mutated, to_json_text
 from test_fuzz_inputs import fuzz
 
 from fetchcarry_env.errors import InputError
-from training.evaluation.results import RESULTS, ResultsError, read_results
+from training.evaluation.results import (
+    MAX_RESULTS_BYTES,
+    RESULTS,
+    RESULTS_GZIP,
+    ResultsError,
+    encode_results,
+    read_results,
+    write_results,
+)
 from training.evaluation.runner import run_benchmark
 
 HANG_SECONDS = 60  # an example still running after this is a hang (a resumed run may plan one episode)
@@ -120,3 +129,23 @@ def test_a_results_file_of_another_kind_is_refused_naming_it(finished, kind: str
         file.write_bytes(b"")
     with hang_guard(HANG_SECONDS, "reading a results file"):
         assert _records_or_refusal(file) is None
+
+
+def test_a_gzip_results_file_reads_as_its_plain_text_and_a_bomb_is_refused_unexpanded(finished) -> None:
+    folder = _copy(finished)
+    records = read_results(folder / RESULTS)
+    write_results(folder / RESULTS_GZIP, records)
+    assert read_results(folder / RESULTS_GZIP) == records
+    assert encode_results(records, compressed=True) == (folder / RESULTS_GZIP).read_bytes()  # no time stamp
+    whole = (folder / RESULTS_GZIP).read_bytes()
+    bomb = gzip.compress(b" " * (MAX_RESULTS_BYTES + 1), mtime=0)  # 256 MB of blanks in about 250 kB
+    cases = {
+        "cut short": whole[: len(whole) // 2],
+        "followed by other data": whole + b"more",
+        "broken": whole[:10] + bytes(len(whole) - 10),
+        "more than": bomb,
+    }
+    for problem, data in cases.items():
+        (folder / RESULTS_GZIP).write_bytes(data)
+        with hang_guard(HANG_SECONDS, "reading a gzip results file"), pytest.raises(ResultsError, match=problem):
+            read_results(folder / RESULTS_GZIP)

@@ -15,6 +15,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.observation import Capacity
 from tests.cli_run import run
 from training.cli import main
+from training.evaluation.leaderboard import merge_folders
 from training.evaluation.recheck import differences, wall_clock_bound
 from training.evaluation.results import read_results, write_results
 from training.evaluation.splits import get_split
@@ -207,9 +208,14 @@ def test_the_summary_names_its_commit_and_the_table_publishes_under_50_mb(smoke:
     copied = publish(out, tmp_path / "published")
     assert 0 < copied["bytes"] < MAX_PUBLISHED_BYTES
     published = tmp_path / "published"
-    assert read_results(published / "results.json") == read_results(out / "results.json")
+    assert read_results(published / "results.json.gz") == read_results(out / "results.json")  # gzip: 1/6 the size
+    assert not (published / "results.json").exists()
+    assert len(merge_folders([published])) == len(read_results(out / "results.json"))  # leaderboard finds the .gz
     assert (published / "runs" / "bc-mlp-s0" / "config.json").is_file()
-    assert {Path(w).parts[1] for w in copied["weights"]} >= {"bc-mlp-s0", "dagger-s0"}  # one seed: the best
+    assert any(run.name.startswith("bc-mlp-n") for run in (published / "runs").iterdir())  # every run's config
+    runs_with_weights = {Path(w).parts[1] for w in copied["weights"]}
+    assert runs_with_weights >= {"bc-mlp-s0", "dagger-s0"}  # one seed: the best
+    assert not any(run.startswith("bc-mlp-n") for run in runs_with_weights)  # not the demonstrations curve's
     assert not (published / "datasets").exists()
     with pytest.raises(PublishError, match="no finished table"):
         publish(tmp_path / "published" / "runs", tmp_path / "nowhere")

@@ -27,7 +27,7 @@ from training.errors import BenchmarkError
 from training.evaluation.compare import Comparison, compare, method_of, pooled
 from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import legend
-from training.evaluation.results import RESULTS, read_results
+from training.evaluation.results import RESULTS, read_results, results_file
 from training.evaluation.splits import SPLITS
 
 SHARED = ("expert", "random", "random-phases", "greedy")  # references every folder may hold
@@ -60,7 +60,7 @@ def merge_folders(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
     merged: list[dict[str, Any]] = []
     owner: dict[tuple[str, str], str] = {}  # (method, split) -> folder
     for folder in map(Path, folders):
-        path = folder / RESULTS if folder.is_dir() else folder
+        path = results_file(folder) if folder.is_dir() else folder
         try:
             records = read_results(path)
         except FileNotFoundError:

@@ -9,12 +9,15 @@ records without ``digest``). :func:`read_results` checks every record against
 :data:`FIELDS` and refuses a file that breaks the schema with a :class:`ResultsError`
 (bad input, exit 2) naming the file and the record; it never drops a record.
 :func:`write_results` writes the file atomically (a temporary file, then a rename), so
-a reader sees the old file or the new one, never half of one. :class:`ResultsLock`
+a reader sees the old file or the new one, never half of one. A file may also be
+gzip-compressed (``results.json.gz``, as the repository keeps the published table):
+the readers take it as they take the plain file. :class:`ResultsLock`
 keeps two benchmarks from writing to one folder at once.
 """
 
 from __future__ import annotations
 
+import gzip
 import hashlib
 import json
 import math
@@ -31,6 +34,7 @@ from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
 
 RESULTS = "results.json"
+RESULTS_GZIP = "results.json.gz"  # the same records, gzip-compressed: how the repository keeps the published table's
 LOCK = ".results.lock"  # in the output folder: held (flock) by the benchmark writing there
 SCHEMA_VERSION = 1  # 0: a plain list of records (no digest); 1: {"schema_version": 1, "records": [...]}
 FORMAT_DOC = "docs/results-format.md"
@@ -181,14 +185,36 @@ def read_results(path: str | Path) -> list[dict[str, Any]]:
     return parse_results(data, path)
 
 
+def results_file(folder: str | Path) -> Path:
+    """The results file of a results folder: ``results.json``, else ``results.json.gz`` if only that is there."""
+    folder = Path(folder)
+    plain, compressed = folder / RESULTS, folder / RESULTS_GZIP
+    return compressed if compressed.exists() and not plain.exists() else plain
+
+
+def encode_results(records: Sequence[dict[str, Any]], compressed: bool = False) -> bytes:
+    """The bytes of a results file holding ``records`` in the current schema.
+
+    Indented JSON text, or (``compressed``) compact JSON gzip-compressed with no time
+    stamp, so that the same records always give the same bytes.
+    """
+    table = {"schema_version": SCHEMA_VERSION, "records": list(records)}
+    if compressed:
+        return gzip.compress(json.dumps(table, separators=(",", ":")).encode(), mtime=0)
+    return (json.dumps(table, indent=1) + "\n").encode()
+
+
 def write_results(path: str | Path, records: Sequence[dict[str, Any]]) -> None:
-    """Write ``records`` to ``path`` in the current schema, atomically (a temporary file, then a rename)."""
-    path = Path(path)
-    text = json.dumps({"schema_version": SCHEMA_VERSION, "records": list(records)}, indent=1) + "\n"
+    """Write ``records`` to ``path`` (gzip-compressed if it ends ``.gz``), atomically."""
+    write_atomically(Path(path), encode_results(records, compressed=Path(path).suffix == ".gz"))
+
+
+def write_atomically(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename: a reader sees the old file or the new."""
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
-        with os.fdopen(handle, "w", encoding="utf-8") as file:
-            file.write(text)
+        with os.fdopen(handle, "wb") as file:
+            file.write(data)
         os.replace(temporary, path)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)

@@ -32,7 +32,7 @@ from training.learners.runs import read_saved
 from training.pictures.benchmark import plot_against_objects, plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
 from training.reproduce.publish import commit_line
-from training.reproduce.table import CURVE_SPLIT, OBJECTS_SPLIT, Baseline
+from training.reproduce.table import CURVE_SPLIT, OBJECTS_SPLIT, Baseline, on_curve_only
 
 SUMMARY, SPLITS_PLOT, OBJECTS_PLOT = "summary.md", "splits.png", "objects.png"
 CURVES_PLOT, DEMONSTRATIONS_PLOT = "ppo_curves.png", "demonstrations.png"
@@ -72,7 +72,7 @@ def write_published(
     per_run = {(row.policy, row.split): row for row in summarise(records)}
     pooled = {(row.policy, row.split): row for row in summarise([{**r, "policy": r["baseline"]} for r in records])}
     labels = {name: expert_labels(out / "runs" / name) for b in baselines for name in b.runs}
-    main = [b for b in baselines if not b.label.startswith("bc-mlp-n")]
+    main = [b for b in baselines if not on_curve_only(b.label)]
     learned = {b.label for b in baselines}
     references = list(dict.fromkeys(r["baseline"] for r in records if r["baseline"] not in learned))
     lines = [

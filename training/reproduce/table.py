@@ -8,6 +8,7 @@ names. Run folder ``DIR/runs/NAME-sSEED`` is baseline ``NAME``'s run for trainin
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 from training.reproduce.budgets import Budget
@@ -41,6 +42,11 @@ def run_names(label: str, seeds: int) -> tuple[str, ...]:
 def curve_label(episodes: int) -> str:
     """The label of the demonstrations curve's BC (flat MLP) baseline trained on ``episodes`` expert episodes."""
     return f"bc-mlp-n{episodes}"
+
+
+def on_curve_only(label: str) -> bool:
+    """Whether baseline ``label`` is a demonstrations-curve point (``bc-mlp-nN``), not a row of the table."""
+    return re.fullmatch(r"bc-mlp-n\d+", label) is not None
 
 
 def has_ensemble(seeds: int, budget: Budget) -> bool:
