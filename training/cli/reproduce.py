@@ -17,10 +17,9 @@ from training.data.generate import BACKENDS
 from training.reproduce import BUDGETS, FULL, reproduce
 from training.reproduce.publish import publish
 
-FULL_ESTIMATE = "about 4 to 5 hours for three seeds"
-# An estimate from measured stages (docs/benchmarks/learning.md, "The published table"): training 83 min, the
-# benchmark 30 min for four splits at 100 episodes, times three at the test parts' 300, plus the graded worlds
-# (the expert's planning alone: 40 min for objects and apartment); not yet measured end to end.
+FULL_ESTIMATE = "2 h 42 min measured for three seeds on 2 shared cores, 3.5 CPU hours"
+# Measured (docs/benchmarks/learning.md, "Its time"): the table of 2026-12-02/03, seven test parts at up to 300
+# episodes; about 1 h 45 min on two idle cores by its CPU seconds.
 
 
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
@@ -39,10 +38,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "perturbed (DIR/benchmark/SPLIT; every learner is trained at the capacity objects=8, which holds them "
         "all); (4) DIR/summary.md (per split, each baseline's mean over the "
         "seeds with its range, success pooled over seeds with a 95 % bootstrap interval over scenarios; the "
-        "commit of the code that made it), DIR/results.json and plots. --publish DEST copies the table, every run's "
-        "config and metrics, and the best run's weights of each learner into DEST (refused above 50 MB). "
-        f"Every stage is skipped when complete. The full budget takes {FULL_ESTIMATE} on a quiet 2-core "
-        "machine with 2 workers.",
+        "commit of the code that made it), DIR/results.json and plots. --publish DEST copies the table (its "
+        "records as results.json.gz), every run's config and metrics, and the best run's weights of each learner "
+        "into DEST (refused above 50 MB). "
+        f"Every stage is skipped when complete. The full budget took {FULL_ESTIMATE}, with 2 workers.",
         epilog="Exit status: 0 done, 2 bad input (another budget in DIR, a bad number), 130 interrupted (what "
         "finished is kept: run the same command again to continue).",
     )

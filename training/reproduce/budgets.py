@@ -1,8 +1,8 @@
 """The budgets of the published table: how much ``fetchcarry reproduce`` records, trains and evaluates.
 
-Two budgets: ``full`` (the published table; about 115 minutes for three training seeds on
-a quiet 2-core machine with two workers, estimated from the CPU seconds of smaller runs in
-docs/benchmarks/learning.md, "The published table") and ``smoke``
+Two budgets: ``full`` (the published table; 2 h 42 min measured for three training seeds
+on a shared 2-core machine with two workers, 12,491 CPU s: docs/benchmarks/learning.md,
+"Its time") and ``smoke``
 (every stage at a toy size, in about a minute: what the tests run). Every field is
 saved in ``DIR/reproduce.json``, so a folder is never continued with another budget. A
 budget with counts out of range raises :class:`~fetchcarry_env.errors.InputError`.
