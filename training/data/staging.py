@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
+from training.files import naming, write_atomically
 from training.rollout import EpisodeFigures, EpisodeRecord
 
 DATASETS_ENV = "MINARI_DATASETS_PATH"  # Minari's variable: where local datasets live
@@ -88,7 +89,7 @@ class Staging:
     def start(self, manifest: dict[str, Any]) -> None:
         """Create the folder and record ``manifest`` (the generation options)."""
         self.path.mkdir(parents=True, exist_ok=True)
-        _atomic_write(self.path / MANIFEST, (json.dumps(manifest, indent=2, sort_keys=True) + "\n").encode())
+        write_atomically(self.path / MANIFEST, (json.dumps(manifest, indent=2, sort_keys=True) + "\n").encode())
 
     def staged(self) -> set[int]:
         """Indices of the episodes already staged."""
@@ -116,7 +117,7 @@ class Staging:
         try:
             handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
         except OSError as error:
-            raise _naming(error, target) from error
+            raise naming(error, target) from error
         try:
             with os.fdopen(handle, "wb") as file:
                 np.savez(file, **arrays)
@@ -125,7 +126,7 @@ class Staging:
             os.replace(temporary, target)
         except OSError as error:
             Path(temporary).unlink(missing_ok=True)
-            raise _naming(error, target) from error
+            raise naming(error, target) from error
         except BaseException:
             Path(temporary).unlink(missing_ok=True)
             raise
@@ -242,20 +243,3 @@ class DatasetLock:
         if self._file is not None:
             self._file.close()  # closing releases the flock
             self._file = None
-
-
-def _naming(error: OSError, path: Path) -> OSError:
-    """``error`` with ``path`` as its file name when it names none (a full disk names no file)."""
-    if error.filename is not None:
-        return error
-    return OSError(error.errno, error.strerror or str(error), str(path))
-
-
-def _atomic_write(path: Path, data: bytes) -> None:
-    try:
-        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-        with os.fdopen(handle, "wb") as file:
-            file.write(data)
-        os.replace(temporary, path)
-    except OSError as error:
-        raise _naming(error, path) from error

@@ -21,8 +21,6 @@ import gzip
 import hashlib
 import json
 import math
-import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path
 from types import TracebackType
@@ -32,6 +30,7 @@ from fetchcarry_env.jsontext import describe, read_json_or
 from fetchcarry_env.scenario import Scenario
 from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
+from training.files import write_atomically
 
 RESULTS = "results.json"
 RESULTS_GZIP = "results.json.gz"  # the same records, gzip-compressed: how the repository keeps the published table's
@@ -206,19 +205,8 @@ def encode_results(records: Sequence[dict[str, Any]], compressed: bool = False) 
 
 def write_results(path: str | Path, records: Sequence[dict[str, Any]]) -> None:
     """Write ``records`` to ``path`` (gzip-compressed if it ends ``.gz``), atomically."""
-    write_atomically(Path(path), encode_results(records, compressed=Path(path).suffix == ".gz"))
-
-
-def write_atomically(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename: a reader sees the old file or the new."""
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "wb") as file:
-            file.write(data)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    path = Path(path)
+    write_atomically(path, encode_results(records, compressed=path.suffix == ".gz"))
 
 
 class ResultsLock(DatasetLock):

@@ -60,6 +60,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.scenario import MAX_COUNTS
+from training.files import write_atomically
 from training.learners import registry
 from training.learners.encoders import image_shape
 from training.learners.options import BCConfig
@@ -285,7 +286,7 @@ def load_policy(path: str | Path, env: Any = None) -> Any:
 def write_config(out: Path, config: dict[str, Any]) -> None:
     """Write ``config.json`` atomically."""
     out.mkdir(parents=True, exist_ok=True)
-    atomic_write(out / CONFIG_FILE, (json.dumps(config, indent=2) + "\n").encode())
+    write_atomically(out / CONFIG_FILE, (json.dumps(config, indent=2) + "\n").encode())
 
 
 def write_metrics(out: Path, rows: list[dict[str, Any]]) -> None:
@@ -424,13 +425,6 @@ def save_weights(out: Path, network: torch.nn.Module) -> None:
         os.replace(temporary, out / WEIGHTS_FILE)
     finally:
         Path(temporary).unlink(missing_ok=True)
-
-
-def atomic_write(path: Path, data: bytes) -> None:
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}_", suffix=".tmp")
-    with os.fdopen(handle, "wb") as file:
-        file.write(data)
-    os.replace(temporary, path)
 
 
 def start_run(out: str | Path, config: dict[str, Any], *, resume: bool) -> tuple[Path, dict[str, Any] | None]:

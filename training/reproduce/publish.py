@@ -25,7 +25,8 @@ from typing import Any
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, read_json
 from training.evaluation.compare import method_of
-from training.evaluation.results import RESULTS, RESULTS_GZIP, encode_results, read_results, write_atomically
+from training.evaluation.results import RESULTS, RESULTS_GZIP, encode_results, read_results
+from training.files import write_atomically
 from training.reproduce.table import on_curve_only
 
 MAX_PUBLISHED_BYTES = 50 * 2**20  # what the repository holds of a reproduction
