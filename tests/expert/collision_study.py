@@ -39,6 +39,7 @@ from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import get_family
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject, Obstacle, Robot, Scenario, Table, check_rules
+from training.speed.planner import UP_TO_THREE_OBJECTS
 
 CHOICES = {  # name: plan()'s options
     "octagon": {"corner_detail": 1},
@@ -155,11 +156,8 @@ def summary(rows: list[dict], name: str) -> str:
     )
 
 
-BENCH_GROUPS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the benchmark's cases up to three objects
-
-
 def bench_rows(
-    scale: float, time_limit: float = 10.0, groups: tuple[str, ...] = BENCH_GROUPS, choices: tuple[str, ...] = ()
+    scale: float, time_limit: float = 10.0, groups: tuple[str, ...] = UP_TO_THREE_OBJECTS, choices: tuple[str, ...] = ()
 ) -> list[dict]:
     """The benchmark's own scenarios (``training.speed.planner.cases(scale)``, its seed) with every choice.
 
@@ -224,7 +222,7 @@ def main() -> None:
         print("\n".join(bench_summary(json.loads(Path(args.summary).read_text(encoding="utf-8")))))
         return
     if args.bench is not None:
-        groups, choices = tuple(args.groups or BENCH_GROUPS), tuple(args.choices or CHOICES)
+        groups, choices = tuple(args.groups or UP_TO_THREE_OBJECTS), tuple(args.choices or CHOICES)
         rows = bench_rows(args.bench, args.time_limit, groups, choices)
         if args.out:
             Path(args.out).write_text(json.dumps(rows, indent=1), encoding="utf-8")

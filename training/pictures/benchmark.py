@@ -147,7 +147,7 @@ def plot_against_objects(rows: Sequence[Row], path: str | Path, title: str = "")
     The graded worlds' headline curve: a line per policy (its own colour) with its 95 %
     intervals as error bars, the policies side by side around each count so that the bars
     do not hide one another; n in the caption. A count where a policy solved nothing has
-    no cost ratio, so its cost line skips it.
+    no cost ratio: its cost line breaks there rather than join the counts around it.
     """
     plt = pyplot()
     policies = list(dict.fromkeys(r.policy for r in rows))
@@ -162,9 +162,8 @@ def plot_against_objects(rows: Sequence[Row], path: str | Path, title: str = "")
         low = [r.success - r.success_low for r in own]
         high = [r.success_high - r.success for r in own]
         left.errorbar(k, [r.success for r in own], yerr=[low, high], label=policy, **style)
-        solved = [r for r in own if not math.isnan(r.cost_ratio)]
-        errors = [[r.cost_ratio - r.cost_ratio_low for r in solved], [r.cost_ratio_high - r.cost_ratio for r in solved]]
-        right.errorbar([int(r.split) + shift for r in solved], [r.cost_ratio for r in solved], yerr=errors, **style)
+        errors = [[r.cost_ratio - r.cost_ratio_low for r in own], [r.cost_ratio_high - r.cost_ratio for r in own]]
+        right.errorbar(k, [r.cost_ratio for r in own], yerr=errors, **style)  # NaN (nothing solved) breaks the line
     counts = sorted({int(r.split) for r in rows})
     for axis, label in ((left, "success rate (95 % CI)"), (right, "cost ratio to the reference (95 % CI)")):
         axis.set_xticks(counts)
