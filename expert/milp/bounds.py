@@ -17,6 +17,8 @@ import math
 from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 
+import numpy as np
+
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
@@ -150,24 +152,37 @@ class Connectivity:
         key = ("two", a, b)
         if key not in self._memo:
             from_a, from_b = self.one_move_from(a), self.one_move_from(b)
-            if from_a is None or from_b is None:
-                self._memo[key] = True
-            else:
-                self._memo[key] = any(not w.intersect(v).empty for w in from_a for v in from_b)
+            self._memo[key] = True if from_a is None or from_b is None else any_overlap(from_a, from_b)
         return self._memo[key]
 
-    def one_move_from(self, a: IndexBox | None) -> list[IndexBox] | None:
-        """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``)."""
+    def one_move_from(self, a: IndexBox | None) -> np.ndarray | None:
+        """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``).
+
+        One row ``(i_lo, i_hi, j_lo, j_hi)`` per box, none of them empty.
+        """
         key = ("from", a)
         if key not in self._memo:
-            pieces: list[IndexBox] | None = []
+            pieces: list[IndexBox] = []
             for piece in self._walk(a, self.domain):
                 pieces.append(piece)
                 if len(pieces) > MAX_PIECES:
-                    pieces = None
                     break
-            self._memo[key] = pieces
+            rows = [(p.i_lo, p.i_hi, p.j_lo, p.j_hi) for p in pieces]
+            self._memo[key] = None if len(pieces) > MAX_PIECES else np.array(rows, dtype=np.int64).reshape(-1, 4)
         return self._memo[key]
+
+
+def any_overlap(first: np.ndarray, second: np.ndarray) -> bool:
+    """Whether a box of ``first`` and a box of ``second`` share a lattice point (rows ``i_lo, i_hi, j_lo, j_hi``).
+
+    All pairs at once: the scalar ``not a.intersect(b).empty`` over every pair, as arrays.
+    """
+    if not len(first) or not len(second):
+        return False
+    a, b = first[:, None, :], second[None, :, :]
+    meet_i = np.maximum(a[..., 0], b[..., 0]) <= np.minimum(a[..., 1], b[..., 1])
+    meet_j = np.maximum(a[..., 2], b[..., 2]) <= np.minimum(a[..., 3], b[..., 3])
+    return bool((meet_i & meet_j).any())
 
 
 @dataclass(frozen=True)
@@ -197,12 +212,11 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
     free = free or Connectivity(problem, deadline)
     count, pushes = len(problem.deliver), len(problem.pushes.pushable)
 
-    def expand(state):
-        delivered, held, pushed, where = state
-        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-            action = actions[key]
-            for entry, exit_box in action.poses:
-                yield _step_cost(free, problem, where, action.kind, entry), (d, h, p, exit_box)
+    def steps(where: IndexBox | None, key: tuple[str, str]) -> list[tuple[int, IndexBox]]:
+        action = actions[key]
+        return [(_step_cost(free, problem, where, action.kind, entry), exit_box) for entry, exit_box in action.poses]
+
+    expand = _expansion(problem, steps)
 
     earliest: dict[int, int] = {0: 0}
     finished: int | None = None
@@ -215,6 +229,27 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
     if finished is None:  # unreachable with a consistent problem; the counting bound takes over
         return Skeleton(1 + 2 * count, tuple(2 * d for d in range(count + 1)))
     return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(count + 1)))
+
+
+def _expansion(problem: Problem, steps: Callable[[IndexBox | None, tuple[str, str]], list]) -> Callable:
+    """The ``expand`` of a search over skeleton states ``(delivered, held, pushed, pose box)``.
+
+    ``steps(where, action)`` gives ``(cost, exit box)`` per pose of the action from base set
+    ``where``; it depends on neither the objects delivered nor the pieces pushed, so each
+    pair is computed once, however many states share it (most of the search's time before).
+    """
+    known: dict = {}
+
+    def expand(state):
+        delivered, held, pushed, where = state
+        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
+            found = known.get((where, key))
+            if found is None:
+                found = known[where, key] = steps(where, key)
+            for cost, exit_box in found:
+                yield cost, (d, h, p, exit_box)
+
+    return expand
 
 
 def skeleton_moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
@@ -249,15 +284,15 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
     actions = _actions_by_key(problem)
     grid, start = problem.grid, problem.scenario.robot.start
 
-    def expand(state):
-        delivered, held, pushed, where = state
-        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-            for entry, exit_box in actions[key].poses:
-                step = _gap_cost(grid, start, where, entry)
-                if key[0] == "push":
-                    step += _gap_cost(grid, start, entry, exit_box, touching=True)
-                yield step, (d, h, p, exit_box)
+    def steps(where: IndexBox | None, key: tuple[str, str]) -> list[tuple[float, IndexBox]]:
+        stroke = key[0] == "push"
+        return [
+            (_gap_cost(grid, start, where, entry) + (_gap_cost(grid, start, entry, exit_box, True) if stroke else 0.0),
+             exit_box)
+            for entry, exit_box in actions[key].poses
+        ]  # fmt: skip
 
+    expand = _expansion(problem, steps)
     for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
         if all_done(problem, delivered, pushed):
             return spent

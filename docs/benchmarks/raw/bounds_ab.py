@@ -1,0 +1,99 @@
+"""A/B of the planner's lower bounds: two checkouts, case by case in turn, each in a fresh process.
+
+    python docs/benchmarks/raw/bounds_ab.py OLD_CHECKOUT NEW_CHECKOUT [--limit S] [CASE ...] > rows.jsonl
+
+A case is ``covered:K:SEED`` or ``multi:K:SEED`` (``draw_paper_covered`` / ``draw_paper_multi``
+with ``default_rng(SEED)`` and K objects, as ``python -m training.speed.planner scale``
+draws them) or ``FAMILY:SEED`` (the scenario ``reset(seed=SEED)`` draws on the family's
+env). Per case and checkout, one JSON line: the whole problem's skeleton bound and travel
+bound (``expert.milp.bounds.skeleton`` and ``min_travel``, seconds and values), then one
+``plan()`` call with ``--limit`` seconds (default 10, the expert's): status, phases, Eq. 1,
+the stages' seconds. The old checkout runs first, then the new, case after case, so the
+load moves both alike. Exits 1 if the two checkouts' bounds differ on any case.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+ONE_CASE = r"""
+import json, sys, time
+import numpy as np
+import gymnasium as gym
+import fetchcarry_env  # noqa: F401
+from expert.milp.bounds import Connectivity, min_travel, skeleton
+from expert.milp.problem import prepare
+from expert.planner import plan
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
+
+case, limit = sys.argv[1], float(sys.argv[2])
+parts = case.split(":")
+if parts[0] in ("covered", "multi"):
+    draw = draw_paper_covered if parts[0] == "covered" else draw_paper_multi
+    scenario = draw(np.random.default_rng(int(parts[2])), int(parts[1]))
+    lattice = Lattice.over(scenario.area, 0.05)
+else:
+    env = gym.make("FetchCarryPush-v0", family=parts[0])
+    env.reset(seed=int(parts[1]))
+    scenario, lattice = env.unwrapped.scenario, env.unwrapped.lattice
+problem = prepare(scenario, lattice)
+clock = time.perf_counter()
+bound = skeleton(problem, Connectivity(problem))
+skeleton_s = time.perf_counter() - clock
+clock = time.perf_counter()
+travel = min_travel(problem)
+travel_s = time.perf_counter() - clock
+result = plan(scenario, time_limit=limit, lattice=lattice)
+stats = result.stats
+print(json.dumps({
+    "skeleton_s": round(skeleton_s, 4), "min_travel_s": round(travel_s, 4),
+    "skeleton": [bound.phases, list(bound.earliest)], "min_travel": round(travel, 6),
+    "status": result.status, "phases": len(result.phases), "objective": stats.get("milp_objective"),
+    **{k: round(stats.get(k) or 0.0, 3) for k in ("lower_bound_s", "decoupled_s", "build_s", "solve_s", "total_s")},
+}))
+"""
+
+CASES = (
+    *(f"covered:3:{seed}" for seed in range(7000, 7004)),
+    *(f"covered:4:{seed}" for seed in range(7000, 7002)),
+    *(f"multi:8:{seed}" for seed in range(7000, 7002)),
+    *(f"objects-8:{seed}" for seed in (7, 9, 14, 17)),
+    "apartment:0",
+    "apartment:8",
+)
+
+
+def run(checkout: str, case: str, limit: float) -> dict:
+    """One case in a fresh process of ``checkout``: its JSON row."""
+    done = subprocess.run(
+        [sys.executable, "-c", ONE_CASE, case, str(limit)],
+        cwd=checkout,
+        env={**os.environ, "PYTHONPATH": checkout},
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str]) -> int:
+    old, new, *rest = argv
+    limit = 10.0
+    if rest[:1] == ["--limit"]:
+        limit, rest = float(rest[1]), rest[2:]
+    differ = 0
+    for case in rest or CASES:
+        rows = {name: run(checkout, case, limit) for name, checkout in (("old", old), ("new", new))}
+        same = all(rows["old"][k] == rows["new"][k] for k in ("skeleton", "min_travel"))
+        differ += not same
+        for name, row in rows.items():
+            print(json.dumps({"case": case, "code": name, "bounds_equal": same, **row}), flush=True)
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
