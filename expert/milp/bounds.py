@@ -81,6 +81,7 @@ class _Action:
 
 
 MAX_PIECES = 256  # boxes listed for the points one move away before the two-move test gives up (optimistically)
+AT_START = 0  # the pose number of the start in the states of the skeleton and travel searches
 
 
 class Connectivity:
@@ -220,7 +221,8 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
 
     earliest: dict[int, int] = {0: 0}
     finished: int | None = None
-    for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
+    nothing_done = (frozenset(), problem.holding, frozenset(), AT_START)
+    for spent, (delivered, _, pushed, _) in settle(nothing_done, expand, deadline):
         earliest.setdefault(len(delivered), int(spent))
         if finished is None and len(delivered) == count and len(pushed) == pushes:
             finished = 1 + int(spent)
@@ -232,22 +234,32 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
 
 
 def _expansion(problem: Problem, steps: Callable[[IndexBox | None, tuple[str, str]], list]) -> Callable:
-    """The ``expand`` of a search over skeleton states ``(delivered, held, pushed, pose box)``.
+    """The ``expand`` of a search over skeleton states ``(delivered, held, pushed, pose)``.
 
     ``steps(where, action)`` gives ``(cost, exit box)`` per pose of the action from base set
-    ``where``; it depends on neither the objects delivered nor the pieces pushed, so each
-    pair is computed once, however many states share it (most of the search's time before).
+    ``where`` (None: the start); it depends on neither the objects delivered nor the pieces
+    pushed, so each pair is computed once, however many states share it. A state names
+    its pose box by number (``AT_START`` for the start): a state is hashed at every step
+    of the search, and a number hashes in C where a box runs Python.
     """
+    boxes: list[IndexBox | None] = [None]  # AT_START
+    numbers: dict[IndexBox, int] = {}
     known: dict = {}
+
+    def number(box: IndexBox) -> int:
+        if box not in numbers:
+            numbers[box] = len(boxes)
+            boxes.append(box)
+        return numbers[box]
 
     def expand(state):
         delivered, held, pushed, where = state
         for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
             found = known.get((where, key))
             if found is None:
-                found = known[where, key] = steps(where, key)
-            for cost, exit_box in found:
-                yield cost, (d, h, p, exit_box)
+                found = known[where, key] = [(cost, number(box)) for cost, box in steps(boxes[where], key)]
+            for cost, exit_pose in found:
+                yield cost, (d, h, p, exit_pose)
 
     return expand
 
@@ -293,7 +305,8 @@ def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
         ]  # fmt: skip
 
     expand = _expansion(problem, steps)
-    for spent, (delivered, _, pushed, _) in settle((frozenset(), problem.holding, frozenset(), None), expand, deadline):
+    nothing_done = (frozenset(), problem.holding, frozenset(), AT_START)
+    for spent, (delivered, _, pushed, _) in settle(nothing_done, expand, deadline):
         if all_done(problem, delivered, pushed):
             return spent
     return 0.0
