@@ -125,9 +125,22 @@ class _Graph:
     @classmethod
     def search(cls, problem: Problem, n: int, pair: PairCosts, deadline: Deadline) -> _Graph:
         """Every state reachable from the start with steps of at most ``n - 1`` phases each."""
-        step = pair.step
         start = (frozenset(), problem.holding, frozenset(), None, None)
-        states, ids = [start], {start: 0}
+        states = [start]
+        # A state is found by its exit box's number (hashed in C; a box's hash runs Python),
+        # and the steps of an action from a box, which depend on nothing else, are listed once.
+        boxes: list[IndexBox | None] = [None]
+        numbers: dict[IndexBox | None, int] = {None: 0}
+        exits = [0]  # per state, its exit box's number
+        ids = {(start[0], start[1], start[2], None, 0): 0}
+        steps: dict = {}  # (exit number, action) -> [(phases, travel, next exit number)], phases <= n - 1
+
+        def number(box: IndexBox) -> int:
+            if box not in numbers:
+                numbers[box] = len(boxes)
+                boxes.append(box)
+            return numbers[box]
+
         level_starts = [0, 1]
         edge_starts = [0]
         src: list[int] = []
@@ -139,15 +152,19 @@ class _Graph:
                 deadline.check()
                 delivered, held, pushed, _, where = states[sid]
                 for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-                    for entry, exit_box in pair.actions[key].poses:
-                        q, t = step(where, key[0], entry, exit_box)
-                        if q > n - 1:
-                            continue
-                        succ = (d, h, p, key, exit_box)
-                        j = ids.get(succ)
+                    found = steps.get((exits[sid], key))
+                    if found is None:
+                        found = steps[exits[sid], key] = []
+                        for entry, exit_box in pair.actions[key].poses:
+                            q, t = pair.step(where, key[0], entry, exit_box)
+                            if q <= n - 1:
+                                found.append((q, t, number(exit_box)))
+                    for q, t, x in found:
+                        j = ids.get((d, h, p, key, x))
                         if j is None:
-                            j = ids[succ] = len(states)
-                            states.append(succ)
+                            j = ids[d, h, p, key, x] = len(states)
+                            states.append((d, h, p, key, boxes[x]))
+                            exits.append(x)
                         src.append(sid)
                         dst.append(j)
                         qs.append(q)
