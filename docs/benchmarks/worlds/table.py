@@ -1,10 +1,13 @@
-"""The tables of ``docs/benchmarks/worlds.md`` from the raw results in this folder: ``python table.py [after]``.
+"""The tables of ``docs/benchmarks/worlds.md`` from the raw results in this folder: ``python table.py [after|seeds]``.
 
 Reads ``expert-<family>.json`` (``fetchcarry evaluate-expert --json``) and
 ``baselines.jsonl`` (``baselines.py``) and prints one markdown row per family. With
 ``after``: the figures after the expert's fallback plan, from the chunks
 ``after/expert-<family>-<start>.json`` (one ``evaluate-expert --start K --episodes N``
-run each; episodes of a family in order from 0), summed per family.
+run each; episodes of a family in order from 0), summed per family. With ``seeds``: the
+expert on seeds 0-499 of each family, each episode counted once, from the chunks where they
+start at 0 and otherwise from the first run (``expert-<family>.json``, seeds 0 .. N-1) and
+the chunks from N on.
 """
 
 from __future__ import annotations
@@ -38,6 +41,44 @@ def after() -> None:
         print(f"| `{family}` | " + " | ".join(cells) + " |")
 
 
+def _chunks(family: str) -> list[dict]:
+    """The family's chunks after the fallback (``after/expert-<family>-<start>.json``), by start."""
+    paths = sorted((HERE / "after").glob(f"expert-{family}-[0-9]*.json"))
+    return [{**json.loads(p.read_text())[0], "start": int(p.stem.rsplit("-", 1)[1])} for p in paths if p.stat().st_size]
+
+
+def seeds() -> None:
+    """The expert on seeds 0 .. n-1 per family (n = 500 when complete): the first run's episodes, then the chunks'."""
+    from training.stats import wilson
+
+    print("| family | seeds | delivered every object | success | 95 % Wilson lower end | from | s/decision |")
+    print("| --- | ---: | ---: | ---: | ---: | --- | ---: |")
+    for family in FAMILIES:
+        chunks = _chunks(family)
+        first = HERE / f"expert-{family}.json"
+        parts = []
+        if (not chunks or chunks[0]["start"] > 0) and first.is_file():
+            parts.append(("first run", {**json.loads(first.read_text())[0], "start": 0}))
+        parts += [("after", c) for c in chunks]
+        covered, kept = 0, []
+        for name, part in sorted(parts, key=lambda p: p[1]["start"]):
+            if part["start"] != covered:  # a gap or an overlap: count seeds 0 .. covered - 1 only, each once
+                break
+            covered += part["episodes"]
+            kept.append((name, part))
+        if not kept:
+            continue
+        episodes = sum(p["episodes"] for _, p in kept)
+        successes = sum(p["successes"] for _, p in kept)
+        decisions = sum(p["mean_steps"] * p["episodes"] for _, p in kept)
+        sources = ", ".join(
+            f"{n} {sum(p['episodes'] for m, p in kept if m == n)}" for n in dict.fromkeys(m for m, _ in kept)
+        )
+        cells = [f"{episodes}", f"{successes}", f"{successes / episodes:.1%}", f"{wilson(successes, episodes)[0]:.1%}",
+                 sources, f"{sum(p['policy_s'] for _, p in kept) / decisions:.3f}"]  # fmt: skip
+        print(f"| `{family}` | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     baselines: dict[tuple[str, str], dict] = {}
     for line in (HERE / "baselines.jsonl").read_text().splitlines():
@@ -62,4 +103,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    after() if sys.argv[1:] == ["after"] else main()
+    {"after": after, "seeds": seeds}.get(sys.argv[1] if sys.argv[1:] else "", main)()
