@@ -27,7 +27,7 @@ import numpy as np
 
 from training.evaluation.metrics import Row, by_objects, summarise
 from training.evaluation.report import source_table
-from training.evaluation.results import RESULTS, read_results, write_results
+from training.evaluation.results import RESULTS, RESULTS_GZIP, read_results, write_results
 from training.learners.runs import read_saved
 from training.pictures.benchmark import plot_against_objects, plot_demonstrations, plot_ppo_curves, plot_splits
 from training.reproduce.budgets import Budget
@@ -112,7 +112,7 @@ def write_published(
             lines.append(f"| {name} | {entry['wall']:.0f} | {entry['cpu']:.0f} |")
     graded = [{**r, "policy": r["baseline"]} for r in records if r["split"].startswith(f"{OBJECTS_SPLIT}-")]
     plots = [SPLITS_PLOT, *([OBJECTS_PLOT] if graded else []), CURVES_PLOT, DEMONSTRATIONS_PLOT]
-    lines += ["", f"Plots: {', '.join(plots)}; every record: {RESULTS}.", ""]
+    lines += ["", f"Plots: {', '.join(plots)}; every record: {RESULTS} ({RESULTS_GZIP} in a published copy).", ""]
     (out / SUMMARY).write_text("\n".join(lines))
     shown = references + [b.label for b in main]
     plot_splits([row for key, row in pooled.items() if key[0] in shown], out / SPLITS_PLOT)
