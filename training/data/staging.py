@@ -23,7 +23,6 @@ import os
 import re
 import shutil
 import sys
-import tempfile
 import zipfile
 from pathlib import Path
 from types import TracebackType
@@ -32,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import UsageError
-from training.files import naming, write_atomically
+from training.files import atomic_file, write_atomically
 from training.rollout import EpisodeFigures, EpisodeRecord
 
 DATASETS_ENV = "MINARI_DATASETS_PATH"  # Minari's variable: where local datasets live
@@ -113,23 +112,8 @@ class Staging:
         }
         arrays.update({f"observations/{k}": v for k, v in record.observations.items()})
         arrays.update({f"infos/{k}": v for k, v in record.infos.items()})
-        target = self.episode_path(index)
-        try:
-            handle, temporary = tempfile.mkstemp(dir=self.path, prefix=".episode_", suffix=".tmp")
-        except OSError as error:
-            raise naming(error, target) from error
-        try:
-            with os.fdopen(handle, "wb") as file:
-                np.savez(file, **arrays)
-                file.flush()
-                os.fsync(file.fileno())
-            os.replace(temporary, target)
-        except OSError as error:
-            Path(temporary).unlink(missing_ok=True)
-            raise naming(error, target) from error
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
+        with atomic_file(self.episode_path(index), durable=True) as file:
+            np.savez(file, **arrays)
 
     def read(self, index: int) -> EpisodeRecord:
         """Episode ``index`` as it was staged (without frames); a file that cannot be read is a ``StagingError``."""

@@ -44,12 +44,12 @@ Every refusal is a :class:`RunFolderError` naming the file.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import os
 import pickle
 import stat
-import tempfile
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import Any
@@ -60,7 +60,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.scenario import MAX_COUNTS
-from training.files import write_atomically
+from training.files import atomic_file, write_atomically
 from training.learners import registry
 from training.learners.encoders import image_shape
 from training.learners.options import BCConfig
@@ -293,12 +293,11 @@ def write_metrics(out: Path, rows: list[dict[str, Any]]) -> None:
     """Write ``metrics.csv`` (all rows, atomically; the columns of the first row)."""
     if not rows:
         return
-    handle, temporary = tempfile.mkstemp(dir=out, prefix=".metrics_", suffix=".tmp")
-    with os.fdopen(handle, "w", newline="") as file:
-        writer = csv.DictWriter(file, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    os.replace(temporary, out / METRICS_FILE)
+    text = io.StringIO(newline="")
+    writer = csv.DictWriter(text, fieldnames=list(rows[0]))
+    writer.writeheader()
+    writer.writerows(rows)
+    write_atomically(out / METRICS_FILE, text.getvalue().encode())
 
 
 def read_metrics(path: str | Path) -> list[dict[str, float]]:
@@ -316,13 +315,8 @@ def _number(text: str) -> float:
 
 def save_checkpoint(out: Path, state: dict[str, Any]) -> None:
     """Write ``checkpoint.pt`` atomically (tensors, numbers, strings and lists of them only)."""
-    handle, temporary = tempfile.mkstemp(dir=out, prefix=".checkpoint_", suffix=".tmp")
-    os.close(handle)
-    try:
-        torch.save(state, temporary)
-        os.replace(temporary, out / CHECKPOINT_FILE)
-    finally:
-        Path(temporary).unlink(missing_ok=True)
+    with atomic_file(out / CHECKPOINT_FILE) as file:
+        torch.save(state, file)
 
 
 def load_checkpoint(out: Path) -> dict[str, Any] | None:
@@ -418,13 +412,8 @@ def check_finite(file: Path, value: Any, where: str = "") -> None:
 
 
 def save_weights(out: Path, network: torch.nn.Module) -> None:
-    handle, temporary = tempfile.mkstemp(dir=out, prefix=".model_", suffix=".tmp")
-    os.close(handle)
-    try:
-        torch.save(network.state_dict(), temporary)
-        os.replace(temporary, out / WEIGHTS_FILE)
-    finally:
-        Path(temporary).unlink(missing_ok=True)
+    with atomic_file(out / WEIGHTS_FILE) as file:
+        torch.save(network.state_dict(), file)
 
 
 def start_run(out: str | Path, config: dict[str, Any], *, resume: bool) -> tuple[Path, dict[str, Any] | None]:

@@ -18,28 +18,19 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent  # conditional_digest.scenario_of reads the cases
 
 ONE_CASE = r"""
 import json, sys, time
-import numpy as np
-import gymnasium as gym
-import fetchcarry_env  # noqa: F401
+from conditional_digest import scenario_of  # this folder's, on the path after the checkout
 from expert.milp.bounds import Connectivity, min_travel, skeleton
 from expert.milp.problem import prepare
 from expert.planner import plan
-from fetchcarry_env.actions import Lattice
-from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
 
 case, limit = sys.argv[1], float(sys.argv[2])
-parts = case.split(":")
-if parts[0] in ("covered", "multi"):
-    draw = draw_paper_covered if parts[0] == "covered" else draw_paper_multi
-    scenario = draw(np.random.default_rng(int(parts[2])), int(parts[1]))
-    lattice = Lattice.over(scenario.area, 0.05)
-else:
-    env = gym.make("FetchCarryPush-v0", family=parts[0])
-    env.reset(seed=int(parts[1]))
-    scenario, lattice = env.unwrapped.scenario, env.unwrapped.lattice
+scenario, lattice = scenario_of(case)
 problem = prepare(scenario, lattice)
 clock = time.perf_counter()
 bound = skeleton(problem, Connectivity(problem))
@@ -72,7 +63,7 @@ def run(checkout: str, case: str, limit: float) -> dict:
     done = subprocess.run(
         [sys.executable, "-c", ONE_CASE, case, str(limit)],
         cwd=checkout,
-        env={**os.environ, "PYTHONPATH": checkout},
+        env={**os.environ, "PYTHONPATH": os.pathsep.join((checkout, str(HERE)))},
         capture_output=True,
         text=True,
         check=True,

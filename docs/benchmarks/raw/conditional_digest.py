@@ -33,7 +33,7 @@ from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
 
 
 def scenario_of(case: str):
-    """The scenario and lattice a case names."""
+    """The scenario and lattice a case names (``bounds_ab.py`` reads its cases with it too)."""
     parts = case.split(":")
     if parts[0] in ("covered", "multi"):
         draw = draw_paper_covered if parts[0] == "covered" else draw_paper_multi
