@@ -42,6 +42,7 @@ from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
 from expert.milp.export import export_model
 from expert.milp.grid import MAX_CORNER_DETAIL
+from expert.milp.order import add_pick_order
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.milp.variables import Milp
@@ -58,6 +59,8 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 SECOND_PASS_FIRST_SOLUTIONS = False  # the two-at-a-time pass with SCIP's first solutions, not optimal sub-plans
+ORDERED_FIRST_PLAN = True  # the first plan is the MILP's in the relaxation's order of deliveries (ordered_plan)
+ORDERED_SHARE = 0.3  # of the time left, at most, for the first plan in the relaxation's order (ordered_plan)
 LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
 _PLANNER_OPTIONS = {
     "integral",
@@ -247,6 +250,7 @@ class _Run:
     best: tuple[str, tuple] | None = None  # (status, phases) of the best plan found so far
     warm: list[SolvedPhase] | None = None  # the decoupled plan as MILP steps, for warm starts
     conditionals: dict[tuple[int, bool], Conditional] = dataclasses.field(default_factory=dict)
+    first_order: tuple[list[str], Lattice] | None = None  # the order (and lattice) of the ordered plan to come
     export_dir: Path | None = None  # where every solved MILP is written (expert.milp.export)
     corner_detail: int = 1  # Eq. 18's corner tangents (expert.milp.grid.corner_directions)
     first_move_tangents: bool = False  # the start's tangents for the first move (expert.milp.grid.start_tangents)
@@ -428,15 +432,12 @@ class _Run:
     def better_first_plan(
         self, problem: Problem, lattice: Lattice, pairs: PairCosts | None, n_phases: int, fewest: bool
     ) -> None:
-        """The decoupled plan again in the order of the relaxation's cheapest schedule, with optimal
-        sub-plans, then two objects at a time (while the best has more than ``n_phases``
-        phases, the lower bound, or is still the first plan), in ``DECOUPLED_SHARE`` of the
-        time left; the better plan is kept (fewer phases, then lower Eq. 1) and warm-starts SCIP.
+        """A first plan in the order of the relaxation's cheapest schedule, to warm-start SCIP.
 
-        The first plan's Eq. 1 is often 5-10 % above the schedule's (first solutions, a
-        greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
-        5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
-        the first plan had the lower bound's phases and the schedule's one phase more.
+        With ``ORDERED_FIRST_PLAN`` the first model's own MILP in that order comes first
+        (:meth:`ordered_plan`, inside the first solve, on the same model) and the decoupled
+        plans only when it finds no plan of the model's phases; otherwise the decoupled plans
+        now (:meth:`decoupled_plans`).
 
         ``fewest``: the model with ``n_phases`` will get the fewest-phases cuts; the
         conditional bounds that give the order are then the ones that model uses (computed once).
@@ -445,7 +446,6 @@ class _Run:
             t_bound = time.perf_counter()
             self.conditional_bounds(problem, n_phases, pairs, fewest)
             self.stats["lower_bound_s"] += time.perf_counter() - t_bound
-        t0 = time.perf_counter()
         order = list(problem.deliver)
         if pairs is not None:
             if self.conditional:
@@ -454,6 +454,23 @@ class _Run:
                 _, schedule = cheapest_schedule(problem, n_phases, pairs, self.deadline)
                 picks = [key[1] for key, _ in schedule if key[0] == "pick"]
             order = picks + [i for i in order if i not in picks]
+            if ORDERED_FIRST_PLAN:
+                self.first_order = (order, lattice)
+                return
+        self.decoupled_plans(problem, lattice, n_phases, order)
+
+    def decoupled_plans(self, problem: Problem, lattice: Lattice, n_phases: int, order: list[str]) -> None:
+        """The decoupled plan in ``order`` with optimal sub-plans, then two objects at a time (while the
+        best has more than ``n_phases`` phases, the lower bound, or is still the first plan), in
+        ``DECOUPLED_SHARE`` of the time left; the better plan is kept (fewer phases, then lower
+        Eq. 1) and warm-starts SCIP.
+
+        The first plan's Eq. 1 is often 5-10 % above the schedule's (first solutions, a
+        greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
+        5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
+        the first plan had the lower bound's phases and the schedule's one phase more.
+        """
+        t0 = time.perf_counter()
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
         for lookahead in (1, 2):
             phases = self.best[1] if self.best is not None else None
@@ -470,6 +487,45 @@ class _Run:
         self.stats["decoupled_s"] = self.stats.get("decoupled_s", 0.0) + time.perf_counter() - t0
         if self.best is not None:
             self.warm = steps_of(problem, self.best[1])
+
+    def ordered_plan(self, milp: Milp, problem: Problem, order: list[str], lattice: Lattice) -> None:
+        """The best plan of the model that delivers the objects in ``order`` (the relaxation's), as the first plan.
+
+        The model restricted to that order (:func:`expert.milp.order.add_pick_order`) is
+        solved within ``ORDERED_SHARE`` of the time left, then the restriction is removed
+        (SCIP back to its problem stage): the model is built once. Where the relaxation's
+        order is the optimum's, the plan is the optimum itself, and as warm start it lets
+        SCIP fix every option whose conditional bound it beats before the search
+        (``docs/benchmarks/planner.md``, "A first plan in the relaxation's order"). It is
+        kept when better than the best plan so far; without a plan of the model's phases
+        the decoupled plans follow (:meth:`decoupled_plans`). Recorded in
+        ``stats["ordered"]`` and ``stats["ordered_s"]``.
+        """
+        model, t0 = milp.model, time.perf_counter()
+        restriction = add_pick_order(milp, order)
+        left = self.deadline.left()
+        if left - RESERVE_S <= 0:
+            raise TimeUp
+        model.setParam("limits/time", min(left - RESERVE_S, ORDERED_SHARE * left))
+        model.optimize()
+        status = model.getStatus()
+        if status == "userinterrupt":  # SCIP caught SIGINT itself (misc/catchctrlc): pass the Ctrl-C on
+            raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+        steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
+        self.stats["ordered"] = {"status": status, "nodes": model.getNNodes(), "order": list(order)}
+        model.freeTransform()
+        for constraint in restriction:
+            model.delCons(constraint)
+        self.stats["ordered_s"] = time.perf_counter() - t0
+        fits = False
+        if steps is not None:
+            phases = phases_of(problem, steps)
+            fits = len(phases) <= milp.n_phases
+            if self.best is None or _better(self.scenario, phases, self.best[1]):
+                self._keep_decoupled(phases, "pick order of the relaxation")
+                self.warm = steps
+        if not fits:
+            self.decoupled_plans(problem, lattice, milp.n_phases, order)
 
     def conditional_bounds(self, problem: Problem, n_phases: int, pairs: PairCosts, fewest: bool) -> Conditional:
         """:func:`expert.milp.conditional.conditional_bounds`, once per phase count and ``fewest``."""
@@ -495,6 +551,8 @@ class _Run:
         """Build and solve with ``n_phases``: ``"infeasible"``, ``"time_limit"`` or ``(status, steps)``.
 
         ``fewest``: ``n_phases - 1`` phases are proven to admit no plan (adds :mod:`expert.milp.fewest`'s cuts).
+        The first model built first makes the first plan in the relaxation's order
+        (:meth:`ordered_plan`) when :meth:`better_first_plan` left one to make.
         """
         stats, deadline = self.stats, self.deadline
         record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
@@ -510,8 +568,15 @@ class _Run:
         t1 = time.perf_counter()
         record["build_s"] = t1 - t0
         stats["build_s"] += t1 - t0
+        if cond is not None:
+            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
+        if self.first_order is not None:  # the first model built
+            order, lattice = self.first_order
+            self.first_order = None
+            self.ordered_plan(milp, problem, order, lattice)
+            t1 = time.perf_counter()
         warms = [warm] if warm is not None else self.warm_starts(n_phases)
-        self.add_cuts_and_warm_start(milp, problem, n_phases, cond, warms, record)
+        self.add_warm_starts(milp, problem, n_phases, cond, warms, record)
         if self.guides and self.guide_branching:
             fitting = [steps for steps in self.guides if len(steps) <= n_phases - 1]
             record["guide_priorities"] = add_branching_hint(milp, (fitting or self.guides)[-1])
@@ -559,7 +624,7 @@ class _Run:
         known = [*self.guides, *([self.warm] if self.warm is not None else [])]
         return [steps for steps in known if len(steps) <= n_phases - 1]
 
-    def add_cuts_and_warm_start(
+    def add_warm_starts(
         self,
         milp: Milp,
         problem: Problem,
@@ -568,10 +633,8 @@ class _Run:
         warms: list[list[SolvedPhase]],
         record: dict[str, Any],
     ) -> None:
-        """The conditional cuts, the warm starts SCIP accepts (each checked) and the options the best of
-        those with ``n_phases`` phases beats (its Eq. 1 is the MILP's)."""
-        if cond is not None:
-            record["conditional_fixed"] = add_conditional_cuts(milp, cond)
+        """The warm starts SCIP accepts (each checked) and the options the best of those with
+        ``n_phases`` phases beats (its Eq. 1 is the MILP's)."""
         if not warms:
             return
         accepted = [steps for steps in warms if add_warm_start(milp, steps)]

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 
@@ -113,7 +114,13 @@ class Connectivity:
             )  # as the MILP's first move
             planes = (*planes, *tangents)
             self.blockers.append((planes, at_start + tuple(range(regular, len(planes))), regular))
-        self._memo: dict = {}
+        self._from_start: dict = {}  # answers about the start: this problem's own
+        geometry = (self.domain, tuple(planes[:regular] for planes, _, regular in self.blockers))
+        self._between = _shared_memo(geometry)  # answers between two boxes: any problem of this geometry's
+
+    def _memo(self, a: IndexBox | None) -> dict:
+        """Where answers about moves from ``a`` are kept: the start's depend on it, the others on the geometry alone."""
+        return self._from_start if a is None else self._between
 
     def _branches(self, a: IndexBox | None, w: IndexBox, depth: int):
         """The ways past blocker ``depth``: one ``(a, w)`` pair per usable region (clipped), or ``[(a, w)]``."""
@@ -139,10 +146,10 @@ class Connectivity:
 
     def connectable(self, a: IndexBox | None, b: IndexBox) -> bool:
         """True when one straight move can join a point of ``a`` (None: the exact start) to a point of ``b``."""
-        key = (a, b)
-        if key not in self._memo:
-            self._memo[key] = next(self._walk(a, b), None) is not None
-        return self._memo[key]
+        memo, key = self._memo(a), (a, b)
+        if key not in memo:
+            memo[key] = next(self._walk(a, b), None) is not None
+        return memo[key]
 
     def connectable_in_two(self, a: IndexBox | None, b: IndexBox) -> bool:
         """True when two straight moves can join ``a`` to ``b``: some lattice point is one move from both.
@@ -150,27 +157,46 @@ class Connectivity:
         Optimistic (True) when the sets one move away are too fragmented to list, so the
         bounds stay valid.
         """
-        key = ("two", a, b)
-        if key not in self._memo:
+        memo, key = self._memo(a), ("two", a, b)
+        if key not in memo:
             from_a, from_b = self.one_move_from(a), self.one_move_from(b)
-            self._memo[key] = True if from_a is None or from_b is None else any_overlap(from_a, from_b)
-        return self._memo[key]
+            memo[key] = True if from_a is None or from_b is None else any_overlap(from_a, from_b)
+        return memo[key]
 
     def one_move_from(self, a: IndexBox | None) -> np.ndarray | None:
         """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``).
 
         One row ``(i_lo, i_hi, j_lo, j_hi)`` per box, none of them empty.
         """
-        key = ("from", a)
-        if key not in self._memo:
+        memo, key = self._memo(a), ("from", a)
+        if key not in memo:
             pieces: list[IndexBox] = []
             for piece in self._walk(a, self.domain):
                 pieces.append(piece)
                 if len(pieces) > MAX_PIECES:
                     break
             rows = [(p.i_lo, p.i_hi, p.j_lo, p.j_hi) for p in pieces]
-            self._memo[key] = None if len(pieces) > MAX_PIECES else np.array(rows, dtype=np.int64).reshape(-1, 4)
-        return self._memo[key]
+            memo[key] = None if len(pieces) > MAX_PIECES else np.array(rows, dtype=np.int64).reshape(-1, 4)
+        return memo[key]
+
+
+SHARED_GEOMETRIES = 4  # the geometries whose answers are kept between problems (the most recently used)
+_SHARED: OrderedDict[Hashable, dict] = OrderedDict()
+
+
+def _shared_memo(geometry: Hashable) -> dict:
+    """The answers kept for one geometry (the domain and the blockers' regions), shared by every problem of it.
+
+    The decoupled plan's sub-problems and the expert's replanning within one episode
+    share their tables and obstacles, so each asks the same questions again; an answer
+    depends on the geometry alone, so sharing it changes no bound. The
+    ``SHARED_GEOMETRIES`` most recently used are kept.
+    """
+    memo = _SHARED.pop(geometry, None)
+    _SHARED[geometry] = memo = {} if memo is None else memo
+    while len(_SHARED) > SHARED_GEOMETRIES:
+        _SHARED.popitem(last=False)
+    return memo
 
 
 def any_overlap(first: np.ndarray, second: np.ndarray) -> bool:

@@ -12,10 +12,16 @@ continuous state variables, 0 or 1 in every solution):
 
 Every plan of the model satisfies both (the windows are exact relaxation bounds), so
 the optimum is unchanged.
+
+:func:`add_pick_order` is not a valid inequality but a restriction, for a first plan:
+the objects delivered in a given order (``docs/benchmarks/planner.md``, "A first plan in
+the relaxation's order").
 """
 
 from __future__ import annotations
 
+import itertools
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from expert.milp.deadline import NEVER, Deadline
@@ -48,6 +54,26 @@ def add_order_windows(milp: Milp, windows: Windows, deadline: Deadline = NEVER) 
                     model.addCons(now <= 1 - done, name=f"order_not_after_{tag}")
                 if k not in before:
                     model.addCons(now <= done, name=f"order_not_before_{tag}")
+
+
+def add_pick_order(milp: Milp, order: Sequence[str]) -> list:
+    """Only plans that pick the objects in ``order``: each pick once the object before it is placed.
+
+    ``pick(b)`` at phase ``k`` only if ``a``, the object before ``b`` in ``order``, is
+    delivered by phase ``k - 1`` (``delta[a][k-1]``). Objects of ``order`` the model does
+    not deliver are skipped. The optimum of the restricted model is a plan of the whole
+    one (the best with that order), not its optimum. Returns the constraints added, for
+    ``delCons`` once SCIP is back in its problem stage.
+    """
+    chain = [target for target in order if target in milp.delta]
+    added = []
+    for before, after in itertools.pairwise(chain):
+        for k in range(1, milp.n_phases):
+            now = milp.action_sum("pick", after, k)
+            if now is not None:
+                name = f"pick_order_{before}_{after}_{k}"
+                added.append(milp.model.addCons(now <= milp.delta[before][k - 1], name=name))
+    return added
 
 
 def _done_by(milp: Milp, action: tuple[str, str], k: int) -> Expr | None:

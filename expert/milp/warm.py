@@ -98,7 +98,9 @@ def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     (``checkSol``) before it is added: ``addSol`` alone is no such check (in the problem
     stage SCIP returns True for an infeasible solution too), and :func:`expert.milp.
     conditional.fix_above` relies on the answer to fix options to 0. An infeasible
-    solution is not added.
+    solution is not added. A feasible one is True even when SCIP keeps it no more (it
+    has it already: a solution of the same model solved before, which SCIP keeps through
+    ``freeTransform``).
     """
     values = solution_values(milp, steps)
     if values is None:
@@ -112,7 +114,8 @@ def add_warm_start(milp: Milp, steps: list[SolvedPhase]) -> bool:
     if not model.checkSol(solution, printreason=False, completely=True):
         model.freeSol(solution)
         return False
-    return bool(model.addSol(solution, free=True))
+    model.addSol(solution, free=True)
+    return True
 
 
 GUIDE_PRIORITY = 10  # SCIP branching priority of a guide's option binaries (the others have 0)

@@ -1,0 +1,71 @@
+"""A/B of whole ``plan()`` calls: two checkouts, case by case in turn, each case in a fresh process.
+
+    python docs/benchmarks/raw/plan_ab.py OLD_CHECKOUT NEW_CHECKOUT [--limit S] [CASE ...] > rows.jsonl
+
+Cases as in ``bounds_ab.py`` (``covered:K:SEED``, ``multi:K:SEED`` or ``FAMILY:SEED``,
+read by ``conditional_digest.scenario_of``). Per case and checkout one JSON line: the
+call's status, phases, Eq. 1, nodes of the final solve, how the first plan was made and
+the stages' seconds. Each process plans a one-object scenario first, so that imports and
+SCIP's start are not in the figures. The old checkout runs first, then the new, case
+after case, so the load moves both alike.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+ONE_CASE = r"""
+import json, sys
+import numpy as np
+from conditional_digest import scenario_of  # this folder's, on the path after the checkout
+from expert.planner import plan
+from fetchcarry_env.families import draw_paper_multi
+
+case, limit = sys.argv[1], float(sys.argv[2])
+plan(draw_paper_multi(np.random.default_rng(1), 1), time_limit=10)  # imports, SCIP's first model
+scenario, lattice = scenario_of(case)
+result = plan(scenario, time_limit=limit, lattice=lattice)
+stats = result.stats
+solves = stats.get("solves", [])
+print(json.dumps({
+    "status": result.status, "phases": len(result.phases), "objective": result.objective,
+    "gap": stats.get("gap"), "nodes": solves[-1].get("nodes") if solves else None,
+    "first_plan": stats.get("decoupled"),
+    **{k: round(stats.get(k) or 0.0, 3)
+       for k in ("lower_bound_s", "decoupled_s", "ordered_s", "build_s", "solve_s", "total_s")},
+}))
+"""
+
+
+def run(checkout: str, case: str, limit: float) -> dict:
+    """One case in a fresh process of ``checkout``: its JSON row."""
+    done = subprocess.run(
+        [sys.executable, "-c", ONE_CASE, case, str(limit)],
+        cwd=checkout,
+        env={**os.environ, "PYTHONPATH": os.pathsep.join((checkout, str(HERE)))},
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str]) -> int:
+    old, new, *rest = argv
+    limit = 30.0
+    if rest[:1] == ["--limit"]:
+        limit, rest = float(rest[1]), rest[2:]
+    for case in rest:
+        for name, checkout in (("old", old), ("new", new)):
+            print(json.dumps({"case": case, "code": name, **run(checkout, case, limit)}), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
