@@ -21,7 +21,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 ONE_CASE = r"""
-import json, sys
+import hashlib, json, sys
 import numpy as np
 from conditional_digest import scenario_of  # this folder's, on the path after the checkout
 from expert.planner import plan
@@ -35,6 +35,7 @@ stats = result.stats
 solves = stats.get("solves", [])
 print(json.dumps({
     "status": result.status, "phases": len(result.phases), "objective": result.objective,
+    "digest": hashlib.sha256(repr(result.phases).encode()).hexdigest()[:16],
     "gap": stats.get("gap"), "nodes": solves[-1].get("nodes") if solves else None,
     "first_plan": stats.get("decoupled"),
     **{k: round(stats.get(k) or 0.0, 3)
