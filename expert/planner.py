@@ -506,11 +506,7 @@ class _Run:
         left = self.deadline.left()
         if left - RESERVE_S <= 0:
             raise TimeUp
-        model.setParam("limits/time", min(left - RESERVE_S, ORDERED_SHARE * left))
-        model.optimize()
-        status = model.getStatus()
-        if status == "userinterrupt":  # SCIP caught SIGINT itself (misc/catchctrlc): pass the Ctrl-C on
-            raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+        status = _optimize(model, min(left - RESERVE_S, ORDERED_SHARE * left))
         steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
         self.stats["ordered"] = {"status": status, "nodes": model.getNNodes(), "order": list(order)}
         model.freeTransform()
@@ -584,11 +580,7 @@ class _Run:
         if remaining <= 0:
             raise TimeUp
         model = milp.model
-        model.setParam("limits/time", remaining)
-        model.optimize()
-        status = model.getStatus()
-        if status == "userinterrupt":  # SCIP caught SIGINT itself (misc/catchctrlc): pass the Ctrl-C on
-            raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+        status = _optimize(model, remaining)
         record.update(status=status, solve_s=time.perf_counter() - t1, nodes=model.getNNodes())
         stats["solve_s"] += record["solve_s"]
         if self.export_dir is not None:
@@ -656,6 +648,20 @@ class _Run:
         gap = model.getGap()
         stats["gap"] = gap if stats["dual_bound"] is not None and abs(gap) < model.infinity() else None
         return steps
+
+
+def _optimize(model: pyscipopt.Model, time_limit: float) -> str:
+    """SCIP's solve within ``time_limit`` seconds; its status. Raises ``KeyboardInterrupt`` on Ctrl-C.
+
+    SCIP catches SIGINT itself (``misc/catchctrlc``) and just stops (``userinterrupt``): the
+    Ctrl-C is passed on, so an interrupted solve never gives a plan.
+    """
+    model.setParam("limits/time", time_limit)
+    model.optimize()
+    status = model.getStatus()
+    if status == "userinterrupt":
+        raise KeyboardInterrupt("planning interrupted during the SCIP solve")
+    return status
 
 
 def _better(scenario: Scenario, phases: tuple, than: tuple) -> bool:

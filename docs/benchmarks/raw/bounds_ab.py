@@ -58,10 +58,10 @@ CASES = (
 )
 
 
-def run(checkout: str, case: str, limit: float) -> dict:
-    """One case in a fresh process of ``checkout``: its JSON row."""
+def run(checkout: str, case: str, limit: float, script: str = ONE_CASE) -> dict:
+    """One case in a fresh process of ``checkout`` running ``script``: its JSON row (``plan_ab.py`` runs its own)."""
     done = subprocess.run(
-        [sys.executable, "-c", ONE_CASE, case, str(limit)],
+        [sys.executable, "-c", script, case, str(limit)],
         cwd=checkout,
         env={**os.environ, "PYTHONPATH": os.pathsep.join((checkout, str(HERE)))},
         capture_output=True,

@@ -13,12 +13,9 @@ after case, so the load moves both alike.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
+from bounds_ab import run  # this folder's: a case in a fresh process of a checkout
 
 ONE_CASE = r"""
 import hashlib, json, sys
@@ -44,19 +41,6 @@ print(json.dumps({
 """
 
 
-def run(checkout: str, case: str, limit: float) -> dict:
-    """One case in a fresh process of ``checkout``: its JSON row."""
-    done = subprocess.run(
-        [sys.executable, "-c", ONE_CASE, case, str(limit)],
-        cwd=checkout,
-        env={**os.environ, "PYTHONPATH": os.pathsep.join((checkout, str(HERE)))},
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 def main(argv: list[str]) -> int:
     old, new, *rest = argv
     limit = 30.0
@@ -64,7 +48,7 @@ def main(argv: list[str]) -> int:
         limit, rest = float(rest[1]), rest[2:]
     for case in rest:
         for name, checkout in (("old", old), ("new", new)):
-            print(json.dumps({"case": case, "code": name, **run(checkout, case, limit)}), flush=True)
+            print(json.dumps({"case": case, "code": name, **run(checkout, case, limit, ONE_CASE)}), flush=True)
     return 0
 
 
