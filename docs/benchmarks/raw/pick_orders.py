@@ -46,6 +46,8 @@ def main(argv: list[str]) -> int:
             seconds = float(value)
         elif flag == "--save":
             save = Path(value)
+        else:
+            raise SystemExit(f"unknown option {flag!r} (see the module docstring)")
     scenario, lattice = scenario_of(case)
     options = planner._Options.parse({}, 0)
     run = planner._Run(scenario, time.perf_counter(), Deadline.after(86400.0), options.settings, 0)
