@@ -27,7 +27,7 @@ from pathlib import Path
 from conditional_digest import scenario_of  # this folder's
 
 from expert import planner
-from expert.milp.build import build
+from expert.milp.build import SolverSettings, build
 from expert.milp.conditional import add_conditional_cuts
 from expert.milp.deadline import Deadline
 from expert.milp.decode import phases_of, plan_objective, read_steps
@@ -49,8 +49,7 @@ def main(argv: list[str]) -> int:
         else:
             raise SystemExit(f"unknown option {flag!r} (see the module docstring)")
     scenario, lattice = scenario_of(case)
-    options = planner._Options.parse({}, 0)
-    run = planner._Run(scenario, time.perf_counter(), Deadline.after(86400.0), options.settings, 0)
+    run = planner._Run(scenario, time.perf_counter(), Deadline.after(86400.0), SolverSettings(), 0)
     problem, pairs, _, _ = run.lower_bound(prepare(scenario, lattice), True)
     bound, windows, cond = run.model_bounds(problem, n_phases, pairs, True, {})
     milp = build(problem, n_phases, run.settings, bound, windows, run.deadline, fewest=True)
@@ -71,17 +70,15 @@ def main(argv: list[str]) -> int:
         }
         if model.getNSols():
             row["objective"] = round(model.getObjVal(), 3)  # the MILP's objective: Eq. 1
-        if model.getNSols() and found is None:
-            phases = phases_of(problem, read_steps(problem, milp, model.getBestSol()))
-            found = Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, {"order": list(order)})
-            row.update(
-                plan_phases=len(phases),
-                validator=validate_plan(scenario, found) or "valid",
-            )
-            if save is not None:
-                save.mkdir(parents=True, exist_ok=True)
-                scenario.save(save / "scenario.json")
-                found.save(save / "plan.json")
+            if found is None:  # the first plan: validated, and saved with --save
+                phases = phases_of(problem, read_steps(problem, milp, model.getBestSol()))
+                objective = plan_objective(scenario, phases)
+                found = Plan(scenario.name, "feasible", objective, phases, {"order": list(order)})
+                row.update(plan_phases=len(phases), validator=validate_plan(scenario, found) or "valid")
+                if save is not None:
+                    save.mkdir(parents=True, exist_ok=True)
+                    scenario.save(save / "scenario.json")
+                    found.save(save / "plan.json")
         print(json.dumps(row), flush=True)
         model.freeTransform()
         for constraint in restriction:
