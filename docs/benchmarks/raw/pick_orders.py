@@ -1,6 +1,7 @@
 """Whether a model of N phases admits a plan: the planner's N-phase model solved once per pick order.
 
     python docs/benchmarks/raw/pick_orders.py CASE N [--seconds S] [--save DIR] > rows.jsonl
+    python docs/benchmarks/raw/pick_orders.py CASE N --relaxation-order
 
 ``CASE`` as in ``bounds_ab.py`` (``covered:K:SEED``, ``multi:K:SEED`` or ``FAMILY:SEED``).
 The model is the one :func:`expert.planner.plan` builds for N phases (the same bounds,
@@ -13,7 +14,9 @@ plan, the best one's Eq. 1 (``objective``). The first plan found is checked by
 scenario (``fetchcarry validate`` reads both).
 Every order proven infeasible proves the N-phase model infeasible; a time-limited order
 proves nothing. The orders' solves are wall-clock bound, so a rerun can find the plan in
-another order, or none.
+another order, or none. ``--relaxation-order`` prints only the pick order of the N-phase
+relaxation's cheapest schedule (``Conditional.order``, the order the planner's ordered
+first plan takes when N is its first model).
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from expert.validate import validate_plan
 def main(argv: list[str]) -> int:
     case, n_phases, *rest = argv
     n_phases, seconds, save = int(n_phases), 20.0, None
+    relaxation_only = "--relaxation-order" in rest
+    rest = [arg for arg in rest if arg != "--relaxation-order"]
     while rest:
         flag, value, *rest = rest
         if flag == "--seconds":
@@ -52,6 +57,9 @@ def main(argv: list[str]) -> int:
     run = planner._Run(scenario, time.perf_counter(), Deadline.after(86400.0), SolverSettings(), 0)
     problem, pairs, _, _ = run.lower_bound(prepare(scenario, lattice), True)
     bound, windows, cond = run.model_bounds(problem, n_phases, pairs, True, {})
+    if relaxation_only:
+        print(json.dumps({"case": case, "phases": n_phases, "relaxation_order": cond.order("pick")}))
+        return 0
     milp = build(problem, n_phases, run.settings, bound, windows, run.deadline, fewest=True)
     add_conditional_cuts(milp, cond)
     model, found = milp.model, None
