@@ -58,10 +58,11 @@ DECOUPLED_FROM = 4  # objects (3 with pushes): from this many the decoupled plan
 DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
-SECOND_PASS_FIRST_SOLUTIONS = False  # the two-at-a-time pass with SCIP's first solutions, not optimal sub-plans
+SECOND_PASS_FIRST_SOLUTIONS = False  # the passes of several objects at a time with SCIP's first solutions
 ORDERED_FIRST_PLAN = True  # the first plan is the MILP's in the relaxation's order of deliveries (ordered_plan)
 ORDERED_SHARE = 0.3  # of the time left, at most, for the first plan in the relaxation's order (ordered_plan)
-LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a second pass with two objects at a time is tried
+LOOKAHEADS = (1, 2, 3)  # objects planned together per step of the decoupled passes, one pass each (decoupled_plans)
+LOOKAHEAD_MIN_S = 0.5  # seconds left in that share before a pass with more objects at a time is tried
 _PLANNER_OPTIONS = {
     "integral",
     "lower_bound",
@@ -460,25 +461,27 @@ class _Run:
         self.decoupled_plans(problem, lattice, n_phases, order)
 
     def decoupled_plans(self, problem: Problem, lattice: Lattice, n_phases: int, order: list[str]) -> None:
-        """The decoupled plan in ``order`` with optimal sub-plans, then two objects at a time (while the
-        best has more than ``n_phases`` phases, the lower bound, or is still the first plan), in
-        ``DECOUPLED_SHARE`` of the time left; the better plan is kept (fewer phases, then lower
-        Eq. 1) and warm-starts SCIP.
+        """The decoupled plan in ``order`` with optimal sub-plans, then two and three objects at a
+        time (``LOOKAHEADS``: while the best has more than ``n_phases`` phases, the lower bound, or
+        is still the first plan; never all the objects at once), in ``DECOUPLED_SHARE`` of the time
+        left; the better plan is kept (fewer phases, then lower Eq. 1) and warm-starts SCIP.
 
         The first plan's Eq. 1 is often 5-10 % above the schedule's (first solutions, a
         greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
         5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
-        the first plan had the lower bound's phases and the schedule's one phase more.
+        the first plan had the lower bound's phases and the schedule's one phase more. Three at
+        a time finds the plans of the fewest phases that push clutter while carrying another
+        object (``docs/benchmarks/planner.md``, "Three objects at a time").
         """
         t0 = time.perf_counter()
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
-        for lookahead in (1, 2):
+        for lookahead in (n for n in LOOKAHEADS if n == 1 or n < len(order)):
             phases = self.best[1] if self.best is not None else None
             good = phases is not None and len(phases) <= n_phases and self.stats.get("decoupled") != "nearest"
-            if lookahead == 2 and (good or budget.left() < LOOKAHEAD_MIN_S):
+            if lookahead > 1 and (good or budget.left() < LOOKAHEAD_MIN_S):
                 break
             try:
-                sub_planner = _first_solution_planner if lookahead == 2 and SECOND_PASS_FIRST_SOLUTIONS else plan
+                sub_planner = _first_solution_planner if lookahead > 1 and SECOND_PASS_FIRST_SOLUTIONS else plan
                 found = decoupled_plan(self.scenario, order, lattice, budget, sub_planner, lookahead)
             except TimeUp:
                 break
