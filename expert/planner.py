@@ -470,8 +470,8 @@ class _Run:
         greedy order), and SCIP's incumbent starts from the warm start: kept alone, it left
         5-object plans 9 % above the optimum at a 1 s limit, and a 4-object one 16 % above when
         the first plan had the lower bound's phases and the schedule's one phase more. Three at
-        a time finds the plans of the fewest phases that push clutter while carrying another
-        object (``docs/benchmarks/planner.md``, "Three objects at a time").
+        a time finds plans of the fewest phases that one and two at a time miss on covered
+        four (``docs/benchmarks/planner.md``, "Three objects at a time").
         """
         t0 = time.perf_counter()
         budget = Deadline(min(self.deadline.at, time.perf_counter() + DECOUPLED_SHARE * self.deadline.left()))
@@ -491,7 +491,7 @@ class _Run:
         if self.best is not None:
             self.warm = steps_of(problem, self.best[1])
 
-    def ordered_plan(self, milp: Milp, problem: Problem, order: list[str], lattice: Lattice) -> None:
+    def ordered_plan(self, milp: Milp, problem: Problem, order: list[str], lattice: Lattice) -> bool:
         """The best plan of the model that delivers the objects in ``order`` (the relaxation's), as the first plan.
 
         The model restricted to that order (:func:`expert.milp.order.add_pick_order`) is
@@ -503,6 +503,12 @@ class _Run:
         kept when better than the best plan so far; without a plan of the model's phases
         the decoupled plans follow (:meth:`decoupled_plans`). Recorded in
         ``stats["ordered"]`` and ``stats["ordered_s"]``.
+
+        When the order's model is infeasible at its root, the whole model is solved at its
+        root too (:meth:`root_proof`) before any decoupled plan; where that proves it
+        infeasible, the decoupled plans aim at one phase more (a plan of the next model's
+        phases needs no pass of more objects at a time) and True is returned: the model
+        needs no further solve. Otherwise False.
         """
         model, t0 = milp.model, time.perf_counter()
         restriction = add_pick_order(milp, order)
@@ -511,11 +517,17 @@ class _Run:
             raise TimeUp
         status = _optimize(model, min(left - RESERVE_S, ORDERED_SHARE * left))
         steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
+        at_root = status == "infeasible" and model.getNNodes() <= 1
         self.stats["ordered"] = {"status": status, "nodes": model.getNNodes(), "order": list(order)}
         model.freeTransform()
         for constraint in restriction:
             model.delCons(constraint)
         self.stats["ordered_s"] = time.perf_counter() - t0
+        if at_root:
+            steps = self.root_proof(milp, problem)
+            if steps == "infeasible":
+                self.decoupled_plans(problem, lattice, milp.n_phases + 1, order)
+                return True
         fits = False
         if steps is not None:
             phases = phases_of(problem, steps)
@@ -525,6 +537,31 @@ class _Run:
                 self.warm = steps
         if not fits:
             self.decoupled_plans(problem, lattice, milp.n_phases, order)
+        return False
+
+    def root_proof(self, milp: Milp, problem: Problem) -> str | list[SolvedPhase] | None:
+        """The whole model solved at its root node only: ``"infeasible"``, the steps of a plan found, or None.
+
+        A node limit, not a time limit, so the outcome is the same at any load. The model is
+        back in its problem stage afterwards unless it was proven infeasible. Counted in
+        ``stats["ordered_s"]``; SCIP's status and nodes in ``stats["ordered"]["root"]`` and ``["root_nodes"]``.
+        """
+        model, t0 = milp.model, time.perf_counter()
+        left = self.deadline.left() - RESERVE_S
+        if left <= 0:
+            raise TimeUp
+        model.setParam("limits/nodes", 1)
+        try:
+            status = _optimize(model, left)
+        finally:
+            model.setParam("limits/nodes", -1)
+        self.stats["ordered"].update(root=status, root_nodes=model.getNNodes())
+        infeasible = status in ("infeasible", "inforunbd")
+        steps = read_steps(problem, milp, model.getBestSol()) if not infeasible and model.getNSols() else None
+        if not infeasible:
+            model.freeTransform()
+        self.stats["ordered_s"] += time.perf_counter() - t0
+        return "infeasible" if infeasible else steps
 
     def conditional_bounds(self, problem: Problem, n_phases: int, pairs: PairCosts, fewest: bool) -> Conditional:
         """:func:`expert.milp.conditional.conditional_bounds`, once per phase count and ``fewest``."""
@@ -572,7 +609,9 @@ class _Run:
         if self.first_order is not None:  # the first model built
             order, lattice = self.first_order
             self.first_order = None
-            self.ordered_plan(milp, problem, order, lattice)
+            if self.ordered_plan(milp, problem, order, lattice):  # proven infeasible at its root (in ordered_s)
+                record.update(status="infeasible", solve_s=0.0, nodes=stats["ordered"]["root_nodes"], root_proof=True)
+                return "infeasible"
             t1 = time.perf_counter()
         warms = [warm] if warm is not None else self.warm_starts(n_phases)
         self.add_warm_starts(milp, problem, n_phases, cond, warms, record)

@@ -114,3 +114,47 @@ def test_first_plan_comes_before_the_bounds(monkeypatch):
     assert result.stats["timed_out"] and result.stats["gap"] is None
     assert result.stats["decoupled"] == "nearest"
     assert validate_plan(scenario, result) == []
+
+
+@pytest.mark.parametrize(("count", "passes"), [(3, [1, 2]), (4, [1, 2, 3])])
+def test_the_passes_never_plan_every_object_at_once(monkeypatch, count, passes):
+    """One pass per lookahead while none gives the model's phases, but never all the objects together.
+
+    A pass of all the objects would be the whole problem again (a plan() inside plan(), without end).
+    """
+    import expert.planner as planner
+
+    tried = []
+
+    def no_plan(scenario, order, lattice, budget, sub_planner, lookahead=1, **kwargs):
+        tried.append(lookahead)
+        return None
+
+    monkeypatch.setattr(planner, "decoupled_plan", no_plan)
+    scenario = draw_paper_covered(np.random.default_rng(7001), count)
+    lattice = Lattice.over(scenario.area, 0.05)
+    run = planner._Run(scenario, 0.0, Deadline.after(60.0), planner.SolverSettings(), 0)
+    run.decoupled_plans(prepare(scenario, lattice), lattice, 3, [o.id for o in scenario.objects])
+    assert tried == passes
+
+
+def test_three_at_a_time_finds_the_fewest_phases_where_two_at_a_time_does_not():
+    """Four objects, every goal covered (seed 7002): two at a time gives 19 phases, three at a time 18.
+
+    The 18-phase plan pushes clutter while carrying another object, which no step of
+    one or two objects sees; 17 phases admit no plan (the skeleton's bound), so 18 is the fewest.
+    """
+    import expert.planner as planner
+
+    scenario = draw_paper_covered(np.random.default_rng(7002), 4)
+    lattice = Lattice.over(scenario.area, 0.05)
+    order = [o.id for o in scenario.objects]
+    two = decoupled_plan(scenario, order, lattice, Deadline.after(120.0), plan, lookahead=2)
+    assert two is not None and len(two) == 19
+    run = planner._Run(scenario, 0.0, Deadline.after(300.0), planner.SolverSettings(), 0)
+    problem = prepare(scenario, lattice)
+    run.decoupled_plans(problem, lattice, 17, order)
+    status, phases = run.best
+    assert run.stats["decoupled"] == "schedule, lookahead 3"
+    assert len(phases) == 18 and run.warm is not None
+    assert validate_plan(scenario, Plan(scenario.name, status, plan_objective(scenario, phases), phases, {})) == []
