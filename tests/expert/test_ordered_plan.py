@@ -61,3 +61,23 @@ def test_without_time_for_it_the_decoupled_plan_comes_instead(monkeypatch):
     assert result.stats["decoupled"].startswith("schedule")
     assert result.status == "optimal"
     assert validate_plan(scenario, result) == []
+
+
+def test_a_model_infeasible_at_its_root_is_solved_no_further(monkeypatch):
+    """Three covered goals (seed 7007): the first model (14 phases) and its relaxation's order admit no plan.
+
+    The root proof settles the model (no second solve of it), the decoupled plans aim at
+    15 phases, and the answer is the optimum the planner finds without the ordered plan.
+    """
+    scenario = draw_paper_covered(np.random.default_rng(7007), 3)
+    result = plan(scenario, time_limit=120.0)
+    first, last = result.stats["solves"][0], result.stats["solves"][-1]
+    assert result.stats["ordered"]["status"] == "infeasible" and result.stats["ordered"]["root"] == "infeasible"
+    assert first["status"] == "infeasible" and first["root_proof"] is True
+    assert last["phases"] == first["phases"] + 1 and last["warm_start"] is True
+    monkeypatch.setattr(planner, "ORDERED_FIRST_PLAN", False)
+    plain = plan(scenario, time_limit=120.0)
+    assert result.status == plain.status == "optimal"
+    assert len(result.phases) == len(plain.phases)
+    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
+    assert validate_plan(scenario, result) == []
