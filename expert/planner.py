@@ -523,11 +523,12 @@ class _Run:
         for constraint in restriction:
             model.delCons(constraint)
         self.stats["ordered_s"] = time.perf_counter() - t0
+        proven_infeasible = False
         if at_root:
             steps = self.root_proof(milp, problem)
-            if steps == "infeasible":
-                self.decoupled_plans(problem, lattice, milp.n_phases + 1, order)
-                return True
+            proven_infeasible = steps == "infeasible"
+            if proven_infeasible:
+                steps = None
         fits = False
         if steps is not None:
             phases = phases_of(problem, steps)
@@ -536,8 +537,9 @@ class _Run:
                 self._keep_decoupled(phases, "pick order of the relaxation")
                 self.warm = steps
         if not fits:
-            self.decoupled_plans(problem, lattice, milp.n_phases, order)
-        return False
+            aim = milp.n_phases + 1 if proven_infeasible else milp.n_phases
+            self.decoupled_plans(problem, lattice, aim, order)
+        return proven_infeasible
 
     def root_proof(self, milp: Milp, problem: Problem) -> str | list[SolvedPhase] | None:
         """The whole model solved at its root node only: ``"infeasible"``, the steps of a plan found, or None.
