@@ -352,9 +352,9 @@ class _Run:
         free = Connectivity(problem, deadline)
         pairs = PairCosts(problem, free, deadline) if use_bound else None
         if use_bound:
-            relaxation = skeleton(problem, free, deadline)
+            relaxation = skeleton(problem, pairs, deadline)
             problem = dataclasses.replace(
-                problem, earliest=relaxation.earliest, min_travel=min_travel(problem, deadline)
+                problem, earliest=relaxation.earliest, min_travel=min_travel(problem, pairs, deadline)
             )
             proven = max(counting_bound(problem), relaxation.phases)
         else:

@@ -23,6 +23,7 @@ import numpy as np
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
+from expert.milp.skeleton_graph import SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
 
@@ -82,7 +83,6 @@ class _Action:
 
 
 MAX_PIECES = 256  # boxes listed for the points one move away before the two-move test gives up (optimistically)
-AT_START = 0  # the pose number of the start in the states of the skeleton and travel searches
 
 
 class Connectivity:
@@ -225,7 +225,7 @@ class Skeleton:
     earliest: tuple[int, ...]
 
 
-def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> Skeleton:
+def skeleton(problem: Problem, pairs: PairCosts | None = None, deadline: Deadline = NEVER) -> Skeleton:
     """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
 
     Shortest path over the states (delivered, held, pushed, last pose) where each
@@ -234,108 +234,30 @@ def skeleton(problem: Problem, free: Connectivity | None = None, deadline: Deadl
     costs 1 more unless the previous pose can already be the stroke's start (a push
     acts from the previous phase's base). Poses are boxes of lattice points; taking
     any point of a box on entry and any on exit only makes the bound weaker, never wrong.
+    The search is over ``pairs``' graph (:class:`expert.milp.skeleton_graph.SkeletonGraph`),
+    which the other bounds share.
     """
-    actions = _actions_by_key(problem)
-    free = free or Connectivity(problem, deadline)
-    count, pushes = len(problem.deliver), len(problem.pushes.pushable)
-
-    def steps(where: IndexBox | None, key: tuple[str, str]) -> list[tuple[int, IndexBox]]:
-        action = actions[key]
-        return [(_step_cost(free, problem, where, action.kind, entry), exit_box) for entry, exit_box in action.poses]
-
-    expand = _expansion(problem, steps)
-
-    earliest: dict[int, int] = {0: 0}
-    finished: int | None = None
-    nothing_done = (frozenset(), problem.holding, frozenset(), AT_START)
-    for spent, (delivered, _, pushed, _) in settle(nothing_done, expand, deadline):
-        earliest.setdefault(len(delivered), int(spent))
-        if finished is None and len(delivered) == count and len(pushed) == pushes:
-            finished = 1 + int(spent)
-        if finished is not None and len(earliest) == count + 1:
-            break
-    if finished is None:  # unreachable with a consistent problem; the counting bound takes over
+    graph = (pairs or PairCosts(problem, deadline=deadline)).graph(deadline)
+    phases = graph.least_from_start(graph.q.astype(float), deadline)
+    count = len(problem.deliver)
+    done = phases[graph.finished]
+    if not done.size or not np.isfinite(done.min()):  # unreachable with a consistent problem: counting takes over
         return Skeleton(1 + 2 * count, tuple(2 * d for d in range(count + 1)))
-    return Skeleton(finished, tuple(earliest.get(d, 2 * d) for d in range(count + 1)))
+    earliest = [phases[graph.delivered == d].min(initial=np.inf) for d in range(count + 1)]
+    return Skeleton(1 + int(done.min()), tuple(int(e) if np.isfinite(e) else 2 * d for d, e in enumerate(earliest)))
 
 
-def _expansion(problem: Problem, steps: Callable[[IndexBox | None, tuple[str, str]], list]) -> Callable:
-    """The ``expand`` of a search over skeleton states ``(delivered, held, pushed, pose)``.
-
-    ``steps(where, action)`` gives ``(cost, exit box)`` per pose of the action from base set
-    ``where`` (None: the start); it depends on neither the objects delivered nor the pieces
-    pushed, so each pair is computed once, however many states share it. A state names
-    its pose box by number (``AT_START`` for the start): a state is hashed at every step
-    of the search, and a number hashes in C where a box runs Python.
-    """
-    boxes: list[IndexBox | None] = [None]  # AT_START
-    numbers: dict[IndexBox, int] = {}
-    known: dict = {}
-
-    def number(box: IndexBox) -> int:
-        if box not in numbers:
-            numbers[box] = len(boxes)
-            boxes.append(box)
-        return numbers[box]
-
-    def expand(state):
-        delivered, held, pushed, where = state
-        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-            found = known.get((where, key))
-            if found is None:
-                found = known[where, key] = [(cost, number(box)) for cost, box in steps(boxes[where], key)]
-            for cost, exit_pose in found:
-                yield cost, (d, h, p, exit_pose)
-
-    return expand
-
-
-def skeleton_moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
-    """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``."""
-    moves = []
-    if held is not None:
-        if all(c in pushed for c in problem.covers.get(held, ())):
-            moves.append((("place", held), (delivered | {held}, None, pushed)))
-    else:
-        for object_id in problem.deliver:
-            if object_id not in delivered:
-                moves.append((("pick", object_id), (delivered, object_id, pushed)))
-    for clutter_id in problem.pushes.pushable:  # with an empty hand or holding an object
-        if clutter_id not in pushed:
-            moves.append((("push", clutter_id), (delivered, held, pushed | {clutter_id})))
-    return moves
-
-
-def all_done(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
-    """Whether a skeleton state has every object delivered and every covering piece pushed."""
-    return len(delivered) == len(problem.deliver) and len(pushed) == len(problem.pushes.pushable)
-
-
-def min_travel(problem: Problem, deadline: Deadline = NEVER) -> float:
+def min_travel(problem: Problem, pairs: PairCosts | None = None, deadline: Deadline = NEVER) -> float:
     """A lower bound (metres) on the travel term of Eq. 1 of any plan: the cheapest order of actions.
 
-    The same search as :func:`skeleton`, costing each step by ``travel_cost`` over the
+    The same graph as :func:`skeleton`'s, each step costed by ``travel_cost`` over the
     gap between the previous pose box (or the start) and the next (``travel_cost`` is a
     norm, so detours only add to it), plus a push's own stroke. The MILP states it as
     the valid inequality ``travel >= min_travel`` (``expert.milp.motion``).
     """
-    actions = _actions_by_key(problem)
-    grid, start = problem.grid, problem.scenario.robot.start
-
-    def steps(where: IndexBox | None, key: tuple[str, str]) -> list[tuple[float, IndexBox]]:
-        stroke = key[0] == "push"
-        return [
-            (_gap_cost(grid, start, where, entry) + (_gap_cost(grid, start, entry, exit_box, True) if stroke else 0.0),
-             exit_box)
-            for entry, exit_box in actions[key].poses
-        ]  # fmt: skip
-
-    expand = _expansion(problem, steps)
-    nothing_done = (frozenset(), problem.holding, frozenset(), AT_START)
-    for spent, (delivered, _, pushed, _) in settle(nothing_done, expand, deadline):
-        if all_done(problem, delivered, pushed):
-            return spent
-    return 0.0
+    graph = (pairs or PairCosts(problem, deadline=deadline)).graph(deadline)
+    done = graph.least_from_start(graph.t, deadline)[graph.finished]
+    return float(done.min()) if done.size and np.isfinite(done.min()) else 0.0
 
 
 def min_objective(
@@ -414,6 +336,14 @@ class PairCosts:
         self.free = free or Connectivity(problem, deadline)
         self.cache: dict = {}
         self.steps: dict = {}
+        self._graph: SkeletonGraph | None = None
+
+    def graph(self, deadline: Deadline = NEVER) -> SkeletonGraph:
+        """The skeleton graph of the problem with these steps' costs (built on the first call, then kept)."""
+        if self._graph is None:
+            poses = {key: action.poses for key, action in self.actions.items()}
+            self._graph = SkeletonGraph.build(self.problem, poses, self.step, deadline)
+        return self._graph
 
     def step(self, where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
         """Least phases and least travel (metres) from base set ``where`` (None: the start) through one pose.

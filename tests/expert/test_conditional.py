@@ -107,7 +107,7 @@ def test_the_order_of_picks_is_the_cheapest_schedules(seed):
     scenario = families.draw_paper_multi(np.random.default_rng(seed), 4)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
     pairs = PairCosts(problem, Connectivity(problem))
-    n_phases = skeleton(problem, pairs.free).phases + 1
+    n_phases = skeleton(problem, pairs).phases + 1
     _, schedule = cheapest_schedule(problem, n_phases, pairs)
     picks = [key[1] for key, _ in schedule if key[0] == "pick"]
     assert conditional_bounds(problem, n_phases, pairs).order("pick") == picks

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from expert.milp.bounds import Connectivity, PairCosts, action_windows, skeleton
+from expert.milp.bounds import PairCosts, action_windows, skeleton
 from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
@@ -67,9 +67,8 @@ def test_windows_are_unions_and_the_last_action_is_at_the_end():
     """V-C: the pick is early (carried through the push) or late (after an empty-hand push), never between."""
     scenario = families.draw_paper_push(np.random.default_rng(2024), "A")
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
-    free = Connectivity(problem)
-    n = skeleton(problem, free).phases
-    pairs = PairCosts(problem, free)
+    pairs = PairCosts(problem)
+    n = skeleton(problem, pairs).phases
     loose = action_windows(problem, n, pairs)
     tight = action_windows(problem, n, pairs, last_at_end=True)
     assert tight.phases[("place", "bottle")] == {n - 1} < loose.phases[("place", "bottle")]

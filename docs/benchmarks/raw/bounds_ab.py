@@ -24,8 +24,8 @@ HERE = Path(__file__).resolve().parent  # conditional_digest.scenario_of reads t
 
 ONE_CASE = r"""
 import json, sys, time
-from conditional_digest import scenario_of  # this folder's, on the path after the checkout
-from expert.milp.bounds import Connectivity, min_travel, skeleton
+from conditional_digest import _SEARCHED_PER_CALL, scenario_of  # this folder's, on the path after the checkout
+from expert.milp.bounds import Connectivity, PairCosts, min_travel, skeleton
 from expert.milp.problem import prepare
 from expert.planner import plan
 
@@ -33,10 +33,11 @@ case, limit = sys.argv[1], float(sys.argv[2])
 scenario, lattice = scenario_of(case)
 problem = prepare(scenario, lattice)
 clock = time.perf_counter()
-bound = skeleton(problem, Connectivity(problem))
+costs = Connectivity(problem) if _SEARCHED_PER_CALL else PairCosts(problem)  # the shared graph's costs, later
+bound = skeleton(problem, costs)
 skeleton_s = time.perf_counter() - clock
 clock = time.perf_counter()
-travel = min_travel(problem)
+travel = min_travel(problem) if _SEARCHED_PER_CALL else min_travel(problem, costs)
 travel_s = time.perf_counter() - clock
 result = plan(scenario, time_limit=limit, lattice=lattice)
 stats = result.stats

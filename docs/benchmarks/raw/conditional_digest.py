@@ -25,11 +25,22 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 from expert.milp.bounds import Connectivity, PairCosts, skeleton
-from expert.milp.conditional import _Graph, conditional_bounds
+from expert.milp import conditional
+from expert.milp.conditional import conditional_bounds
 from expert.milp.deadline import NEVER
 from expert.milp.problem import prepare
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
+
+
+_SEARCHED_PER_CALL = hasattr(conditional, "_Graph")  # checkouts before the skeleton graph was shared (85a1b2c)
+
+
+def graph_of(problem, n_phases: int, pairs: PairCosts):
+    """The skeleton graph the conditional bounds of ``n_phases`` search, in this checkout's code."""
+    if _SEARCHED_PER_CALL:
+        return conditional._Graph.search(problem, n_phases, pairs, NEVER)
+    return pairs.graph().within(n_phases)
 
 
 def scenario_of(case: str):
@@ -48,18 +59,18 @@ def digest(case: str) -> tuple[str, float, float]:
     """The case's digest, and the seconds of its first graph search and of its first conditional bounds."""
     problem = prepare(*scenario_of(case))
     free = Connectivity(problem)
-    n = skeleton(problem, free).phases
     pairs = PairCosts(problem, free)
+    n = skeleton(problem, free if _SEARCHED_PER_CALL else pairs).phases
     sha = hashlib.sha256()
     clock = time.perf_counter()
-    _Graph.search(problem, n, pairs, NEVER)
+    graph_of(problem, n, pairs)
     search_s = time.perf_counter() - clock
     clock = time.perf_counter()
     conditional_bounds(problem, n, pairs, NEVER)
     conditional_s = time.perf_counter() - clock
     for phases in (n, n + 1):
         for last_at_end in (False, True):
-            graph = _Graph.search(problem, phases, pairs, NEVER)
+            graph = graph_of(problem, phases, pairs)
             sha.update(repr(graph.states).encode())
             for array in (graph.src, graph.dst, graph.q, graph.t):
                 sha.update(array.tobytes())
