@@ -33,7 +33,7 @@ from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
 
 
-_SEARCHED_PER_CALL = hasattr(conditional, "_Graph")  # checkouts before the skeleton graph was shared (85a1b2c)
+_SEARCHED_PER_CALL = hasattr(conditional, "_Graph")  # checkouts before e6bf9b1, where the skeleton graph became shared
 
 
 def graph_of(problem, n_phases: int, pairs: PairCosts):
