@@ -24,14 +24,13 @@ import gymnasium as gym
 import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the env ids)
-from expert.milp.bounds import Connectivity, PairCosts, skeleton
 from expert.milp import conditional
+from expert.milp.bounds import Connectivity, PairCosts, skeleton
 from expert.milp.conditional import conditional_bounds
 from expert.milp.deadline import NEVER
 from expert.milp.problem import prepare
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
-
 
 _SEARCHED_PER_CALL = hasattr(conditional, "_Graph")  # checkouts before e6bf9b1, where the skeleton graph became shared
 
