@@ -23,7 +23,7 @@ import numpy as np
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
-from expert.milp.skeleton_graph import SkeletonGraph, all_done, skeleton_moves
+from expert.milp.skeleton_graph import ActionGraph, SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
 
 
@@ -328,13 +328,16 @@ def cheapest_schedule(
 
 
 class PairCosts:
-    """Least phases and least travel between two consecutive actions, over all their pose pairs (cached)."""
+    """The cost of a skeleton step, least phases and least travel through one pose (cached), and the graph of them.
+
+    Every bound of this module and of :mod:`expert.milp.conditional` searches the one
+    :class:`~expert.milp.skeleton_graph.SkeletonGraph` that :meth:`graph` builds.
+    """
 
     def __init__(self, problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> None:
         self.problem = problem
         self.actions = _actions_by_key(problem)
         self.free = free or Connectivity(problem, deadline)
-        self.cache: dict = {}
         self.steps: dict = {}
         self._graph: SkeletonGraph | None = None
 
@@ -359,21 +362,6 @@ class PairCosts:
                 travel += _gap_cost(grid, start, entry, exit_box, touching=True)
             found = self.steps[key] = (_step_cost(self.free, self.problem, where, kind, entry), travel)
         return found
-
-    def __call__(self, previous: tuple[str, str] | None, key: tuple[str, str]) -> tuple[int, float]:
-        if (previous, key) not in self.cache:
-            problem, action = self.problem, self.actions[key]
-            grid, start = problem.grid, problem.scenario.robot.start
-            exits = [None] if previous is None else list(dict.fromkeys(e for _, e in self.actions[previous].poses))
-            phases = min(_step_cost(self.free, problem, w, action.kind, en) for w in exits for en, _ in action.poses)
-            travel = min(
-                _gap_cost(grid, start, w, en)
-                + (_gap_cost(grid, start, en, ex, touching=True) if action.kind == "push" else 0.0)
-                for w in exits
-                for en, ex in action.poses
-            )
-            self.cache[(previous, key)] = (phases, travel)
-        return self.cache[(previous, key)]
 
 
 def action_windows(
@@ -400,40 +388,44 @@ def action_windows(
     (its state is finished) is then at ``N - 1`` exactly, so an action that is always
     the last (the place of a single object) can only be at ``N - 1``.
     """
-    pair = pair or PairCosts(problem, deadline=deadline)
-
-    def expand(state):
-        delivered, held, pushed, last = state
-        for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-            yield pair(last, key)[0], (d, h, p, key)
-
-    start = (frozenset(), problem.holding, frozenset(), None)
-    arrival = {state: int(phase) for phase, state in settle(start, expand, deadline, limit=n_phases)}
-    remaining = _phases_still_needed(problem, arrival, pair, n_phases, deadline)
-    return _union_of_windows(problem, n_phases, arrival, remaining, last_at_end)
+    graph = (pair or PairCosts(problem, deadline=deadline)).graph(deadline).actions
+    q = graph.q.astype(float)
+    arrival = graph.least_from_start(q, deadline)
+    remaining = graph.least_to_end(q, graph.finished, float(n_phases), deadline)
+    return _union_of_windows(problem, n_phases, graph, arrival, remaining, last_at_end)
 
 
-def _union_of_windows(problem: Problem, n_phases: int, arrival: dict, remaining: dict, last_at_end: bool) -> Windows:
-    """:func:`action_windows`' union over the states: ``[arrival(s), N - 1 - remaining(s)]`` per action."""
-    keys = list(_actions_by_key(problem))
-    phases: dict[tuple[str, str], set[int]] = {}
-    given: dict[tuple[tuple[str, str], tuple[str, str], bool], set[int]] = {}
-    for state, phase in arrival.items():
-        key = state[3]
-        if key is None:
+def _union_of_windows(
+    problem: Problem, n_phases: int, graph: ActionGraph, arrival: np.ndarray, remaining: np.ndarray, last_at_end: bool
+) -> Windows:
+    """:func:`action_windows`' union over the states reached within ``n_phases``: ``[arrival, N - 1 - remaining]``."""
+    n, keys = n_phases, list(_actions_by_key(problem))
+    index = {key: i for i, key in enumerate(keys)}
+    reached = np.flatnonzero(arrival[1:] <= n) + 1  # the start (node 0) did no action
+    key_of = np.array([index[graph.nodes[g][3]] for g in reached], dtype=np.intp)
+    first, last = arrival[reached], n - 1 - remaining[reached]
+    if last_at_end:  # the last action of a finished state is at N - 1
+        first = np.where(graph.finished[reached] & (first <= n - 1), n - 1, first)
+    phases = np.arange(n)
+    at = ((phases >= np.maximum(first, 1)[:, None]) & (phases <= last[:, None])).astype(np.intp)
+    done = _done_before(keys, index, [graph.nodes[g] for g in reached])
+    windows: dict[tuple[str, str], frozenset[int]] = {}
+    given: dict[tuple[tuple[str, str], tuple[str, str], bool], frozenset[int]] = {}
+    for i, key in enumerate(keys):
+        rows = key_of == i
+        if not rows.any():
             continue
-        last = n_phases - 1 - remaining[state]
-        if last_at_end and phase <= n_phases - 1 and all_done(problem, state[0], state[2]):
-            phase = n_phases - 1
-        at = set(range(max(phase, 1), last + 1))
-        phases.setdefault(key, set()).update(at)
-        for other in keys:
-            if other != key:
-                given.setdefault((key, other, _done_before(state, other)), set()).update(at)
-    return Windows(
-        {key: frozenset(at) for key, at in phases.items()},
-        {cond: frozenset(at) for cond, at in given.items()},
-    )
+        windows[key] = _phases_of(at[rows].any(axis=0))
+        for before, which in ((True, done[rows]), (False, ~done[rows])):
+            hits = which.T.astype(np.intp) @ at[rows]  # per other action, the states' windows summed
+            for j in np.flatnonzero(which.any(axis=0)):
+                if j != i:
+                    given[key, keys[j], before] = _phases_of(hits[j] > 0)
+    return Windows(windows, given)
+
+
+def _phases_of(mask: np.ndarray) -> frozenset[int]:
+    return frozenset(np.flatnonzero(mask).tolist())
 
 
 @dataclass(frozen=True)
@@ -454,42 +446,19 @@ class Windows:
         return k in self.phases.get(key, ())
 
 
-def _done_before(state, other: tuple[str, str]) -> bool:
-    """Whether action ``other`` was done before the action that led to skeleton ``state``."""
-    delivered, held, pushed, key = state
-    kind, target = other
-    if kind == "push":
-        return target in pushed and key != other
-    if kind == "pick":
-        return (target in delivered or target == held) and key != other
-    return target in delivered and key != other
+def _done_before(keys: list[tuple[str, str]], index: dict, nodes: list[tuple]) -> np.ndarray:
+    """``[s, j]``: whether action ``keys[j]`` was done before the action that led to skeleton node ``s``.
 
-
-def _phases_still_needed(
-    problem: Problem, states: Iterable, pair: PairCosts, n_phases: int, deadline: Deadline
-) -> dict:
-    """Per state, the least phases its remaining actions need (an explicit post-order walk: no recursion limit)."""
-    remaining: dict = {}
-    for root in states:
-        stack = [root]
-        while stack:
-            state = stack[-1]
-            if state in remaining:
-                stack.pop()
-                continue
-            deadline.check()
-            delivered, held, pushed, last = state
-            if all_done(problem, delivered, pushed):
-                remaining[stack.pop()] = 0
-                continue
-            nexts = [(key, (d, h, p, key)) for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed)]
-            todo = [nxt for _, nxt in nexts if nxt not in remaining]
-            if todo:
-                stack.extend(todo)
-                continue
-            stack.pop()
-            remaining[state] = min((pair(last, key)[0] + remaining[nxt] for key, nxt in nexts), default=n_phases)
-    return remaining
+    A node is ``(delivered, held, pushed, last action)``: an object delivered was picked and
+    placed, the one held was picked, a piece pushed was pushed; the last action itself is not before.
+    """
+    done = np.zeros((len(nodes), len(keys)), dtype=bool)
+    for row, (delivered, held, pushed, key) in enumerate(nodes):
+        before = [("pick", o) for o in delivered] + [("place", o) for o in delivered] + [("push", c) for c in pushed]
+        if held is not None:
+            before.append(("pick", held))
+        done[row, [index[k] for k in before if k != key and k in index]] = True  # a held object has no pick
+    return done
 
 
 def _gap_cost(grid, start, a: IndexBox | None, b: IndexBox, touching: bool = False) -> float:

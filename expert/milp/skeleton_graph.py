@@ -53,20 +53,85 @@ def all_done(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
 
 
 @dataclass(frozen=True)
-class SkeletonGraph:
-    """The states, level by level, and the edges, listed by level and within it by source.
+class Layers:
+    """A DAG whose nodes are numbered level by level and whose edges go from one level to the next.
 
-    ``src[e] -> dst[e]`` costs at least ``q[e]`` phases and ``t[e]`` metres of travel.
-    Per state: ``finished`` (every object delivered, every covering piece pushed),
-    ``delivered`` (how many objects), ``placed`` (its last action is a place) and
-    ``slot`` (the number of its last action and exit box in ``slots``; the start's is -1).
+    Edges are listed by level (their source's) and within a level by source, so a least
+    cost from the start (node 0) or to the end is one pass over the levels.
     """
 
-    states: list[tuple]  # (delivered, held, pushed, last action, its exit box), ids in order of discovery
-    level_starts: list[int]  # states of level L: level_starts[L] .. level_starts[L + 1] - 1
+    level_starts: list[int]  # nodes of level L: level_starts[L] .. level_starts[L + 1] - 1
     edge_starts: list[int]  # edges out of level L: edge_starts[L] .. edge_starts[L + 1] - 1
     src: np.ndarray
     dst: np.ndarray
+
+    @functools.cached_property
+    def by_destination(self) -> np.ndarray:
+        """The edges in order of level, and within a level by destination (stable): for minima per destination."""
+        return np.concatenate(
+            [e0 + np.argsort(self.dst[e0:e1], kind="stable") for e0, e1 in pairwise(self.edge_starts)]
+            or [np.zeros(0, dtype=np.intp)]
+        )
+
+    def destinations(self, e0: int, e1: int) -> tuple[np.ndarray, np.ndarray]:
+        """Of the edges ``e0 .. e1 - 1`` of one level in :attr:`by_destination` order: each destination once, and
+        where its edges start in that order (for ``np.minimum.reduceat``)."""
+        targets = self.dst[self.by_destination[e0:e1]]
+        firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
+        return targets[firsts], firsts
+
+    def least_from_start(self, cost: np.ndarray, deadline: Deadline = NEVER) -> np.ndarray:
+        """Per node, the least total ``cost`` (one value per edge) of a path from node 0; inf where none."""
+        least = np.full(self.level_starts[-1], np.inf)
+        least[0] = 0.0
+        for e0, e1 in pairwise(self.edge_starts):
+            if e1 > e0:
+                deadline.check()
+                order = self.by_destination[e0:e1]
+                targets, firsts = self.destinations(e0, e1)
+                least[targets] = np.minimum.reduceat(least[self.src[order]] + cost[order], firsts)
+        return least
+
+    def least_to_end(
+        self, cost: np.ndarray, ends: np.ndarray, dead_end: float, deadline: Deadline = NEVER
+    ) -> np.ndarray:
+        """Per node, the least total ``cost`` of a path to a node of ``ends`` (0 there); ``dead_end`` at a node
+        neither in ``ends`` nor with an edge out, and counted on through it."""
+        least = np.where(ends, 0.0, dead_end)
+        for level in range(len(self.edge_starts) - 2, -1, -1):
+            e0, e1 = self.edge_starts[level], self.edge_starts[level + 1]
+            if e1 > e0:
+                deadline.check()
+                sources = self.src[e0:e1]
+                firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
+                least[sources[firsts]] = np.minimum.reduceat(least[self.dst[e0:e1]] + cost[e0:e1], firsts)
+        return least
+
+
+@dataclass(frozen=True)
+class ActionGraph(Layers):
+    """The skeleton graph with its poses merged: a node per (delivered, held, pushed, last action).
+
+    An edge costs at least ``q`` phases: the least over the pose pairs of the two actions.
+    """
+
+    q: np.ndarray
+    nodes: list[tuple]  # (delivered, held, pushed, last action)
+    finished: np.ndarray
+
+
+@dataclass(frozen=True)
+class SkeletonGraph(Layers):
+    """The states (the nodes, in order of discovery) and the edges between them.
+
+    ``src[e] -> dst[e]`` costs at least ``q[e]`` phases and ``t[e]`` metres of travel.
+    Per state: ``finished`` (every object delivered, every covering piece pushed),
+    ``delivered`` (how many objects), ``placed`` (its last action is a place),
+    ``slot`` (the number of its last action and exit box in ``slots``; the start's is -1)
+    and ``group`` (its node in :attr:`actions`, the graph without poses).
+    """
+
+    states: list[tuple]  # (delivered, held, pushed, last action, its exit box)
     q: np.ndarray
     t: np.ndarray
     finished: np.ndarray
@@ -74,6 +139,8 @@ class SkeletonGraph:
     placed: np.ndarray
     slot: np.ndarray
     slots: list[tuple[Key, IndexBox]]
+    group: np.ndarray
+    groups: list[tuple]  # (delivered, held, pushed, last action), numbered level by level
 
     @classmethod
     def build(
@@ -94,6 +161,8 @@ class SkeletonGraph:
         steps: dict = {}  # (exit number, action) -> [(phases, travel, next exit number)]
         slot_ids: dict[tuple[Key, int], int] = {}
         slot_of = [-1]
+        group_ids: dict[tuple, int] = {start[:4]: 0}
+        group_of = [0]
 
         def number(box: IndexBox) -> int:
             if box not in numbers:
@@ -123,6 +192,7 @@ class SkeletonGraph:
                             states.append((d, h, p, key, boxes[x]))
                             exits.append(x)
                             slot_of.append(slot_ids.setdefault((key, x), len(slot_ids)))
+                            group_of.append(group_ids.setdefault((d, h, p, key), len(group_ids)))
                         src.append(sid)
                         dst.append(j)
                         qs.append(q)
@@ -130,11 +200,11 @@ class SkeletonGraph:
             edge_starts.append(len(src))
             level_starts.append(len(states))
         return cls(
-            states,
             level_starts,
             edge_starts,
             np.asarray(src, dtype=np.intp),
             np.asarray(dst, dtype=np.intp),
+            states,
             np.asarray(qs, dtype=np.intp),
             np.asarray(ts, dtype=float),
             np.array([all_done(problem, s[0], s[2]) for s in states], dtype=bool),
@@ -142,6 +212,8 @@ class SkeletonGraph:
             np.array([s[3] is not None and s[3][0] == "place" for s in states], dtype=bool),
             np.asarray(slot_of, dtype=np.intp),
             [(key, boxes[x]) for key, x in slot_ids],
+            np.asarray(group_of, dtype=np.intp),
+            list(group_ids),
         )
 
     def within(self, n_phases: int) -> SkeletonGraph:
@@ -164,28 +236,25 @@ class SkeletonGraph:
         )
 
     @functools.cached_property
-    def by_destination(self) -> np.ndarray:
-        """The edges in order of level, and within a level by destination (stable): for minima per destination."""
-        return np.concatenate(
-            [e0 + np.argsort(self.dst[e0:e1], kind="stable") for e0, e1 in pairwise(self.edge_starts)]
-            or [np.zeros(0, dtype=np.intp)]
+    def actions(self) -> ActionGraph:
+        """This graph with the states of one (delivered, held, pushed, last action) merged, each edge its least ``q``.
+
+        A state's groups are numbered in order of discovery, so level by level, and every
+        exit box of the last action is among a group's states (each action's poses all
+        lead on from any state), so an edge's ``q`` is the least over both actions' poses.
+        """
+        count = len(self.groups)
+        pair = self.group[self.src] * count + self.group[self.dst]
+        order = np.argsort(pair, kind="stable")
+        firsts = np.flatnonzero(np.r_[True, pair[order][1:] != pair[order][:-1]])
+        src, dst = pair[order][firsts] // count, pair[order][firsts] % count
+        levels = np.repeat(np.arange(len(self.level_starts) - 1), np.diff(self.level_starts))
+        group_level = np.empty(count, dtype=np.intp)
+        group_level[self.group] = levels
+        level_starts = np.searchsorted(group_level, np.arange(len(self.level_starts))).tolist()
+        edge_starts = np.searchsorted(group_level[src], np.arange(len(self.edge_starts))).tolist()
+        finished = np.zeros(count, dtype=bool)
+        finished[self.group] = self.finished
+        return ActionGraph(
+            level_starts, edge_starts, src, dst, np.minimum.reduceat(self.q[order], firsts), self.groups, finished
         )
-
-    def least_from_start(self, cost: np.ndarray, deadline: Deadline = NEVER) -> np.ndarray:
-        """Per state, the least total ``cost`` (one value per edge) of a path from the start; inf where none."""
-        least = np.full(len(self.states), np.inf)
-        least[0] = 0.0
-        for e0, e1 in pairwise(self.edge_starts):
-            if e1 > e0:
-                deadline.check()
-                order = self.by_destination[e0:e1]
-                targets, firsts = self.destinations(e0, e1)
-                least[targets] = np.minimum.reduceat(least[self.src[order]] + cost[order], firsts)
-        return least
-
-    def destinations(self, e0: int, e1: int) -> tuple[np.ndarray, np.ndarray]:
-        """Of the edges ``e0 .. e1 - 1`` of one level in :attr:`by_destination` order: each destination once, and
-        where its edges start in that order (for ``np.minimum.reduceat``)."""
-        targets = self.dst[self.by_destination[e0:e1]]
-        firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
-        return targets[firsts], firsts
