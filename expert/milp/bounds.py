@@ -38,14 +38,15 @@ def settle(
     start: Hashable,
     expand: Callable[[Hashable], Iterable[tuple[float, Hashable]]],
     deadline: Deadline = NEVER,
-    limit: float = math.inf,
     parents: dict | None = None,
 ) -> Iterator[tuple[float, Hashable]]:
-    """Dijkstra's search: yield ``(cost, state)`` in order of least cost, each state once, up to ``limit``.
+    """Dijkstra's search: yield ``(cost, state)`` in order of least cost, each state once.
 
-    ``expand(state)`` gives ``(step cost, next state)`` pairs. The one search loop of
-    every bound in this module; callers stop iterating when they have what they need.
-    ``parents``, if given, receives each settled state's predecessor on its cheapest path.
+    ``expand(state)`` gives ``(step cost, next state)`` pairs; callers stop iterating when
+    they have what they need. ``parents``, if given, receives each settled state's
+    predecessor on its cheapest path. :func:`cheapest_schedule` searches with it, over
+    states with their phase; the other bounds search the skeleton graph level by level
+    (:mod:`expert.milp.skeleton_graph`).
     """
     best = {start: 0.0}
     queue = [(0.0, 0, start)]
@@ -54,8 +55,6 @@ def settle(
         cost, _, state = heapq.heappop(queue)
         if cost > best[state]:
             continue
-        if cost > limit:
-            return
         deadline.check()
         yield cost, state
         for step, nxt in expand(state):
