@@ -39,7 +39,7 @@ from expert.milp.bounds import PairCosts
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.problem import Problem
-from expert.milp.skeleton_graph import SkeletonGraph
+from expert.milp.skeleton_graph import SkeletonGraph, run_starts
 from fetchcarry_env.kinematics import DELIVERY_BONUS
 
 Key = tuple[str, str]
@@ -98,7 +98,7 @@ def conditional_bounds(
     total = _forward(graph, n, bonus, deadline) + _leave(graph, n, bonus, deadline) + constant
     slots = graph.slot[1:]  # the start (state 0) did no action
     order = np.argsort(slots, kind="stable")
-    firsts = np.flatnonzero(np.r_[True, slots[order][1:] != slots[order][:-1]])
+    firsts = run_starts(slots[order])
     least = np.minimum.reduceat(total[:, 1:][:, order], firsts, axis=1).T.copy()
     return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[order][firsts], least, strict=True)})
 
@@ -139,7 +139,7 @@ def _leave(graph: SkeletonGraph, n: int, bonus: np.ndarray, deadline: Deadline) 
         if e1 > e0:
             sources = src_a[e0:e1]
             values = suffix[q_a[e0:e1] + phases, dst_a[e0:e1]] + t_a[e0:e1]
-            firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
+            firsts = run_starts(sources)
             leave[:, sources[firsts]] = np.minimum.reduceat(values, firsts, axis=1)
         states = slice(level_starts[level], level_starts[level + 1])
         suffix[:n, states] = np.minimum.accumulate((bonus[:, states] + leave[:, states])[::-1], axis=0)[::-1]

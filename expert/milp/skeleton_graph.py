@@ -52,6 +52,11 @@ def all_done(problem: Problem, delivered: frozenset, pushed: frozenset) -> bool:
     return len(delivered) == len(problem.deliver) and len(pushed) == len(problem.pushes.pushable)
 
 
+def run_starts(values: np.ndarray) -> np.ndarray:
+    """Where each run of equal consecutive ``values`` starts (the indices ``np.minimum.reduceat`` takes)."""
+    return np.flatnonzero(np.r_[True, values[1:] != values[:-1]])
+
+
 @dataclass(frozen=True)
 class Layers:
     """A DAG whose nodes are numbered level by level and whose edges go from one level to the next.
@@ -77,7 +82,7 @@ class Layers:
         """Of the edges ``e0 .. e1 - 1`` of one level in :attr:`by_destination` order: each destination once, and
         where its edges start in that order (for ``np.minimum.reduceat``)."""
         targets = self.dst[self.by_destination[e0:e1]]
-        firsts = np.flatnonzero(np.r_[True, targets[1:] != targets[:-1]])
+        firsts = run_starts(targets)
         return targets[firsts], firsts
 
     def least_from_start(self, cost: np.ndarray, deadline: Deadline = NEVER) -> np.ndarray:
@@ -103,7 +108,7 @@ class Layers:
             if e1 > e0:
                 deadline.check()
                 sources = self.src[e0:e1]
-                firsts = np.flatnonzero(np.r_[True, sources[1:] != sources[:-1]])
+                firsts = run_starts(sources)
                 least[sources[firsts]] = np.minimum.reduceat(least[self.dst[e0:e1]] + cost[e0:e1], firsts)
         return least
 
@@ -246,7 +251,7 @@ class SkeletonGraph(Layers):
         count = len(self.groups)
         pair = self.group[self.src] * count + self.group[self.dst]
         order = np.argsort(pair, kind="stable")
-        firsts = np.flatnonzero(np.r_[True, pair[order][1:] != pair[order][:-1]])
+        firsts = run_starts(pair[order])
         src, dst = pair[order][firsts] // count, pair[order][firsts] % count
         levels = np.repeat(np.arange(len(self.level_starts) - 1), np.diff(self.level_starts))
         group_level = np.empty(count, dtype=np.intp)
