@@ -37,7 +37,7 @@ from expert.milp.bounds import (
 )
 from expert.milp.build import SolverSettings, build
 from expert.milp.collision import Infeasible
-from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above
+from expert.milp.conditional import Conditional, add_conditional_cuts, conditional_bounds, fix_above, fix_unreached
 from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase, phases_of, plan_objective, read_steps
 from expert.milp.export import export_model
@@ -59,6 +59,7 @@ DECOUPLED_SHARE = 0.7  # of the time left, at most, for the decoupled plan
 FIRST_PLAN_BELOW_S = 2.0  # seconds: with a longer limit the schedule's decoupled plan comes in time: no first plan
 FIRST_PLAN_ALL_S = 1.0  # seconds: with less time left, the first decoupled plan may use all of it (nothing else would)
 SECOND_PASS_FIRST_SOLUTIONS = False  # the passes of several objects at a time with SCIP's first solutions
+ORDER_FIXINGS = True  # the ordered plan's model: options no plan in its order does fixed to 0 (fix_outside_order)
 ORDERED_FIRST_PLAN = True  # the first plan is the MILP's in the relaxation's order of deliveries (ordered_plan)
 ORDERED_SHARE = 0.3  # of the time left, at most, for the first plan in the relaxation's order (ordered_plan)
 LOOKAHEADS = (1, 2, 3)  # objects planned together per step of the decoupled passes, one pass each (decoupled_plans)
@@ -491,12 +492,15 @@ class _Run:
         if self.best is not None:
             self.warm = steps_of(problem, self.best[1])
 
-    def ordered_plan(self, milp: Milp, problem: Problem, order: list[str], lattice: Lattice) -> bool:
+    def ordered_plan(
+        self, milp: Milp, problem: Problem, order: list[str], lattice: Lattice, pairs: PairCosts, fewest: bool
+    ) -> bool:
         """The best plan of the model that delivers the objects in ``order`` (the relaxation's), as the first plan.
 
         The model restricted to that order (:func:`expert.milp.order.add_pick_order`) is
-        solved within ``ORDERED_SHARE`` of the time left, then the restriction is removed
-        (SCIP back to its problem stage): the model is built once. Where the relaxation's
+        solved within ``ORDERED_SHARE`` of the time left, with the options no plan in that
+        order does fixed to 0 (:meth:`fix_outside_order`); then the restriction and those
+        fixings are removed (SCIP back to its problem stage): the model is built once. Where the relaxation's
         order is the optimum's, the plan is the optimum itself, and as warm start it lets
         SCIP fix every option whose conditional bound it beats before the search
         (``docs/benchmarks/planner.md``, "A first plan in the relaxation's order"). It is
@@ -512,16 +516,24 @@ class _Run:
         """
         model, t0 = milp.model, time.perf_counter()
         restriction = add_pick_order(milp, order)
+        outside = self.fix_outside_order(milp, problem, order, pairs, fewest)
         left = self.deadline.left()
         if left - RESERVE_S <= 0:
             raise TimeUp
         status = _optimize(model, min(left - RESERVE_S, ORDERED_SHARE * left))
         steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
         at_root = status == "infeasible" and model.getNNodes() <= 1
-        self.stats["ordered"] = {"status": status, "nodes": model.getNNodes(), "order": list(order)}
+        self.stats["ordered"] = {
+            "status": status,
+            "nodes": model.getNNodes(),
+            "order": list(order),
+            "fixed": len(outside),
+        }
         model.freeTransform()
         for constraint in restriction:
             model.delCons(constraint)
+        for z in outside:
+            model.chgVarUb(z, 1.0)
         self.stats["ordered_s"] = time.perf_counter() - t0
         proven_infeasible = False
         if at_root:
@@ -540,6 +552,17 @@ class _Run:
             aim = milp.n_phases + 1 if proven_infeasible else milp.n_phases
             self.decoupled_plans(problem, lattice, aim, order)
         return proven_infeasible
+
+    def fix_outside_order(self, milp: Milp, problem: Problem, order: list[str], pairs: PairCosts, fewest: bool) -> list:
+        """Fix to 0 the options that no plan in ``order`` does, by the conditional bounds of those plans
+        (:func:`expert.milp.conditional.fix_unreached`); returns them, to be freed with the order's restriction.
+
+        Only with ``ORDER_FIXINGS`` and the conditional bounds on; counted in ``stats["ordered"]["fixed"]``.
+        """
+        if not (ORDER_FIXINGS and self.conditional):
+            return []
+        in_order = conditional_bounds(problem, milp.n_phases, pairs, self.deadline, last_at_end=fewest, order=order)
+        return fix_unreached(milp, in_order)
 
     def root_proof(self, milp: Milp, problem: Problem) -> str | list[SolvedPhase] | None:
         """The whole model solved at its root node only: ``"infeasible"``, the steps of a plan found, or None.
@@ -611,7 +634,7 @@ class _Run:
         if self.first_order is not None:  # the first model built
             order, lattice = self.first_order
             self.first_order = None
-            if self.ordered_plan(milp, problem, order, lattice):  # proven infeasible at its root (in ordered_s)
+            if self.ordered_plan(milp, problem, order, lattice, pairs, fewest):  # proven infeasible at its root
                 record.update(status="infeasible", solve_s=0.0, nodes=stats["ordered"]["root_nodes"], root_proof=True)
                 return "infeasible"
             t1 = time.perf_counter()

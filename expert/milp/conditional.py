@@ -28,7 +28,7 @@ The MILP uses it twice (:func:`add_conditional_cuts`, :func:`fix_above`), both e
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -85,15 +85,19 @@ def conditional_bounds(
     pair: PairCosts,
     deadline: Deadline = NEVER,
     last_at_end: bool = False,
+    order: Sequence[str] | None = None,
 ) -> Conditional:
     """The bounds of the module docstring for plans with ``n_phases`` phases, on ``pair``'s skeleton graph.
 
     ``last_at_end``: every plan's last place is at phase ``N - 1`` (``N - 1`` phases admit
-    no plan), as in :func:`expert.milp.bounds.min_objective`.
+    no plan), as in :func:`expert.milp.bounds.min_objective`. ``order``: of the plans that pick
+    the objects in that order only (:meth:`expert.milp.skeleton_graph.SkeletonGraph.in_order`).
     """
     n = n_phases
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
     graph = pair.graph(deadline).within(n)
+    if order is not None:
+        graph = graph.in_order(order)
     bonus = _arrival_bonus(graph, n, last_at_end)
     total = _forward(graph, n, bonus, deadline) + _leave(graph, n, bonus, deadline) + constant
     slots = graph.slot[1:]  # the start (state 0) did no action
@@ -191,6 +195,20 @@ def add_conditional_cuts(milp, conditional: Conditional) -> int:
             continue
         expr = quicksum((value - floor) * z for value, z in terms if value > floor + 1e-9)
         model.addCons(milp.objective >= floor - 1e-6 + expr, name=f"conditional_{key[0]}_{key[1]}")
+    return fixed
+
+
+def fix_unreached(milp, conditional: Conditional) -> list:
+    """Fix to 0 the options that no plan of ``conditional`` does (bound ``inf``); the ones not fixed before.
+
+    For the bounds of a restricted model (``conditional_bounds(..., order=...)``): the
+    caller frees them again (``chgVarUb(z, 1)``) when the restriction is lifted.
+    """
+    fixed = []
+    for _, value, z in _bounded_options(milp, conditional):
+        if not math.isfinite(value) and z.getUbOriginal() > 0.5:
+            milp.model.chgVarUb(z, 0.0)
+            fixed.append(z)
     return fixed
 
 

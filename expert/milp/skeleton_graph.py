@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -227,7 +227,22 @@ class SkeletonGraph(Layers):
         Its states are all kept: one reached only by such edges is reached by no plan, and
         every bound through it is ``inf``.
         """
-        keep = self.q <= n_phases - 1
+        return self._keeping(self.q <= n_phases - 1)
+
+    def in_order(self, order: Sequence[str]) -> SkeletonGraph:
+        """The graph without the picks out of ``order``: the ``i``-th object of it is picked once ``i`` are delivered.
+
+        The plans of a model restricted to that pick order (:func:`expert.milp.order.add_pick_order`)
+        map onto this graph's paths, so its bounds hold for them. Objects not in ``order`` are not picked.
+        """
+        rank = {target: i for i, target in enumerate(order)}
+        wanted = np.array(
+            [-1 if s[3] is None or s[3][0] != "pick" else rank.get(s[3][1], -2) for s in self.states], dtype=np.intp
+        )[self.dst]
+        return self._keeping((wanted == -1) | (wanted == self.delivered[self.src]))
+
+    def _keeping(self, keep: np.ndarray) -> SkeletonGraph:
+        """The graph with the edges where ``keep`` is True (its states all kept)."""
         if keep.all():
             return self
         kept_before = np.concatenate(([0], np.cumsum(keep)))
