@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 import expert.planner as planner
+from expert.milp.bounds import PairCosts
 from expert.milp.build import build
+from expert.milp.conditional import add_conditional_cuts, conditional_bounds, fix_unreached
 from expert.milp.decode import read_steps
 from expert.milp.order import add_pick_order
 from expert.milp.problem import prepare
@@ -34,6 +38,53 @@ def test_pick_order_is_obeyed():
     steps = read_steps(milp.problem, milp, milp.model.getBestSol())
     picked = [s.option.target for s in steps if s.option is not None and s.option.kind == "pick"]
     assert picked == reverse
+
+
+def test_the_options_outside_the_order_fixed_keep_its_best_plan_and_are_freed_after():
+    """Three covered goals (seed 7105), 15 phases, picks in the order 2, 1, 3 (not the optimum's): the same
+    best plan with the options no plan in that order does fixed to 0; freed again, the model's optimum."""
+    scenario = draw_paper_covered(np.random.default_rng(7105), 3)
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem)
+    every, order = conditional_bounds(problem, 15, pairs), ["object_2", "object_1", "object_3"]
+
+    def model():  # as the planner builds it: the conditional cuts of every plan
+        milp = build(problem, 15, objective_bound=every.least)
+        add_conditional_cuts(milp, every)
+        return milp
+
+    optima = []
+    for fixing in (False, True):
+        milp = model()
+        restriction = add_pick_order(milp, order)
+        fixed = fix_unreached(milp, conditional_bounds(problem, 15, pairs, order=order)) if fixing else []
+        assert bool(fixed) == fixing
+        milp.model.optimize()
+        optima.append(milp.model.getObjVal())
+    assert optima[1] == pytest.approx(optima[0], abs=1e-6)
+    milp.model.freeTransform()
+    for constraint in restriction:
+        milp.model.delCons(constraint)
+    for z in fixed:
+        milp.model.chgVarUb(z, 1.0)
+    milp.model.optimize()
+    plain = model()
+    plain.model.optimize()
+    assert milp.model.getObjVal() == pytest.approx(plain.model.getObjVal(), abs=1e-6)
+    assert milp.model.getObjVal() < optima[0] - 1.0  # the restriction and the fixings are gone
+
+
+def test_an_order_no_plan_follows_has_every_option_fixed():
+    """Three objects (multi-3, seed 3), 9 phases: only the optimum's pick order has a plan; any other, no option
+    is left, so the ordered model is infeasible before SCIP searches."""
+    scenario = draw_paper_multi(np.random.default_rng(3), 3)
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem)
+    assert conditional_bounds(problem, 9, pairs, order=["object_2", "object_1", "object_3"]).least < 0
+    blocked = conditional_bounds(problem, 9, pairs, order=["object_1", "object_2", "object_3"])
+    assert blocked.least == math.inf
+    milp = build(problem, 9)
+    assert len(fix_unreached(milp, blocked)) == sum(len(chosen) for chosen in milp.z)
 
 
 @pytest.mark.parametrize(("draw", "count", "seed"), [(draw_paper_multi, 5, 2024), (draw_paper_covered, 3, 7000)])

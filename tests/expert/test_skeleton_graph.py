@@ -37,13 +37,18 @@ def _pairs(scenario, holding=None) -> PairCosts:
     return PairCosts(prepare(scenario, Lattice.over(scenario.area, 0.05), holding=holding))
 
 
-def _least_by_search(pairs: PairCosts, which: int) -> dict:
-    """Per state ``(delivered, held, pushed, exit box)``: the least phases (``which`` 0) or travel (1) to it."""
+def _least_by_search(pairs: PairCosts, which: int, order: list[str] | None = None) -> dict:
+    """Per state ``(delivered, held, pushed, exit box)``: the least phases (``which`` 0) or travel (1) to it.
+
+    ``order``: only the picks of the object next in it.
+    """
     problem = pairs.problem
 
     def expand(state):
         delivered, held, pushed, where = state
         for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
+            if order is not None and key[0] == "pick" and order.index(key[1]) != len(delivered):
+                continue
             for entry, exit_box in pairs.actions[key].poses:
                 yield pairs.step(where, key[0], entry, exit_box)[which], (d, h, p, exit_box)
 
@@ -109,3 +114,19 @@ def test_a_graph_within_n_phases_has_no_longer_step():
     assert len(short.src) == int((graph.q <= 2).sum())
     assert short.edge_starts[-1] == len(short.src) and short.edge_starts == sorted(short.edge_starts)
     assert graph.within(int(graph.q.max()) + 1) is graph
+
+
+@pytest.mark.parametrize("scenario", CASES[2:], ids=[s.name for s in CASES[2:]])
+def test_a_graph_in_order_has_the_paths_that_pick_in_that_order(scenario):
+    """The least phases to each state over the graph without the picks out of order, as a search in that order."""
+    pairs = _pairs(scenario)
+    graph = pairs.graph()
+    order = [o.id for o in scenario.objects][::-1]
+    in_order = graph.in_order(order)
+    assert len(in_order.states) == len(graph.states) and len(in_order.src) < len(graph.src)
+    searched = _least_by_search(pairs, 0, order)
+    layered = in_order.least_from_start(in_order.q.astype(float))
+    for sid, (delivered, held, pushed, _, box) in enumerate(graph.states):
+        assert layered[sid] == searched.get((delivered, held, pushed, box), math.inf)
+    picked = [graph.states[d][3][1] for d in in_order.dst if graph.states[d][3][0] == "pick"]
+    assert picked and set(picked) <= set(order)
