@@ -1,13 +1,14 @@
-"""A/B of whole ``plan()`` calls: two checkouts, case by case in turn, each case in a fresh process.
+"""A/B of whole ``plan()`` calls: two checkouts (or more), case by case in turn, each case in a fresh process.
 
     python docs/benchmarks/raw/plan_ab.py OLD_CHECKOUT NEW_CHECKOUT [--limit S] [CASE ...] > rows.jsonl
+    python docs/benchmarks/raw/plan_ab.py NAME=CHECKOUT NAME=CHECKOUT ... [--limit S] [CASE ...] > rows.jsonl
 
 Cases as in ``bounds_ab.py`` (``covered:K:SEED``, ``multi:K:SEED`` or ``FAMILY:SEED``,
 read by ``conditional_digest.scenario_of``). Per case and checkout one JSON line: the
 call's status, phases, Eq. 1, nodes of the final solve, how the first plan was made and
 the stages' seconds. Each process plans a one-object scenario first, so that imports and
-SCIP's start are not in the figures. The old checkout runs first, then the new, case
-after case, so the load moves both alike.
+SCIP's start are not in the figures. The checkouts run in the order given, case after
+case, so the load moves them alike. Two unnamed checkouts are called ``old`` and ``new``.
 """
 
 from __future__ import annotations
@@ -42,12 +43,18 @@ print(json.dumps({
 
 
 def main(argv: list[str]) -> int:
-    old, new, *rest = argv
-    limit = 30.0
-    if rest[:1] == ["--limit"]:
-        limit, rest = float(rest[1]), rest[2:]
-    for case in rest:
-        for name, checkout in (("old", old), ("new", new)):
+    checkouts, cases, limit = [], [], 30.0
+    args = iter(argv)
+    for arg in args:
+        if arg == "--limit":
+            limit = float(next(args))
+        elif ":" in arg:
+            cases.append(arg)
+        else:
+            checkouts.append(arg)
+    named = [arg.split("=", 1) if "=" in arg else (("old", "new")[i], arg) for i, arg in enumerate(checkouts)]
+    for case in cases:
+        for name, checkout in named:
             print(json.dumps({"case": case, "code": name, **run(checkout, case, limit, ONE_CASE)}), flush=True)
     return 0
 
