@@ -97,14 +97,14 @@ def conditional_bounds(
     constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
     graph = pair.graph(deadline).within(n)
     if order is not None:
-        graph = graph.in_order(order)
+        graph = graph.in_order(order, problem.deliver)
     bonus = _arrival_bonus(graph, n, last_at_end)
     total = _forward(graph, n, bonus, deadline) + _leave(graph, n, bonus, deadline) + constant
     slots = graph.slot[1:]  # the start (state 0) did no action
-    order = np.argsort(slots, kind="stable")
-    firsts = run_starts(slots[order])
-    least = np.minimum.reduceat(total[:, 1:][:, order], firsts, axis=1).T.copy()
-    return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[order][firsts], least, strict=True)})
+    by_slot = np.argsort(slots, kind="stable")
+    firsts = run_starts(slots[by_slot])
+    least = np.minimum.reduceat(total[:, 1:][:, by_slot], firsts, axis=1).T.copy()
+    return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[by_slot][firsts], least, strict=True)})
 
 
 # The searches below keep their tables phase by phase, one row per phase and one column per

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -229,17 +229,24 @@ class SkeletonGraph(Layers):
         """
         return self._keeping(self.q <= n_phases - 1)
 
-    def in_order(self, order: Sequence[str]) -> SkeletonGraph:
-        """The graph without the picks out of ``order``: the ``i``-th object of it is picked once ``i`` are delivered.
+    def in_order(self, order: Sequence[str], deliver: Collection[str]) -> SkeletonGraph:
+        """The graph without the picks out of ``order``, as :func:`expert.milp.order.add_pick_order` restricts a model.
 
-        The plans of a model restricted to that pick order (:func:`expert.milp.order.add_pick_order`)
-        map onto this graph's paths, so its bounds hold for them. Objects not in ``order`` are not picked.
+        Of ``order``'s objects the model delivers (``deliver``), each one after the first is
+        picked only once the one before it is delivered; any other object at any time. The
+        plans of the restricted model map onto this graph's paths, so its bounds hold for them.
         """
-        rank = {target: i for i, target in enumerate(order)}
-        wanted = np.array(
-            [-1 if s[3] is None or s[3][0] != "pick" else rank.get(s[3][1], -2) for s in self.states], dtype=np.intp
-        )[self.dst]
-        return self._keeping((wanted == -1) | (wanted == self.delivered[self.src]))
+        chain = [target for target in order if target in deliver]
+        bit = {target: 1 << i for i, target in enumerate(chain)}  # a set of delivered objects is a sum of bits
+        before = {after: bit[first] for first, after in pairwise(chain)}
+
+        def needed(state: tuple) -> int:  # what must be delivered before the action that led to ``state``
+            key = state[3]
+            return before.get(key[1], 0) if key is not None and key[0] == "pick" else 0
+
+        delivered = np.array([sum(bit.get(o, 0) for o in state[0]) for state in self.states], dtype=np.int64)
+        need = np.array([needed(state) for state in self.states], dtype=np.int64)[self.dst]
+        return self._keeping((need & delivered[self.src]) == need)
 
     def _keeping(self, keep: np.ndarray) -> SkeletonGraph:
         """The graph with the edges where ``keep`` is True (its states all kept)."""

@@ -53,15 +53,17 @@ def test_the_options_outside_the_order_fixed_keep_its_best_plan_and_are_freed_af
         add_conditional_cuts(milp, every)
         return milp
 
-    optima = []
-    for fixing in (False, True):
-        milp = model()
+    def best_in_order(milp, fixing: bool) -> tuple[float, list, list]:
         restriction = add_pick_order(milp, order)
         fixed = fix_unreached(milp, conditional_bounds(problem, 15, pairs, order=order)) if fixing else []
-        assert bool(fixed) == fixing
         milp.model.optimize()
-        optima.append(milp.model.getObjVal())
-    assert optima[1] == pytest.approx(optima[0], abs=1e-6)
+        return milp.model.getObjVal(), restriction, fixed
+
+    plain_order, _, none = best_in_order(model(), fixing=False)
+    milp = model()
+    fixed_order, restriction, fixed = best_in_order(milp, fixing=True)
+    assert fixed and not none
+    assert fixed_order == pytest.approx(plain_order, abs=1e-6)
     milp.model.freeTransform()
     for constraint in restriction:
         milp.model.delCons(constraint)
@@ -71,7 +73,22 @@ def test_the_options_outside_the_order_fixed_keep_its_best_plan_and_are_freed_af
     plain = model()
     plain.model.optimize()
     assert milp.model.getObjVal() == pytest.approx(plain.model.getObjVal(), abs=1e-6)
-    assert milp.model.getObjVal() < optima[0] - 1.0  # the restriction and the fixings are gone
+    assert milp.model.getObjVal() < fixed_order - 1.0  # the restriction and the fixings are gone
+
+
+def test_the_planner_frees_the_fixings_for_the_whole_model(monkeypatch):
+    """Three covered goals (seed 7100): the relaxation's order is not the optimum's. The ordered plan (with
+    options fixed) is beaten by the unrestricted solve, and the answer is the one without the fixings."""
+    scenario = draw_paper_covered(np.random.default_rng(7100), 3)
+    result = plan(scenario, time_limit=60.0)
+    assert result.status == "optimal" and result.stats["ordered"]["fixed"] > 0
+    assert result.stats["decoupled"] == "pick order of the relaxation"
+    assert result.objective < result.stats["decoupled_objective"] - 1.0
+    monkeypatch.setattr(planner, "ORDER_FIXINGS", False)
+    unfixed = plan(scenario, time_limit=60.0)
+    assert unfixed.status == "optimal" and unfixed.stats["ordered"]["fixed"] == 0
+    assert len(result.phases) == len(unfixed.phases)
+    assert result.objective == pytest.approx(unfixed.objective, abs=1e-6)
 
 
 def test_an_order_no_plan_follows_has_every_option_fixed():

@@ -40,14 +40,15 @@ def _pairs(scenario, holding=None) -> PairCosts:
 def _least_by_search(pairs: PairCosts, which: int, order: list[str] | None = None) -> dict:
     """Per state ``(delivered, held, pushed, exit box)``: the least phases (``which`` 0) or travel (1) to it.
 
-    ``order``: only the picks of the object next in it.
+    ``order``: a pick of one of its objects only once the one before it is delivered (``add_pick_order``'s rule).
     """
     problem = pairs.problem
+    before = dict(zip(order[1:], order[:-1], strict=True)) if order else {}
 
     def expand(state):
         delivered, held, pushed, where = state
         for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-            if order is not None and key[0] == "pick" and order.index(key[1]) != len(delivered):
+            if key[0] == "pick" and key[1] in before and before[key[1]] not in delivered:
                 continue
             for entry, exit_box in pairs.actions[key].poses:
                 yield pairs.step(where, key[0], entry, exit_box)[which], (d, h, p, exit_box)
@@ -116,17 +117,25 @@ def test_a_graph_within_n_phases_has_no_longer_step():
     assert graph.within(int(graph.q.max()) + 1) is graph
 
 
-@pytest.mark.parametrize("scenario", CASES[2:], ids=[s.name for s in CASES[2:]])
-def test_a_graph_in_order_has_the_paths_that_pick_in_that_order(scenario):
+ORDERS = {  # name: (whether the first object is held at the start, the order of the object ids)
+    "reversed": (False, lambda ids: ids[::-1]),
+    "held one first": (True, lambda ids: ids),
+    "first left out, an unknown id skipped": (False, lambda ids: ["not_an_object", *ids[:0:-1]]),
+}
+IN_ORDER = [(CASES[2], name) for name in ORDERS] + [(CASES[3], "reversed")]  # two objects, one held: no order to keep
+
+
+@pytest.mark.parametrize(("scenario", "orders"), IN_ORDER, ids=[f"{s.name}-{name}" for s, name in IN_ORDER])
+def test_a_graph_in_order_has_the_paths_that_pick_in_that_order(scenario, orders):
     """The least phases to each state over the graph without the picks out of order, as a search in that order."""
-    pairs = _pairs(scenario)
-    graph = pairs.graph()
-    order = [o.id for o in scenario.objects][::-1]
-    in_order = graph.in_order(order)
-    assert len(in_order.states) == len(graph.states) and len(in_order.src) < len(graph.src)
-    searched = _least_by_search(pairs, 0, order)
+    holding, order_of = ORDERS[orders]
+    ids = [o.id for o in scenario.objects]
+    pairs = _pairs(scenario, ids[0] if holding else None)
+    graph, order = pairs.graph(), order_of(ids)
+    in_order = graph.in_order(order, pairs.problem.deliver)
+    searched = _least_by_search(pairs, 0, [o for o in order if o in pairs.problem.deliver])
     layered = in_order.least_from_start(in_order.q.astype(float))
     for sid, (delivered, held, pushed, _, box) in enumerate(graph.states):
         assert layered[sid] == searched.get((delivered, held, pushed, box), math.inf)
-    picked = [graph.states[d][3][1] for d in in_order.dst if graph.states[d][3][0] == "pick"]
-    assert picked and set(picked) <= set(order)
+    assert len(in_order.states) == len(graph.states) and len(in_order.src) < len(graph.src)
+    assert np.isinf(layered).any() and not np.isinf(graph.least_from_start(graph.q.astype(float))).any()
