@@ -14,6 +14,7 @@ case, so the load moves them alike. Two unnamed checkouts are called ``old`` and
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 from bounds_ab import run  # this folder's: a case in a fresh process of a checkout
@@ -48,11 +49,13 @@ def main(argv: list[str]) -> int:
     for arg in args:
         if arg == "--limit":
             limit = float(next(args))
-        elif ":" in arg:
-            cases.append(arg)
+        elif os.path.isdir(arg.split("=", 1)[-1]):  # a checkout, named (NAME=PATH) or not
+            checkouts.append(arg.split("=", 1) if "=" in arg else (None, arg))
         else:
-            checkouts.append(arg)
-    named = [arg.split("=", 1) if "=" in arg else (("old", "new")[i], arg) for i, arg in enumerate(checkouts)]
+            cases.append(arg)
+    if sum(name is None for name, _ in checkouts) > 2 or len(checkouts) < 2:
+        sys.exit("plan_ab.py: give two checkouts (old, new) or name each one NAME=PATH")
+    named = [(name or ("old", "new")[i], path) for i, (name, path) in enumerate(checkouts)]
     for case in cases:
         for name, checkout in named:
             print(json.dumps({"case": case, "code": name, **run(checkout, case, limit, ONE_CASE)}), flush=True)
