@@ -501,8 +501,8 @@ class _Run:
         solved within ``ORDERED_SHARE`` of the time left, with the options no plan in that
         order does fixed to 0 (:meth:`fix_outside_order`); then the restriction and those
         fixings are removed (SCIP back to its problem stage): the model is built once.
-        Where the relaxation's order is the optimum's, the plan is the optimum itself, and as warm start it lets
-        SCIP fix every option whose conditional bound it beats before the search
+        Where the relaxation's order is the optimum's, the plan is the optimum itself, and as
+        warm start it lets SCIP fix every option whose conditional bound it beats before the search
         (``docs/benchmarks/planner.md``, "A first plan in the relaxation's order"). It is
         kept when better than the best plan so far; without a plan of the model's phases
         the decoupled plans follow (:meth:`decoupled_plans`). Recorded in
