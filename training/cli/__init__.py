@@ -1,6 +1,8 @@
 """The ``fetchcarry`` command line: every command's options, handlers and printed output.
 
-One module per group of commands (:mod:`~training.cli.planning`: ``plan``,
+:mod:`~training.cli.commands` lists every command with its help line and its modules:
+``fetchcarry --help`` imports none of them, ``fetchcarry COMMAND`` only its own. One
+module per group of commands (:mod:`~training.cli.planning`: ``plan``,
 ``validate``; :mod:`~training.cli.episodes`: ``rollout``, ``demo``,
 ``evaluate-expert``; :mod:`~training.cli.data`: ``generate``, ``dataset``;
 :mod:`~training.cli.bench`: ``bench env|planner|generate|phases|projection``; :mod:`~training.cli.benchmark`:
@@ -20,57 +22,63 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import sys
 from collections.abc import Sequence
 
-from training.cli.exits import INTERRUPTED, run_command, say
+from training.cli.commands import COMMANDS, missing_extra, needing_extras, selected
+from training.cli.exits import BAD_INPUT, INTERRUPTED, run_command, say
 
-COMMAND_MODULES = (
-    "training.cli.planning",
-    "training.cli.episodes",
-    "training.cli.data",
-    "training.cli.bench",
-    "training.cli.benchmark",
-    "training.cli.train",
-    "training.cli.checks",
-    "training.cli.reproduce",
-    "training.cli.leaderboard",
-    "training.cli.compare",
+DESCRIPTION = (
+    "Fetch-and-carry with push-aside: plan with the MILP expert, run episodes in PyBullet, build datasets and "
+    "benchmarks. 'fetchcarry COMMAND --help' explains a command."
 )
-"""Modules that add commands; a module that is not installed (an optional part) is skipped."""
+EPILOG = (
+    "Exit status: 0 success, 1 a negative answer (no plan, an invalid plan, a failed episode), 2 bad input, "
+    "3 an internal error (the message says where the full report is), 130 interrupted."
+)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``fetchcarry`` parser with every command."""
-    parser = argparse.ArgumentParser(
-        prog="fetchcarry",
-        description="Fetch-and-carry with push-aside: plan with the MILP expert, run episodes in PyBullet, "
-        "build datasets and benchmarks.",
-        epilog="Exit status: 0 success, 1 a negative answer (no plan, an invalid plan, a failed episode), "
-        "2 bad input, 3 an internal error (the message says where the full report is), 130 interrupted.",
-    )
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The ``fetchcarry`` parser: every command's options when ``argv`` is None, else only those of its command.
+
+    With ``argv``, only the modules of the command it runs are imported (none for ``--help``); the
+    other commands are listed by name and help line (:mod:`training.cli.commands`), so that a
+    command starts without importing what the others need.
+    """
+    parser = argparse.ArgumentParser(prog="fetchcarry", description=DESCRIPTION, epilog=EPILOG)
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    bench_parser = commands.add_parser(
-        "bench",
-        help="measure speed: env steps, planner times, dataset generation",
-        description="Benchmarks that print figures.",
-    )
-    bench = bench_parser.add_subparsers(dest="bench", metavar="WHAT", required=True)
-    for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as error:
-            if error.name != name:
-                raise
-            continue
-        module.register(commands, bench)
+    chosen = None if argv is None else selected(list(argv))
+    loaded: set[str] = set()
+    for name, entry in COMMANDS.items():
+        if argv is None or name == chosen:
+            bench = _add_bench(commands, entry.help) if name == "bench" else None
+            for module in (m for m in entry.modules if m not in loaded):
+                loaded.add(module)
+                importlib.import_module(module).register(commands, bench)
+    for name, entry in COMMANDS.items():  # the other commands, listed by name: their modules stay unloaded
+        if name not in commands.choices:
+            commands.add_parser(name, help=entry.help, add_help=False)
     return parser
+
+
+def _add_bench(commands: argparse._SubParsersAction, help_line: str) -> argparse._SubParsersAction:
+    """The ``bench`` command, whose subcommands several modules add."""
+    parser = commands.add_parser("bench", help=help_line, description="Benchmarks that print figures.")
+    return parser.add_subparsers(dest="bench", metavar="WHAT", required=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``fetchcarry argv...`` and return its exit status (argparse's own errors exit 2 by ``SystemExit``)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(argv).parse_args(argv)
     except KeyboardInterrupt:
         say("interrupted")
         return INTERRUPTED
-    return run_command(args.handler, args)
+    except ModuleNotFoundError as error:
+        message = missing_extra(error)
+        if message is None:
+            raise
+        say(message)
+        return BAD_INPUT
+    return run_command(needing_extras(args.handler), args)

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from training.cli import references
 from training.cli.arguments import add_worker_options, capacity_text, positive_int
+from training.cli.commands import summary
 from training.cli.episodes import add_obs_mode_argument
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
@@ -35,7 +36,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     """Add ``benchmark`` to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "benchmark",
-        help="evaluate policies against the MILP expert on a split or a folder of scenarios",
+        help=summary("benchmark"),
         description=_description(),
         epilog="Exit status: 0 done (--check: every record identical), 1 (--check) a record came out differently, "
         "2 bad input (unknown policy or split, missing run folder, unusable "

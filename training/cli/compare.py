@@ -11,6 +11,7 @@ import json
 import math
 from dataclasses import asdict
 
+from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
 from training.evaluation.compare import compare, pooled
@@ -18,7 +19,7 @@ from training.evaluation.leaderboard import merge_folders
 
 COMPARE_COMMAND = Command(
     name="compare",
-    help="compare two methods on the same scenarios: paired bootstrap and the sign over training seeds",
+    help=summary("compare"),
     description="Per split that both methods ran, the difference A - B on the scenarios both ran (same seed and "
     "scenario digest): success (per-scenario success rate over the training seeds, mean difference with a 95 % "
     "paired bootstrap interval over scenarios), travel cost in metres (on the scenarios both solved), and the sign "

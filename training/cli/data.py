@@ -15,6 +15,7 @@ from pathlib import Path
 
 from fetchcarry_env.errors import UsageError
 from training.cli.arguments import add_worker_options, positive_int, whole_number
+from training.cli.commands import summary
 from training.cli.episodes import add_obs_mode_argument, add_source_arguments, episode_source
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.options import Command
@@ -34,7 +35,7 @@ from training.evaluation.protocol import refuse_split_scenario
 
 GENERATE_COMMAND = Command(
     name="generate",
-    help="generate a Minari dataset of episodes (resumable)",
+    help=summary("generate"),
     description="Generate a Minari dataset under MINARI_DATASETS_PATH (default ~/.minari/datasets), "
     "no network. Episode k uses seed SEED + k; every episode stores its seed and scenario JSON (episode "
     "metadata) and the planner's figures (per-step infos). Finished episodes are staged at once, so an "
@@ -210,9 +211,7 @@ def _print_generation(report: GenerationReport, as_json: bool) -> None:
 
 # ---------------------------------------------------------------------------- dataset
 def _register_dataset(commands: argparse._SubParsersAction) -> None:
-    parser = commands.add_parser(
-        "dataset", help="inspect and replay Minari datasets", description="Inspect and replay Minari datasets."
-    )
+    parser = commands.add_parser("dataset", help=summary("dataset"), description="Inspect and replay Minari datasets.")
     actions = parser.add_subparsers(dest="dataset_command", metavar="ACTION", required=True)
     info = actions.add_parser(
         "info",

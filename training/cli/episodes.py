@@ -18,6 +18,7 @@ from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
 from fetchcarry_env.observations import OBS_MODES
 from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
+from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, say
 from training.cli.files import check_picture, load_scenario
 from training.cli.seeds import check_seed_range, seed
@@ -239,7 +240,7 @@ def _run_folder(policy: str) -> Path | None:
 def _register_rollout(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "rollout",
-        help="run one episode in the physics env and print its figures",
+        help=summary("rollout"),
         description="Run one episode of FetchCarryPush-v0 (a fixed scenario, or a family's scenario drawn from "
         "the seed) with the expert, the random policy or a trained run folder (in FetchCarryPushPhases-v0), "
         "and print its figures: objects delivered, steps, "
@@ -272,7 +273,7 @@ def run_rollout(args: argparse.Namespace) -> int:
 def _register_demo(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "demo",
-        help="the expert delivers an object whose goal is covered: a picture and the figures",
+        help=summary("demo"),
         description="Make FetchCarryPush-v0 with a push-family scenario (the goal is covered by clutter that "
         "must be pushed aside), run the MILP expert in the physics env, write a picture of the episode "
         "(.png: key states; .gif: every state) and print the episode's figures.",
@@ -317,7 +318,7 @@ def run_demo(args: argparse.Namespace) -> int:
 def _register_evaluate(commands: argparse._SubParsersAction) -> None:
     parser = commands.add_parser(
         "evaluate-expert",
-        help="success rate and speed of the expert in physics, per family",
+        help=summary("evaluate-expert"),
         description="Run the MILP expert on seeded scenarios of each family in the physics env, report the "
         "success rate, replans, planning and simulation time and episodes per second per worker, and write "
         "every failure as a scenario file plus a sidecar with its seed and figures.",

@@ -10,13 +10,14 @@ from __future__ import annotations
 import argparse
 import json
 
+from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
 from training.evaluation.leaderboard import leaderboard, leaderboard_markdown, merge_folders
 
 LEADERBOARD_COMMAND = Command(
     name="leaderboard",
-    help="merge benchmark result folders into one ranked table per split, with paired statistics",
+    help=summary("leaderboard"),
     description="Read DIR/results.json of every folder (fetchcarry benchmark --out folders, anyone's), check that "
     "they are comparable (one version of each split, the same fixed references, no method in two folders; "
     "expert, random, random-phases and greedy come from the first folder that has them) and print, per split, "

@@ -20,6 +20,7 @@ from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
+from training.cli.commands import summary
 from training.cli.files import (
     check_plot_format,
     check_readable,
@@ -43,7 +44,7 @@ SCENARIO_FORMAT = "fetchcarry-scenario/1"
 
 PLAN_COMMAND = Command(
     name="plan",
-    help="plan a scenario with the MILP expert and write the plan JSON",
+    help=summary("plan"),
     description="Plan SCENARIO (a fetchcarry-scenario/1 file) with the paper's MILP on SCIP, print a "
     "one-screen summary (status, objective, the phases, timings) and, with -o PLAN, write the plan as "
     "fetchcarry-plan/1 JSON; without -o no file is written. The plan is written whatever the outcome: "
@@ -53,7 +54,7 @@ PLAN_COMMAND = Command(
 )
 VALIDATE_COMMAND = Command(
     name="validate",
-    help="check a scenario, or a plan for it, against the format's rules and list every violation",
+    help=summary("validate"),
     description="Without PLAN: check SCENARIO alone against the rules of docs/scenario-format.md (its "
     "fields, unique ids, rectangles, the robot's start, objects and goals on tables, no overlaps, "
     "numbers and counts), without planning, and list every violation; --plot draws it from above. "

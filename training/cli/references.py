@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 from training.cli.arguments import add_worker_options, positive_int
+from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
 from training.evaluation.references import (
@@ -26,7 +27,7 @@ from training.evaluation.splits import published_splits
 
 REFERENCES_COMMAND = Command(
     name="references",
-    help="make or check the fixed expert references of the published splits",
+    help=summary("references"),
     description="Run the MILP expert once, with a generous planning limit, on every scenario of a split's dev "
     "and test parts, and write the split's reference file (every scenario's digest and the expert's cost, "
     "return, phases, pushes and proven status). The benchmark's cost ratio, SPL and score read these files, "

@@ -11,6 +11,7 @@ import argparse
 import sys
 
 from training.cli.arguments import positive_int
+from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.text import echo
 from training.data.generate import BACKENDS
@@ -26,7 +27,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     """Add ``reproduce`` to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "reproduce",
-        help="the published table: expert data, every learned baseline per training seed, every split",
+        help=summary("reproduce"),
         description="Make the published table in one folder: (1) the MILP expert's episodes on the training "
         "family (basic, push, corridor or multi-2) as a candidate-phase Minari dataset under DIR/datasets; "
         "(2) per training seed, BC with the flat MLP and the set encoder, DAgger, DAgger aimed at push and "

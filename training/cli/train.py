@@ -28,6 +28,7 @@ from typing import Any
 
 from fetchcarry_env.errors import InputError
 from training.cli.arguments import positive_float, positive_int, whole_number
+from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
 from training.cli.refusals import CHECKS, add_refusal_option, refuse_evaluation_data
 from training.cli.text import echo
@@ -46,7 +47,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
     """Add ``train KIND`` for every registered learner to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "train",
-        help=f"train a learned baseline ({', '.join(registry.kinds())}) into a run folder",
+        help=summary("train"),
         description="Train a learned policy on the candidate-phase interface (FetchCarryPushPhases-v0) into a "
         "run folder. Deterministic on CPU for one --seed.",
     )
