@@ -133,15 +133,19 @@ class Capacity:
     def parse(cls, text: str, base: Capacity | None = None) -> Capacity:
         """A capacity from ``"objects=8,clutter=12"`` (the other counts from ``base``, by default :class:`Capacity`)."""
         values = asdict(base if base is not None else cls())
+        given: set[str] = set()
         for part in (p.strip() for p in text.split(",")):
             key, sep, value = part.partition("=")
-            digits = value.strip()
-            if not sep or key.strip() not in values or not (digits.isascii() and digits.isdigit() and len(digits) <= 6):
+            key, digits = key.strip(), value.strip()
+            if not sep or key not in values or not (digits.isascii() and digits.isdigit() and len(digits) <= 6):
                 raise CapacityError(
                     f"capacity {text[:80]!r}: give comma-separated KEY=N with KEY one of {', '.join(values)}, "
                     "e.g. objects=8,clutter=12"
                 )
-            values[key.strip()] = int(value)
+            if key in given:
+                raise CapacityError(f"capacity {text[:80]!r}: {key} is given twice")
+            given.add(key)
+            values[key] = int(digits)
         if any(v > CAPACITY_LIMITS[k] for k, v in values.items()):
             raise CapacityError(f"capacity {text[:80]!r}: at most {CAPACITY_LIMITS} (what a scenario may hold)")
         return cls(**values)
