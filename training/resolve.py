@@ -10,7 +10,12 @@ A policy is named by
   ``capacity`` (observation slots), if stored, is the env's;
 - ``package.module:factory``, a user's function (or class) called with the env that
   returns a :class:`~training.policies.protocol.Policy`; it acts in ``phases`` unless
-  the factory has an attribute ``interface = "env"``.
+  the factory has an attribute ``interface = "env"``. The module is imported as
+  ``python -m`` would find it: the working folder :func:`resolve` ran in comes first on
+  the import path, for that import only (then the installed packages); the factory and
+  every answer of its policy are checked (:mod:`training.policies.user`: a factory that
+  raises or gives no policy, an answer that is no action of the env, is bad input naming
+  ``module:factory``). Naming it runs the user's code, as running their script would.
 
 Each acts in one *interface* (:mod:`training.envs`): ``env`` (``FetchCarryPush-v0``'s
 ``MultiDiscrete`` phase actions) or ``phases`` (``FetchCarryPushPhases-v0``'s
@@ -23,7 +28,11 @@ is not listed.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import os
+import sys
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,6 +41,7 @@ from fetchcarry_env.observations import OBS_MODES, image_options
 from training.envs import INTERFACES
 from training.errors import BenchmarkError
 from training.policies.protocol import Policy
+from training.policies.user import describe_raised, user_policy
 
 EXPERT, RANDOM = "expert", "random"  # the reference policies every benchmark runs
 EXPERT_TIME_LIMIT = 10.0  # seconds per planning call of the expert
@@ -72,6 +82,7 @@ class PolicySpec:
     run: str | None = None  # the path of a run folder, or
     user: str | None = None  # package.module:factory
     env_options: dict[str, Any] = field(default_factory=dict)  # extra gym.make options (capacity)
+    folder: str | None = None  # module:factory's working folder, first on the import path where it is built
 
     @property
     def env_id(self) -> str:
@@ -102,7 +113,8 @@ def resolve(name: str) -> PolicySpec:
     path = Path(name)
     if not path.exists():
         if _is_factory_name(name):
-            return PolicySpec(name, _user_interface(name), user=name)
+            folder = os.getcwd()  # a worker's may differ (Ray's): the spec carries it
+            return PolicySpec(name, _user_interface(name, folder), user=name, folder=folder)
         if "/" in name or "\\" in name:
             raise BenchmarkError(f"no run folder at {name}")
         known = ", ".join(available())
@@ -115,13 +127,22 @@ def _is_factory_name(name: str) -> bool:
     return bool(colon) and all(part.isidentifier() for part in [*module.split("."), *attribute.split(".")])
 
 
-def _user_factory(name: str) -> Any:
-    """The callable ``package.module:factory`` names; ``BenchmarkError`` if it cannot be imported."""
+def _user_factory(name: str, folder: str | None) -> Callable[[Any], Any]:
+    """The callable ``package.module:factory`` names, imported with ``folder`` first on the import path.
+
+    ``BenchmarkError`` if the module cannot be imported (or raises as it runs) or has no such callable.
+    """
     module_name, _, attribute = name.partition(":")
     try:
-        target: Any = importlib.import_module(module_name)
+        with _first_on_import_path(folder):
+            target: Any = importlib.import_module(module_name)
     except ImportError as error:
-        raise BenchmarkError(f"policy {name!r}: cannot import {module_name} ({error})") from None
+        where = f"the working folder {folder} and " if folder is not None else ""
+        raise BenchmarkError(
+            f"policy {name!r}: cannot import {module_name} from {where}the installed packages ({error})"
+        ) from None
+    except Exception as error:  # the user's module failed as it ran
+        raise BenchmarkError(f"policy {name!r}: importing {module_name} raised {describe_raised(error)}") from error
     for part in attribute.split("."):
         target = getattr(target, part, None)
     if not callable(target):
@@ -129,8 +150,23 @@ def _user_factory(name: str) -> Any:
     return target
 
 
-def _user_interface(name: str) -> str:
-    interface = getattr(_user_factory(name), "interface", "phases")
+@contextlib.contextmanager
+def _first_on_import_path(folder: str | None) -> Iterator[None]:
+    """Run the block with ``folder`` first on ``sys.path`` (where ``python -m`` puts the working folder), then not."""
+    if folder is None:
+        yield
+        return
+    sys.path.insert(0, folder)
+    importlib.invalidate_caches()  # a module written since the import system last listed the folder
+    try:
+        yield
+    finally:
+        with contextlib.suppress(ValueError):
+            sys.path.remove(folder)
+
+
+def _user_interface(name: str, folder: str | None) -> str:
+    interface = getattr(_user_factory(name, folder), "interface", "phases")
     if interface not in INTERFACES:
         raise BenchmarkError(f"policy {name!r}: interface must be one of {', '.join(INTERFACES)}, got {interface!r}")
     return interface
@@ -221,7 +257,7 @@ def build(spec: PolicySpec, env: Any, *, time_limit: float | None = None) -> Pol
 
         return load_policy(spec.run, env)
     if spec.user is not None:
-        return _user_factory(spec.user)(env)
+        return user_policy(spec.user, _user_factory(spec.user, spec.folder), env)
     factory = FACTORIES[spec.factory]
     options = dict(factory.options)
     if time_limit is not None and "time_limit" in options:

@@ -48,7 +48,10 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         nargs="+",
         required=True,
         metavar="POLICY",
-        help="expert, random, random-phases, greedy (where installed) or run folders (as fetchcarry train writes)",
+        help="each one of: expert, random, random-phases, greedy, expert-phases (where installed); a run folder "
+        "(as fetchcarry train writes); or package.module:factory, your own factory that is called with the env "
+        "and returns a policy (docs/protocol.md), found from the working folder first, then the installed "
+        "packages: naming it imports and runs your code, so trust it as you would a script you run",
     )
     where = parser.add_mutually_exclusive_group()
     where.add_argument(

@@ -120,8 +120,11 @@ def _add_plan_options(parser: argparse.ArgumentParser) -> None:
         "--guide",
         metavar="GUIDE",
         help="a plan to guide the search: a plan file (fetchcarry-plan/1), or a policy whose episode on SCENARIO "
-        "becomes the plan (a run folder of fetchcarry train, or greedy); SCIP's warm start where it fits a model "
-        "(as it is, or with its moves dropped), the optimum and its proof unchanged",
+        "becomes the plan (a name such as greedy or expert-phases, a run folder of fetchcarry train, or "
+        "package.module:factory, your own factory called with the env that returns a policy, found from the "
+        "working folder first: naming it imports and runs your code, so trust it as you would a script you run); "
+        "SCIP's warm start where it fits a model (as it is, or with its moves dropped), the optimum and its proof "
+        "unchanged",
     )
     parser.add_argument(
         "--guide-branching",
