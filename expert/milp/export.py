@@ -16,9 +16,13 @@ variable name, its kind and meaning.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 import re
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -42,7 +46,8 @@ def export_model(milp: Milp, directory: Path, solve: dict[str, Any]) -> tuple[Pa
     """
     model = milp.model
     mps, meta = export_paths(directory, milp.problem.scenario.name, milp.n_phases)
-    model.writeProblem(str(mps), trans=False, verbose=False)
+    with _replacing(mps) as partial:
+        model.writeProblem(str(partial), trans=False, verbose=False)
     status = model.getStatus()
     optimum = model.getObjVal() if status == "optimal" and model.getNSols() > 0 else None
     dual = model.getDualbound() if status in ("optimal", "timelimit", "gaplimit", "sollimit") else None
@@ -62,8 +67,27 @@ def export_model(milp: Milp, directory: Path, solve: dict[str, Any]) -> tuple[Pa
         "lattice": {"origin": list(lattice.origin), "resolution": lattice.resolution},
         "variables": variable_meanings(milp),
     }
-    meta.write_text(json.dumps(record, indent=1), encoding="utf-8")
+    with _replacing(meta) as partial:
+        partial.write_text(json.dumps(record, indent=1), encoding="utf-8")
     return mps, meta
+
+
+@contextlib.contextmanager
+def _replacing(path: Path) -> Iterator[Path]:
+    """A new file beside ``path`` to write, which then replaces ``path``'s directory entry.
+
+    Whatever stands at ``path`` (a FIFO that would block a writer, a symlink to a file
+    elsewhere) is replaced, never opened or followed; the new file keeps ``path``'s suffix,
+    from which SCIP picks the format. Nothing is left behind when writing fails.
+    """
+    handle, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(handle)
+    partial = Path(name)
+    try:
+        yield partial
+        os.replace(partial, path)
+    finally:
+        partial.unlink(missing_ok=True)
 
 
 def variable_meanings(milp: Milp) -> dict[str, dict[str, Any]]:

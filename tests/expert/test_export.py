@@ -110,3 +110,32 @@ def test_cli_export_model(tmp_path, capsys):
     not_a_folder.write_text("x")
     status, _, err = run(capsys, "plan", EXAMPLE, "--export-model", not_a_folder)
     assert status == 2 and "not a folder" in err
+
+
+def test_export_replaces_a_fifo_or_symlink_named_like_its_output(tmp_path):
+    """A FIFO named like an output once blocked the writer for ever, and a symlink's target was overwritten.
+
+    The planner runs in a child process, so that the old behaviour (a writer blocked on the
+    FIFO) fails the test at the safety timeout instead of hanging the suite.
+    """
+    import os
+    import subprocess
+    import sys
+
+    from expert.milp.export import export_paths
+    from fetchcarry_env.scenario import Scenario
+
+    folder, elsewhere = tmp_path / "models", tmp_path / "precious.txt"
+    folder.mkdir()
+    elsewhere.write_text("keep me")
+    mps, meta = export_paths(folder, Scenario.load(EXAMPLE).name, 6)
+    os.mkfifo(mps)
+    meta.symlink_to(elsewhere)
+    code = "import sys; from training.cli import main; sys.exit(main(sys.argv[1:]))"
+    argv = [sys.executable, "-c", code, "plan", str(EXAMPLE), "--export-model", str(folder), "--max-phases", "6"]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=300)  # a safety stop, not a speed bound
+    assert done.returncode in (0, 1), done.stderr
+    assert mps.is_file() and not mps.is_symlink() and mps.stat().st_size > 0
+    assert meta.is_file() and not meta.is_symlink() and json.loads(meta.read_text())["format"] == MODEL_FORMAT
+    assert elsewhere.read_text() == "keep me"
+    assert not [p for p in folder.iterdir() if p.name.startswith(".")]  # no partial file left behind
