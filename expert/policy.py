@@ -43,6 +43,17 @@ planning seconds.
 
 The policy uses the env only for its lattice and observation capacity (never its
 simulation), so it works on a plain env, a wrapped env or an SB3 ``VecEnv``.
+
+It acts in the env it was given. On ``FetchCarryPush-v0`` it answers the env's
+``MultiDiscrete`` phase actions, its plan's own. On ``FetchCarryPushPhases-v0`` (a
+``Discrete`` action space) it answers the candidate index that stands for its plan's
+action (:mod:`expert.candidates`: a move no candidate stands for is projected onto the
+nearest allowed move and the expert replans from where the base ends;
+:attr:`ExpertPolicy.projected` counts them), one env at a time: a vector env of phases
+envs is refused. ``interface="env"`` keeps the plan's env actions on a phases env, for a
+caller that labels or executes them itself (the phases env's ``index_of`` and
+``step_env_action``). ``training.policies.phase_expert.PhaseExpert`` (the benchmark's
+``expert-phases``) is this policy on a phases env.
 """
 
 from __future__ import annotations
@@ -55,6 +66,7 @@ from typing import Any
 import numpy as np
 
 from expert import planner
+from expert.candidates import NEAREST_RULES, UNEXPRESSIBLE, acts_in_candidates, candidate_answer
 from expert.decoupled import fallback_plan
 from expert.escape import corner_gap, escape_move
 from expert.milp.deadline import Deadline
@@ -69,6 +81,7 @@ DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
 FALLBACK_FACTOR = 3.0  # the decoupled fallback plan's seconds, by default, per second of the planner's time limit
+INTERFACES = ("env", "phases")  # what the expert answers: env actions, or candidate indices of a phases env
 
 
 @dataclass(frozen=True)
@@ -131,8 +144,13 @@ class ExpertPolicy:
     planning call; ``base_tolerance`` and ``item_tolerance`` (metres) say how far the state
     may drift from the plan before the expert replans. ``fallback_time_limit`` (seconds,
     default ``FALLBACK_FACTOR * time_limit``; 0 turns the fallback off) bounds the decoupled plan made when a
-    planning call ran out of time without a plan. ``planner_options`` go to
-    :func:`expert.planner.plan`.
+    planning call ran out of time without a plan. ``interface`` is what it answers: ``"env"``
+    (the env actions it plans in) or ``"phases"`` (the candidate index of a single
+    ``FetchCarryPushPhases-v0`` env); None, the default: the env's own (``"phases"`` for a
+    phases env). ``projection`` (``"end"`` or ``"detour"``) says which allowed move stands
+    in for a move no candidate expresses (:func:`expert.candidates.nearest_move`).
+    ``planner_options`` go to :func:`expert.planner.plan`. ``ValueError`` for an
+    interface the env cannot take (a vector env of phases envs answered in candidates).
     """
 
     def __init__(
@@ -145,6 +163,8 @@ class ExpertPolicy:
         lattice: Lattice | None = None,
         capacity: Capacity | None = None,
         fallback_time_limit: float | None = None,
+        interface: str | None = None,
+        projection: str = "end",
         **planner_options: Any,
     ) -> None:
         if time_limit <= 0:
@@ -153,6 +173,11 @@ class ExpertPolicy:
             raise ValueError(f"fallback_time_limit must not be negative (seconds), got {fallback_time_limit}")
         if base_tolerance < 0 or item_tolerance < 0:
             raise ValueError("tolerances must not be negative")
+        if projection not in NEAREST_RULES:
+            raise ValueError(f"projection must be one of {', '.join(NEAREST_RULES)}, got {projection!r}")
+        self.interface = _interface(env, interface)
+        self.projection = projection
+        self._phases_env = env if self.interface == "phases" else None
         self.lattice: Lattice = lattice if lattice is not None else _env_attribute(env, "lattice")
         self.capacity: Capacity = capacity if capacity is not None else _env_attribute(env, "capacity")
         self.time_limit = time_limit
@@ -164,6 +189,9 @@ class ExpertPolicy:
         self._stats = ExpertStats()
         self.last_decisions: list[Decision] = []
         self.last_plan: Plan | None = None
+        self.last_projected = False  # the last answer is a projected move (interface "phases")
+        self.projected = 0  # moves projected onto their nearest candidate since the last reset
+        self.unexpressible = 0  # other actions no allowed candidate expressed since the last reset
 
     @property
     def stats(self) -> ExpertStats:
@@ -181,6 +209,8 @@ class ExpertPolicy:
         self._stats = ExpertStats()
         self.last_decisions = []
         self.last_plan = None
+        self.last_projected = False
+        self.projected = self.unexpressible = 0
 
     def predict(
         self,
@@ -193,15 +223,19 @@ class ExpertPolicy:
         """The expert's action for each observation: ``(action, state)`` as stable-baselines3 returns them.
 
         ``observation`` is one observation dict (arrays of the env's shapes) or a batch
-        (the same keys, arrays with a leading dimension, as a ``VecEnv`` gives them).
+        (the same keys, arrays with a leading dimension, as a ``VecEnv`` gives them; in the
+        ``phases`` interface a batch of one: the candidates are those of the env's state).
         ``episode_start`` (one bool per env) makes the expert drop its plan for that env.
-        The expert is deterministic; ``deterministic`` and ``action_masks`` are accepted for
-        the protocol (the planner checks its actions with the env's own rules).
+        The expert is deterministic; ``deterministic`` is accepted for the protocol (the
+        planner checks its actions with the env's own rules); ``action_masks``, if given,
+        is the state's candidate mask in the ``phases`` interface (else the env's is read).
         ``state`` is returned unchanged.
         """
         flat = np.asarray(observation["observation"] if isinstance(observation, dict) else observation)
         batched = flat.ndim == 2
         rows = flat if batched else flat[None, :]
+        if self._phases_env is not None and len(rows) != 1:
+            raise ValueError(f"in the phases interface the expert answers one observation at a time, got {len(rows)}")
         starts = np.broadcast_to(np.asarray(False if episode_start is None else episode_start, dtype=bool), len(rows))
         while len(self._tracks) < len(rows):
             self._tracks.append(Track())
@@ -210,11 +244,31 @@ class ExpertPolicy:
             if starts[k]:
                 self._tracks[k] = Track()
             action, decision = self._act(self._tracks[k], row)
-            actions.append(action.to_array())
+            answer = action.to_array()
+            if self._phases_env is not None:
+                answer, decision = self._candidate(answer, decision, action_masks)
+            actions.append(answer)
             decisions.append(decision)
         self.last_decisions = decisions
         stacked = np.stack(actions)
         return (stacked if batched else stacked[0]), state
+
+    def _candidate(
+        self, action: np.ndarray, decision: Decision, action_masks: np.ndarray | None
+    ) -> tuple[np.int64, Decision]:
+        """The phases env's candidate for the env ``action`` (:func:`expert.candidates.candidate_answer`)."""
+        answer = candidate_answer(
+            self._phases_env, action, project=decision.failure is None, rule=self.projection, mask=action_masks
+        )
+        self.last_projected = answer.projected
+        if answer.projected:
+            self.projected += 1
+            decision = replace(decision, reason=f"{decision.reason}; move projected onto candidate {answer.index}")
+        elif answer.unexpressible is not None:
+            self.unexpressible += 1
+            reason = answer.unexpressible
+            decision = replace(decision, reason=reason, status=UNEXPRESSIBLE, failure=reason, repaired=False)
+        return np.int64(answer.index), decision
 
     # -- one env -----------------------------------------------------------------------------
 
@@ -344,6 +398,26 @@ def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:
         "status": planned[-1].plan.status if planned else None,
         "objective": planned[-1].plan.objective if planned else None,
     }
+
+
+def _interface(env: Any, asked: str | None) -> str:
+    """What the expert answers on ``env`` (:data:`INTERFACES`): ``asked``, or by default the env's own."""
+    if asked is not None and asked not in INTERFACES:
+        raise ValueError(f"interface must be one of {', '.join(INTERFACES)} (or None: the env's), got {asked!r}")
+    if asked == "env":
+        return "env"
+    candidates = env is not None and acts_in_candidates(env)
+    if asked == "phases" and not candidates:
+        raise ValueError(
+            "interface='phases' answers candidate indices of a FetchCarryPushPhases-v0 env; "
+            f"this env's actions are {getattr(env, 'action_space', None)}"
+        )
+    if candidates and hasattr(env, "get_attr"):  # a vector env: the candidates are each env's own
+        raise ValueError(
+            "ExpertPolicy answers candidate indices for one FetchCarryPushPhases-v0 env at a time; for a vector "
+            'env give interface="env" (the env actions it plans in; each env\'s step_env_action executes them)'
+        )
+    return "phases" if candidates else "env"
 
 
 def _env_attribute(env: Any, name: str) -> Any:

@@ -15,7 +15,7 @@ ENV_ID = "FetchCarryPushPhases-v0"
 
 def expert_run(env: gym.Env, seed: int) -> list[tuple[float, dict]]:
     """The expert's episode through the candidates: ``(reward, info)`` per step."""
-    expert = ExpertPolicy(env)
+    expert = ExpertPolicy(env, interface="env")  # the plan's env actions, mapped here
     observation, _ = env.reset(seed=seed)
     out = []
     for step in range(20):

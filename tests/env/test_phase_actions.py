@@ -163,7 +163,7 @@ def test_the_expert_acts_through_the_interface():
     from expert import ExpertPolicy
 
     env = gym.make(ENV_ID, family="basic")
-    expert = ExpertPolicy(env)
+    expert = ExpertPolicy(env, interface="env")  # the plan's env actions, mapped here
     observation, _ = env.reset(seed=4)
     for step in range(10):
         action, _ = expert.predict(observation, episode_start=step == 0)

@@ -92,7 +92,7 @@ class Demonstrations:
 def record_demonstrations(family: str, seeds: range | list[int], **env_options: Any) -> Demonstrations:
     """The expert's episodes on ``seeds`` of ``family``, its expressible actions as labels."""
     env = make_env("phases", family=family, **env_options)
-    expert = ExpertPolicy(env)
+    expert = ExpertPolicy(env, interface="env")  # its own env actions, as expert_episode executes them
     observations, masks, labels = [], [], []
     steps = successes = 0
     for seed in seeds:

@@ -41,7 +41,7 @@ def check_projection(
     rows = []
     try:
         for seed in seeds:
-            own = expert_episode(env, ExpertPolicy(env, time_limit=time_limit), seed)
+            own = expert_episode(env, ExpertPolicy(env, time_limit=time_limit, interface="env"), seed)
             phase = PhaseExpert(env, time_limit=time_limit, rule=rule)
             episode = run_episode(env, phase, seed)
             rows.append(

@@ -93,7 +93,7 @@ def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     torch.set_num_threads(1)
     env = make_env("phases", family=task.family_of(index), **task.env_options)
     try:
-        expert = ExpertPolicy(env, time_limit=task.time_limit)
+        expert = ExpertPolicy(env, time_limit=task.time_limit, interface="env")  # env actions: the labeller maps them
         obs_mode = task.env_options.get("obs_mode", "state")
         labeller = _Labeller(env, expert, task.nearest_moves, acting=task.network is None, obs_mode=obs_mode)
         if task.network is None:  # the expert's own episode, whether or not a candidate expresses its action

@@ -109,7 +109,7 @@ def heldout_success(policy: Any, family: str, episodes: int, **env_options: Any)
 def expert_costs(family: str, seeds: Iterable[int]) -> dict[int, float]:
     """The expert's travel cost per seed it solves (through the same interface, its own env actions)."""
     env = make_env("phases", family=family)
-    expert = ExpertPolicy(env)
+    expert = ExpertPolicy(env, interface="env")  # its own env actions, as expert_episode executes them
     costs = {}
     try:
         for seed in seeds:

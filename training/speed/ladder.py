@@ -94,7 +94,7 @@ def policy_episodes(name: str, k: int, seeds: Iterable[int]) -> Iterable[tuple[E
     env = make_env(interface, family=family(k))  # the family's capacity, not the run's
     try:
         if spec is None:
-            expert = ExpertPolicy(env)
+            expert = ExpertPolicy(env, interface="env")  # its own env actions, as expert_episode executes them
             for seed in seeds:
                 record = expert_episode(env, expert, seed)
                 result = EpisodeResult(seed, bool(record.success), float(record.travel_cost), int(record.steps), 0)

@@ -28,7 +28,7 @@ FAMILIES = ("basic", "push", "corridor", "multi-2")
 def expressibility(family: str, episodes: int, first_seed: int = 0) -> dict[str, Any]:
     """The expert on ``episodes`` seeds of ``family``: its actions that a candidate stands for."""
     env = gym.make("FetchCarryPushPhases-v0", family=family)
-    expert = ExpertPolicy(env)
+    expert = ExpertPolicy(env, interface="env")  # its own env actions, as expert_episode executes them
     by_mode, expressible_by_mode = Counter(), Counter()
     whole, successes, steps, mask_s = 0, 0, 0, 0.0
     for seed in range(first_seed, first_seed + episodes):
