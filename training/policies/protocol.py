@@ -9,7 +9,8 @@ A policy is any object with SB3's ``predict`` signature (MaskablePPO's, with
 - ``stats``: totals with a ``to_dict()`` (planners).
 
 A user's policy enters every command as ``package.module:factory`` where
-``factory(env)`` returns such an object (``docs/design.md`` has a ten-line example).
+``factory(env)`` returns such an object (``docs/protocol.md`` has a ten-line example;
+:mod:`training.policies.user` checks what it gives).
 """
 
 from __future__ import annotations
