@@ -69,9 +69,12 @@ def plot_plan(scenario: Scenario, plan: Plan, path: str | Path, *, width_in: flo
     map_axes.set_title(_title(scenario, plan), fontsize=10)
     _list_steps(steps_axes, plan)
     close_view = _close_up_view(scenario, plan)
-    drawing.frame_map(close_axes, close_view)
-    _draw_plan(close_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * close_view.size[0] / SIDE_WIDTH_IN)
-    close_axes.set_title("close-up: places and pushes", fontsize=9)
+    if close_view is None:
+        _no_close_up(close_axes)
+    else:
+        drawing.frame_map(close_axes, close_view)
+        _draw_plan(close_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * close_view.size[0] / SIDE_WIDTH_IN)
+        close_axes.set_title("close-up: places and pushes", fontsize=9)
     figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
     drawing.separate_labels(map_axes)
     drawing.separate_labels(close_axes)
@@ -91,25 +94,25 @@ def _draw_plan(axes: Axes, scenario: Scenario, plan: Plan, *, label_merge_m: flo
     drawing.number_points(axes, [p.base for p in phases], label_merge_m, LABEL_OFFSET * scenario.robot.radius)
 
 
-def _close_up_view(scenario: Scenario, plan: Plan | None) -> Rect:
-    """The region around the goal tables and the bases of every place and push (and where pushes start)."""
+def _close_up_view(scenario: Scenario, plan: Plan | None) -> Rect | None:
+    """The region around the goal tables and the bases of every place and push (and where pushes start).
+
+    None where that region is most of the area (:func:`fetchcarry_env.drawing.close_up`): no close-up then.
+    """
     boxes = [t.rect for obj in scenario.objects if (t := scenario.table_under(obj.goal, obj.radius)) is not None]
     for k, phase in enumerate(plan.phases if plan is not None else ()):
         if phase.action in ("place", "push"):
-            boxes.append(Rect.around(phase.base, 0.0, 0.0))
+            boxes.append(drawing.point_box(phase.base))
             if phase.action == "push":
-                boxes.append(Rect.around(plan.phases[k - 1].base, 0.0, 0.0))
-    if not boxes:
-        return scenario.area.inflate(drawing.MARGIN)
-    box = Rect(
-        min(b.min_x for b in boxes),
-        min(b.min_y for b in boxes),
-        max(b.max_x for b in boxes),
-        max(b.max_y for b in boxes),
-    ).inflate(CLOSE_UP_MARGIN)
-    # Square it, so the close-up fills its panel.
-    half = max(box.size) / 2
-    return Rect.around(box.center, half, half)
+                boxes.append(drawing.point_box(plan.phases[k - 1].base))
+    return drawing.close_up(boxes, scenario.area.inflate(drawing.MARGIN), CLOSE_UP_MARGIN)
+
+
+def _no_close_up(axes: Axes) -> None:
+    """The close-up's place where none is drawn: why."""
+    axes.set_axis_off()
+    axes.text(0.0, 1.0, "no close-up: the goal tables, places and pushes\nspread over most of the area",
+              va="top", fontsize=8, transform=axes.transAxes)  # fmt: skip
 
 
 def _draw_clutter(axes: Axes, scenario: Scenario, phases: tuple[Phase, ...]) -> None:
@@ -241,16 +244,19 @@ def plot_scenario(scenario: Scenario, path: str | Path, *, width_in: float = 7.0
     close_axes.set_anchor("N")
     drawing.frame_map(map_axes, scenario.area.inflate(drawing.MARGIN))
     close_view = _close_up_view(scenario, None)
-    drawing.frame_map(close_axes, close_view)
-    for axes in (map_axes, close_axes):
+    maps = [map_axes]
+    if close_view is None:
+        _no_close_up(close_axes)
+    else:
+        drawing.frame_map(close_axes, close_view)
+        close_axes.set_title("close-up: the goal tables", fontsize=9)
+        maps.append(close_axes)
+    for axes in maps:
         drawing.draw_scenario(axes, scenario, show_clutter=False)
         for item in scenario.clutter:  # labelled above, so that the label does not hide a goal under it
             drawing.draw_clutter(axes, item, item.rect.center, label=False)
-            axes.text(item.rect.center[0], item.rect.max_y + 0.02, item.id, ha="center", va="bottom", fontsize=7,
-                      color=drawing.PALETTE.clutter_edge, weight="bold", zorder=drawing.Z_TEXT, clip_on=True,
-                      path_effects=drawing.LABEL_HALO)  # fmt: skip
+            drawing.box_label(axes, item.rect, item.id, color=drawing.PALETTE.clutter_edge, weight="bold", side="above")
     map_axes.set_title(f"{scenario.name}: the scenario as it starts (no plan)", fontsize=10)
-    close_axes.set_title("close-up: the goal tables", fontsize=9)
     facts_axes.set_axis_off()
     facts_axes.text(0.0, 1.0, "\n".join(facts), va="top", ha="left", family="monospace", fontsize=7,
                     transform=facts_axes.transAxes)  # fmt: skip

@@ -24,7 +24,11 @@ from matplotlib import patheffects
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle, FancyArrowPatch, Rectangle
+from matplotlib.legend_handler import HandlerTuple
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, FancyArrowPatch, Patch, Rectangle
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
 
 from fetchcarry_env.geometry import Heading, Point, Rect, heading_vector
 from fetchcarry_env.scenario import Clutter, DeliveryObject, Scenario
@@ -46,8 +50,10 @@ class Palette:
 
     Objects, their goals and clutter have the colours the simulator gives their bodies
     (``fetchcarry_env/sim/bodies.py``; a test keeps the two equal), so that a map and a
-    3-D render of the same state read alike: objects red, goals green, clutter blue.
-    Several objects get shades of red, in scenario order.
+    3-D render of the same state read alike: the (first) object red, goals green, clutter
+    blue. Further objects get colours of matplotlib's ``tab10`` that no other mark of the
+    maps has (not its blue, green, grey or red), in scenario order, then three more
+    (purple, brown, navy) for up to eight, the most objects a family draws.
     """
 
     outside: str = "#d0d0d0"  # beyond the area
@@ -59,7 +65,8 @@ class Palette:
     clutter: str = "#3373d9"  # the renders' clutter blue
     clutter_edge: str = "#1d4380"
     goal: str = "#26bf40"  # the renders' goal-marker green
-    objects: tuple[str, ...] = ("#d92e2e", "#8c1c1c", "#f08080", "#b03060", "#e0604a", "#5e0c0c")  # reds, one each
+    # the renders' red, then tab10's orange, cyan, pink, olive, purple, brown, and a navy: one per object
+    objects: tuple[str, ...] = ("#d92e2e", "#ff7f0e", "#17becf", "#e377c2", "#bcbd22", "#9467bd", "#8c564b", "#1b2a6b")
 
     @property
     def object(self) -> str:
@@ -200,7 +207,7 @@ def draw_clutter(
         return
     draw_rect(axes, rect, face=PALETTE.clutter, edge=PALETTE.clutter_edge, zorder=Z_CLUTTER, alpha=0.9)
     if label:
-        _label(axes, rect.center, item.id, color=PALETTE.clutter_edge, weight="bold")
+        box_label(axes, rect, item.id, color=PALETTE.clutter_edge, weight="bold")
 
 
 def draw_object(
@@ -212,10 +219,14 @@ def draw_object(
     held: bool = False,
     label: bool = True,
 ) -> None:
-    """A delivery object (a disc of its radius) centred at ``center``; held ones get a thick outline."""
+    """A delivery object (a disc of its radius) centred at ``center``; held ones get a thick outline.
+
+    Its label, in its colour, sits on top of the disc (or touching it elsewhere: :func:`separate_labels`).
+    """
+    x, y = float(center[0]), float(center[1])
     axes.add_patch(
         Circle(
-            (float(center[0]), float(center[1])),
+            (x, y),
             obj.radius,
             facecolor=colour,
             edgecolor="black" if held else colour,
@@ -224,7 +235,7 @@ def draw_object(
         )
     )
     if label:
-        _label(axes, (float(center[0]), float(center[1]) + obj.radius + 0.02), obj.id, va="bottom")
+        box_label(axes, Rect.around((x, y), obj.radius, obj.radius), obj.id, color=colour, side="above")
 
 
 def draw_goal(axes: Axes, obj: DeliveryObject, *, colour: str = PALETTE.object) -> None:
@@ -289,19 +300,64 @@ def render_rgb(
 def _label(
     axes: Axes, at: Point, text: str, *, va: str = "center", color: str = "black", weight: str = "normal"
 ) -> None:
-    axes.text(
-        at[0],
-        at[1],
-        text,
-        ha="center",
-        va=va,
-        fontsize=7,
-        color=color,
-        weight=weight,
-        zorder=Z_TEXT,
-        clip_on=True,
-        path_effects=LABEL_HALO,
-    )
+    axes.text(at[0], at[1], text, ha="center", va=va, **_label_style(color, weight))
+
+
+def _label_style(color: str, weight: str) -> dict:
+    """The look of a map's name label: small, coloured, over everything, with a white halo."""
+    return {
+        "fontsize": 7,
+        "color": color,
+        "weight": weight,
+        "zorder": Z_TEXT,
+        "clip_on": True,
+        "path_effects": LABEL_HALO,
+    }
+
+
+class BoxLabel(Text):
+    """A text that names a box (a piece of clutter, an object's disc): it stays on or touching the box.
+
+    ``box`` is the box in data coordinates (metres). :func:`separate_labels` places these
+    labels first and moves one only to another side of its own box.
+    """
+
+    def __init__(self, box: Rect, text: str, side: str, **style) -> None:
+        super().__init__(0.0, 0.0, text, **style)
+        self.box = box
+        self.side = side
+        self.put(side)
+
+    def put(self, side: str) -> None:
+        """Place the label on ``side`` of its box: ``on`` (centred), ``above``, ``below``, ``left`` or ``right``."""
+        box = self.box
+        self.side = side
+        (cx, cy), ha, va = box.center, "center", "center"
+        if side == "above":
+            cy, va = box.max_y, "bottom"
+        elif side == "below":
+            cy, va = box.min_y, "top"
+        elif side == "left":
+            cx, ha = box.min_x, "right"
+        elif side == "right":
+            cx, ha = box.max_x, "left"
+        elif side != "on":
+            raise ValueError(f"unknown side {side!r}")
+        self.set_position((cx, cy))
+        self.set_horizontalalignment(ha)
+        self.set_verticalalignment(va)
+
+
+BOX_LABEL_SIDES = ("above", "below", "right", "left", "on")  # where separate_labels tries a box's label, after its own
+
+
+def box_label(
+    axes: Axes, box: Rect, text: str, *, color: str = "black", weight: str = "normal", side: str = "on"
+) -> BoxLabel:
+    """A :class:`BoxLabel` naming ``box`` (metres), on ``side`` of it."""
+    label = BoxLabel(box, text, side, **_label_style(color, weight))
+    axes.add_artist(label)
+    return label
 
 
 def draw_faint_base(axes: Axes, base: Point, heading: Heading, radius: float) -> None:
@@ -315,7 +371,8 @@ def draw_faint_base(axes: Axes, base: Point, heading: Heading, radius: float) ->
 def number_points(axes: Axes, points: Sequence[Point], merge_m: float, offset_m: float, *, fontsize: float = 7) -> None:
     """The index of each point beside it, ``offset_m`` up-left.
 
-    Points closer than ``merge_m`` metres share one label ("3,7").
+    Points closer than ``merge_m`` metres share one label, runs of indices written as
+    ranges (:func:`index_ranges`: "3,7", "20-23").
     """
     groups: list[tuple[Point, list[int]]] = []
     for k, point in enumerate(points):
@@ -329,7 +386,7 @@ def number_points(axes: Axes, points: Sequence[Point], merge_m: float, offset_m:
         axes.text(
             at[0] - offset_m,
             at[1] + offset_m,
-            ",".join(str(k) for k in members),
+            index_ranges(members),
             ha="center",
             va="center",
             fontsize=fontsize,
@@ -340,31 +397,128 @@ def number_points(axes: Axes, points: Sequence[Point], merge_m: float, offset_m:
         )
 
 
+def index_ranges(indices: Sequence[int]) -> str:
+    """Indices as text, runs of three or more as a range: ``[4, 16, 23, 24, 25]`` -> ``"4,16,23-25"``."""
+    runs: list[list[int]] = []
+    for k in indices:
+        if runs and k == runs[-1][-1] + 1:
+            runs[-1].append(k)
+        else:
+            runs.append([k])
+    return ",".join(f"{run[0]}-{run[-1]}" if len(run) >= 3 else ",".join(str(k) for k in run) for run in runs)
+
+
 def separate_labels(axes: Axes) -> None:
     """Move the texts of ``axes`` apart so that none overlaps another (call once everything is drawn).
 
-    Texts are placed in drawing order; one that overlaps a placed text moves up or down
-    (alternately, one text height further at each try) to the first free place, at most
-    :data:`LABEL_TRIES` tries. Needs the figure's canvas (the Agg canvas has a renderer).
+    The labels of boxes (:class:`BoxLabel`: clutter, objects) are placed first, each on the
+    first side of its own box (:data:`BOX_LABEL_SIDES`, its drawn side first) where it
+    overlaps no placed label, else where it was drawn: a box's label always touches its
+    box. The other texts follow in drawing order; one that overlaps a placed text moves up
+    or down (alternately, one text height further at each try) to the first free place, at
+    most :data:`LABEL_TRIES` tries; one moved farther than the next place gets a thin line
+    back to where it was drawn. Needs the figure's canvas (the Agg canvas has a renderer).
     """
     renderer = axes.figure.canvas.get_renderer()
+    texts = [t for t in axes.texts if t.get_visible() and t.get_text()]
+    placed: list[Bbox] = []
+    for label in (t for t in texts if isinstance(t, BoxLabel)):
+        placed.append(_place_box_label(label, placed, renderer))
+    for text in (t for t in texts if not isinstance(t, BoxLabel)):
+        placed.append(_place_text(axes, text, placed, renderer))
+
+
+def _extent(text: Text, renderer) -> Bbox:
+    """The window extent (pixels) of ``text`` with the gap kept between labels."""
+    return text.get_window_extent(renderer).expanded(1.0, 1.0).padded(LABEL_GAP_PX)
+
+
+def _place_box_label(label: BoxLabel, placed: list[Bbox], renderer) -> Bbox:
+    """Put ``label`` on the first side of its box where it overlaps none of ``placed``; its extent."""
+    drawn = label.side
+    for side in dict.fromkeys((drawn, *BOX_LABEL_SIDES)):
+        label.put(side)
+        box = _extent(label, renderer)
+        if not any(box.overlaps(other) for other in placed):
+            return box
+    label.put(drawn)
+    return _extent(label, renderer)
+
+
+def _place_text(axes: Axes, text: Text, placed: list[Bbox], renderer) -> Bbox:
+    """Move ``text`` up or down to the first place where it overlaps none of ``placed``; its extent."""
     to_data = axes.transData.inverted()
-    placed: list = []
-    for text in axes.texts:
-        if not text.get_visible() or not text.get_text():
-            continue
-        box = text.get_window_extent(renderer).expanded(1.0, 1.0).padded(LABEL_GAP_PX)
-        if any(box.overlaps(other) for other in placed):
-            x, y = text.get_position()
-            anchor = axes.transData.transform((x, y))
-            for k in range(1, LABEL_TRIES + 1):
-                shift = box.height * ((k + 1) // 2) * (1 if k % 2 else -1)
-                moved = box.translated(0, shift)
-                if not any(moved.overlaps(other) for other in placed):
-                    text.set_position(to_data.transform((anchor[0], anchor[1] + shift)))
-                    box = moved
-                    break
-        placed.append(box)
+    box = _extent(text, renderer)
+    if any(box.overlaps(other) for other in placed):
+        drawn = text.get_position()
+        anchor = axes.transData.transform(drawn)
+        for k in range(1, LABEL_TRIES + 1):
+            shift = box.height * ((k + 1) // 2) * (1 if k % 2 else -1)
+            moved = box.translated(0, shift)
+            if not any(moved.overlaps(other) for other in placed):
+                text.set_position(to_data.transform((anchor[0], anchor[1] + shift)))
+                if k > 2:  # moved farther than next to where it was drawn: a line back to that place
+                    _leader(axes, drawn, text.get_position())
+                return moved
+    return box
+
+
+def _leader(axes: Axes, drawn: Sequence[float], moved: Sequence[float]) -> None:
+    """A thin line from a label moved to ``moved`` back to where it was drawn (``drawn``), under the labels."""
+    axes.plot([drawn[0], moved[0]], [drawn[1], moved[1]], color=PALETTE.robot_edge, linewidth=0.6, zorder=Z_TEXT - 0.5)
+
+
+CLOSE_UP_MOST = 0.6  # a close-up's side at most this share of the whole view's longer side, else none is drawn
+
+
+def close_up(boxes: Sequence[Rect], whole: Rect, margin: float, most: float = CLOSE_UP_MOST) -> Rect | None:
+    """A square view (metres) around ``boxes`` plus ``margin``: where the action is, to draw beside ``whole``.
+
+    ``None`` when there are no boxes, or when the square's side is more than ``most`` of
+    ``whole``'s longer side: such a "close-up" would show about what the whole view shows.
+    """
+    if not boxes:
+        return None
+    low = (min(b.min_x for b in boxes), min(b.min_y for b in boxes))
+    box = Rect(*low, max(b.max_x for b in boxes), max(b.max_y for b in boxes)).inflate(margin)
+    half = max(box.size) / 2
+    if 2 * half > most * max(whole.size):
+        return None
+    return Rect.around(box.center, half, half)
+
+
+def point_box(point: Sequence[float]) -> Rect:
+    """The box of zero size at ``point`` (``(x, y)`` or ``(x, y, z)``, metres)."""
+    return Rect.around((float(point[0]), float(point[1])), 0.0, 0.0)
+
+
+LEGEND_HANDLERS = {tuple: HandlerTuple(ndivide=None, pad=0.2)}  # a tuple of handles: its samples side by side
+
+
+def scene_legend(objects: int, *, obstacles: bool, clutter: bool) -> tuple[list, list[str]]:
+    """Legend handles and labels of a scene drawn by :func:`draw_scenario` (pass ``handler_map=LEGEND_HANDLERS``).
+
+    ``objects``: how many objects the scenes have at most (their colours are shown side by
+    side); ``obstacles``, ``clutter``: whether any scene has them.
+    """
+    colours = PALETTE.objects[: max(1, min(objects, len(PALETTE.objects)))]
+    discs = tuple(_disc_handle(c, c, 6) for c in colours)
+    entries: list[tuple[object, str]] = [
+        (_disc_handle(PALETTE.robot, PALETTE.robot_edge, 11), "robot start (arrow: its heading)"),
+        (discs, "objects at their start, one colour each"),
+        (_disc_handle(PALETTE.goal, colours[0], 9), "goal (ring, cross: its object's colour)"),
+        (Patch(facecolor=PALETTE.table, edgecolor=PALETTE.table_edge), "table"),
+    ]
+    if obstacles:
+        entries.append((Patch(facecolor=PALETTE.obstacle, edgecolor=PALETTE.wall, hatch="//"), "wall, obstacle"))
+    if clutter:
+        entries.append((Patch(facecolor=PALETTE.clutter, edgecolor=PALETTE.clutter_edge), "clutter"))
+    return [handle for handle, _ in entries], [label for _, label in entries]
+
+
+def _disc_handle(face: str, edge: str, size: float) -> Line2D:
+    """A legend sample: a disc of ``size`` points filled ``face``, ringed ``edge``."""
+    return Line2D([], [], marker="o", markersize=size, markerfacecolor=face, markeredgecolor=edge, linestyle="none")
 
 
 def draw_arrow(axes: Axes, start: Point, end: Point, colour: str, *, width: float, style: str = "-|>") -> None:

@@ -14,6 +14,9 @@ import nbformat
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
+from training.evaluation.metrics import SCORE_ZERO
+from training.evaluation.splits import get_split
+
 HERE = Path(__file__).resolve().parent
 
 QUICKSTART = [
@@ -146,14 +149,23 @@ DATASET = [
     ),
 ]
 
+SPLITS_SHOWN = ("iid", "more-objects", "layouts", "push-required", "objects", "apartment", "perturbed")
+
+
+def split_lines(names: tuple[str, ...] = SPLITS_SHOWN) -> str:
+    """One markdown line per split: its name, the version and part it means now, and its description."""
+    return "\n".join(f"- `{name}` (`{get_split(name).name}`): {get_split(name).description}" for name in names)
+
+
 BENCHMARK = [
     new_markdown_cell(
         "# Benchmark learned policies against the MILP expert\n\n"
         "`fetchcarry benchmark` (or `training.benchmark.run_benchmark`) runs every policy on the same fixed, "
-        "versioned scenarios and compares it with the optimal planner scenario by scenario. Splits: `iid` "
-        "(unseen seeds of the training families), `more-objects` (three and four objects), `layouts` (rooms and "
-        "corridors turned a quarter turn, which no training family draws) and `push-required` (Table I's push "
-        "patterns). Evaluation seeds start at 10^9, far from any training seed. Here: a tiny budget, so the "
+        "versioned scenarios and compares it with the expert's reference scenario by scenario. A split's name "
+        "without a version means its newest version's test part:\n\n"
+        f"{split_lines()}\n\n"
+        "The older `layouts-v0` and `layouts-v1` are the training families' rooms and corridors turned a quarter "
+        "turn. Evaluation seeds start at 10^9, far from any training seed. Here: a tiny budget, so the "
         "intervals are wide."
     ),
     new_code_cell(
@@ -174,10 +186,14 @@ BENCHMARK = [
         "report.records[0]"
     ),
     new_markdown_cell(
-        "`summary.md` holds the table: success with a 95 % Wilson interval, cost ratio to the expert on the "
-        "same scenarios (successful episodes), an SPL-style cost-weighted success, phases and pushes next to "
-        "the expert's, invalid actions and contacts, the time per decision next to the planner's, and the "
-        "normalised score 100 (R - R_random) / (R_expert - R_random)."
+        "`summary.md` holds the table: success with a 95 % Wilson interval, cost ratio to the reference on the "
+        "same scenarios (episodes both solved), an SPL-style cost-weighted success, phases and pushes next to "
+        "the reference's, invalid actions and contacts, the time per decision next to the planner's, and the "
+        "normalised score 100 (R - R_zero) / (R_reference - R_zero): R is the policy's mean episode return on "
+        "the split, R_reference the mean return of the reference on the same scenarios (the expert's result "
+        "shipped with a published split, else this run's expert), and R_zero the mean return of "
+        f"`{SCORE_ZERO}` (uniform over the allowed candidate phases; `random`, the masked random policy, where "
+        f"`{SCORE_ZERO}` did not run). So `{SCORE_ZERO}` scores 0 and the reference 100."
     ),
     new_code_cell(
         "from IPython.display import Image, Markdown, display\n\n"

@@ -2,8 +2,10 @@
 
 :func:`plot_splits` draws success and cost ratio per split (or per object count) with
 their 95 % intervals, a distinct colour for every policy (:func:`policy_colours`) and n in
-the caption;
-:func:`plot_against_objects` draws success and cost ratio against the object count, one line per policy;
+the caption (per group, in the order of the x axis, where it differs between groups);
+:func:`plot_against_objects` draws success and cost ratio against the object count, one line per policy.
+A bar or point without an interval (one scenario) is marked "no CI", never drawn with an
+error bar of zero width. :func:`splits_figure` and :func:`objects_figure` return their figures.
 :func:`plot_learning_curve` draws a run folder's ``metrics.csv`` (any numeric columns
 against its first); :func:`plot_demonstrations` draws success against the number of
 demonstrations from records that carry a ``demonstrations`` count;
@@ -19,7 +21,7 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -59,18 +61,57 @@ def policy_colours(policies: Sequence[str]) -> dict[str, Any]:
     return {**{p: REFERENCE_COLOURS[p] for p in policies if p in REFERENCE_COLOURS}, **out}
 
 
-def _caption(rows: Sequence[Row], bars: bool = True) -> str:
-    """``n = 300 episodes per bar (seeds pooled over 100 scenarios ...)``: what the bars (or points) are made of."""
-    counts = sorted({r.episodes for r in rows})
-    scenarios = sorted({r.scenarios for r in rows if r.scenarios and r.scenarios != r.episodes})
-    text = f"n = {', '.join(map(str, counts))} episodes per {'bar' if bars else 'point'}"
-    if scenarios:
-        text += f" (seeds pooled over {', '.join(map(str, scenarios))} scenarios; intervals resample scenarios)"
+def _caption(rows: Sequence[Row], bars: bool = True, missing_interval: bool = False) -> str:
+    """``n = 300 episodes per bar (seeds pooled over 100 scenarios ...)``: what the bars (or points) are made of.
+
+    Where the counts differ between groups (``row.split``), they are listed per group in the
+    order of the x axis: ``n = 225 (1), 75 (2) episodes per bar``. ``missing_interval``: some
+    bar or point has no interval (fewer than two scenarios), and the caption says so.
+    """
+    unit = "bar" if bars else "point"
+    text = f"n = {_per_group(rows, lambda r: r.episodes)} episodes per {unit}"
+    if any(r.scenarios and r.scenarios != r.episodes for r in rows):
+        pooled = _per_group([r for r in rows if r.scenarios and r.scenarios != r.episodes], lambda r: r.scenarios)
+        text += f" (seeds pooled over {pooled} scenarios; intervals resample scenarios)"
     zero = sorted({r.score_zero for r in rows})
     kinds = sorted({r.reference for r in rows})
     reference = "the split's fixed reference" if kinds == ["fixed"] else f"the reference ({', '.join(kinds)})"
     stub = "; hatched stub marked 0: no success" if bars else ""
-    return text + f"{stub}; cost ratio to {reference}; score zero {'/'.join(zero)}"
+    no_interval = f"; {NO_INTERVAL}: fewer than two scenarios, no interval" if missing_interval else ""
+    return text + f"{stub}{no_interval}; cost ratio to {reference}; score zero {'/'.join(zero)}"
+
+
+def _per_group(rows: Sequence[Row], count: Callable[[Row], int]) -> str:
+    """The counts of ``rows``: ``"20, 60"`` if every group has the same ones, else per group in axis order.
+
+    Per group: ``"225 (1), 75 (2)"``, a group of several counts as ``"20/60 (3)"``.
+    """
+    groups = {g: sorted({count(r) for r in rows if r.split == g}) for g in dict.fromkeys(r.split for r in rows)}
+    if len({tuple(counts) for counts in groups.values()}) <= 1:
+        return ", ".join(str(n) for n in sorted({count(r) for r in rows}))
+    return ", ".join(f"{'/'.join(map(str, counts))} ({group})" for group, counts in groups.items())
+
+
+NO_INTERVAL = "no CI"  # written over a bar or point that has no interval, instead of an error bar of zero width
+
+
+def _interval(value: float, low: float, high: float) -> tuple[float, float] | None:
+    """The error bar's lengths below and above ``value``, or None where there is no interval (NaN bounds)."""
+    if math.isnan(value) or math.isnan(low) or math.isnan(high):
+        return None
+    return (value - low, high - value)
+
+
+def _error_bars(axis: Any, points: list[tuple[float, float, tuple[float, float] | None]], **style: Any) -> None:
+    """Error bars at ``(x, y, (below, above))``; where the interval is None, the words :data:`NO_INTERVAL` instead."""
+    shown = [(x, y, e) for x, y, e in points if e is not None]
+    if shown:
+        errors = [[e[0] for _, _, e in shown], [e[1] for _, _, e in shown]]
+        axis.errorbar([x for x, _, _ in shown], [y for _, y, _ in shown], yerr=errors, fmt="none", **style)
+    for x, y, e in points:
+        if e is None and not math.isnan(y):
+            axis.annotate(NO_INTERVAL, (x, y), xytext=(0, 3), textcoords="offset points", ha="center", va="bottom",
+                          fontsize="x-small", rotation=90)  # fmt: skip
 
 
 def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, Any]) -> None:
@@ -80,7 +121,7 @@ def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, 
     by_key = {(r.policy, r.split): r for r in rows}
     width = 0.8 / max(1, len(policies))
     for k, policy in enumerate(policies):
-        xs, success, s_err, ratio, r_err, r_xs, zero_xs = [], [], [[], []], [], [[], []], [], []
+        xs, success, s_err, r_xs, ratio, r_err, zero_xs = [], [], [], [], [], [], []
         for j, group in enumerate(groups):
             row = by_key.get((policy, group))
             if row is None:
@@ -88,35 +129,47 @@ def _bars(axes: Any, rows: Sequence[Row], groups: list[str], colours: dict[str, 
             x = j + (k - (len(policies) - 1) / 2) * width
             xs.append(x)
             success.append(row.success)
-            s_err[0].append(row.success - row.success_low)
-            s_err[1].append(row.success_high - row.success)
+            s_err.append(_interval(row.success, row.success_low, row.success_high))
             zero_xs += [x] if row.success == 0 else []
             if not math.isnan(row.cost_ratio):
                 r_xs.append(x)
                 ratio.append(row.cost_ratio)
-                low = row.cost_ratio_low if not math.isnan(row.cost_ratio_low) else row.cost_ratio
-                high = row.cost_ratio_high if not math.isnan(row.cost_ratio_high) else row.cost_ratio
-                r_err[0].append(row.cost_ratio - low)
-                r_err[1].append(high - row.cost_ratio)
+                r_err.append(_interval(row.cost_ratio, row.cost_ratio_low, row.cost_ratio_high))
         colour = colours[policy]
-        left.bar(
-            xs, success, width, yerr=s_err, capsize=3, label=policy, color=colour, edgecolor="black", linewidth=0.3
-        )
+        left.bar(xs, success, width, label=policy, color=colour, edgecolor="black", linewidth=0.3)
+        _error_bars(left, list(zip(xs, success, s_err, strict=True)), ecolor="black", capsize=3)
         left.bar(
             zero_xs, [ZERO_MARK] * len(zero_xs), width, color="white", edgecolor=colour, hatch="////", linewidth=1.0
         )
-        right.bar(r_xs, ratio, width, yerr=r_err, capsize=3, color=colour, edgecolor="black", linewidth=0.3)
+        right.bar(r_xs, ratio, width, color=colour, edgecolor="black", linewidth=0.3)
+        _error_bars(right, list(zip(r_xs, ratio, r_err, strict=True)), ecolor="black", capsize=3)
         for x in zero_xs:
             left.text(x, ZERO_MARK + 0.01, "0", ha="center", va="bottom", fontsize="x-small", color="black")
+
+
+def _missing_interval(rows: Sequence[Row]) -> bool:
+    """Whether a success or a cost ratio of ``rows`` is drawn without an interval."""
+    return any(
+        _interval(r.success, r.success_low, r.success_high) is None
+        or (not math.isnan(r.cost_ratio) and _interval(r.cost_ratio, r.cost_ratio_low, r.cost_ratio_high) is None)
+        for r in rows
+    )
 
 
 def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None = None) -> Path:
     """Success and cost ratio per split (or per group: ``row.split``) and policy, with 95 % intervals, as one PNG.
 
     Every policy has its own colour (:func:`policy_colours`), a bar of zero success shows
-    as a hatched stub, and the caption gives n (episodes per bar, and the scenarios when
-    seeds are pooled). ``groups_label`` names the x axis (the splits by default).
+    as a hatched stub, a bar without an interval (one scenario) has "no CI" over it
+    instead of an error bar, and the caption gives n (episodes per bar, and the scenarios
+    when seeds are pooled; per group, in the order of the x axis, where it differs).
+    ``groups_label`` names the x axis (the splits by default).
     """
+    return _save(splits_figure(rows, groups_label), path)
+
+
+def splits_figure(rows: Sequence[Row], groups_label: str | None = None) -> Any:
+    """The figure of :func:`plot_splits` (a pyplot figure: close it with ``pyplot().close``)."""
     plt = pyplot()
     groups = list(dict.fromkeys(r.split for r in rows))
     policies = list(dict.fromkeys(r.policy for r in rows))
@@ -133,11 +186,17 @@ def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None 
     right.axhline(1.0, color="grey", linewidth=0.8)
     handles, labels = left.get_legend_handles_labels()
     figure.legend(handles, labels, loc="upper center", ncol=min(len(policies), 6), fontsize="small", frameon=False)
-    figure.text(0.5, 0.01, _caption(rows), ha="center", fontsize="x-small", wrap=True)
+    figure.text(0.5, 0.01, _caption(rows, missing_interval=_missing_interval(rows)), ha="center", fontsize="x-small",
+                wrap=True)  # fmt: skip
     rows_of_legend = math.ceil(len(policies) / 6)
     figure.tight_layout(rect=(0, 0.05, 1, 1 - 0.06 * rows_of_legend))
+    return figure
+
+
+def _save(figure: Any, path: str | Path) -> Path:
+    """Write the pyplot ``figure`` to ``path`` at :data:`DPI` and close it."""
     figure.savefig(path, dpi=DPI)
-    plt.close(figure)
+    pyplot().close(figure)
     return Path(path)
 
 
@@ -147,23 +206,32 @@ def plot_against_objects(rows: Sequence[Row], path: str | Path, title: str = "")
     The graded worlds' headline curve: a line per policy (its own colour) with its 95 %
     intervals as error bars, the policies side by side around each count so that the bars
     do not hide one another; n in the caption. A count where a policy solved nothing has
-    no cost ratio: its cost line breaks there rather than join the counts around it.
+    no cost ratio: its cost line breaks there rather than join the counts around it. A
+    point without an interval (one scenario) has "no CI" over it instead of an error bar.
     """
+    return _save(objects_figure(rows, title), path)
+
+
+def objects_figure(rows: Sequence[Row], title: str = "") -> Any:
+    """The figure of :func:`plot_against_objects` (a pyplot figure: close it with ``pyplot().close``)."""
     plt = pyplot()
     policies = list(dict.fromkeys(r.policy for r in rows))
+    rows = sorted(rows, key=lambda r: int(r.split))  # the caption's groups in the order of the axis
     colours = policy_colours(policies)
     figure, (left, right) = plt.subplots(1, 2, figsize=(12.0, 4.8))
     spread = 0.6  # objects: the width of one count's group of policies
     for n, policy in enumerate(policies):
         shift = spread * (n / max(1, len(policies) - 1) - 0.5)
-        own = sorted((r for r in rows if r.policy == policy), key=lambda r: int(r.split))
-        style = {"color": colours[policy], "marker": "o", "markersize": MARKER_SIZE, "linewidth": 1.0, "capsize": 2}
+        own = [r for r in rows if r.policy == policy]
+        style = {"color": colours[policy], "marker": "o", "markersize": MARKER_SIZE, "linewidth": 1.0}
         k = [int(r.split) + shift for r in own]
-        low = [r.success - r.success_low for r in own]
-        high = [r.success_high - r.success for r in own]
-        left.errorbar(k, [r.success for r in own], yerr=[low, high], label=policy, **style)
-        errors = [[r.cost_ratio - r.cost_ratio_low for r in own], [r.cost_ratio_high - r.cost_ratio for r in own]]
-        right.errorbar(k, [r.cost_ratio for r in own], yerr=errors, **style)  # NaN (nothing solved) breaks the line
+        left.plot(k, [r.success for r in own], label=policy, **style)
+        right.plot(k, [r.cost_ratio for r in own], **style)  # NaN (nothing solved) breaks the line
+        bars = {"ecolor": colours[policy], "elinewidth": 1.0, "capsize": 2}
+        success = [_interval(r.success, r.success_low, r.success_high) for r in own]
+        _error_bars(left, list(zip(k, [r.success for r in own], success, strict=True)), **bars)
+        ratio = [_interval(r.cost_ratio, r.cost_ratio_low, r.cost_ratio_high) for r in own]
+        _error_bars(right, list(zip(k, [r.cost_ratio for r in own], ratio, strict=True)), **bars)
     counts = sorted({int(r.split) for r in rows})
     for axis, label in ((left, "success rate (95 % CI)"), (right, "cost ratio to the reference (95 % CI)")):
         axis.set_xticks(counts)
@@ -174,11 +242,10 @@ def plot_against_objects(rows: Sequence[Row], path: str | Path, title: str = "")
     right.axhline(1.0, color="grey", linewidth=0.8)
     handles, labels = left.get_legend_handles_labels()
     figure.legend(handles, labels, loc="upper center", ncol=min(len(policies), 6), fontsize="small", frameon=False)
-    figure.text(0.5, 0.01, _caption(rows, bars=False), ha="center", fontsize="x-small", wrap=True)
+    caption = _caption(rows, bars=False, missing_interval=_missing_interval(rows))
+    figure.text(0.5, 0.01, caption, ha="center", fontsize="x-small", wrap=True)
     figure.tight_layout(rect=(0, 0.05, 1, 1 - 0.06 * math.ceil(len(policies) / 6)))
-    figure.savefig(path, dpi=DPI)
-    plt.close(figure)
-    return Path(path)
+    return figure
 
 
 def plot_learning_curve(

@@ -6,14 +6,18 @@ The still (PNG, JPEG, SVG, PDF) has three parts under a title with the episode's
   the base's path step by step (travel with an empty hand, carrying in the object's
   colour, push strokes in red), the base at every step with its number, the arm line of
   every pick and place, clutter where it started (dashed) and where it ended;
-- a close-up map of where objects were placed and clutter pushed;
+- a close-up map of where objects were placed and clutter pushed, when that is a small
+  part of the area; otherwise the legend takes its place;
 - a strip of the env's renders (perspective camera) at the key states (the start and the
   state after each pick, place and push), each cropped around the robot and what its arm
   acted on, titled with the step's number and what it did.
 
-The colours are those of the plan plot (:mod:`expert.plot`) and of the renders: objects
-red, goals green, clutter blue in the maps and in the 3-D renders alike. Labels that
-would overlap are moved apart. The GIF shows, for every state, the env's render
+The colours are those of the plan plot (:mod:`expert.plot`) and of the renders: the
+object red (further objects a distinct colour each, the same for the object, its goal
+ring, its label and the moves that carry it), goals green, clutter blue in the maps and
+in the 3-D renders alike. Step numbers at one place share a label ("20-23"); labels
+that would overlap are moved apart, the name of a piece of clutter or an object only
+to another side of it. The GIF shows, for every state, the env's render
 (cropped to where the episode happens) beside the top-down map of the path so far,
 under a caption that says which step it is and what the step did. Headless (matplotlib's Agg canvas, Pillow for GIFs).
 """
@@ -46,6 +50,7 @@ from training.rollout import EpisodeFigures, EpisodeRecord
 GIF_FRAME_MS = 700  # milliseconds each state is shown in a GIF
 MAX_RENDERS = 6  # env renders in the strip of a still picture
 MAP_WIDTH_IN = 6.6  # inches of the whole-area map (the close-up has the same size)
+LONE_MAP_SHARE = 0.68  # of the picture's width: the whole-area map's where no close-up is drawn (the legend beside)
 CLOSE_UP_MARGIN = 0.35  # metres shown around the close-up's content
 CROP_MARGIN = 0.06  # of the frame's width, kept around the robot and its target in a render crop
 CROP_MIN_WIDTH = 0.28  # of the frame's width: the smallest crop (a zoom of about 3.5)
@@ -228,27 +233,52 @@ def key_states(steps: Sequence[EpisodeStep], most: int = MAX_RENDERS) -> list[in
 # ---------------------------------------------------------------------------- the still picture
 def save_story(record: EpisodeRecord, path: Path) -> None:
     """The still picture of the module docstring."""
+    story_figure(record).savefig(path, dpi=STILL_DPI)
+
+
+def story_figure(record: EpisodeRecord) -> Figure:
+    """The still picture of the module docstring, as a headless figure (labels already moved apart)."""
     scenario = Scenario.from_dict(record.scenario)
     steps = episode_steps(record.states, record.actions)
     shown = key_states(steps)
-    map_height_in = drawing.map_height_in(scenario, MAP_WIDTH_IN)
+    view = close_up_view(scenario, steps)
+    whole_width_in = MAP_WIDTH_IN if view is not None else LONE_MAP_SHARE * 2 * MAP_WIDTH_IN
+    map_height_in = drawing.map_height_in(scenario, whole_width_in)
     render_width_in = 2 * MAP_WIDTH_IN / max(len(shown), 3)
     strip_height_in = render_width_in * 0.75 + 0.3
-    figure = Figure(figsize=(2 * MAP_WIDTH_IN, map_height_in + strip_height_in + 1.5), layout="constrained")
+    legend_height_in = 0.4 if view is not None else 0.0
+    figure = Figure(
+        figsize=(2 * MAP_WIDTH_IN, map_height_in + strip_height_in + legend_height_in + 1.1), layout="constrained"
+    )
     FigureCanvasAgg(figure)
-    rows = figure.add_gridspec(3, 1, height_ratios=[map_height_in, strip_height_in, 0.4])
-    maps = rows[0].subgridspec(1, 2)
+    rows = figure.add_gridspec(3, 1, height_ratios=[map_height_in, strip_height_in, max(legend_height_in, 1e-3)])
+    maps = rows[0].subgridspec(1, 2, width_ratios=[whole_width_in, 2 * MAP_WIDTH_IN - whole_width_in])
     whole = figure.add_subplot(maps[0])
     drawing.frame_map(whole, scenario.area.inflate(drawing.MARGIN))
-    draw_episode(whole, scenario, record.states, steps, label_size_m=0.2 * scenario.area.size[0] / MAP_WIDTH_IN)
+    draw_episode(whole, scenario, record.states, steps, label_size_m=0.2 * scenario.area.size[0] / whole_width_in)
     whole.set_title("the episode from above (numbers: the state after each step)", fontsize=10)
-    close = figure.add_subplot(maps[1])
-    view = close_up_view(scenario, steps)
-    drawing.frame_map(close, view)
-    draw_episode(close, scenario, record.states, steps, label_size_m=0.2 * view.size[0] / MAP_WIDTH_IN)
-    close.set_title("close-up: pushes and places", fontsize=10)
+    if view is not None:
+        close = figure.add_subplot(maps[1])
+        drawing.frame_map(close, view)
+        draw_episode(close, scenario, record.states, steps, label_size_m=0.2 * view.size[0] / MAP_WIDTH_IN)
+        close.set_title("close-up: pushes and places", fontsize=10)
+        legend_axes = figure.add_subplot(rows[2])
+    else:
+        legend_axes = figure.add_subplot(maps[1])
+    _draw_strip(figure, rows[1], record, scenario, steps, shown)
+    _draw_legend(legend_axes, scenario, beside=view is None)
+    figure.suptitle(title(record.figures), fontsize=11, family="monospace")
+    figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
+    for axes in figure.axes:
+        drawing.separate_labels(axes)
+    return figure
 
-    strip = rows[1].subgridspec(1, max(len(shown), 3))
+
+def _draw_strip(
+    figure: Figure, cell, record: EpisodeRecord, scenario: Scenario, steps: Sequence[EpisodeStep], shown: list[int]
+) -> None:
+    """The env's renders of the ``shown`` states in a row of ``cell``, each cropped around what its step did."""
+    strip = cell.subgridspec(1, max(len(shown), 3))
     for slot, state_index in enumerate(shown):
         axes = figure.add_subplot(strip[slot])
         frame = np.asarray(record.frames[state_index])
@@ -257,14 +287,16 @@ def save_story(record: EpisodeRecord, path: Path) -> None:
         axes.imshow(frame)
         axes.set_axis_off()
         axes.set_title("0 start" if state_index == 0 else steps[state_index - 1].label(), fontsize=10)
-    legend_axes = figure.add_subplot(rows[2])
-    legend_axes.set_axis_off()
-    legend_axes.legend(handles=legend_handles(scenario), loc="center", ncol=5, fontsize=8, frameon=False)
-    figure.suptitle(title(record.figures), fontsize=11, family="monospace")
-    figure.canvas.draw()  # lays the figure out, so that labels are separated where they will be
-    drawing.separate_labels(whole)
-    drawing.separate_labels(close)
-    figure.savefig(path, dpi=STILL_DPI)
+
+
+def _draw_legend(axes: Axes, scenario: Scenario, *, beside: bool) -> None:
+    """The legend on ``axes``: a row under the maps, or a column beside the map where no close-up is drawn."""
+    axes.set_axis_off()
+    if beside:
+        note = "no close-up: the pushes and places\nspread over most of the area"
+        axes.legend(handles=legend_handles(scenario), loc="center left", ncol=1, fontsize=9, frameon=False, title=note)
+    else:
+        axes.legend(handles=legend_handles(scenario), loc="center", ncol=5, fontsize=8, frameon=False)
 
 
 def title(figures: EpisodeFigures) -> str:
@@ -301,20 +333,21 @@ def draw_episode(
     drawing.number_points(axes, [s.base for s in states], label_size_m, 0.75 * scenario.robot.radius, fontsize=8)
 
 
-def close_up_view(scenario: Scenario, steps: Sequence[EpisodeStep]) -> Rect:
-    """A square around the goal tables and the bases of every push and place."""
-    boxes = [t.rect for o in scenario.objects if (t := scenario.table_under(o.goal, o.radius)) is not None]
+def close_up_view(scenario: Scenario, steps: Sequence[EpisodeStep]) -> Rect | None:
+    """A square around the bases and targets of every push and place, or None (:func:`fetchcarry_env.drawing.close_up`).
+
+    The targets: where each object was placed, where each pushed piece of clutter was and
+    went. None when nothing was pushed or placed, or when the square would show about as
+    much as the whole area.
+    """
+    boxes = []
     for step in steps:
         if step.acted and step.mode == Mode.PUSH:
-            boxes += [Rect.around(step.before.base, 0.0, 0.0), Rect.around(step.after.base, 0.0, 0.0)]
+            pushed = (step.before.clutter[step.target], step.after.clutter[step.target])
+            boxes += [drawing.point_box(point) for point in (step.before.base, step.after.base, *pushed)]
         elif step.acted and step.mode == Mode.PLACE:
-            boxes.append(Rect.around(step.after.base, 0.0, 0.0))
-    if not boxes:
-        return scenario.area.inflate(drawing.MARGIN)
-    lo_x, lo_y = min(b.min_x for b in boxes), min(b.min_y for b in boxes)
-    box = Rect(lo_x, lo_y, max(b.max_x for b in boxes), max(b.max_y for b in boxes)).inflate(CLOSE_UP_MARGIN)
-    half = max(box.size) / 2
-    return Rect.around(box.center, half, half)
+            boxes += [drawing.point_box(step.after.base), drawing.point_box(step.after.objects[step.target])]
+    return drawing.close_up(boxes, scenario.area.inflate(drawing.MARGIN), CLOSE_UP_MARGIN)
 
 
 def _draw_step(axes: Axes, scenario: Scenario, step: EpisodeStep) -> None:
