@@ -70,7 +70,7 @@ def plot_plan(scenario: Scenario, plan: Plan, path: str | Path, *, width_in: flo
     _list_steps(steps_axes, plan)
     close_view = _close_up_view(scenario, plan)
     if close_view is None:
-        _no_close_up(close_axes)
+        _no_close_up(close_axes, "the goal tables, places and pushes")
     else:
         drawing.frame_map(close_axes, close_view)
         _draw_plan(close_axes, scenario, plan, label_merge_m=LABEL_SIZE_IN * close_view.size[0] / SIDE_WIDTH_IN)
@@ -108,11 +108,11 @@ def _close_up_view(scenario: Scenario, plan: Plan | None) -> Rect | None:
     return drawing.close_up(boxes, scenario.area.inflate(drawing.MARGIN), CLOSE_UP_MARGIN)
 
 
-def _no_close_up(axes: Axes) -> None:
-    """The close-up's place where none is drawn: why."""
+def _no_close_up(axes: Axes, what: str) -> None:
+    """The close-up's place where none is drawn: why (``what`` spreads over most of the area)."""
     axes.set_axis_off()
-    axes.text(0.0, 1.0, "no close-up: the goal tables, places and pushes\nspread over most of the area",
-              va="top", fontsize=8, transform=axes.transAxes)  # fmt: skip
+    axes.text(0.0, 1.0, f"no close-up: {what}\nspread over most of the area", va="top", fontsize=8,
+              transform=axes.transAxes)  # fmt: skip
 
 
 def _draw_clutter(axes: Axes, scenario: Scenario, phases: tuple[Phase, ...]) -> None:
@@ -246,7 +246,7 @@ def plot_scenario(scenario: Scenario, path: str | Path, *, width_in: float = 7.0
     close_view = _close_up_view(scenario, None)
     maps = [map_axes]
     if close_view is None:
-        _no_close_up(close_axes)
+        _no_close_up(close_axes, "the goal tables")
     else:
         drawing.frame_map(close_axes, close_view)
         close_axes.set_title("close-up: the goal tables", fontsize=9)

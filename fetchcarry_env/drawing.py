@@ -140,7 +140,7 @@ def draw_scenario(
     for table in scenario.tables:
         draw_rect(axes, table.rect, face=PALETTE.table, edge=PALETTE.table_edge, zorder=Z_FURNITURE)
         if show_labels:
-            _label(axes, (table.rect.center[0], table.rect.min_y - 0.02), table.id, va="top", color=PALETTE.table_edge)
+            box_label(axes, table.rect, table.id, color=PALETTE.table_edge, side="below")
     for obstacle in scenario.obstacles:
         draw_rect(axes, obstacle.rect, face=PALETTE.obstacle, edge=PALETTE.wall, zorder=Z_FURNITURE, hatch="//")
     if show_goals:
@@ -297,12 +297,6 @@ def render_rgb(
     return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
 
-def _label(
-    axes: Axes, at: Point, text: str, *, va: str = "center", color: str = "black", weight: str = "normal"
-) -> None:
-    axes.text(at[0], at[1], text, ha="center", va=va, **_label_style(color, weight))
-
-
 def _label_style(color: str, weight: str) -> dict:
     """The look of a map's name label: small, coloured, over everything, with a white halo."""
     return {
@@ -316,7 +310,7 @@ def _label_style(color: str, weight: str) -> dict:
 
 
 class BoxLabel(Text):
-    """A text that names a box (a piece of clutter, an object's disc): it stays on or touching the box.
+    """A text that names a box (a table, a piece of clutter, an object's disc): it stays on or touching the box.
 
     ``box`` is the box in data coordinates (metres). :func:`separate_labels` places these
     labels first and moves one only to another side of its own box.
@@ -411,7 +405,7 @@ def index_ranges(indices: Sequence[int]) -> str:
 def separate_labels(axes: Axes) -> None:
     """Move the texts of ``axes`` apart so that none overlaps another (call once everything is drawn).
 
-    The labels of boxes (:class:`BoxLabel`: clutter, objects) are placed first, each on the
+    The labels of boxes (:class:`BoxLabel`: tables, clutter, objects) are placed first, each on the
     first side of its own box (:data:`BOX_LABEL_SIDES`, its drawn side first) where it
     overlaps no placed label, else where it was drawn: a box's label always touches its
     box. The other texts follow in drawing order; one that overlaps a placed text moves up

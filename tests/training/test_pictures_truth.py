@@ -227,6 +227,15 @@ def test_no_close_up_where_the_action_spreads_over_the_area() -> None:
     assert any(a.get_legend() is not None for a in figure.axes)
 
 
+def test_the_plan_and_scenario_plots_close_up_only_where_the_goal_tables_are_close(spec_example: Scenario) -> None:
+    from expert.plot import _close_up_view
+
+    spread = apartment()  # goals on tables in three rooms
+    assert _close_up_view(spread, None) is None
+    view = _close_up_view(spec_example, None)  # one goal table
+    assert view is not None and max(view.size) <= 0.5 * min(spec_example.area.size)
+
+
 # ---------------------------------------------------------------------------- the gallery
 def test_the_gallery_pictures_have_a_legend_of_what_they_draw() -> None:
     from fetchcarry_env.worlds.gallery import PICTURES, gallery_figure
