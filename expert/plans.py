@@ -234,3 +234,12 @@ def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
     )
     travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
     return -DELIVERY_BONUS * bonus + travel
+
+
+def plan_length(phases: int) -> str:
+    """A plan's length as every command and picture words it: ``6 phases (the start and 5 steps)``.
+
+    A plan's phases count its start (phase 0); each later phase is one step (one env action).
+    """
+    steps = phases - 1
+    return f"{phases} phases (the start and {steps} step{'' if steps == 1 else 's'})"

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from expert.plans import Phase, Plan, phase_rows
+from expert.plans import Phase, Plan, phase_rows, plan_length
 from fetchcarry_env import drawing
 from fetchcarry_env.geometry import Point, Rect
 from fetchcarry_env.scenario import Scenario
@@ -195,10 +195,10 @@ def _legend_handles(scenario: Scenario) -> list:
 
 def _title(scenario: Scenario, plan: Plan) -> str:
     objective = "n/a" if plan.objective is None else f"{plan.objective:.3f}"
-    steps = max(len(plan.phases) - 1, 0)
+    length = plan_length(len(plan.phases)) if plan.phases else "no phases"
     total_s = plan.stats.get("total_s")
     timing = f", {total_s:.2f} s" if isinstance(total_s, int | float) else ""
-    return f"{scenario.name}: {plan.status}, objective {objective}, {steps} steps{timing}"
+    return f"{scenario.name}: {plan.status}, objective {objective}, {length}{timing}"
 
 
 def _step_row(k: int, phase: Phase) -> str:

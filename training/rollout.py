@@ -32,6 +32,7 @@ from fetchcarry_env.observation import WorldState
 from fetchcarry_env.scenario import Scenario
 from training.policies.phase_expert import MASK_INFO, PROJECTED_INFO, UNEXPRESSIBLE
 from training.policies.protocol import reset_policy, takes_masks
+from training.policies.saved_plan import PLAN_ENDED
 
 # The per-step infos recorded for every episode (Minari needs the same keys at every step):
 # seconds in the planner before the step, whether the policy planned / replanned / repaired its
@@ -60,7 +61,8 @@ class EpisodeFigures:
     objects: int  # objects to deliver
     delivered: int  # objects standing at their goals at the end
     success: bool  # every object delivered and the hand empty
-    outcome: str  # "delivered", "truncated" (time limit), "planner_failed (<status>)", "expert_stuck", "unexpressible"
+    outcome: str  # "delivered", "truncated" (time limit), "planner_failed (<status>)", "expert_stuck",
+    # "unexpressible", "plan_ended" (a saved plan's phases ran out)
     failure: str | None  # the policy's reason when it could not act, else None
     steps: int  # actions taken
     episode_return: float  # sum of rewards
@@ -75,6 +77,8 @@ class EpisodeFigures:
     repairs: int  # actions the expert moved so that the env acts on the planned item
     planner_failures: int  # planning calls that found no plan
     objective: float | None  # objective (Eq. 1) of the first plan, if the policy plans
+    plan_status: str | None = None  # that plan's status: "optimal" (proven), "feasible" (not proven), ...
+    fallback_plans: int = 0  # planning calls answered by the expert's unproven decoupled fallback plan
     pushes: int = 0  # steps that pushed a piece of clutter (info["push"] present)
     mask_s: float = 0.0  # seconds in the env's action_masks() (0 when no mask was asked for)
 
@@ -201,6 +205,7 @@ class _Trace:
         self.pushes = 0
         self.failure: Decision | None = None  # the planning policy's failure that ended the episode
         self.first_objective: float | None = None
+        self.first_status: str | None = None
         self.info: dict[str, Any] = {}
 
     def _delivered(self) -> int:
@@ -210,7 +215,7 @@ class _Trace:
             info: dict[str, Any], decision: Decision) -> None:  # fmt: skip
         """Keep one step."""
         if self.first_objective is None and decision.objective is not None:
-            self.first_objective = decision.objective
+            self.first_objective, self.first_status = decision.objective, decision.status
         self.observations.append(observation)
         self.states.append(self.unwrapped.state)
         self.actions.append(np.asarray(action, dtype=np.int64))
@@ -262,6 +267,8 @@ class _Trace:
             repairs=int(stats.get("repairs", 0)),
             planner_failures=int(stats.get("failures", 0)),
             objective=self.first_objective,
+            plan_status=self.first_status,
+            fallback_plans=int(stats.get("decoupled", 0)),
             pushes=self.pushes,
             mask_s=clock.seconds["mask"],
         )
@@ -301,8 +308,8 @@ def _outcome(success: bool, failure: Decision | None) -> str:
         return "delivered"
     if failure is None:
         return "truncated"
-    if failure.status == UNEXPRESSIBLE:
-        return UNEXPRESSIBLE
+    if failure.status in (UNEXPRESSIBLE, PLAN_ENDED):
+        return failure.status
     if failure.status in ("infeasible", "time_limit") and failure.failure.startswith("no plan"):
         return f"planner_failed ({failure.status})"
     return "expert_stuck"

@@ -48,7 +48,7 @@ def bad_inputs(tmp_path) -> dict[str, Path]:
 def test_validate_a_valid_plan(capsys, plan_file):
     status, out, err = run(capsys, "validate", EXAMPLE, plan_file)
     assert status == 0, err
-    assert "valid for" in out and "7 steps" in out
+    assert "valid for" in out and "8 phases (the start and 7 steps)" in out
 
 
 def test_validate_lists_every_violation(capsys, tmp_path, hand_plan):

@@ -13,6 +13,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from expert.plans import plan_length
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import DELIVERY_BONUS
@@ -20,7 +21,7 @@ from fetchcarry_env.observations import OBS_MODES
 from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
 from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, say
-from training.cli.files import check_picture, load_scenario
+from training.cli.files import check_picture, load_plan, load_scenario
 from training.cli.seeds import check_seed_range, seed
 from training.cli.text import echo
 from training.data.sources import EpisodeSource
@@ -138,8 +139,14 @@ def _figures_text(figures: Any, label: str, policy: str, time_limit: float) -> s
     lines += [
         f"motion     path {figures.path_length_m:.2f} m, collisions {figures.collisions}, "
         f"invalid actions {figures.invalid_actions}",
-        f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
-        f"{figures.repairs} repairs, {figures.planner_failures} failures",
+        *(
+            [
+                f"planning   {figures.planning_s:.3f} s in {figures.plans} plan(s), {figures.replans} replans, "
+                f"{figures.repairs} repairs, {figures.planner_failures} failures"
+            ]
+            if figures.plans
+            else []
+        ),
         f"timings    policy {figures.policy_s:.3f} s (planning included), simulation {figures.simulation_s:.3f} s",
     ]
     return "\n".join(lines)
@@ -161,10 +168,26 @@ def return_and_objective(figures: Any) -> list[str]:
     ]
     if figures.objective is not None:
         lines.append(
-            f"objective  {figures.objective:.3f} (Eq. 1 of the expert's first plan, a cost: its travel cost, "
+            f"objective  {figures.objective:.3f} (Eq. 1 of the first plan, a cost: its travel cost, "
             f"-{DELIVERY_BONUS:g} per object for each phase it stands at its goal)"
         )
+        lines.append(f"plan       {plan_status_text(figures)}")
     return lines
+
+
+def plan_status_text(figures: Any) -> str:
+    """What the episode's plans were proven to be: the first plan's status, and the unproven fallback plans."""
+    meaning = {
+        "optimal": "optimal (proven by the planner)",
+        "feasible": "feasible: a valid plan, not proven optimal",
+    }.get(figures.plan_status, str(figures.plan_status))
+    text = f"the first plan is {meaning}"
+    if figures.fallback_plans:
+        text += (
+            f"; {figures.fallback_plans} of {figures.plans} planning call(s) ran out of time and were answered by "
+            "the decoupled fallback plan (valid, not proven optimal)"
+        )
+    return text
 
 
 def failure_reason(failure: str, time_limit: float) -> str | None:
@@ -249,6 +272,13 @@ def _register_rollout(commands: argparse._SubParsersAction) -> None:
         epilog="Exit status: 0 every object delivered, 1 not, 2 bad input.",
     )
     add_source_arguments(parser, runs=True)
+    parser.add_argument(
+        "--plan",
+        metavar="PLAN",
+        help="execute this saved plan (fetchcarry plan -o PLAN) in FetchCarryPush-v0 on --scenario, open loop: "
+        "each phase after the start is one action, an action the env refuses counts as invalid and the next "
+        "phase follows (instead of --policy)",
+    )
     parser.add_argument("--render", metavar="PICTURE", help="write the episode as a .gif (every state) or .png")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
     parser.set_defaults(handler=run_rollout)
@@ -256,14 +286,45 @@ def _register_rollout(commands: argparse._SubParsersAction) -> None:
 
 def run_rollout(args: argparse.Namespace) -> int:
     picture = check_picture(args.render)
+    if args.plan is not None:
+        return _run_saved_plan(args, picture)
     run = _run_folder(args.policy)
     source = episode_source(args, policy="expert" if run is not None else None)
     record = _run_one(source, picture, run, args.obs_mode)
+    label = source.policy if run is None else f"{run} (candidate phases)"
+    return _report(args, record, picture, _figures_text(record.figures, source.label, label, source.time_limit))
+
+
+def _run_saved_plan(args: argparse.Namespace, picture: Path | None) -> int:
+    """``rollout --plan PLAN --scenario S``: the plan's phases as the env's actions (:class:`SavedPlanPolicy`)."""
+    from training.policies.saved_plan import SavedPlanPolicy
+
+    if args.scenario is None or args.policy != "expert" or args.obs_mode not in (None, "state"):
+        raise UsageError("--plan executes a saved plan on --scenario FILE (not a --family), without --policy")
+    plan = load_plan(Path(args.plan))
+    source = episode_source(args, policy="expert")
+    scenario = load_scenario(Path(args.scenario))
+    size = render_size(picture) if picture is not None else None
+    env = source.build_env(**({"render_mode": "rgb_array", "width": size[0], "height": size[1]} if size else {}))
+    try:
+        policy = SavedPlanPolicy(plan, scenario, env.unwrapped.lattice)
+        record = run_episode(env, policy, source.seed, render=picture is not None)
+    finally:
+        env.close()
+    if picture is not None:
+        from training.pictures.episode import save_episode_picture  # matplotlib at its top
+
+        save_episode_picture(record, picture)
+    text = _figures_text(record.figures, source.label, f"the saved plan {args.plan}", source.time_limit)
+    return _report(args, record, picture, f"{text}\nplan file  {args.plan}: {plan_length(len(plan.phases))}")
+
+
+def _report(args: argparse.Namespace, record: Any, picture: Path | None, text: str) -> int:
+    """Print an episode's figures (``--json``: as one object), say where its picture is; 0 if it delivered all."""
     if args.json:
         print(json.dumps({**record.figures.to_dict(), "picture": str(picture) if picture else None}, indent=2))
     else:
-        label = source.policy if run is None else f"{run} (candidate phases)"
-        echo(_figures_text(record.figures, source.label, label, source.time_limit))
+        echo(text)
         if picture is not None:
             echo(f"picture    {picture}")
     return 0 if record.figures.success else 1
@@ -306,12 +367,7 @@ def run_demo(args: argparse.Namespace) -> int:
         args.family = "push"
     source = episode_source(args, policy="expert")
     record = _run_one(source, picture)
-    if args.json:
-        print(json.dumps({**record.figures.to_dict(), "picture": str(picture)}, indent=2))
-    else:
-        echo(_figures_text(record.figures, source.label, "expert", source.time_limit))
-        echo(f"picture    {picture}")
-    return 0 if record.figures.success else 1
+    return _report(args, record, picture, _figures_text(record.figures, source.label, "expert", source.time_limit))
 
 
 # ---------------------------------------------------------------------------- evaluate-expert

@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from expert.plans import Phase, Plan, phase_rows
+from expert.plans import Phase, Plan, phase_rows, plan_length
 from expert.validate import validate_plan
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
@@ -246,7 +246,7 @@ def _plan_summary_text(
             proven = f" (proven gap {gap:.1%})" if isinstance(gap, float) else no_gap
         lines.append(f"meaning    {plan.stats['optimality']}{proven}")
     lines += [
-        f"phases     {len(plan.phases)}" + _phases_tried(plan),
+        f"phases     {plan_length(len(plan.phases)) if plan.phases else 0}" + _phases_tried(plan),
         f"timings    {_timings(plan)}",
     ]
     if plan.phases:
@@ -359,8 +359,7 @@ def run_validate(args: argparse.Namespace) -> int:
         echo(f"{args.plan}: INVALID for {args.scenario}: {len(violations)} violation(s)")
         echo("\n".join(f"  - {v}" for v in violations))
     else:
-        steps = len(plan.phases) - 1
-        echo(f"{args.plan}: valid for {args.scenario} ({plan.status}, {steps} steps)")
+        echo(f"{args.plan}: valid for {args.scenario} ({plan.status}, {plan_length(len(plan.phases))})")
     if plot_path is not None and not args.json:
         echo(f"plot written to {plot_path}")
     return 1 if violations else 0
