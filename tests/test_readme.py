@@ -44,3 +44,35 @@ def test_the_planner_examples_write_nothing_into_the_repository(monkeypatch, tmp
             assert main(argv) == 0, command
     assert sorted(_repository_files() - before) == []
     assert (tmp_path / "plan.json").is_file() and (tmp_path / "plan.png").is_file()
+
+
+SHELL = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.DOTALL)
+SMALLER = {"--episodes": "3"}  # the README's sizes, made small enough for the suite
+
+
+def _small(command: str) -> list[str]:
+    """A README command line as argv, its sizes made small (and BC trained for one epoch)."""
+    argv = command.split()[1:]
+    for i, word in enumerate(argv[:-1]):
+        if word in SMALLER:
+            argv[i + 1] = SMALLER[word]
+    return [*argv, "--epochs", "1"] if argv[:2] == ["train", "bc"] else argv
+
+
+@pytest.mark.slow
+def test_the_dataset_training_and_benchmark_blocks_run_in_turn(monkeypatch, tmp_path):
+    """The README's dataset block makes the run folder its benchmark block evaluates (at a small size).
+
+    The dataset once recorded the env's own actions, which ``train bc`` refuses, and
+    ``runs/bc-set`` came from no README command.
+    """
+    from training.cli import main
+
+    data = next(block for block in SHELL if "fetchcarry generate" in block and "train bc" in block)
+    bench = next(block for block in SHELL if "fetchcarry benchmark --policies" in block)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path / "datasets"))
+    lines = [line.strip() for line in (data + bench).splitlines() if line.strip().startswith("fetchcarry ")]
+    for command in (c for c in lines if "--scenarios my_scenarios" not in c):
+        assert main(_small(command)) == 0, command
+    assert (tmp_path / "bench" / "iid" / "results.json").is_file()
