@@ -76,6 +76,7 @@ MAIN_DATA_FILE = "main_data.hdf5"  # Minari's HDF5 file of the episodes
 MAX_METADATA_BYTES = 20_000_000  # a dataset's metadata.json (the spaces' bounds are its largest part)
 MAX_SPACE_ELEMENTS = 10_000_000  # elements of one box of a recorded space (its bounds are made in memory)
 _OPTIONAL_STRING_LISTS = ("author", "author_email", "combined_datasets")  # Minari makes sets of the first two
+SPACE_KEYS = ("observation_space", "action_space")  # metadata.json's serialized spaces
 
 
 ENV_PACKAGES = ("fetchcarry_env", "training")  # entry points of this project's envs live here
@@ -332,9 +333,10 @@ def load(dataset_id: str):
     Minari itself (``minari.load_dataset``) ``gym.make``s the env a dataset names when a
     space is missing from its metadata, which would run whatever entry point an edited
     file names. Here the metadata is checked first (:func:`check_metadata`: every key
-    Minari reads, the env spec trusted, both spaces present and sane, the episode count
-    that of the HDF5 file) and the storage is built from the spaces read here, so no
-    code of Minari's ever makes an env. A bad file is a :class:`DatasetError` naming it.
+    Minari reads, the env spec trusted, both spaces present and sane, the HDF5 file's
+    episodes those it counts, no link in it followed) and the storage is built from the
+    spaces read here, so no code of Minari's ever makes an env and Minari reads nothing
+    outside the dataset's files. A bad file is a :class:`DatasetError` naming it.
     """
     from minari import MinariDataset
     from minari.dataset._storages import get_minari_storage
@@ -354,8 +356,10 @@ def check_metadata(dataset_id: str) -> tuple[gym.Space, gym.Space]:
     Checks, before Minari reads the file: the keys Minari reads and their types, the
     Minari version, the env spec (it must pass :func:`trusted_env_spec`, and so must an
     ``eval_env_spec``), both spaces (present, of sane size, readable), and that the HDF5
-    file holds the episodes the metadata counts. Raises :class:`DatasetError` naming the
-    file (or :class:`UnknownEnvError`); an unreadable file is an ``OSError`` naming it.
+    file holds the episodes and steps the metadata counts, as plain groups and datasets of
+    those spaces that read nothing outside the file (:func:`_check_main_data`). Raises
+    :class:`DatasetError` naming the file (or :class:`UnknownEnvError`); an unreadable
+    file is an ``OSError`` naming it.
     """
     file = dataset_path(dataset_id) / "data" / METADATA_FILE
     try:
@@ -374,9 +378,9 @@ def check_metadata(dataset_id: str) -> tuple[gym.Space, gym.Space]:
                 trusted_env_spec(_env_spec(file, key, metadata[key]), dataset_id)
             except UnknownEnvError as error:
                 raise UnknownEnvError(f"{file}: {error}") from None
-    spaces = tuple(_space(file, key, metadata.get(key)) for key in ("observation_space", "action_space"))
-    _check_episode_count(file, metadata["total_episodes"])
-    return spaces
+    observation_space, action_space = (_space(file, key, metadata.get(key)) for key in SPACE_KEYS)
+    _check_main_data(dataset_id, file, metadata, observation_space, action_space)
+    return observation_space, action_space
 
 
 def _metadata_problem(file: Path, problem: str) -> str:
@@ -470,20 +474,36 @@ def _check_space_size(value: Any, depth: int = 0) -> None:
         _check_space_size(child, depth + 1)
 
 
-def _check_episode_count(file: Path, episodes: int) -> None:
-    """Raise :class:`DatasetError` unless the HDF5 file next to ``file`` holds episodes ``0 .. episodes-1``."""
-    import h5py
+def _check_main_data(
+    dataset_id: str, file: Path, metadata: dict[str, Any], observation_space: gym.Space, action_space: gym.Space
+) -> None:
+    """Raise :class:`DatasetError` unless the HDF5 file next to ``file`` holds the episodes ``metadata`` counts.
+
+    :func:`training.data.hdf5_checks.check_episode_file`: episodes ``0 .. total_episodes-1``
+    of ``total_steps`` steps in all, plain groups and datasets of the recorded spaces, and
+    nothing that makes a reader read outside the file (a link, external storage, a
+    virtual dataset) or more than it holds. No link is followed.
+    """
+    from training.data.hdf5_checks import (  # h5py only when a dataset is read
+        EpisodeCountError,
+        EpisodeFileError,
+        Spaces,
+        check_episode_file,
+    )
 
     main = file.parent / MAIN_DATA_FILE
+    spaces = Spaces(observation_space, action_space)  # images as JPEG bytes: how the storage of load() reads them
     try:
-        with h5py.File(main, "r") as data:
-            missing = [k for k in range(episodes) if f"episode_{k}" not in data]
-    except OSError as error:  # h5py's errors name no file
-        raise DatasetError(f"{main}: not a readable HDF5 file ({error})") from None
-    if missing:
+        check_episode_file(main, metadata["total_episodes"], metadata["total_steps"], spaces)
+    except FileNotFoundError:
+        raise DatasetError(f"dataset {dataset_id!r}: {main}: no such file (the dataset's episodes)") from None
+    except EpisodeCountError as problem:  # the two files disagree: name both
+        raise DatasetError(_metadata_problem(file, f"{MAIN_DATA_FILE}: {problem}")) from None
+    except EpisodeFileError as problem:
         raise DatasetError(
-            _metadata_problem(file, f"total_episodes is {episodes} but {main.name} lacks episode {missing[0]}")
-        )
+            f"dataset {dataset_id!r}: {main}: {problem} (this dataset's episodes are not what fetchcarry writes: "
+            "generate it again)"
+        ) from None
 
 
 def episode_metadata(dataset, episode: int) -> dict[str, Any]:
