@@ -14,7 +14,7 @@ from dataclasses import asdict
 from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
-from training.evaluation.compare import compare, pooled
+from training.evaluation.compare import compare_methods, methods_by_split
 from training.evaluation.leaderboard import merge_folders
 
 COMPARE_COMMAND = Command(
@@ -47,12 +47,11 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 def run_compare(args: argparse.Namespace) -> int:
     """``fetchcarry compare A B``: 0 printed (bad input is an ``InputError``: exit 2)."""
-    records = merge_folders(args.results)
-    both = [{r["split"] for r in pooled(records) if r["policy"] == m} for m in (args.a, args.b)]
-    splits = args.split or [s for s in dict.fromkeys(r["split"] for r in records) if s in both[0] & both[1]]
+    table = methods_by_split(merge_folders(args.results))  # one pass: split -> method -> records
+    splits = args.split or [s for s, methods in table.items() if args.a in methods and args.b in methods]
     if not splits:
-        splits = list(dict.fromkeys(r["split"] for r in records))[:1]  # compare() names what is missing
-    results = [compare(records, args.a, args.b, split) for split in splits]
+        splits = list(table)[:1]  # compare_methods() names what is missing
+    results = [compare_methods(table.get(split, {}), args.a, args.b, split) for split in splits]
     if args.json:
         rows = [
             {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in asdict(c).items()} for c in results

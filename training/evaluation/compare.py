@@ -3,7 +3,9 @@
 A *method* is what a table ranks: a policy label, with its training seeds pooled. A
 record's method and seed are its ``baseline`` and ``training_seed`` fields when it has
 them (``fetchcarry reproduce``'s records), else its policy label read as ``NAME-sSEED``
-(``bc-mlp-s2`` is method ``bc-mlp``, seed 2; ``expert`` is method ``expert``, no seed).
+(``bc-mlp-s2`` is method ``bc-mlp``, seed 2; ``expert`` is method ``expert``, no seed):
+:func:`training.evaluation.results.method_of`, by which a results file also holds each
+episode (split, seed, method and training seed) once.
 
 :func:`compare` pairs two methods on the scenarios both ran (same split, seed and
 digest): per scenario, each method's success rate over its seeds and its mean cost over
@@ -17,24 +19,24 @@ sign-test p-value.
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from training.errors import BenchmarkError
+from training.evaluation.results import SEED_SUFFIX, method_of
 from training.stats import paired_bootstrap, sign_test
 
-SEED_SUFFIX = re.compile(r"^(?P<method>.+)-s(?P<seed>\d+)$")
-
-
-def method_of(record: dict[str, Any]) -> tuple[str, int | None]:
-    """``(method, training seed)`` of ``record`` (seed ``None``: one run, a reference or an ensemble)."""
-    if isinstance(record.get("baseline"), str):
-        seed = record.get("training_seed")
-        return record["baseline"], seed if isinstance(seed, int) else None
-    match = SEED_SUFFIX.match(record["policy"])
-    return (match["method"], int(match["seed"])) if match else (record["policy"], None)
+__all__ = [
+    "SEED_SUFFIX",
+    "Comparison",
+    "compare",
+    "compare_methods",
+    "grouped",
+    "method_of",
+    "methods_by_split",
+    "pooled",
+]
 
 
 def pooled(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -44,6 +46,19 @@ def pooled(records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         method, seed = method_of(record)
         out.append({**record, "policy": method, "training_seed": seed})
     return out
+
+
+def methods_by_split(records: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """split -> method -> its :func:`pooled` records, in the order they first appear: one pass over ``records``."""
+    return grouped(pooled(records))
+
+
+def grouped(pooled_records: Sequence[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """split -> method -> records of ``pooled_records`` (already :func:`pooled`), in the order they first appear."""
+    table: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    for record in pooled_records:
+        table.setdefault(record["split"], {}).setdefault(record["policy"], []).append(record)
+    return table
 
 
 @dataclass(frozen=True)
@@ -101,11 +116,15 @@ def _cost(group: list[dict[str, Any]]) -> float | None:
 
 def compare(records: Sequence[dict[str, Any]], a: str, b: str, split: str) -> Comparison:
     """Method ``a`` against ``b`` on ``split``; :class:`BenchmarkError` if either is missing or none is shared."""
-    chosen = [r for r in pooled(records) if r["split"] == split]
-    mine = {m: [r for r in chosen if r["policy"] == m] for m in (a, b)}
+    return compare_methods(methods_by_split(records).get(split, {}), a, b, split)
+
+
+def compare_methods(methods: dict[str, list[dict[str, Any]]], a: str, b: str, split: str) -> Comparison:
+    """:func:`compare` on one split's records grouped by method (:func:`methods_by_split`), in time linear in them."""
+    mine = {m: methods.get(m, []) for m in (a, b)}
     for method, group in mine.items():
         if not group:
-            known = ", ".join(dict.fromkeys(r["policy"] for r in chosen)) or "none"
+            known = ", ".join(methods) or "none"
             raise BenchmarkError(f"no records of {method!r} on {split}; methods there: {known}")
     per_a, per_b = _per_scenario(mine[a]), _per_scenario(mine[b])
     common = [key for key in per_a if key in per_b]

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from training.errors import BenchmarkError
-from training.evaluation.compare import Comparison, compare, method_of, pooled
+from training.evaluation.compare import Comparison, compare_methods, grouped, method_of, pooled
 from training.evaluation.metrics import Row, summarise
 from training.evaluation.report import legend
 from training.evaluation.results import RESULTS, read_results, results_file
@@ -65,6 +65,8 @@ def merge_folders(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
             records = read_results(path)
         except FileNotFoundError:
             raise LeaderboardError(f"{folder}: no {RESULTS} (a fetchcarry benchmark --out folder)") from None
+        for record in records:  # the reader's own dicts: marked in place, not copied
+            record["folder"] = str(folder)
         keys = {(method_of(r)[0], r["split"]) for r in records}
         for method, split in keys:
             first = owner.get((method, split))
@@ -73,7 +75,7 @@ def merge_folders(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
                     f"{method} on {split} is in both {first} and {folder}: give its runs other names"
                 )
         fresh = {key for key in keys if key not in owner}
-        merged += [{**r, "folder": str(folder)} for r in records if (method_of(r)[0], r["split"]) in fresh]
+        merged += [r for r in records if (method_of(r)[0], r["split"]) in fresh]
         owner.update({key: str(folder) for key in fresh})
     _check_comparable(merged)
     return merged
@@ -100,21 +102,26 @@ def _check_comparable(records: list[dict[str, Any]]) -> None:
 
 
 def leaderboard(records: Sequence[dict[str, Any]]) -> dict[str, list[Entry]]:
-    """Per split, the methods ranked by success then SPL, each compared with the first."""
-    records = list(records)
-    rows = summarise(pooled(records))
-    folders = {(method_of(r)[0], r["split"]): r.get("folder", "") for r in records}
-    seeds: dict[tuple[str, str], set] = {}
-    for r in pooled(records):
-        seeds.setdefault((r["policy"], r["split"]), set()).add(r["training_seed"])
+    """Per split, the methods ranked by success then SPL, each compared with the first.
+
+    The records are pooled and grouped by split and method once: the time is linear in
+    the records (and the rows' bootstraps), however many splits and methods they name.
+    """
+    records = pooled(records)
+    table = grouped(records)
+    rows_by_split: dict[str, list[Row]] = {}
+    for row in summarise(records):
+        rows_by_split.setdefault(row.split, []).append(row)
     out: dict[str, list[Entry]] = {}
-    for split in dict.fromkeys(row.split for row in rows):
-        ranked = sorted((row for row in rows if row.split == split), key=lambda row: (-row.success, -_or0(row.spl)))
+    for split, rows in rows_by_split.items():
+        methods = table[split]
+        ranked = sorted(rows, key=lambda row: (-row.success, -_or0(row.spl)))
         entries = []
         for rank, row in enumerate(ranked, 1):
-            against = None if rank == 1 else compare(records, row.policy, ranked[0].policy, split)
-            key = (row.policy, split)
-            entries.append(Entry(rank, row, len(seeds[key] - {None}) or 1, folders.get(key, ""), against))
+            against = None if rank == 1 else compare_methods(methods, row.policy, ranked[0].policy, split)
+            group = methods[row.policy]
+            seeds = len({r["training_seed"] for r in group} - {None}) or 1
+            entries.append(Entry(rank, row, seeds, group[0].get("folder", ""), against))
         out[split] = entries
     return out
 

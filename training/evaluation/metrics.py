@@ -16,8 +16,9 @@ are one cluster: intervals resample scenarios (:mod:`training.stats`).
   clustered bootstrap over scenarios with several);
 - objects delivered per episode;
 - cost ratio: the policy's travel cost over the reference's on the same scenario,
-  averaged over the episodes both solved, with a clustered bootstrap interval (never
-  negative; none below two scenarios);
+  averaged over the episodes both solved where the reference travelled at least
+  :data:`MIN_RATIO_COST_M`, with a clustered bootstrap interval (never negative; none
+  below two scenarios);
 - SPL-style cost-weighted success, averaged over episodes the reference solved:
   ``success * reference_cost / max(cost, reference_cost)`` (:func:`spl`; Anderson et
   al.'s SPL with path length replaced by the paper's travel cost);
@@ -48,6 +49,7 @@ from training.stats import Z_95, cluster_bootstrap, success_interval, wilson  # 
 
 SCORE_ZERO = "random-phases"  # the normalised score's zero: the random policy of the candidate-phase interface
 COST_AGREES_M = 1e-3  # metres: the expert row reproduces its reference cost within this
+MIN_RATIO_COST_M = 1e-3  # metres: a reference that travelled less has no cost ratio (it would be huge, or infinite)
 
 
 def spl(success: bool, cost: float, expert_cost: float) -> float:
@@ -175,7 +177,7 @@ def clusters(group: list[dict[str, Any]], value: Any) -> tuple[list[float], list
 
 
 def _ratio(r: dict[str, Any], ref: dict[str, Any] | None) -> float | None:
-    if ref is None or not (r["success"] and ref["success"] and ref["cost"] > 0):
+    if ref is None or not (r["success"] and ref["success"] and ref["cost"] >= MIN_RATIO_COST_M):
         return None
     return r["cost"] / ref["cost"]
 

@@ -21,13 +21,15 @@ import gzip
 import hashlib
 import json
 import math
-from collections.abc import Sequence
+import re
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
 
-from fetchcarry_env.jsontext import describe, read_json_or
-from fetchcarry_env.scenario import Scenario
+from fetchcarry_env.jsontext import JsonInputError, JsonItems, describe, stream_json
+from fetchcarry_env.kinematics import COLLISION_PENALTY, DELIVERY_BONUS, INVALID_ACTION_PENALTY, travel_cost
+from fetchcarry_env.scenario import COORD_LIMIT, Scenario
 from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
 from training.files import write_atomically
@@ -38,6 +40,23 @@ LOCK = ".results.lock"  # in the output folder: held (flock) by the benchmark wr
 SCHEMA_VERSION = 1  # 0: a plain list of records (no digest); 1: {"schema_version": 1, "records": [...]}
 FORMAT_DOC = "docs/results-format.md"
 MAX_RESULTS_BYTES = 256 * 2**20  # bytes: about half a million records; a larger file is refused unread
+
+# What one results file may hold: read a record at a time, a file is refused at the first record past a cap.
+# Each cap is several times the published table's figure (docs/benchmarks/published: 42,470 records).
+MAX_RECORDS = 200_000  # records: 4.7 times the published table's 42,470
+MAX_RECORD_CHARS = 8_192  # characters of one record's JSON text: 13 times the published records' longest, 626
+MAX_VALUES = 32 * MAX_RECORDS  # JSON values of every record together (fields, items): 23 a published record
+MAX_SPLITS = 64  # splits one file names: the published table names 7
+MAX_POLICIES = 1_024  # policy labels one file names: the published table names 35
+MAX_PAIRS = 4_096  # pairs of a policy label and a split (a leaderboard's rows at most): the published table has 173
+MAX_SPLIT_SCENARIOS = 5_000  # scenarios (seeds) on one split: the published splits have at most 300
+MAX_COUNT = 2**31 - 1  # the largest count a record may hold (objects, phases, pushes, invalid actions, contacts)
+MAX_MS = 86_400_000.0  # milliseconds: a mean time per decision above a day is no measurement
+MAX_PHASE_COST_M = 2 * max(
+    travel_cost((-COORD_LIMIT, -COORD_LIMIT), (COORD_LIMIT, COORD_LIMIT)),
+    travel_cost((-COORD_LIMIT, 0.0), (COORD_LIMIT, 0.0)),
+)  # metres: twice the longest move within the square every coordinate of a scenario lies in
+MAX_COST_M = MAX_COUNT * MAX_PHASE_COST_M  # metres: the most an episode of the most phases can travel
 
 _INT, _NUMBER, _TEXT, _BOOL, _NULL = "an integer", "a number", "a string", "true or false", "null"
 FIELDS: dict[str, tuple[str, ...]] = {
@@ -70,7 +89,18 @@ OPTIONAL: dict[str, tuple[str, ...]] = {
 }
 """Fields a record may lack (written by later versions, or by fetchcarry reproduce), checked when present."""
 
-NOT_NEGATIVE = ("seed", "delivered", "objects", "phases", "pushes", "invalid_actions", "contacts")
+BOUNDS: dict[str, tuple[float, float | None]] = {
+    "seed": (0, None),
+    "training_seed": (0, None),
+    **dict.fromkeys(("delivered", "objects", "phases", "pushes", "invalid_actions", "contacts"), (0, MAX_COUNT)),
+    "cost": (0, None),  # at most what its phases can travel (record_problem)
+    "expert_cost": (0, MAX_COST_M),
+    **dict.fromkeys(("decision_ms", "mask_ms", "step_ms"), (0, MAX_MS)),
+}
+"""The least and the largest value (None: no largest) of the numeric fields, checked when the field is a number."""
+
+DIGESTS = ("digest", "references")  # fields that, when a string, are a sha256 in hex
+_SHA256_HEX = re.compile(r"[0-9a-f]{64}")
 
 
 class ResultsError(BenchmarkError):
@@ -79,6 +109,22 @@ class ResultsError(BenchmarkError):
 
 class ResultsBusyError(BenchmarkError):
     """Another benchmark holds the lock of an output folder."""
+
+
+SEED_SUFFIX = re.compile(r"^(?P<method>.+)-s(?P<seed>\d{1,18})$")  # a longer number is no training seed
+
+
+def method_of(record: dict[str, Any]) -> tuple[str, int | None]:
+    """``(method, training seed)`` of ``record`` (seed ``None``: one run, a reference or an ensemble).
+
+    Its ``baseline`` and ``training_seed`` when it has them (``fetchcarry reproduce``'s
+    records), else its policy label read as ``NAME-sSEED`` (``bc-mlp-s2``: ``bc-mlp``, 2).
+    """
+    if isinstance(record.get("baseline"), str):
+        seed = record.get("training_seed")
+        return record["baseline"], seed if isinstance(seed, int) else None
+    match = SEED_SUFFIX.match(record["policy"])
+    return (match["method"], int(match["seed"])) if match else (record["policy"], None)
 
 
 def scenario_digest(scenario: Scenario, named: bool = True) -> str:
@@ -109,9 +155,14 @@ def _kind(value: Any) -> str | None:
 
 
 def record_problem(record: Any) -> str | None:
-    """What is wrong with ``record`` against :data:`FIELDS`, or None when it is a well-formed record."""
+    """What is wrong with ``record`` (its fields against :data:`FIELDS`, :data:`BOUNDS` and each other), or None."""
     if not isinstance(record, dict):
         return f"is {type(record).__name__}, not an object"
+    return _kind_problem(record) or _bound_problem(record) or _digest_problem(record) or _agreement_problem(record)
+
+
+def _kind_problem(record: dict[str, Any]) -> str | None:
+    """A field missing or of a kind :data:`FIELDS` (:data:`OPTIONAL`) does not allow, or None."""
     for name, kinds in (*FIELDS.items(), *OPTIONAL.items()):
         if name not in record:
             if name in OPTIONAL:
@@ -120,38 +171,148 @@ def record_problem(record: Any) -> str | None:
         kind = _kind(record[name])
         if kind not in kinds and not (kind == _INT and _NUMBER in kinds):  # 3 is a number, 3.0 no integer
             return f"has {name!r} = {_shown(record[name])}, which is not {' or '.join(kinds)}"
-    for name in NOT_NEGATIVE:
-        if record[name] < 0:
-            return f"has {name!r} = {record[name]}, which is negative"
-    if record["delivered"] > record["objects"]:
-        return f"delivers {record['delivered']} of {record['objects']} objects"
     return None
+
+
+def _bound_problem(record: dict[str, Any]) -> str | None:
+    """A number below or above its :data:`BOUNDS`, or None (fields of a well-kinded record)."""
+    for name, (least, largest) in BOUNDS.items():
+        value = record.get(name)
+        if value is None:
+            continue
+        if value < least:
+            return f"has {name!r} = {_shown(value)}, which is negative"
+        if largest is not None and value > largest:
+            return f"has {name!r} = {_shown(value)}, more than {_figure(largest)}, the most the format allows"
+    return None
+
+
+def _digest_problem(record: dict[str, Any]) -> str | None:
+    """A ``digest`` or ``references`` string that is not a sha256 in hex, or None."""
+    for name in DIGESTS:
+        value = record.get(name)
+        if isinstance(value, str) and not _SHA256_HEX.fullmatch(value):
+            return f"has {name!r} = {_shown(value)}, which is not 64 hexadecimal digits (a sha256)"
+    return None
+
+
+def _agreement_problem(record: dict[str, Any]) -> str | None:
+    """Figures of one record that contradict each other (docs/results-format.md), or None."""
+    delivered, objects, phases, cost = record["delivered"], record["objects"], record["phases"], record["cost"]
+    if delivered > objects:
+        return f"delivers {delivered} of {objects} objects"
+    if record["success"] and delivered != objects:
+        return f"has 'success' = true but delivers {delivered} of {objects} objects"
+    if cost > phases * MAX_PHASE_COST_M:
+        return (
+            f"has 'cost' = {_shown(cost)}, more than its {phases} phases can travel "
+            f"(at most {_figure(MAX_PHASE_COST_M)} m each)"
+        )
+    most = DELIVERY_BONUS * objects + phases * (MAX_PHASE_COST_M + COLLISION_PENALTY + INVALID_ACTION_PENALTY)
+    if abs(record["return"]) > most:
+        return (
+            f"has 'return' = {_shown(record['return'])}, more in size than {_figure(most)}, what {objects} objects "
+            f"and {phases} phases can earn or lose"
+        )
+    return None
+
+
+def _figure(value: float) -> str:
+    """A bound in a message: an integer with thousands separators, a float in six significant digits."""
+    if isinstance(value, int):
+        return f"{value:,}"
+    return f"{value:,.0f}" if value.is_integer() and abs(value) < 1e15 else f"{value:.6g}"
 
 
 def parse_results(data: Any, path: Path) -> list[dict[str, Any]]:
     """The records of ``data`` (the parsed ``path``: the object of schema 1, or a schema-0 list), validated."""
     if isinstance(data, list):
-        records, version = data, 0
-    elif isinstance(data, dict):
-        version = data.get("schema_version")
-        if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version <= SCHEMA_VERSION:
-            raise ResultsError(
-                f"{path}: schema_version {_shown(version)} is not one this version reads (1 to {SCHEMA_VERSION})"
-            )
-        records = data.get("records")
-        if not isinstance(records, list):
-            raise ResultsError(f"{path}: 'records' is not a list of records (the format: {FORMAT_DOC})")
-    else:
-        raise ResultsError(f"{path}: not an object with 'schema_version' and 'records' (the format: {FORMAT_DOC})")
+        return _checked(data, path, version=0)
+    if not isinstance(data, dict):
+        raise _not_results(path)
+    _check_version(data.get("schema_version"), path)
+    records = data.get("records")
+    if not isinstance(records, list):
+        raise _not_a_list(path)
+    return _checked(records, path, version=SCHEMA_VERSION)
+
+
+def _check_version(version: Any, path: Path) -> None:
+    """:class:`ResultsError` unless ``version`` is a ``schema_version`` this module reads."""
+    if not isinstance(version, int) or isinstance(version, bool) or not 1 <= version <= SCHEMA_VERSION:
+        raise ResultsError(
+            f"{path}: schema_version {_shown(version)} is not one this version reads (1 to {SCHEMA_VERSION})"
+        )
+
+
+def _not_results(path: Path) -> ResultsError:
+    return ResultsError(f"{path}: not an object with 'schema_version' and 'records' (the format: {FORMAT_DOC})")
+
+
+def _not_a_list(path: Path) -> ResultsError:
+    return ResultsError(f"{path}: 'records' is not a list of records (the format: {FORMAT_DOC})")
+
+
+def _checked(records: Iterable[Any], path: Path, version: int) -> list[dict[str, Any]]:
+    """``records`` (of a file of schema ``version``) checked as they come: :class:`ResultsError` at the first bad one.
+
+    A record must be well formed (:func:`record_problem`), within the file's caps
+    (:data:`MAX_RECORDS`, :data:`MAX_VALUES` when ``records`` are :class:`JsonItems`
+    being read, and :class:`_Census`'s) and no episode of a record before it.
+    """
+    census = _Census(path)
     out = []
-    for k, record in enumerate(records):
+    for index, record in enumerate(records):
+        if index >= MAX_RECORDS:
+            raise ResultsError(f"{path}: more than {MAX_RECORDS:,} records (record {index}) {_CAPS}")
+        if isinstance(records, JsonItems) and records.values > MAX_VALUES:
+            raise ResultsError(f"{path}: more than {MAX_VALUES:,} JSON values by record {index} {_CAPS}")
         if version == 0 and isinstance(record, dict) and "digest" not in record:
             record = {**record, "digest": None}
         problem = record_problem(record)
         if problem is not None:
-            raise ResultsError(f"{path}: record {k} {_label(record)}{problem} (the format: {FORMAT_DOC})")
+            raise ResultsError(f"{path}: record {index} {_label(record)}{problem} (the format: {FORMAT_DOC})")
+        census.add(index, record)
         out.append(record)
     return out
+
+
+_CAPS = f"(a results file may hold no more: the format, {FORMAT_DOC}, says its caps)"
+
+
+class _Census:
+    """What the records of a file read so far name and which episodes they hold: the caps, and no episode twice."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.episodes: dict[tuple[Any, ...], int] = {}  # (split, seed, method, training seed) -> its record
+        self.splits: set[str] = set()
+        self.policies: set[str] = set()
+        self.pairs: set[tuple[str, str]] = set()
+        self.scenarios: dict[str, set[int]] = {}  # split -> seeds
+
+    def add(self, index: int, record: dict[str, Any]) -> None:
+        """Count ``record`` (the file's record ``index``); :class:`ResultsError` past a cap, or for an episode twice."""
+        split, policy = record["split"], record["policy"]
+        self._grow(self.splits, split, MAX_SPLITS, "splits", index)
+        self._grow(self.policies, policy, MAX_POLICIES, "policies", index)
+        self._grow(self.pairs, (policy, split), MAX_PAIRS, "pairs of a policy and a split", index)
+        seeds = self.scenarios.setdefault(split, set())
+        self._grow(seeds, record["seed"], MAX_SPLIT_SCENARIOS, f"scenarios on {_shown(split)}", index)
+        method, training_seed = method_of(record)
+        first = self.episodes.setdefault((split, record["seed"], method, training_seed), index)
+        if first != index:
+            raise ResultsError(
+                f"{self.path}: records {first} and {index} are the same episode (method {_shown(method)}, training "
+                f"seed {_shown(training_seed)}, split {_shown(split)}, seed {record['seed']}): a file holds each "
+                f"episode once (the format: {FORMAT_DOC})"
+            )
+
+    def _grow(self, seen: set, name: Any, cap: int, what: str, index: int) -> None:
+        """Add ``name`` to ``seen``; :class:`ResultsError` when it would make more than ``cap`` ``what``."""
+        if name not in seen and len(seen) >= cap:
+            raise ResultsError(f"{self.path}: more than {cap:,} {what} (record {index} makes one more) {_CAPS}")
+        seen.add(name)
 
 
 MAX_SHOWN_CHARS = 80  # characters of a string value quoted in a message
@@ -177,11 +338,40 @@ def _label(record: Any) -> str:
 def read_results(path: str | Path) -> list[dict[str, Any]]:
     """The records of the results file ``path``, validated; :class:`ResultsError` names what breaks the schema.
 
-    ``FileNotFoundError`` propagates (a caller decides whether a missing file is empty).
+    The file is read a chunk at a time and its records checked one by one as they are
+    decoded (:func:`fetchcarry_env.jsontext.stream_json`): the first record that breaks
+    the schema or a cap stops the read, so a hostile file costs no more memory than
+    the records before it. ``FileNotFoundError`` propagates (a caller decides whether a
+    missing file is empty).
     """
     path = Path(path)
-    data = read_json_or(path, MAX_RESULTS_BYTES, lambda problem: ResultsError(f"{path}: {problem}"))
-    return parse_results(data, path)
+    try:
+        return _read(path)
+    except JsonInputError as problem:
+        raise ResultsError(f"{path}: {problem}") from None
+
+
+def _read(path: Path) -> list[dict[str, Any]]:
+    """:func:`read_results` on the members of the file's top level as they come."""
+    records: list[dict[str, Any]] | None = None
+    versioned = False
+    for key, value in stream_json(path, MAX_RESULTS_BYTES, "records", MAX_RECORD_CHARS, item="record"):
+        if key is None and isinstance(value, JsonItems):  # schema 0: a list of records
+            records, versioned = _checked(value, path, version=0), True
+        elif key is None:
+            raise _not_results(path)
+        elif key == "schema_version":
+            _check_version(value, path)
+            versioned = True
+        elif key == "records":
+            if not isinstance(value, JsonItems) or records is not None:
+                raise _not_a_list(path)
+            records = _checked(value, path, version=SCHEMA_VERSION)
+    if not versioned:
+        _check_version(None, path)
+    if records is None:
+        raise _not_a_list(path)
+    return records
 
 
 def results_file(folder: str | Path) -> Path:
