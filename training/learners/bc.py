@@ -37,6 +37,9 @@ from training.learners.encoders import CandidateScorer, build_network, network_i
 from training.learners.options import BCConfig
 from training.policies.protocol import MaskedPolicy
 
+CHECKPOINT_FIELDS = ("network", "optimiser", "order", "metrics", "epoch")  # what fit saves after every epoch
+METRIC_COLUMNS = ("epoch", "loss", "accuracy", "seconds")  # a metrics row of an epoch (seconds since the start)
+
 
 class BCPolicy(MaskedPolicy):
     """A trained scorer of candidates behind stable-baselines3's ``predict`` protocol.
@@ -353,12 +356,16 @@ def fit(
     checkpoint: dict[str, Any] | None = None,
     save: Callable[[dict[str, Any]], None] | None = None,
     on_epoch: Callable[[dict[str, Any]], None] | None = None,
+    checkpoint_file: Path | None = None,
 ) -> tuple[nn.Module, list[dict[str, Any]]]:
     """Train a fresh network for ``config.epochs`` epochs; return it and one metrics row per epoch.
 
     ``checkpoint`` (what ``save`` was last given) resumes training after its epoch;
     ``save`` is called with the training state after every epoch. Deterministic on CPU
-    for one ``config.seed``, interrupted or not.
+    for one ``config.seed``, interrupted or not. A checkpoint is checked field by field
+    against the network, optimiser and generator it resumes (:func:`check_checkpoint`)
+    before any of it is loaded: :class:`~training.learners.runs.RunFolderError` (bad input)
+    naming ``checkpoint_file`` (the file it was read from) and the field.
 
     The CPU flushes subnormal floats to zero while it trains (``torch.set_flush_denormal``,
     off again afterwards): weight decay drives the weights of candidates that never win
@@ -369,7 +376,7 @@ def fit(
     if len(demonstrations) == 0:
         raise ValueError("no labelled demonstrations to learn from")
     with subnormals_flushed():
-        return _fit(demonstrations, config, capacity, checkpoint, save, on_epoch)
+        return _fit(demonstrations, config, capacity, checkpoint, save, on_epoch, checkpoint_file)
 
 
 def _fit(
@@ -379,6 +386,7 @@ def _fit(
     checkpoint: dict[str, Any] | None,
     save: Callable[[dict[str, Any]], None] | None,
     on_epoch: Callable[[dict[str, Any]], None] | None,
+    checkpoint_file: Path | None,
 ) -> tuple[nn.Module, list[dict[str, Any]]]:
     torch.set_num_threads(1)  # faster here than two threads, and the same sums every run
     torch.manual_seed(config.seed)
@@ -392,6 +400,8 @@ def _fit(
     first = 0
     elapsed = 0.0
     if checkpoint is not None:
+        file = checkpoint_file or Path(runs.CHECKPOINT_FILE)
+        check_checkpoint(file, checkpoint, config.epochs, network, optimiser, order)
         network.load_state_dict(checkpoint["network"])
         optimiser.load_state_dict(checkpoint["optimiser"])
         order.set_state(checkpoint["order"])
@@ -421,6 +431,27 @@ def _fit(
         if on_epoch is not None:
             on_epoch(row)
     return network.eval(), metrics
+
+
+def check_checkpoint(
+    file: Path, checkpoint: Any, epochs: int, network: nn.Module, optimiser: torch.optim.Adam, order: torch.Generator
+) -> None:
+    """:class:`~training.learners.runs.RunFolderError` naming ``file`` and the field, unless ``checkpoint`` fits.
+
+    A checkpoint of :func:`fit` holds exactly :data:`CHECKPOINT_FIELDS`: ``network`` (the
+    fresh ``network``'s tensors: names, shapes, dtypes), ``optimiser`` (``optimiser``'s
+    state: its settings, each parameter's moments), ``order`` (a state the ``order``
+    generator takes), ``epoch`` (from 0 to ``epochs``) and ``metrics`` (one row of
+    :data:`METRIC_COLUMNS` per epoch done).
+    """
+    if not isinstance(checkpoint, dict):
+        raise runs.RunFolderError(f"{file} does not hold a training checkpoint (a dict of its state)")
+    runs.check_checkpoint_fields(file, checkpoint, CHECKPOINT_FIELDS)
+    runs.check_module_state(file, "network", checkpoint["network"], network)
+    runs.check_adam_state(file, "optimiser", checkpoint["optimiser"], optimiser)
+    runs.check_generator_state(file, "order", checkpoint["order"], order)
+    epoch = runs.checkpoint_counter(file.parent, checkpoint, "epoch", epochs)
+    runs.check_metric_rows(file, "metrics", checkpoint["metrics"], METRIC_COLUMNS, epoch)
 
 
 def train_bc(

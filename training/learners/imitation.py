@@ -30,7 +30,7 @@ from fetchcarry_env.jsontext import describe
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.phases import PhaseLayout
 from training.learners import runs
-from training.learners.bc import BCConfig, BCPolicy, Demonstrations, fit
+from training.learners.bc import CHECKPOINT_FIELDS, BCConfig, BCPolicy, Demonstrations, fit
 from training.learners.encoders import Ensemble, build_network, network_input
 from training.policies.phase_expert import MASK_INFO
 
@@ -119,7 +119,10 @@ def train_bc_run(
     folder, checkpoint = runs.start_run(out, config_json, resume=resume)
     if runs.read_config(folder).get("complete"):
         return runs.load_policy(folder)
-    done = runs.checkpoint_counter(folder, checkpoint, "epoch", config.epochs) if checkpoint else 0
+    done = 0
+    if checkpoint is not None:  # an empty one too: it lacks every field
+        runs.check_checkpoint_fields(folder / runs.CHECKPOINT_FILE, checkpoint, CHECKPOINT_FIELDS)
+        done = runs.checkpoint_counter(folder, checkpoint, "epoch", config.epochs)
     with tqdm(total=config.epochs, initial=done, desc=f"bc {folder.name}", unit="epoch", disable=not progress) as bar:
 
         def on_epoch(row: dict[str, Any]) -> None:
@@ -128,7 +131,7 @@ def train_bc_run(
             bar.update(1)
             bar.set_postfix_str(f"loss {row['loss']:.3f} accuracy {row['accuracy']:.1%}", refresh=False)
 
-        saved_rows: list[dict[str, Any]] = [dict(r) for r in checkpoint["metrics"]] if checkpoint else []
+        saved_rows: list[dict[str, Any]] = [dict(r) for r in checkpoint["metrics"]] if checkpoint is not None else []
         network, _ = fit(
             demonstrations,
             config,
@@ -136,6 +139,7 @@ def train_bc_run(
             checkpoint=checkpoint,
             save=lambda state: runs.save_checkpoint(folder, state),
             on_epoch=on_epoch,
+            checkpoint_file=folder / runs.CHECKPOINT_FILE,
         )
     runs.finish_run(folder, network, config_json)
     return BCPolicy(network, config, capacity)

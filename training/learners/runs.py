@@ -36,9 +36,14 @@ deep nesting); its capacity within the scenario format's counts
 the observation's length for that capacity, its network within :data:`MAX_HIDDEN`
 units, :data:`MAX_CANDIDATES` scores and :data:`MAX_PARAMETERS` weights. ``model.pt``
 and ``checkpoint.pt`` are read as regular files of bounded size (:func:`read_tensors`);
-weights that are not finite (NaN, infinities) are refused, on load and on resume, and a
-checkpoint's counter must lie within the run's budget (:func:`checkpoint_counter`).
-Every refusal is a :class:`RunFolderError` naming the file.
+weights that are not finite (NaN, infinities) or not dense are refused, on load and on
+resume, and a checkpoint's counter must lie within the run's budget
+(:func:`checkpoint_counter`). A resumed checkpoint holds exactly its learner's fields
+(:func:`check_checkpoint_fields`), each checked against what it is loaded into before
+it is: a network's tensors (:func:`check_module_state`), an Adam optimiser's state
+(:func:`check_adam_state`), a random generator's (:func:`check_generator_state`) and the
+metrics rows (:func:`check_metric_rows`). Every refusal is a :class:`RunFolderError`
+naming the file (and the field).
 """
 
 from __future__ import annotations
@@ -360,6 +365,149 @@ def checkpoint_counter(out: Path, checkpoint: dict[str, Any], key: str, high: in
     return value
 
 
+def check_checkpoint_fields(file: Path, checkpoint: dict[str, Any], names: tuple[str, ...]) -> None:
+    """:class:`RunFolderError` unless the checkpoint holds exactly the fields ``names`` (none missing, none unknown)."""
+    missing = [name for name in names if name not in checkpoint]
+    if missing:
+        raise RunFolderError(f"{file}: missing fields {', '.join(missing)} (a training checkpoint holds "
+                             f"{', '.join(names)})")  # fmt: skip
+    unknown = [describe(key) for key in checkpoint if key not in names]
+    if unknown:
+        raise RunFolderError(f"{file}: unknown fields {', '.join(unknown[:5])} (a training checkpoint holds "
+                             f"{', '.join(names)} only)")  # fmt: skip
+
+
+def check_module_state(file: Path, field: str, state: Any, module: torch.nn.Module) -> None:
+    """:class:`RunFolderError` unless ``state`` holds ``module``'s own tensors: the same names, shapes and dtypes.
+
+    ``field`` names the checkpoint's field in the message (``network``, ``network.layers.0.weight``).
+    """
+    expected = module.state_dict()
+    if not isinstance(state, dict):
+        raise RunFolderError(f"{file}: {field} must be a network's state (a dict of tensors), got {_words(state)}")
+    missing = [name for name in expected if name not in state]
+    if missing:
+        raise RunFolderError(f"{file}: {field} lacks {', '.join(missing[:5])}: it is not this run's network")
+    unknown = [describe(name) for name in state if name not in expected]
+    if unknown:
+        raise RunFolderError(f"{file}: {field} holds {', '.join(unknown[:5])}, which this run's network has not")
+    for name, tensor in expected.items():
+        check_tensor_like(file, f"{field}.{name}", state[name], tensor)
+
+
+def check_tensor_like(file: Path, field: str, value: Any, like: torch.Tensor) -> None:
+    """:class:`RunFolderError` unless ``value`` is a plain (dense) tensor of ``like``'s shape and dtype."""
+    if (
+        not isinstance(value, torch.Tensor)
+        or value.layout != torch.strided
+        or value.shape != like.shape
+        or value.dtype != like.dtype
+    ):
+        raise RunFolderError(f"{file}: {field} must be {_words(like)}, got {_words(value)}")
+
+
+def check_adam_state(file: Path, field: str, state: Any, optimiser: torch.optim.Adam) -> None:
+    """:class:`RunFolderError` unless ``state`` is a state of ``optimiser`` (Adam over the same parameters).
+
+    Its parameter groups hold the same settings (a setting an older torch did not save may
+    be missing) and parameter indices; each parameter's moments are tensors of that
+    parameter's shape and dtype (the second moment never negative), its step a count >= 0.
+    """
+    if not isinstance(state, dict) or set(state) != {"state", "param_groups"}:
+        raise RunFolderError(f"{file}: {field} must be an optimiser's state (state and param_groups)")
+    fresh = optimiser.state_dict()["param_groups"]
+    groups = state["param_groups"]
+    if not isinstance(groups, list) or len(groups) != len(fresh):
+        raise RunFolderError(f"{file}: {field}.param_groups must list {len(fresh)} group(s), got {_words(groups)}")
+    for index, (group, own) in enumerate(zip(groups, fresh, strict=True)):
+        _check_param_group(file, f"{field}.param_groups[{index}]", group, own)
+    parameters = [p for group in optimiser.param_groups for p in group["params"]]
+    moments = ("exp_avg", "exp_avg_sq", *(("max_exp_avg_sq",) if optimiser.defaults.get("amsgrad") else ()))
+    entries = state["state"]
+    if not isinstance(entries, dict):
+        raise RunFolderError(f"{file}: {field}.state must be a dict of the parameters' moments")
+    for index, entry in entries.items():
+        where = f"{field}.state[{describe(index)}]"
+        if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < len(parameters):
+            raise RunFolderError(f"{file}: {where}: not one of the {len(parameters)} parameters' indices")
+        if not isinstance(entry, dict) or set(entry) != {"step", *moments}:
+            raise RunFolderError(f"{file}: {where} must hold step, {', '.join(moments)}")
+        _check_step(file, f"{where}.step", entry["step"])
+        for moment in moments:
+            check_tensor_like(file, f"{where}.{moment}", entry[moment], parameters[index].detach())
+            if moment != "exp_avg" and bool((entry[moment] < 0).any()):
+                raise RunFolderError(f"{file}: {where}.{moment} holds negative numbers (a mean of squares)")
+
+
+def _check_param_group(file: Path, where: str, group: Any, own: dict[str, Any]) -> None:
+    """One saved parameter group: this run's settings (the learning rate, ...) and parameter indices."""
+    if not isinstance(group, dict):
+        raise RunFolderError(f"{file}: {where} must be a dict of settings, got {_words(group)}")
+    for key in ("params", "lr", "betas", "eps", "weight_decay"):
+        if key not in group:
+            raise RunFolderError(f"{file}: {where} lacks {key}")
+    for key, value in group.items():
+        if key not in own:
+            raise RunFolderError(f"{file}: {where} holds {describe(key)}, which this run's optimiser has not")
+        if not _same_setting(value, own[key]):
+            raise RunFolderError(f"{file}: {where}.{key} is {_words(value)}, not this run's {describe(own[key])}")
+
+
+def _same_setting(value: Any, own: Any) -> bool:
+    """Whether a saved setting is this run's: the same type and value (tuples and lists element by element)."""
+    if isinstance(own, tuple | list):
+        return (
+            type(value) is type(own)
+            and len(value) == len(own)
+            and all(_same_setting(v, o) for v, o in zip(value, own, strict=True))
+        )
+    return type(value) is type(own) and bool(value == own)
+
+
+def _check_step(file: Path, field: str, step: Any) -> None:
+    """An optimiser's step count: a number, or a one-element real tensor, finite and >= 0."""
+    if isinstance(step, torch.Tensor) and step.numel() == 1 and not step.is_complex() and step.dtype != torch.bool:
+        step = step.item()
+    if not isinstance(step, int | float) or isinstance(step, bool) or not math.isfinite(step) or step < 0:
+        raise RunFolderError(f"{file}: {field} must be a count of steps >= 0, got {_words(step)}")
+
+
+def check_generator_state(file: Path, field: str, state: Any, generator: torch.Generator) -> None:
+    """:class:`RunFolderError` unless ``state`` is a state ``generator`` takes (tried on a fresh generator)."""
+    check_tensor_like(file, field, state, generator.get_state())
+    try:
+        torch.Generator(device=generator.device).set_state(state)
+    except RuntimeError as error:  # the bytes of no state (torch checks the Mersenne Twister's own)
+        raise RunFolderError(f"{file}: {field} is not a random generator's state ({_short(error)})") from None
+
+
+def check_metric_rows(file: Path, field: str, rows: Any, columns: tuple[str, ...], count: int) -> None:
+    """:class:`RunFolderError` unless ``rows`` are ``count`` rows of exactly ``columns``, each a finite number."""
+    if not isinstance(rows, list) or len(rows) != count:
+        raise RunFolderError(f"{file}: {field} must list {count} row(s) (one per {columns[0]} done), "
+                             f"got {_words(rows)}")  # fmt: skip
+    for index, row in enumerate(rows):
+        if not isinstance(row, dict):
+            raise RunFolderError(f"{file}: {field}[{index}] must be a row of {', '.join(columns)}, got {_words(row)}")
+        missing, unknown = [c for c in columns if c not in row], [describe(c) for c in row if c not in columns]
+        if missing or unknown:
+            wrong = f"lacks {', '.join(missing)}" if missing else f"holds {', '.join(unknown[:5])}"
+            raise RunFolderError(f"{file}: {field}[{index}] {wrong} (a row holds {', '.join(columns)})")
+        for column, value in row.items():
+            if not isinstance(value, int | float) or isinstance(value, bool) or not math.isfinite(value):
+                raise RunFolderError(f"{file}: {field}[{index}].{column} must be a number, got {_words(value)}")
+
+
+def _words(value: Any) -> str:
+    """A value in a message: a tensor by its dtype and shape (never its numbers), anything else cut short."""
+    if isinstance(value, torch.Tensor):
+        layout = "" if value.layout == torch.strided else f"{value.layout} "
+        return f"a {layout}{str(value.dtype).removeprefix('torch.')} tensor of shape {tuple(value.shape)}"
+    if isinstance(value, list | dict):
+        return f"a {type(value).__name__} of {len(value)}"
+    return describe(value)
+
+
 def read_tensors(file: Path, max_bytes: int) -> Any:
     """What ``torch.save`` wrote to ``file``, read with ``weights_only`` (tensors, numbers, strings, lists, dicts).
 
@@ -398,10 +546,16 @@ def _short(error: BaseException) -> str:
 
 
 def check_finite(file: Path, value: Any, where: str = "") -> None:
-    """:class:`RunFolderError` if a floating-point tensor in ``value`` (dicts, lists of them) holds NaN or infinity."""
+    """:class:`RunFolderError` if a floating-point tensor in ``value`` (dicts, lists of them) holds NaN or infinity.
+
+    A tensor that is not dense (sparse, say: ``torch.save`` keeps any layout) is refused too:
+    a run folder holds dense tensors only, and other layouts lack the operations checked here.
+    """
     if isinstance(value, torch.Tensor):
+        shown = describe(where) if where else "it holds"
+        if value.layout != torch.strided:
+            raise RunFolderError(f"{file}: the tensor {shown} is not dense but {value.layout} (run folders hold dense)")
         if value.is_floating_point() and not bool(torch.isfinite(value).all()):
-            shown = describe(where) if where else "it holds"
             raise RunFolderError(f"{file}: the weights {shown} are not all finite numbers (NaN or inf)")
     elif isinstance(value, dict):
         for key, item in value.items():
