@@ -25,8 +25,8 @@ from fetchcarry_env.families import DEFAULT_FAMILY, Family, get_family
 from fetchcarry_env.geometry import Rect, heading_vector
 from fetchcarry_env.kinematics import (
     COLLISION_PENALTY,
-    DELIVERY_BONUS,
     INVALID_ACTION_PENALTY,
+    WAIT_COST,
     hand_offset,
     travel_cost,
 )
@@ -146,14 +146,19 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     ## Rewards
 
-    The paper's objective (Eq. 1) seen one phase at a time: ``+10`` for each object
-    that becomes delivered (its centre within 1 cm of its goal's, not held; ``-10`` if
-    one stops being delivered), minus the travel cost of the base,
-    ``|dx| + |dy| + 0.1 * ||dx| - |dy||`` metres actually travelled (a push stroke
-    included), minus 1 when the base stops at a contact, minus 1 for an impossible
-    action (masked, or failing a check: nothing in reach, the arm line blocked, a goal
-    occupied...), which moves nothing. :meth:`compute_reward` gives the same value from
-    ``(achieved_goal, desired_goal, info)`` and works on batches (for HER).
+    The task's cost, one phase at a time, negated: the paper's Eq. 1 counted over the
+    whole episode (``docs/formulation.md``, "The task cost"). Each step costs ``10`` for
+    every object that is not at its goal after it (its centre within 1 cm of its goal's,
+    not held: ``W1`` of Eq. 1, the price of a late delivery), plus the travel cost of the
+    base, ``|dx| + |dy| + 0.1 * ||dx| - |dy||`` metres actually travelled (a push stroke
+    included), plus 1 when the base stops at a contact, plus 1 for an impossible action
+    (masked, or failing a check: nothing in reach, the arm line blocked, a goal
+    occupied...), which moves nothing. So the return of an episode is minus its cost:
+    ``-(travel + 10 * sum over objects of the steps before it was delivered + penalties)``,
+    the value the MILP expert's plans minimise (a plan's ``objective``), and an episode that
+    leaves an object undelivered pays for it at every step until the time limit.
+    :meth:`compute_reward` gives the same value from ``(achieved_goal, desired_goal,
+    info)`` and works on batches (for HER).
 
     ## Starting State
 
@@ -173,10 +178,11 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ``info`` (reset and step): ``is_success`` (bool), ``delivered`` (objects at their
     goals), ``path_length`` (metres the base has travelled this episode),
     ``travel_cost`` (the paper's cost of those moves so far: Manhattan plus the diagonal term),
+    ``task_cost`` (the task's cost so far: minus the return, see Rewards),
     ``collisions`` (contacts so far), ``invalid_action`` (a short reason, or None),
     ``contact`` (the id of what the base touched this step, or None), ``travel`` and
     ``penalty`` (this step's travel cost and penalties), ``previous_achieved_goal``
-    (for :meth:`compute_reward`) and ``push`` (after a push: the clutter's id, the
+    (the objects' centres before the step) and ``push`` (after a push: the clutter's id, the
     stroke asked and travelled in metres, whether it jammed).
 
     ## Arguments
@@ -284,6 +290,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._achieved: np.ndarray | None = None
         self._path_length = 0.0
         self._travel_cost = 0.0
+        self._task_cost = 0.0
         self._collisions = 0
 
     @classmethod
@@ -342,6 +349,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self._sim_in_sync, self._snapshot = True, None
         self._path_length = 0.0
         self._travel_cost = 0.0
+        self._task_cost = 0.0
         self._collisions = 0
         observation = encode(scenario, self._state, self.capacity)
         if self._images is not None:
@@ -380,6 +388,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         if push_report is not None:
             info["push"] = push_report
         reward = float(self.compute_reward(observation["achieved_goal"], observation["desired_goal"], info))
+        self._task_cost -= reward
+        info["task_cost"] = self._task_cost
         self._achieved = observation["achieved_goal"]
         terminated = bool(info["is_success"])
         if self.render_mode == "human":
@@ -391,22 +401,19 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     ) -> np.ndarray | float:
         """The step reward from the goals and ``info`` (one transition, or a batch as HER passes it).
 
-        ``10 * (objects at their goals now - before)`` minus the step's travel cost and
-        penalties; ``info`` is one step's info dict, or a sequence (or object array) of them
-        for a batch of ``achieved_goal`` / ``desired_goal`` rows.
+        Minus ``10 * (objects not at their goals after the step)``, the step's travel cost
+        and its penalties; ``info`` is one step's info dict, or a sequence (or object array)
+        of them for a batch of ``achieved_goal`` / ``desired_goal`` rows.
         """
         achieved = np.asarray(achieved_goal, dtype=np.float64)
         desired = np.asarray(desired_goal, dtype=np.float64)
         if isinstance(info, Mapping):
-            previous = np.asarray(info["previous_achieved_goal"], dtype=np.float64)
             cost = float(info["travel"]) + float(info["penalty"])
         else:
             infos = list(np.asarray(info, dtype=object).reshape(-1))
-            previous = np.stack([np.asarray(i["previous_achieved_goal"], dtype=np.float64) for i in infos])
-            previous = previous.reshape(achieved.shape)
             cost = np.array([float(i["travel"]) + float(i["penalty"]) for i in infos]).reshape(achieved.shape[:-1])
-        gained = _count_at_goal(achieved, desired) - _count_at_goal(previous, desired)
-        reward = DELIVERY_BONUS * gained - cost
+        waiting = achieved.shape[-1] // 3 - _count_at_goal(achieved, desired)  # absent slots count as at goal
+        reward = -(WAIT_COST * waiting + cost)
         return float(reward) if np.ndim(reward) == 0 else reward
 
     def action_masks(self) -> np.ndarray:
@@ -552,6 +559,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
             "delivered": delivered,
             "path_length": self._path_length,
             "travel_cost": self._travel_cost,
+            "task_cost": self._task_cost,
             "collisions": self._collisions,
             "invalid_action": invalid,
             "contact": contact,

@@ -16,7 +16,8 @@ from fetchcarry_env.scenario import Posture
 
 HAND_HALF_SIZE = 0.02  # metres: the hand is a cube of 4 cm; a push puts its face on the clutter's rear face
 
-DELIVERY_BONUS = 10.0  # W1 of the paper's Eq. 1: reward per object delivered
+WAIT_COST = 10.0  # W1 of the paper's Eq. 1: the task's cost of each phase an object is not yet at its goal
+DELIVERY_BONUS = WAIT_COST  # the same W1 as Eq. 1 writes it: -W1 for each phase an object stands at its goal
 DIAGONAL_WEIGHT = 0.1  # W2 of the paper's Eq. 1: weight of |dx - dy| (favours diagonal moves)
 COLLISION_PENALTY = 1.0  # reward lost when the base stops at a contact
 INVALID_ACTION_PENALTY = 1.0  # reward lost for an impossible (masked or failed) action

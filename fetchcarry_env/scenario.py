@@ -378,7 +378,7 @@ class _Numbers:
     def coordinate(self, owner: str, name: str, value: float) -> None:
         if self.finite(owner, name, value) and abs(value) > COORD_LIMIT:
             self.out.append(
-                f"rule 6 (numbers): {owner} {name} {value!r} is more than {COORD_LIMIT:g} m from the origin"
+                f"rule 6 (numbers): {owner} {name} {_number(value)} is more than {COORD_LIMIT:g} m from the origin"
             )
 
     def size(self, owner: str, name: str, value: float, high: float = COORD_LIMIT) -> None:
@@ -387,9 +387,9 @@ class _Numbers:
         if value < 0:
             self.out.append(f"rule 6 (numbers): {owner} {name} is negative")
         elif value < MIN_SIZE:
-            self.out.append(f"rule 6 (numbers): {owner} {name} {value!r} is less than {MIN_SIZE * 1000:g} mm")
+            self.out.append(f"rule 6 (numbers): {owner} {name} {_number(value)} is less than {MIN_SIZE * 1000:g} mm")
         elif value > high:
-            self.out.append(f"rule 6 (numbers): {owner} {name} {value!r} is more than {high!r} m")
+            self.out.append(f"rule 6 (numbers): {owner} {name} {_number(value)} is more than {_number(high)} m")
 
     def rect(self, owner: str, r: Rect) -> None:
         for name, value in zip(("min x", "min y", "max x", "max y"), (r.min_x, r.min_y, r.max_x, r.max_y), strict=True):
@@ -407,6 +407,12 @@ class _Numbers:
             self.coordinate(f"posture {posture.name!r}", f"{axis} range", high)
             if math.isfinite(low) and math.isfinite(high) and high < low:
                 self.out.append(f"rule 6 (numbers): posture {posture.name!r} {axis} range has a negative width")
+
+
+def _number(value: float) -> str:
+    """``value`` short (``0.05``, ``120``) where that is exact, else in full: two numbers compared never print alike."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(float(value))
 
 
 def _headroom(scenario: Scenario, *points: Point) -> float:

@@ -17,7 +17,7 @@ from fetchcarry_env import Capacity, ScenarioError
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.env import FetchCarryPushEnv
 from fetchcarry_env.errors import UsageError
-from fetchcarry_env.kinematics import DELIVERY_BONUS, INVALID_ACTION_PENALTY, travel_cost
+from fetchcarry_env.kinematics import INVALID_ACTION_PENALTY, WAIT_COST, travel_cost
 from fetchcarry_env.observation import decode
 from fetchcarry_env.registration import MAX_EPISODE_STEPS
 
@@ -248,7 +248,8 @@ def test_every_masked_action_is_refused_with_a_reason_and_moves_nothing():
         _, reward, terminated, _, info = env.step(vector)
         assert info["invalid_action"], vector
         assert u.state == before
-        assert reward == -INVALID_ACTION_PENALTY and info["travel"] == 0.0 and not terminated
+        waiting = WAIT_COST * (len(u.scenario.objects) - info["delivered"])  # the objects not at their goals
+        assert reward == -(INVALID_ACTION_PENALTY + waiting) and info["travel"] == 0.0 and not terminated
         refused += 1
     assert refused > 100
 
@@ -275,7 +276,7 @@ def test_an_impossible_action_does_nothing_and_says_why(steps, reason):
     _, reward, _, _, info = env.step(action(env, *steps[-1]))
     assert info["invalid_action"].startswith(reason), info["invalid_action"]
     assert u.state == before
-    assert reward == -INVALID_ACTION_PENALTY
+    assert reward == -(INVALID_ACTION_PENALTY + WAIT_COST * (len(u.scenario.objects) - info["delivered"]))
     assert info["penalty"] == INVALID_ACTION_PENALTY and info["travel"] == 0.0
     env.close()
 
@@ -303,7 +304,8 @@ def test_the_observation_holds_the_whole_geometry_in_the_goal_env_convention():
     env.close()
 
 
-def test_rewards_follow_the_paper_s_objective_and_the_episode_ends_on_delivery():
+def test_the_return_is_minus_the_task_cost_and_the_episode_ends_on_delivery():
+    """Each step costs its travel and W1 per object not at its goal after it: the return is minus the task cost."""
     env = make(push_pick_place())
     u = unwrapped(env)
     bases = [u.state.base]
@@ -313,12 +315,13 @@ def test_rewards_follow_the_paper_s_objective_and_the_episode_ends_on_delivery()
         bases.append(u.state.base)
     travels = [travel_cost(a, b) for a, b in itertools.pairwise(bases)]
     rewards = [r[1] for r in results]
-    assert rewards[:2] == pytest.approx([-t for t in travels[:2]])
-    assert rewards[2] == pytest.approx(DELIVERY_BONUS - travels[2])
+    assert rewards[:2] == pytest.approx([-(t + WAIT_COST) for t in travels[:2]])  # one object, not yet delivered
+    assert rewards[2] == pytest.approx(-travels[2])  # delivered by this step
     assert [r[2] for r in results] == [False, False, True]  # terminated when delivered with an empty hand
     info = results[-1][4]
     assert info["is_success"] and info["delivered"] == 1 and info["collisions"] == 0
     assert info["travel_cost"] == pytest.approx(sum(travels))
+    assert info["task_cost"] == pytest.approx(-sum(rewards)) == pytest.approx(sum(travels) + 2 * WAIT_COST)
     assert info["path_length"] == pytest.approx(sum(math.dist(a, b) for a, b in itertools.pairwise(bases)))
     assert info["invalid_action"] is None
     env.close()
@@ -338,8 +341,9 @@ def test_compute_reward_works_on_a_batch_and_agrees_with_step():
     assert batch.shape == (4,)
     assert np.allclose(batch, rewards)
     assert u.compute_reward(achieved[-1], desired[-1], infos[-1]) == pytest.approx(rewards[-1])
-    # HER relabels the desired goal: a goal the object already stood at before earns no bonus.
-    assert u.compute_reward(achieved[-1], infos[-1]["previous_achieved_goal"], infos[-1]) < 0
+    # HER relabels the desired goal: an object away from the relabelled goal costs W1 more.
+    relabelled = u.compute_reward(achieved[-1], infos[-1]["previous_achieved_goal"], infos[-1])
+    assert relabelled == pytest.approx(rewards[-1] - WAIT_COST)
     env.close()
 
 

@@ -12,7 +12,7 @@ import pytest
 
 import fetchcarry_env.phases as phases
 from fetchcarry_env.actions import Action, Mode
-from fetchcarry_env.kinematics import INVALID_ACTION_PENALTY
+from fetchcarry_env.kinematics import INVALID_ACTION_PENALTY, WAIT_COST
 from fetchcarry_env.phase_env import PhaseActions
 from fetchcarry_env.phases import KINDS, PhaseLayout, enumerate_phases
 from fetchcarry_env.registration import MAX_EPISODE_STEPS
@@ -128,7 +128,7 @@ def test_a_masked_candidate_is_refused_and_changes_nothing():
     mask = env.get_wrapper_attr("action_masks")()
     masked = int(np.flatnonzero(~mask)[0])
     after, reward, _terminated, _truncated, info = env.step(masked)
-    assert reward == -INVALID_ACTION_PENALTY
+    assert reward == -(INVALID_ACTION_PENALTY + WAIT_COST * (len(env.unwrapped.scenario.objects) - info["delivered"]))
     assert info["masked"] and f"candidate {masked}" in info["invalid_action"]
     for key in observation:
         np.testing.assert_array_equal(after[key], observation[key])
