@@ -8,6 +8,13 @@ caller wraps it in its own error (``ScenarioError``, ``PlanFormatError``). A gzi
 (what the repository stores of a large results file) is read as the JSON text it holds,
 its decompressed size bounded as the plain file's is.
 
+A large file of many records (a results file) goes through :func:`stream_json`
+instead, with the same checks: it is read, inflated and decoded a chunk at a time and
+its records decoded one by one, each from a window of at most its limit of
+characters, so that the caller can check each record as it comes and stop at the first
+bad one; the memory then holds one chunk and the records kept, not the whole text and
+every object it would make.
+
 :func:`describe` shows a value in a message without printing megabytes of it or
 recursing into deep nesting.
 """

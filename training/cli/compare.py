@@ -1,7 +1,8 @@
 """The ``fetchcarry compare`` command: two methods paired on the same scenarios.
 
-Exit statuses: 0 printed; 2 bad input (a folder without ``results.json``, a method with
-no records on a split, two methods sharing no scenario).
+Exit statuses: 0 printed; 2 bad input (a folder without ``results.json``, a file that
+breaks its schema or its caps or holds an episode twice (docs/results-format.md), a
+method with no records on a split, two methods sharing no scenario).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ COMPARE_COMMAND = Command(
     "paired bootstrap interval over scenarios), travel cost in metres (on the scenarios both solved), and the sign "
     "of the success difference over training seeds with its two-sided sign-test p-value. A method is a policy "
     "label with its training seeds NAME-sK pooled (bc-mlp for bc-mlp-s0, bc-mlp-s1, ...).",
-    epilog="Exit status: 0 printed, 2 bad input (no results.json, an unknown method, no shared scenario).",
+    epilog="Exit status: 0 printed, 2 bad input (no results.json, a file that breaks its schema or caps or holds an "
+    "episode twice: docs/results-format.md, an unknown method, no shared scenario).",
 )
 
 

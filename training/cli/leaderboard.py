@@ -1,8 +1,8 @@
 """The ``fetchcarry leaderboard`` command: result folders merged into one ranked table per split.
 
 Exit statuses: 0 printed; 2 bad input (a folder without ``results.json``, a file that
-breaks its schema, results of different split versions or references, a method in two
-folders).
+breaks its schema or its caps or holds an episode twice (docs/results-format.md),
+results of different split versions or references, a method in two folders).
 """
 
 from __future__ import annotations
@@ -24,7 +24,8 @@ LEADERBOARD_COMMAND = Command(
     "the methods (training seeds NAME-sK pooled) ranked by success then SPL, with intervals clustered by "
     "scenario and each method's paired difference in success with the first (bootstrap over the scenarios "
     "both ran, and the sign over training seeds).",
-    epilog="Exit status: 0 printed, 2 bad input (no results.json, a file that breaks its schema, different split "
+    epilog="Exit status: 0 printed, 2 bad input (no results.json, a file that breaks its schema or caps or holds an "
+    "episode twice: docs/results-format.md, different split "
     "versions or references, a method in two folders).",
 )
 

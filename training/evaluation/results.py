@@ -5,9 +5,13 @@ The file is one JSON object (docs/results-format.md)::
     {"schema_version": 1, "records": [{"policy": "expert", ...}, ...]}
 
 Readers also accept the plain list of records the benchmark wrote before (schema 0,
-records without ``digest``). :func:`read_results` checks every record against
-:data:`FIELDS` and refuses a file that breaks the schema with a :class:`ResultsError`
-(bad input, exit 2) naming the file and the record; it never drops a record.
+records without ``digest``). :func:`read_results` reads the file a chunk at a time and
+checks each record as it is decoded: against :data:`FIELDS` and :data:`BOUNDS`, its
+figures against each other (:func:`record_problem`), the file's caps (``MAX_*``: records,
+characters of a record, JSON values, splits, policies, pairs, scenarios of a split) and
+the records before it (no episode twice). The first record that breaks one stops the
+read with a :class:`ResultsError` (bad input, exit 2) naming the file and the record;
+no record is ever dropped.
 :func:`write_results` writes the file atomically (a temporary file, then a rename), so
 a reader sees the old file or the new one, never half of one. A file may also be
 gzip-compressed (``results.json.gz``, as the repository keeps the published table):
