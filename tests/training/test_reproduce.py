@@ -264,7 +264,8 @@ def test_benchmark_check_reproduces_a_runs_records_and_finds_a_tampered_one(smok
     assert f"16 of 16 records identical (timings aside: decision_ms, mask_ms, step_ms); {others} records" in out
     records = read_results(smoke / "results.json")
     (k,) = [k for k, r in enumerate(records) if r["policy"] == "bc-mlp-s0" and r["seed"] == 1003500001]
-    records[k] = {**records[k], "success": not records[k]["success"], "cost": records[k]["cost"] + 1.0}
+    flipped = {"success": not records[k]["success"], "delivered": records[k]["objects"]}  # a success delivers all
+    records[k] = {**records[k], **flipped, "cost": records[k]["cost"] + 1.0}
     write_results(tmp_path / "results.json", records)
     status, out, _ = run(capsys, "benchmark", "--check", tmp_path / "results.json", *argv)
     assert status == 1
