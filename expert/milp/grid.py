@@ -24,137 +24,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fetchcarry_env import regions
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Point, Rect
+from fetchcarry_env.regions import (
+    DiagonalPlane,
+    HalfPlane,
+    IndexBox,
+    Plane,
+    point_beyond_tangent,
+    point_in_side,
+    side_regions,
+)
 
-GEOM_TOL = 5e-7  # metres: this close outside an exact bound counts as inside (covers float32 observations)
 EPS_CELL = 1e-3  # cells: keeps continuous coordinates this far from a rounding tie
-
-
-@dataclass(frozen=True)
-class HalfPlane:
-    """``index <= bound`` (``upper``) or ``index >= bound`` on ``axis`` (0: x, 1: y), in lattice indices."""
-
-    axis: int
-    upper: bool
-    bound: int
-
-    def shifted(self, cells: int) -> HalfPlane:
-        """The condition on ``p`` that ``p + cells`` (along this axis) satisfies this half-plane."""
-        return HalfPlane(self.axis, self.upper, self.bound - cells)
-
-    def tighter(self, other: HalfPlane) -> HalfPlane:
-        """The intersection of two half-planes of the same axis and sense."""
-        assert (self.axis, self.upper) == (other.axis, other.upper)
-        return HalfPlane(
-            self.axis, self.upper, min(self.bound, other.bound) if self.upper else max(self.bound, other.bound)
-        )
-
-    def holds(self, index: float) -> bool:
-        return index <= self.bound if self.upper else index >= self.bound
-
-
-@dataclass(frozen=True)
-class DiagonalPlane:
-    """``su * i + sv * j >= bound`` (``su``, ``sv`` non-zero whole numbers), in lattice indices: a cut corner.
-
-    ``(1, 1)``-type planes are the octagon's 45-degree cuts; other directions (``(2, 1)``,
-    ``(1, 2)``, ...) are further tangents of the rounded corner (:func:`corner_directions`).
-    """
-
-    su: int
-    sv: int
-    bound: int
-
-    def value_range(self, box: IndexBox) -> tuple[int, int]:
-        """The least and the largest ``su * i + sv * j`` over the (non-empty) ``box``."""
-        i_lo, i_hi = sorted((self.su * box.i_lo, self.su * box.i_hi))
-        j_lo, j_hi = sorted((self.sv * box.j_lo, self.sv * box.j_hi))
-        return i_lo + j_lo, i_hi + j_hi
-
-    @property
-    def octilinear(self) -> bool:
-        """Whether the plane is one of the octagon's 45-degree cuts (``|su| = |sv| = 1``)."""
-        return abs(self.su) == 1 and abs(self.sv) == 1
-
-    def holds_at(self, i: float, j: float) -> bool:
-        return self.su * i + self.sv * j >= self.bound
-
-
-Plane = HalfPlane | DiagonalPlane
-
-
-@dataclass(frozen=True)
-class IndexBox:
-    """Lattice points ``i_lo <= i <= i_hi``, ``j_lo <= j <= j_hi`` (empty when a range is)."""
-
-    i_lo: int
-    i_hi: int
-    j_lo: int
-    j_hi: int
-
-    @property
-    def empty(self) -> bool:
-        return self.i_lo > self.i_hi or self.j_lo > self.j_hi
-
-    def lo(self, axis: int) -> int:
-        return self.i_lo if axis == 0 else self.j_lo
-
-    def hi(self, axis: int) -> int:
-        return self.i_hi if axis == 0 else self.j_hi
-
-    def intersect(self, other: IndexBox) -> IndexBox:
-        return IndexBox(
-            max(self.i_lo, other.i_lo),
-            min(self.i_hi, other.i_hi),
-            max(self.j_lo, other.j_lo),
-            min(self.j_hi, other.j_hi),
-        )
-
-    def clip(self, plane: Plane) -> IndexBox:
-        """The part of the box inside ``plane`` (for a diagonal plane: the bounding box of that part)."""
-        i_lo, i_hi, j_lo, j_hi = self.i_lo, self.i_hi, self.j_lo, self.j_hi
-        if isinstance(plane, DiagonalPlane):
-            if self.empty:
-                return self
-            # su * i >= bound - sv * j: the loosest j gives the bounding box's limit on i, and vice versa.
-            j_best = max(plane.sv * j_lo, plane.sv * j_hi)
-            i_best = max(plane.su * i_lo, plane.su * i_hi)
-            i_need, j_need = plane.bound - j_best, plane.bound - i_best  # su * i >= i_need, sv * j >= j_need
-            if plane.su > 0:
-                i_lo = max(i_lo, -(-i_need // plane.su))
-            else:
-                i_hi = min(i_hi, i_need // plane.su)
-            if plane.sv > 0:
-                j_lo = max(j_lo, -(-j_need // plane.sv))
-            else:
-                j_hi = min(j_hi, j_need // plane.sv)
-            return IndexBox(i_lo, i_hi, j_lo, j_hi)
-        if plane.axis == 0:
-            i_lo, i_hi = (i_lo, min(i_hi, plane.bound)) if plane.upper else (max(i_lo, plane.bound), i_hi)
-        else:
-            j_lo, j_hi = (j_lo, min(j_hi, plane.bound)) if plane.upper else (max(j_lo, plane.bound), j_hi)
-        return IndexBox(i_lo, i_hi, j_lo, j_hi)
-
-    def inside(self, plane: Plane) -> bool:
-        """True when the whole (non-empty) box lies in ``plane``."""
-        if isinstance(plane, DiagonalPlane):
-            return plane.value_range(self)[0] >= plane.bound
-        return plane.holds(self.hi(plane.axis)) if plane.upper else plane.holds(self.lo(plane.axis))
-
-    def meets(self, plane: Plane) -> bool:
-        """True when some point of the box lies in ``plane``."""
-        if self.empty:
-            return False
-        if isinstance(plane, DiagonalPlane):
-            return plane.value_range(self)[1] >= plane.bound
-        return self.lo(plane.axis) <= plane.bound if plane.upper else self.hi(plane.axis) >= plane.bound
-
-    def shifted(self, di: int, dj: int) -> IndexBox:
-        return IndexBox(self.i_lo + di, self.i_hi + di, self.j_lo + dj, self.j_hi + dj)
-
-    def contains(self, i: int, j: int) -> bool:
-        return self.i_lo <= i <= self.i_hi and self.j_lo <= j <= self.j_hi
 
 
 @dataclass(frozen=True)
@@ -184,14 +67,7 @@ class Grid:
         first_move_tangents: bool = False,
     ) -> Grid:
         """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
-        probe = cls(lattice, IndexBox(0, -1, 0, -1), integral)
-        inner = area.inflate(-radius)
-        domain = IndexBox(
-            max(0, probe.index_at_least(0, inner.min_x)),
-            min(lattice.shape[0] - 1, probe.index_at_most(0, inner.max_x)),
-            max(0, probe.index_at_least(1, inner.min_y)),
-            min(lattice.shape[1] - 1, probe.index_at_most(1, inner.max_y)),
-        )
+        domain = regions.area_domain(lattice, area, radius)
         return cls(lattice, domain, integral, corner_detail, first_move_tangents)
 
     @property
@@ -201,22 +77,22 @@ class Grid:
     # ------------------------------------------------------------ exact world -> index rounding
     def index_of(self, axis: int, value: float) -> float:
         """``value`` (metres) in index units along ``axis`` (not rounded)."""
-        return (value - self.lattice.origin[axis]) / self.lattice.resolution
+        return regions.index_of(self.lattice, axis, value)
 
     def index_at_most(self, axis: int, value: float) -> int:
         """The largest lattice index whose coordinate is ``<= value`` (metres)."""
-        return math.floor(self.index_of(axis, value + GEOM_TOL) + 1e-12)
+        return regions.index_at_most(self.lattice, axis, value)
 
     def index_at_least(self, axis: int, value: float) -> int:
         """The smallest lattice index whose coordinate is ``>= value`` (metres)."""
-        return math.ceil(self.index_of(axis, value - GEOM_TOL) - 1e-12)
+        return regions.index_at_least(self.lattice, axis, value)
 
     def at_most(self, axis: int, value: float) -> HalfPlane:
         """The half-plane of lattice points with coordinate ``<= value`` on ``axis``."""
-        return HalfPlane(axis, True, self.index_at_most(axis, value))
+        return regions.at_most(self.lattice, axis, value)
 
     def at_least(self, axis: int, value: float) -> HalfPlane:
-        return HalfPlane(axis, False, self.index_at_least(axis, value))
+        return regions.at_least(self.lattice, axis, value)
 
     def box_between(self, lo: Point, hi: Point) -> IndexBox:
         """Lattice points inside the world box ``[lo, hi]`` (inclusive, metres)."""
@@ -249,9 +125,7 @@ class Grid:
 
     def diagonal_at_least(self, su: int, sv: int, value: float) -> DiagonalPlane:
         """The lattice points with ``su * x + sv * y >= value`` (metres)."""
-        origin = self.lattice.origin
-        scaled = (value - su * origin[0] - sv * origin[1] - GEOM_TOL) / self.resolution
-        return DiagonalPlane(su, sv, math.ceil(scaled - 1e-12))
+        return regions.diagonal_at_least(self.lattice, su, sv, value)
 
     def plane_value_range(self, plane: DiagonalPlane) -> tuple[float, float]:
         """The least and largest ``su u + sv v`` (index units) of MILP base variables over the domain."""
@@ -268,18 +142,13 @@ class Grid:
 def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]:
     """The paper's four regions R_{j,1..4} of Fig. 2 around ``rect`` grown by ``margin``, for lattice bases.
 
-    Order: +x side (x >= max_x + margin), -x side, +y side, -y side.
+    Order: +x side (x >= max_x + margin), -x side, +y side, -y side (:func:`fetchcarry_env.regions.side_regions`).
     """
-    return (
-        grid.at_least(0, rect.max_x + margin),
-        grid.at_most(0, rect.min_x - margin),
-        grid.at_least(1, rect.max_y + margin),
-        grid.at_most(1, rect.min_y - margin),
-    )
+    return side_regions(grid.lattice, rect, margin)
 
 
 SQRT2 = math.sqrt(2.0)
-CORNERS = ((1, 1), (-1, 1), (-1, -1), (1, -1))  # outward signs of the corners: NE, NW, SW, SE
+CORNERS = regions.CORNERS  # outward signs of the corners: NE, NW, SW, SE
 MAX_CORNER_DETAIL = 6  # the largest corner_detail accepted (11 tangents a corner at 4; 6 gives 23)
 
 
@@ -308,13 +177,6 @@ def rect_normals(grid: Grid, rect: Rect) -> tuple[tuple[int, int], ...]:
     return regular + tuple(n for n in extra if n not in regular)
 
 
-def _tangent_value(rect: Rect, radius: float, a: int, b: int) -> float:
-    """``a cx + b cy + radius |(a, b)|`` at the corner ``(cx, cy)`` the normal points from (metres)."""
-    cx = rect.max_x if a > 0 else rect.min_x
-    cy = rect.max_y if b > 0 else rect.min_y
-    return a * cx + b * cy + radius * math.hypot(a, b)
-
-
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
     """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
 
@@ -324,11 +186,13 @@ def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
     ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
     the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
     cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
-    outside it is ``radius`` or more from ``rect``) and touches it on every side.
+    outside it is ``radius`` or more from ``rect``) and touches it on every side. With the
+    default ``corner_detail`` and no extra normals these are exactly the env's regions,
+    :func:`fetchcarry_env.regions.octagon_regions`.
     """
     out: list[Plane] = list(base_regions(grid, rect, radius))
     for a, b in rect_normals(grid, rect):
-        out.append(grid.diagonal_at_least(a, b, _tangent_value(rect, radius, a, b)))
+        out.append(regions.corner_cut(grid.lattice, rect, radius, a, b))
     return tuple(out)
 
 
@@ -405,20 +269,12 @@ def pose_normals(grid: Grid, points: Iterable[Point], rect: Rect, radius: float)
 def point_in_move_region(grid: Grid, point: Point, rect: Rect, radius: float, region: int) -> bool:
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
     if region < 4:
-        return point_in_region(point, rect, radius, region)
+        return point_in_side(point, rect, radius, region)
     a, b = rect_normals(grid, rect)[region - 4]
-    return a * point[0] + b * point[1] >= _tangent_value(rect, radius, a, b) - GEOM_TOL
+    return point_beyond_tangent(point, rect, radius, a, b)
 
 
-def point_in_region(point: Point, rect: Rect, margin: float, region: int) -> bool:
-    """Exact test of an off-lattice point against region ``region`` (same order as :func:`base_regions`)."""
-    x, y = point
-    return (
-        x >= rect.max_x + margin - GEOM_TOL,
-        x <= rect.min_x - margin + GEOM_TOL,
-        y >= rect.max_y + margin - GEOM_TOL,
-        y <= rect.min_y - margin + GEOM_TOL,
-    )[region]
+point_in_region = point_in_side  # exact test of an off-lattice point against a region of base_regions (same order)
 
 
 # ---------------------------------------------------------------------- splitting boxes

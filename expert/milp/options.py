@@ -32,10 +32,11 @@ import math
 from dataclasses import dataclass
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import GEOM_TOL, Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
+from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance, to_world_frame
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
+from fetchcarry_env.regions import GEOM_TOL, hand_in_side
 from fetchcarry_env.scenario import Posture, Scenario
 
 
@@ -75,7 +76,6 @@ class ObjectAt:
     where: str
 
 
-HAND_TOL = 5e-7  # metres: a hand point this close to a region counts as inside (float32 observations)
 CONFUSION_MARGIN = 2e-3  # metres: another item confuses an action when it is in reach within the env's 1 mm
 # tolerance plus this, and at most this much farther from the middle of the ranges (float32 observations)
 
@@ -94,11 +94,12 @@ def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[i
     """Base half-planes in which the arm stays clear of ``rect`` (Eq. 19's common region).
 
     The base (at both ends of a stroke of ``cells``) and every hand point must lie in one
-    region of ``rect``; only regions that hold every hand point are possible.
+    region of ``rect``; only regions that hold every hand point are possible. The env's
+    arm rule is the same test (:func:`fetchcarry_env.rules.arm_refusal`).
     """
     out = []
     for region, plane in enumerate(base_regions(grid, rect, 0.0)):
-        if all(_hand_in(rect, hand, region) for hand in hands):
+        if all(hand_in_side(rect, hand, region) for hand in hands):
             out.append(_with_stroke(plane, cells))
     return tuple(out)
 
@@ -111,16 +112,6 @@ def _near(grid: Grid, box: IndexBox, cells: tuple[int, int], rect: Rect, radius:
         if lo[0] <= grown.max_x and hi[0] >= grown.min_x and lo[1] <= grown.max_y and hi[1] >= grown.min_y:
             return True
     return False
-
-
-def _hand_in(rect: Rect, hand: Point, region: int) -> bool:
-    x, y = hand
-    return (
-        x >= rect.max_x - HAND_TOL,
-        x <= rect.min_x + HAND_TOL,
-        y >= rect.max_y - HAND_TOL,
-        y <= rect.min_y + HAND_TOL,
-    )[region]
 
 
 def _with_stroke(plane: HalfPlane, cells: tuple[int, int]) -> HalfPlane:
