@@ -5,6 +5,13 @@
   JSON, and an ``OSError`` on a file (named in the message: a missing or read-only
   file, a full disk). Nothing else: a ``ValueError`` that is not an ``InputError`` is a bug.
 - 130, Ctrl-C: ``KeyboardInterrupt`` wherever it arrives.
+- 143 (128 + SIGTERM, the status a shell reports for ``kill``), SIGTERM: while a command
+  runs, the first SIGTERM raises :class:`Terminated`, a ``KeyboardInterrupt``, where it
+  lands, so a command stops as on Ctrl-C (what finished is kept, a worker pool is stopped
+  and joined, a short message); later SIGTERMs are ignored while it cleans up (SIGKILL
+  still stops it at once). A SIGTERM that lands in a SCIP solve of this process takes
+  effect when the solve returns (its time limit bounds it): SCIP holds the interpreter
+  until then. Pool workers ignore both signals: their parent stops them.
 - 3, an unexpected internal error: one line naming the error and the path of a full
   report (the traceback) written under the temporary folder; when the report cannot be
   written (no temporary folder, a file in the report folder's place), a line says so and
@@ -17,13 +24,17 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import os
+import signal
 import sys
 import tempfile
+import threading
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 from fetchcarry_env.errors import InputError
@@ -32,21 +43,68 @@ from training.cli.text import printable
 BAD_INPUT = 2
 INTERNAL_ERROR = 3
 INTERRUPTED = 130
+TERMINATED = 143  # 128 + SIGTERM, what a shell reports for a process stopped by ``kill``
 BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a tool whose reader went away
 REPORT_FOLDER = "fetchcarry-crash-reports"  # under the system's temporary folder
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where it lands: every ``except KeyboardInterrupt`` that keeps finished work runs for it too."""
+
+
+@dataclass
+class Termination:
+    """Whether a SIGTERM arrived while :func:`sigterm_as_interrupt` was in force."""
+
+    received: bool = False
+
+
+@contextlib.contextmanager
+def sigterm_as_interrupt() -> Iterator[Termination]:
+    """Within the block, the first SIGTERM raises :class:`Terminated` in the main thread; later ones are ignored.
+
+    The handler of before comes back at the end. Outside the main thread, where Python
+    cannot set a signal handler, SIGTERM keeps its handler.
+    """
+    termination = Termination()
+
+    def stop(signum: int, frame: object) -> None:
+        if termination.received:
+            return  # already stopping: let the clean-up finish
+        termination.received = True
+        raise Terminated
+
+    if threading.current_thread() is not threading.main_thread():
+        yield termination
+        return
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        yield termination
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def run_command(handler: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
+    """``handler(args)``'s exit status, or the status of the exception it raised (and a message on stderr).
+
+    A command stopped by SIGTERM ends with :data:`TERMINATED` (:func:`sigterm_as_interrupt`).
+    """
+    with sigterm_as_interrupt() as termination:
+        status = _run_handler(handler, args)
+    return TERMINATED if termination.received and status == INTERRUPTED else status
+
+
+def _run_handler(handler: Callable[[argparse.Namespace], int | None], args: argparse.Namespace) -> int:
     """``handler(args)``'s exit status, or the status of the exception it raised (and a message on stderr)."""
     try:
         status = int(handler(args) or 0)
         sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's last flush
         return status
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as interrupt:
         # Objects whose construction Ctrl-C cut short (a PyBullet client half connected) complain from
         # their finalizers as the program winds down: that is noise after an interrupt, not a report.
         sys.unraisablehook = ignore_unraisable
-        say("interrupted")
+        say("terminated" if isinstance(interrupt, Terminated) else "interrupted")
         return INTERRUPTED
     except BrokenPipeError:
         return quiet_broken_pipe()

@@ -294,13 +294,17 @@ def _run_pool(
 
 
 def worker_setup(parent: int) -> None:
-    """Initialise a pool worker: it ignores Ctrl-C (its parent stops it) and dies with its parent.
+    """Initialise a pool worker: it ignores Ctrl-C and SIGTERM (its parent stops it) and dies with its parent.
 
-    On Linux the kernel kills the worker when the parent dies, however it dies
-    (``PR_SET_PDEATHSIG``); elsewhere, and as a second guard, a daemon thread checks
-    every :data:`PARENT_CHECK_S` seconds that the parent is still there.
+    Ctrl-C and a service manager's stop signal every process of the group: the parent
+    keeps what finished and kills its workers (:func:`_terminate_workers`), so a worker
+    that died first would only break the pool under it. On Linux the kernel kills the
+    worker when the parent dies, however it dies (``PR_SET_PDEATHSIG``); elsewhere, and as
+    a second guard, a daemon thread checks every :data:`PARENT_CHECK_S` seconds that the
+    parent is still there.
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     if sys.platform.startswith("linux"):
         try:
             libc = ctypes.CDLL(None, use_errno=True)
@@ -319,13 +323,22 @@ def _watch_parent(parent: int) -> None:
 
 
 def _terminate_workers(pool: ProcessPoolExecutor) -> None:
-    """Kill the pool's worker processes now (the executor has no public way to stop running calls)."""
+    """Kill the pool's worker processes now (the executor has no public way to stop running calls).
+
+    A worker killed in the middle of sending its result leaves the pool's manager thread
+    waiting for the rest of the message, and the interpreter's exit, which joins that
+    thread, with it. This process's own copy of the result pipe's writing end is closed
+    once the workers are gone, so that the wait ends (end of file: the pool is broken).
+    """
     processes = dict(getattr(pool, "_processes", None) or {})
     for process in processes.values():
         if process.is_alive():
             process.kill()
     for process in processes.values():
         process.join(timeout=1.0)
+    results = getattr(pool, "_result_queue", None)
+    if results is not None:  # a worker still alive keeps its own copy: its result, if any, still arrives
+        results._writer.close()
 
 
 def _run_ray(
