@@ -349,9 +349,16 @@ def test_the_limits_themselves_are_fine(spec_example_dict):
     assert (len(scenario.obstacles), len(scenario.clutter)) == (1024, 256)
 
 
-def test_a_30_mb_file_is_refused_fast(tmp_path, spec_example_dict):
-    """300,000 obstacles (30 MB): refused by their count, in well under the minute it once took."""
-    import time
+def test_a_30_mb_file_is_refused_by_its_count_before_it_is_parsed(tmp_path, spec_example_dict, monkeypatch):
+    """300,000 obstacles (30 MB): refused by their count; parsing and checking them once took a minute.
+
+    What makes the refusal fast is that no obstacle is parsed: asserted here, not a time (which a
+    loaded machine stretches); ``python tests/fuzz/campaign.py --timings`` prints the time.
+    """
+    import fetchcarry_env.scenario as scenario_module
+
+    def parsed(*args, **kwargs):
+        raise AssertionError("the scenario was parsed")
 
     spec_example_dict["obstacles"] = [
         {"id": f"box_{i}", "min": [1.0 + i * 1e-6, 1.0], "max": [1.5, 1.5]} for i in range(300_000)
@@ -359,12 +366,10 @@ def test_a_30_mb_file_is_refused_fast(tmp_path, spec_example_dict):
     path = tmp_path / "big.json"
     path.write_text(json.dumps(spec_example_dict, indent=1))
     assert path.stat().st_size > 30e6
-    started = time.perf_counter()
+    monkeypatch.setattr(scenario_module._Parser, "parse", parsed)
     with pytest.raises(ScenarioError) as info:
         Scenario.load(path)
-    elapsed = time.perf_counter() - started
     assert info.value.violations == ["rule 6 (numbers): 300,000 obstacles, more than the 1,024 a scenario may hold"]
-    assert elapsed < 10, elapsed  # about 0.5 s alone; generous for a loaded machine
 
 
 def test_a_file_beyond_the_size_limit_is_not_read(tmp_path, monkeypatch):

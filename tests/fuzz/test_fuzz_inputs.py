@@ -24,7 +24,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from cli_run import run
+from cli_run import SAFETY_TIMEOUT_S, run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mutations import file_bytes, mutated, nudged, to_json_text, write_mutated
@@ -256,7 +256,11 @@ def test_hostile_scenario_files_through_the_installed_command(tmp_path, command)
             [str(PLAN_FILE)] if command == "validate" else ["-o", str(tmp_path / "x.json")]
         )
         done = subprocess.run(
-            [sys.executable, "-m", "training.cli", *argv], capture_output=True, cwd=ROOT, timeout=60, check=False
+            [sys.executable, "-m", "training.cli", *argv],
+            capture_output=True,
+            cwd=ROOT,
+            timeout=SAFETY_TIMEOUT_S,
+            check=False,
         )
         err = done.stderr.decode("utf-8", errors="replace")
         assert done.returncode == 2, (name, done.returncode, err)

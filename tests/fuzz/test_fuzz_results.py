@@ -20,10 +20,10 @@ import json
 import os
 import shutil
 import tempfile
-from datetime import timedelta
 from pathlib import Path
 
 import pytest
+from cli_run import SAFETY_TIMEOUT_S
 from hang import hang_guard
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -42,8 +42,8 @@ from training.evaluation.results import (
 )
 from training.evaluation.runner import run_benchmark
 
-HANG_SECONDS = 60  # an example still running after this is a hang (a resumed run may plan one episode)
-DEADLINE = timedelta(seconds=30)
+HANG_SECONDS = SAFETY_TIMEOUT_S  # an example still running after this is a hang (a resumed run may plan one)
+DEADLINE = None  # no per-example time bound: a loaded machine would break it; HANG_SECONDS stops a hang
 BENCHMARK = {"policies": ["random"], "split": "iid", "episodes": 2}
 
 

@@ -8,7 +8,7 @@ wrong tensors, NaN, another dtype), or either file swapped for a FIFO, a device,
 folder or a link. ``training.load_policy`` then returns a policy that acts (one
 decision on a zero observation) or raises :class:`RunFolderError` naming the folder,
 never another exception, never advice to turn ``weights_only`` off, and never hangs:
-every example runs under an alarm (:data:`HANG_SECONDS`) and hypothesis's deadline.
+every example runs under an alarm (:data:`HANG_SECONDS`), a safety timeout, not a speed bound.
 """
 
 from __future__ import annotations
@@ -20,12 +20,12 @@ import pickle
 import shutil
 import tempfile
 from dataclasses import replace
-from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from cli_run import SAFETY_TIMEOUT_S
 from hang import hang_guard
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -38,8 +38,8 @@ from training.learners import runs
 from training.learners.bc import BCConfig, record_demonstrations, train_bc
 from training.learners.ensemble import make_ensemble
 
-HANG_SECONDS = 30  # an example still running after this is a hang: it fails instead of blocking the suite
-DEADLINE = timedelta(seconds=10)  # hypothesis's per-example deadline (a load takes some 0.1 s)
+HANG_SECONDS = SAFETY_TIMEOUT_S  # an example still running after this is a hang: it fails instead of blocking
+DEADLINE = None  # no per-example time bound: a loaded machine would break it (a load takes some 0.1 s alone)
 KINDS = ("mlp", "set", "ensemble")
 
 

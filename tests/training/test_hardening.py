@@ -1,7 +1,8 @@
 """Hardening (issue 8, sections 1-3): no code from a data file, exit statuses, datasets never corrupted.
 
 Every test here reproduces one attack or fault of the issue through the command line
-(in-process through ``training.cli.main``, or a subprocess where signals are involved).
+(in-process through ``training.cli.main``, or a subprocess where signals are involved). A subprocess test
+waits for a state, never for a number of seconds (``cli_run.SAFETY_TIMEOUT_S`` only stops a hang).
 """
 
 from __future__ import annotations
@@ -12,12 +13,11 @@ import shutil as shutil_module
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_run import run
+from cli_run import ROOT, SAFETY_TIMEOUT_S, cli_process, finish, run, signal_while_frozen, wait_for
 from gymnasium.envs.registration import EnvSpec
 
 import expert.planner
@@ -90,16 +90,7 @@ def test_replay_of_an_untouched_dataset_still_works(capsys, dataset: str) -> Non
 
 
 # ---------------------------------------------------------------------------- 2. interrupts and exit statuses
-ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "push_basic.json"
-
-
-def cli_process(*argv: str, minari_root: Path, **options) -> subprocess.Popen:
-    """``python -m training.cli argv...`` in a subprocess of this worktree, its datasets under ``minari_root``."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)}
-    return subprocess.Popen(
-        [sys.executable, "-m", "training.cli", *argv], env=env, cwd=options.pop("cwd", ROOT), text=True, **options
-    )
 
 
 def interrupted_solve(*args, **kwargs):
@@ -142,46 +133,50 @@ def test_ctrl_c_during_a_rollout_exits_130(capsys, monkeypatch) -> None:
 
 
 @pytest.mark.parametrize(("family", "policy"), [("basic", "random"), ("multi", "expert")])
-def test_sigint_stops_generate_within_a_second(tmp_path: Path, family: str, policy: str) -> None:
-    """A real SIGINT to a running ``generate``; with the expert it mostly lands in a SCIP solve."""
+def test_sigint_stops_generate_at_the_episode_in_flight(minari_root: Path, family: str, policy: str) -> None:
+    """A real SIGINT to a running ``generate``; with the expert it mostly lands in a SCIP solve.
+
+    Before the fix a solve swallowed it and the run went on: here it would never end (the
+    safety timeout fails it), or stage more episodes than the one in flight.
+    """
     process = cli_process(
         "generate", "--family", family, "--policy", policy, "--episodes", "100000", "--dataset-id", DATASET_ID,
-        minari_root=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        minari_root=minari_root, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
     )  # fmt: skip
-    staging = tmp_path / ".staging" / DATASET_ID
-    deadline = time.monotonic() + 60
-    while not list(staging.glob("episode_*.npz")) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    sent = time.monotonic()
-    process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=30)
-    stopped = time.monotonic() - sent
-    assert process.returncode == 130 and "Traceback" not in err and "run the same command again" in err
-    # Not ignored (before the fix a solve swallowed it and the run went on): a generous bound, so that a loaded
-    # machine cannot fail it. The measured times (0.1-0.5 s) come from tests/training/reliability_trials.py.
-    assert stopped < 10.0
+    staging = Staging(DATASET_ID)
+    wait_for(staging.staged, "a staged episode", process)
+    at_signal = len(signal_while_frozen(process, signal.SIGINT, staging.staged))
+    status, _, err = finish(process)
+    assert status == 130 and "Traceback" not in err and "run the same command again" in err
+    assert at_signal <= len(staging.staged()) <= at_signal + 1  # one worker: at most its episode in flight
 
 
-def test_an_interrupted_then_resumed_dataset_equals_an_uninterrupted_one(tmp_path: Path, minari_root: Path) -> None:
-    """SIGINT in the middle of expert episodes, then a resume: every episode is the one an uninterrupted run makes."""
+def test_an_interrupted_then_resumed_dataset_equals_an_uninterrupted_one(capsys, minari_root: Path) -> None:
+    """SIGINT in the middle of expert episodes, then a resume: every episode is the one an uninterrupted run makes.
+
+    The interrupted run asks for more episodes than it can make before the signal, so the
+    signal always lands in the run; the resume and the uninterrupted run make two more.
+    """
     import h5py
 
-    argv = ["generate", "--family", "multi", "--seed", "11", "--episodes", "6", "--no-progress"]
-    process = cli_process(*argv, "--dataset-id", DATASET_ID, minari_root=minari_root,
-                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
-    staging = minari_root / ".staging" / DATASET_ID
-    deadline = time.monotonic() + 60
-    while not list(staging.glob("episode_*.npz")) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    process.send_signal(signal.SIGINT)
-    assert process.wait(timeout=30) == 130
-    assert 1 <= len(list(staging.glob("episode_*.npz"))) < 6
-    for dataset_id in (DATASET_ID, "fetchcarry/whole-v0"):  # resume the first; make the second in one go
-        assert cli_process(*argv, "--dataset-id", dataset_id, minari_root=minari_root,
-                           stdout=subprocess.DEVNULL).wait(timeout=300) == 0  # fmt: skip
+    argv = ["generate", "--family", "multi", "--seed", "11", "--no-progress"]
+    process = cli_process(*argv, "--episodes", "100000", "--dataset-id", DATASET_ID, minari_root=minari_root,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)  # fmt: skip
+    staging = Staging(DATASET_ID)
+    wait_for(staging.staged, "a staged episode", process)
+    signal_while_frozen(process, signal.SIGINT, staging.staged)
+    status, _, err = finish(process)
+    assert status == 130, err
+    staged = len(staging.staged())
+    assert staging.staged() == set(range(staged))  # one worker: the first episodes, in order
+    episodes = staged + 2
+    status, out, err = run(capsys, *argv, "--episodes", episodes, "--dataset-id", DATASET_ID)  # the resume
+    assert status == 0 and f"{staged} resumed, 2 generated" in out, err
+    status, _, err = run(capsys, *argv, "--episodes", episodes, "--dataset-id", "fetchcarry/whole-v0")  # in one go
+    assert status == 0, err
     files = [h5py.File(dataset_path(d) / "data" / "main_data.hdf5") for d in (DATASET_ID, "fetchcarry/whole-v0")]
     try:
-        for k in range(6):
+        for k in range(episodes):
             resumed, whole = (f[f"episode_{k}"] for f in files)
             assert np.array_equal(resumed["actions"][()], whole["actions"][()]), k
             assert np.array_equal(resumed["infos"]["objective"][()], whole["infos"]["objective"][()], equal_nan=True)
@@ -206,31 +201,29 @@ def test_a_closed_pipe_ends_quietly(tmp_path: Path) -> None:
                           stderr=subprocess.PIPE)  # fmt: skip
     process.stdout.close()  # the reader (| head) went away before anything was written
     err = process.stderr.read()
-    process.wait(timeout=60)
+    process.wait(timeout=SAFETY_TIMEOUT_S)
     assert "Traceback" not in err and "BrokenPipeError" not in err and "Exception ignored" not in err
     assert process.returncode == 141
 
 
 def test_workers_die_with_their_parent(tmp_path: Path) -> None:
-    """SIGKILL of ``generate --workers 2``: both workers and the resource tracker are gone soon after."""
+    """SIGKILL of ``generate --workers 2``: both workers and the resource tracker end with it."""
     psutil = pytest.importorskip("psutil")
     process = cli_process(
         "generate", "--family", "push", "--episodes", "100000", "--workers", "2", "--dataset-id", DATASET_ID,
         "--no-progress", minari_root=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
     )  # fmt: skip
     parent = psutil.Process(process.pid)
-    deadline = time.monotonic() + 60
-    children: list = []
-    while time.monotonic() < deadline:
+
+    def workers_and_tracker() -> list:
         children = parent.children(recursive=True)
-        if len([c for c in children if "resource_tracker" not in " ".join(c.cmdline())]) >= 2:
-            break
-        time.sleep(0.1)
-    assert len(children) >= 2
+        workers = [c for c in children if "resource_tracker" not in " ".join(c.cmdline())]
+        return children if len(workers) >= 2 else []
+
+    children = wait_for(workers_and_tracker, "two workers", process)
     process.kill()
     process.wait()
-    _, alive = psutil.wait_procs(children, timeout=15)  # a loaded 2-core machine may take a while
-    assert [c for c in alive if _running(c, psutil)] == []
+    wait_for(lambda: not [c for c in children if _running(c, psutil)], "the end of every child")
 
 
 def _running(process, psutil) -> bool:
@@ -255,7 +248,7 @@ def test_a_second_run_on_a_locked_dataset_id_exits_2_naming_the_holder(capsys) -
 def test_a_lock_held_by_another_process_refuses_a_run(capsys, tmp_path: Path, minari_root: Path) -> None:
     holder = subprocess.Popen(
         [sys.executable, "-c", "import sys, time; from training.data.staging import DatasetLock\n"
-         f"with DatasetLock({DATASET_ID!r}):\n    print('held', flush=True); time.sleep(60)"],
+         f"with DatasetLock({DATASET_ID!r}):\n    print('held', flush=True); time.sleep({SAFETY_TIMEOUT_S})"],
         env={**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)},
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
@@ -491,13 +484,13 @@ class Hung(Exception):
 
 @pytest.fixture
 def no_hang():
-    """Fail a test whose command blocks for more than 30 s, instead of hanging the suite."""
+    """Fail a test whose command still blocks after the safety timeout (a hang), instead of hanging the suite."""
 
     def hung(signum, frame):
         raise Hung
 
     previous = signal.signal(signal.SIGALRM, hung)
-    signal.alarm(30)
+    signal.alarm(SAFETY_TIMEOUT_S)
     yield
     signal.alarm(0)
     signal.signal(signal.SIGALRM, previous)
