@@ -6,9 +6,9 @@ phases, and proving that 7 to 11 admit no plan took SCIP up to 100 s). The decou
 fallback plan (:func:`expert.decoupled.fallback_plan`) therefore makes the long legs
 here: a search over the free lattice points (8-connected, every ``STRIDE``-th point, the
 base kept ``MARGIN`` beyond its radius from tables, obstacles and the area's edge), cut
-into straight moves that the env executes without a contact
-(:func:`fetchcarry_env.rules.move_stop`), and a pick at the reachable lattice pose
-nearest along that search that the env accepts (:func:`fetchcarry_env.rules.check_action`).
+into straight moves that the env accepts (its move rule, :func:`fetchcarry_env.rules.move_refusal`),
+and a pick at the reachable lattice pose nearest along that search that the env accepts
+(:func:`fetchcarry_env.rules.check_action`).
 The MILP then plans only what is left near the goal (pushes and the place).
 
 Every move keeps the heading. Units are metres.
@@ -28,7 +28,7 @@ from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Point, first_contact, to_world_frame
 from fetchcarry_env.kinematics import hand_offset
 from fetchcarry_env.observation import WorldState
-from fetchcarry_env.rules import base_blockers, check_action, move_stop
+from fetchcarry_env.rules import base_blockers, check_action, move_refusal
 from fetchcarry_env.scenario import Scenario
 
 STRIDE = 2  # lattice points between the searched points (0.1 m on the env's 5 cm lattice)
@@ -59,13 +59,15 @@ class FreeLattice:
         return self.lattice.point(cell[0] * STRIDE, cell[1] * STRIDE)
 
     def clear(self, a: Point, b: Point, exact: bool = False) -> bool:
-        """True when the base slides from ``a`` to ``b`` keeping half of ``MARGIN`` beyond its radius.
+        """True when the env allows the move from ``a`` to ``b`` and it keeps half of ``MARGIN`` beyond the radius.
 
-        ``exact``: by the env's own contact rule instead (for a slide from a base that
-        stands closer than that to a table, as at a pick).
+        ``exact``: by the env's own move rule alone (for a slide from a base that stands
+        closer than that to a table, as at a pick).
         """
+        if move_refusal(self.scenario, self.lattice, a, b) is not None:
+            return False
         if exact:
-            return move_stop(self.scenario, a, b)[1] is None
+            return True
         radius = self.scenario.robot.radius + MARGIN / 2
         lo_x, hi_x = min(a[0], b[0]) - radius, max(a[0], b[0]) + radius
         lo_y, hi_y = min(a[1], b[1]) - radius, max(a[1], b[1]) + radius
@@ -210,8 +212,7 @@ def _pick_at(scenario, world, lattice, before: Point | None, pose: Point, target
 
     ``before`` None: the pick alone, whatever the slide to ``pose``.
     """
-    if before is not None and move_stop(scenario, before, pose)[1] is not None:
-        return None
+    world = dataclasses.replace(world, base=pose if before is None else before)  # the env's rules: the move from there
     cell = lattice.index(pose)
     for heading in HEADINGS:
         for k, posture in enumerate(scenario.robot.postures):
@@ -239,9 +240,10 @@ def shortcut(scenario: Scenario, phases: Sequence[Phase]) -> tuple[Phase, ...]:
 
     A move followed by a move, a pick or a place (whose arm acts from the phase's own
     base) is dropped when the straight slide from the phase before it to the next one's
-    base stays ``SHORTCUT_MARGIN`` clear of every blocker; a move before a push is kept
-    (the push starts where that move ends). Nothing else changes: moves move no item
-    but the held object, which goes with the base.
+    base stays ``SHORTCUT_MARGIN`` clear of every blocker and the env's move rule allows it
+    (tested in metres, :func:`fetchcarry_env.rules.move_refusal` without a lattice); a
+    move before a push is kept (the push starts where that move ends). Nothing else
+    changes: moves move no item but the held object, which goes with the base.
     """
     blockers = [rect for _, rect in base_blockers(scenario)]
     radius = scenario.robot.radius + SHORTCUT_MARGIN
@@ -250,7 +252,11 @@ def shortcut(scenario: Scenario, phases: Sequence[Phase]) -> tuple[Phase, ...]:
     while k < len(out) - 1:
         here, after = out[k], out[k + 1]
         droppable = here.action == "move" and after.action in ("move", "pick", "place")
-        if droppable and first_contact(out[k - 1].base, after.base, radius, blockers) >= 1.0:
+        if (
+            droppable
+            and first_contact(out[k - 1].base, after.base, radius, blockers) >= 1.0
+            and move_refusal(scenario, None, out[k - 1].base, after.base) is None
+        ):
             del out[k]
             continue
         k += 1

@@ -16,7 +16,7 @@ from expert.plans import Phase
 from expert.tracking import PlannedAction
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.observation import WorldState
-from fetchcarry_env.rules import move_stop
+from fetchcarry_env.rules import move_refusal
 from fetchcarry_env.scenario import Scenario
 
 ESCAPE_RADIUS_CELLS = 4  # lattice cells: how far an escape from a corner gap may go
@@ -32,13 +32,13 @@ def corner_gap(scenario: Scenario, world: WorldState) -> str | None:
 
 
 def escape_move(scenario: Scenario, world: WorldState, lattice: Lattice) -> PlannedAction | None:
-    """A move to the nearest lattice point outside every grown square, reached without a contact, or None."""
+    """A move to the nearest lattice point outside every grown square that the env's move rule allows, or None."""
     for cell in cells_around(lattice, lattice.index(world.base), ESCAPE_RADIUS_CELLS):
         base = lattice.point(*cell)
         if (
             scenario.area.contains_disc(base, scenario.robot.radius)
             and corner_gap(scenario, replace(world, base=base)) is None
-            and move_stop(scenario, world.base, base)[1] is None
+            and move_refusal(scenario, lattice, world.base, base) is None
         ):
             objects = {k: v[:2] for k, v in world.objects.items()}
             expected = Phase(base, world.heading, "move", holding=world.holding, objects=objects)

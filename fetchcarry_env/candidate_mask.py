@@ -1,25 +1,27 @@
 """The candidate mask as array operations: :mod:`fetchcarry_env.phases`' rules over all candidates at once.
 
 :class:`FastPhases` answers what :func:`fetchcarry_env.phases.enumerate_phases` answers
-(the reference: one candidate at a time through :func:`fetchcarry_env.rules.check_action`
-and :func:`fetchcarry_env.rules.move_stop`), decision for decision, in a few array
-operations per kind:
+(the reference: one candidate at a time through :func:`fetchcarry_env.rules.check_action`),
+decision for decision, in a few array operations per kind:
 
-* the reach tests (which posture puts the hand over the target from each pose), the
-  arm-line tests (Eq. 19, Liang-Barsky clipping) and the base's swept-disc tests
-  (``first_contact``'s Minkowski sum: two grown rectangles and four rounded corners)
-  are the scalar formulas applied to arrays, operation for operation, so that every
-  comparison sees the same floating-point numbers as the scalar code;
-* the one test whose numpy and Python forms may differ in the last bit (a hypot against
-  a threshold) is redone with :func:`math.hypot` wherever the two are within 1e-12 m of
-  the threshold, and a candidate whose choice of item is not obvious (two objects or
-  two pieces of clutter within reach of one pose) is decided by ``check_action`` itself;
+* the reach tests (which posture puts the hand over the target from each pose) are the
+  scalar formulas applied to arrays, operation for operation, so that every comparison
+  sees the same floating-point numbers as the scalar code;
+* the move, pose and arm rules (:func:`fetchcarry_env.rules.move_refusal`,
+  :func:`~fetchcarry_env.rules.pose_refusal`, :func:`~fetchcarry_env.rules.arm_refusal`)
+  test lattice points against the regions' exact integer rows
+  (:mod:`fetchcarry_env.regions`) as bit sets: which regions of each table's and
+  obstacle's octagon hold a lattice point is computed once per scenario, for every
+  lattice point; points off the lattice (the start, a base after a jammed push) and hand
+  points are tested by the scalar functions' own comparisons;
+* a candidate whose choice of item is not obvious (two objects or two pieces of clutter
+  within reach of one pose) is decided by ``check_action`` itself;
 * what depends on the scenario alone is cached once per scenario (which lattice points
-  the base disc fits in the area at, where it may stand without a contact, the
-  blockers as arrays, the waypoint cells), and what depends on the movable items
-  (pick, place and approach candidates before the base's move) is cached per state of
-  the items: a move changes only the base, so a step after a move recomputes only the
-  swept-disc tests from the new base, the pushes and the edge moves.
+  the base disc fits in the area at, the octagons' regions at every lattice point, the
+  waypoint cells), and what depends on the movable items (pick, place and approach
+  candidates before the base's move) is cached per state of the items: a move changes
+  only the base, so a step after a move recomputes only the move rule from the new
+  base, the pushes and the edge moves.
 
 Units: metres for points, lattice cells for indices.
 """
@@ -33,212 +35,41 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fetchcarry_env.actions import Action, Lattice, Mode
-from fetchcarry_env.geometry import EPS, HEADINGS, Rect, heading_vector, to_world_frame
+from fetchcarry_env.geometry import EPS, HEADINGS, Point, Rect, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import hand_blocker, push_contact, push_headings
 from fetchcarry_env.observation import WorldState
-from fetchcarry_env.phases import CORNERS, STILL, PhaseLayout, PhaseTable, inside_lattice
-from fetchcarry_env.rules import CONTACT_SLACK, base_blockers, check_action, clutter_rect, move_stop
+from fetchcarry_env.phases import CORNERS, STILL, PhaseLayout, PhaseTable, side_line, waypoint_cell
+from fetchcarry_env.regions import (
+    ALL_SIDES,
+    REGIONS,
+    SIDES,
+    area_domain,
+    cells_bits,
+    grid_bits,
+    hands_bits,
+    lattice_cell,
+    octagon_bits,
+    octagon_rows,
+    side_bits,
+    side_rows,
+)
+from fetchcarry_env.rules import check_action, clutter_rect, in_area, move_blockers
 from fetchcarry_env.scenario import DeliveryObject, Scenario
 
-ArrayLike = np.ndarray | float  # metres: an array, or one number broadcast against the others
 REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance (the rules use the default)
-ARM_TOL = 1e-6  # metres: arm_line_clear's tolerance
-GUARD = 1e-12  # metres: a hypot this close to its threshold is redone with math.hypot
 UNIT = np.array([heading_vector(h) for h in HEADINGS], dtype=np.int64)  # (4, 2): heading index -> unit vector
 _FIELDS = ("index", "ci", "cj", "heading", "posture")  # an _Offers' arrays
 PUSH_HEADING = np.array([[HEADINGS.index(h) for h in push_headings(d)] for d in HEADINGS], dtype=np.int64)  # (4, 3)
 
 
-# ---------------------------------------------------------------------- vectorised geometry
-def _clip(
-    px: ArrayLike, py: ArrayLike, dx: ArrayLike, dy: ArrayLike, rect: tuple
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Liang-Barsky over arrays (geometry._clip): ``(valid, t0, t1)`` of ``p + t (dx, dy)`` in ``rect``.
-
-    ``rect`` is ``(min_x, min_y, max_x, max_y)``, each an array or a number (metres). The
-    scalar loop's four constraints, taken per axis: a constraint whose denominator is
-    negative raises ``t0``, a positive one lowers ``t1``, a zero one (within 1e-15) only
-    asks that the point be on its side; max and min do not care in which order.
-    """
-    x0, y0, x1, y1 = rect
-    t0, t1, bad = 0.0, 1.0, False
-    for d, low, high in ((dx, px - x0, x1 - px), (dy, py - y0, y1 - py)):
-        zero = np.abs(d) <= 1e-15
-        bad = bad | (zero & ((low < 0) | (high < 0)))
-        safe = np.where(zero, 1.0, d)
-        t_low, t_high = low / -safe, high / safe  # the constraints (-d, low) and (d, high)
-        rising = d > 0
-        t0 = np.where(zero, t0, np.maximum(t0, np.where(rising, t_low, t_high)))
-        t1 = np.where(zero, t1, np.minimum(t1, np.where(rising, t_high, t_low)))
-    return ~bad & (t0 <= t1), t0, t1
-
-
-def _hypot_below(dx: np.ndarray, dy: np.ndarray, limit: np.ndarray) -> np.ndarray:
-    """``hypot(dx, dy) < limit`` elementwise, exactly as :func:`math.hypot` decides it (1-D arrays, metres)."""
-    value = np.hypot(dx, dy)
-    out = value < limit
-    for i in np.flatnonzero(np.abs(value - limit) <= GUARD):
-        out[i] = math.hypot(float(dx[i]), float(dy[i])) < float(limit[i])
-    return out
-
-
-def sweep_table(blockers: np.ndarray, radius: float) -> np.ndarray:
-    """``(22, 2 M)``: what the swept-disc test needs of each blocker, for ``radius - CONTACT_SLACK`` then ``radius``.
-
-    Per column: the rectangle (4), the disc's ``radius - EPS`` and ``radius ** 2`` (computed as
-    ``radius * radius``), the two grown rectangles' ``min_x`` (2), ``min_y`` (2), ``max_x`` (2),
-    ``max_y`` (2), and the four corners' x (4) and y (4), in the scalar code's order (metres).
-    One row per quantity, so that the columns of the pairs tested gather into contiguous rows.
-    """
-    rows = []
-    for r in (radius - CONTACT_SLACK, radius):
-        x0, y0, x1, y1 = (blockers[:, i] for i in range(4))
-        rows.append(
-            np.stack(
-                [
-                    *(x0, y0, x1, y1, np.full(x0.shape, r - EPS), np.full(x0.shape, r * r)),
-                    *(x0 - r, x0, y0, y0 - r, x1 + r, x1, y1, y1 + r),
-                    *(x0, x1, x1, x0, y0, y0, y1, y1),
-                ]
-            )
-        )
-    return np.ascontiguousarray(np.concatenate(rows, axis=1).reshape(22, -1))
-
-
-def _sweep_hits(px: ArrayLike, py: ArrayLike, qx: np.ndarray, qy: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """True where the disc of column ``n`` of a :func:`sweep_table` sliding ``p`` -> ``q`` touches its rectangle.
-
-    geometry._sweep_disc_rect(...) < 1.0, operation for operation (1-D arrays, or one start
-    point as numbers, metres): the start inside the rounded rectangle, an entry into one of
-    the two grown rectangles or the four corner circles before ``t = 1``. The two
-    rectangles, and the four circles, go through one array pass each.
-    """
-    x0, y0, x1, y1, limit, r2 = rows[:6]
-    hit = _hypot_below(
-        np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1), limit
-    )
-    dx, dy = qx - px, qy - py
-    grown = rows[6:8], rows[8:10], rows[10:12], rows[12:14]  # (2, n) each
-    valid, t0, t1 = _clip(px, py, dx, dy, grown)
-    hit |= (valid & (t1 - t0 > EPS) & (t0 < 1.0)).any(axis=0)
-    fx, fy = px - rows[14:18], py - rows[18:22]  # (4, n): from each corner
-    a = dx * dx + dy * dy
-    b = 2 * (fx * dx + fy * dy)
-    disc = b * b - 4 * a * (fx * fx + fy * fy - r2)
-    real = (a > 1e-18) & (disc > 0)
-    root, two_a = np.sqrt(np.where(real, disc, 0.0)), np.where(real, 2 * a, 1.0)
-    t_in, t_out = (-b - root) / two_a, (-b + root) / two_a
-    return hit | (real & (t_out > EPS) & (t_in < 1.0)).any(axis=0)
-
-
-def moves_free(
-    start_x: ArrayLike,
-    start_y: ArrayLike,
-    end_x: ArrayLike,
-    end_y: ArrayLike,
-    radius: float,
-    blockers: np.ndarray,
-    table: np.ndarray | None = None,
-) -> np.ndarray:
-    """True where ``move_stop`` of a base of ``radius`` from start to end reports no contact (1-D arrays).
-
-    ``blockers`` is ``(M, 4)``: ``rules.base_blockers``' rectangles as ``min_x, min_y,
-    max_x, max_y`` (metres); ``table`` their :func:`sweep_table` (built here if not
-    given). A blocker stops a move when the box around the move overlaps it and the
-    swept discs of ``radius - CONTACT_SLACK`` and of ``radius`` both touch it (one array
-    pass for the two). One start point (two numbers) is used as it is, not repeated per move.
-    """
-    table = sweep_table(blockers, radius) if table is None else table
-    if np.ndim(start_x) == 0 and np.ndim(start_y) == 0:  # one start: every move leaves from it
-        sx, sy = float(start_x), float(start_y)
-        ex, ey = np.asarray(end_x, dtype=float), np.asarray(end_y, dtype=float)
-        ex, ey = (ex, ey) if ex.shape == ey.shape else np.broadcast_arrays(ex, ey)
-        starts = sx, sy
-    else:
-        sx, sy, ex, ey = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (start_x, start_y, end_x, end_y)))
-        starts = None
-    n, m = np.nonzero(
-        _box_overlaps(
-            sx if starts else sx[:, None],
-            sy if starts else sy[:, None],
-            ex[:, None],
-            ey[:, None],
-            radius,
-            *(blockers[None, :, i] for i in range(4)),
-        )
-    )
-    free = np.ones(ex.shape, dtype=bool)
-    if n.size:
-        both = np.concatenate((n, n))
-        rows = table[:, np.concatenate((m, m + blockers.shape[0]))]
-        px, py = starts if starts else (sx[both], sy[both])
-        touch = _sweep_hits(px, py, ex[both], ey[both], rows).reshape(2, -1)
-        free[n[touch.all(axis=0)]] = False
-    return free
-
-
-def _box_overlaps(
-    sx: ArrayLike,
-    sy: ArrayLike,
-    ex: ArrayLike,
-    ey: ArrayLike,
-    radius: float,
-    x0: ArrayLike,
-    y0: ArrayLike,
-    x1: ArrayLike,
-    y1: ArrayLike,
-) -> np.ndarray:
-    """move_stop's first test: the box around every disc of the move overlaps the blocker (tol 0)."""
-    box_x0, box_y0 = np.minimum(sx, ex) - radius, np.minimum(sy, ey) - radius
-    box_x1, box_y1 = np.maximum(sx, ex) + radius, np.maximum(sy, ey) + radius
-    return (np.minimum(box_x1, x1) - np.maximum(box_x0, x0) > 0.0) & (
-        np.minimum(box_y1, y1) - np.maximum(box_y0, y0) > 0.0
-    )
-
-
-def _standing_blocked(px: np.ndarray, py: np.ndarray, radius: float, rects: np.ndarray) -> np.ndarray:
-    """``moves_free``'s test of zero-length moves (``move_stop(p, p)``), per pair (point ``n``, ``rects[n]``).
-
-    With ``q = p`` the sweep reduces to: the start inside the rounded rectangle, or
-    inside one of the two closed grown rectangles (Liang-Barsky with zero denominators
-    only asks ``low >= 0`` and ``high >= 0``; then ``t0 = 0``, ``t1 = 1``); the corner
-    circles need a motion. The same comparisons as the scalar code, for both radii.
-    """
-    x0, y0, x1, y1 = (rects[:, i] for i in range(4))
-    box = (np.minimum(px + radius, x1) - np.maximum(px - radius, x0) > 0.0) & (
-        np.minimum(py + radius, y1) - np.maximum(py - radius, y0) > 0.0
-    )
-    blocked = box
-    for r in (radius - CONTACT_SLACK, radius):
-        near = np.maximum(np.maximum(x0 - px, 0.0), px - x1), np.maximum(np.maximum(y0 - py, 0.0), py - y1)
-        touch = _hypot_below(*near, np.full(px.size, r - EPS))
-        touch |= (px - (x0 - r) >= 0) & ((x1 + r) - px >= 0) & (py - y0 >= 0) & (y1 - py >= 0)
-        touch |= (px - x0 >= 0) & (x1 - px >= 0) & (py - (y0 - r) >= 0) & ((y1 + r) - py >= 0)
-        blocked = blocked & touch
-    return blocked
-
-
-def arm_crossings(px: ArrayLike, py: ArrayLike, qx: ArrayLike, qy: ArrayLike, rects: np.ndarray) -> np.ndarray:
-    """``(N, R)``: True where the segment ``p`` - ``q`` crosses rectangle ``r`` of ``rects`` (``(R, 4)``, metres).
-
-    ``segment_intersects_rect`` with ``arm_line_clear``'s tolerance: Liang-Barsky
-    clipping against the rectangle shrunk by 1e-6 m.
-    """
-    px, py, qx, qy = (np.atleast_1d(np.asarray(v, dtype=float))[:, None] for v in np.broadcast_arrays(px, py, qx, qy))
-    x0, y0, x1, y1 = (rects[:, i][None, :] + s for i, s in enumerate((ARM_TOL, ARM_TOL, -ARM_TOL, -ARM_TOL)))
-    proper = (x0 < x1) & (y0 < y1)
-    valid, _t0, _t1 = _clip(px, py, qx - px, qy - py, (x0, y0, x1, y1))
-    return np.broadcast_to(proper & valid, (px.shape[0], rects.shape[0])).copy()
-
-
-def arm_crosses(px: ArrayLike, py: ArrayLike, qx: ArrayLike, qy: ArrayLike, rects: np.ndarray) -> np.ndarray:
-    """True where the segment ``p`` - ``q`` crosses one of ``rects`` (``(R, 4)``), as ``arm_line_clear`` decides."""
-    return arm_crossings(px, py, qx, qy, rects).any(axis=1)
-
-
 def _rects(rects: Iterable[Rect]) -> np.ndarray:
     """``(N, 4)`` array of rectangles (metres)."""
     return np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in rects], dtype=float).reshape(-1, 4)
+
+
+def _side_rows(lattice: Lattice, rects: Iterable[Rect]) -> np.ndarray:
+    """``(N, 4, 3)`` int64: the arm rule's side half-planes of each rectangle (``regions.side_rows``)."""
+    return np.array([side_rows(lattice, r) for r in rects], dtype=np.int64).reshape(-1, len(SIDES), 3)
 
 
 # ---------------------------------------------------------------------- the candidates
@@ -274,11 +105,8 @@ class _Pieces:
     tables: list  # the table under each piece, or None (Scenario.table_under_rect)
     table_array: np.ndarray  # (n, 4): the rectangle of each one's table (NaN: none), metres
     hand_free: np.ndarray  # (n, 4) bool: nothing leaves no room for the hand at the contact (rules.hand_blocker)
-
-    def arm_rects(self, obstacles: np.ndarray, ignore: int | None) -> np.ndarray:
-        """What the arm line may not cross: obstacles, then every piece but slot ``ignore`` (rules._arm_blocker)."""
-        keep = np.arange(len(self.rects)) != (-1 if ignore is None else ignore)
-        return np.concatenate([obstacles, self.array[keep]])
+    arm_array: np.ndarray  # (A, 4): what the arm rule tests, obstacles then every piece (rules.arm_refusal), metres
+    arm_rows: np.ndarray  # (A, 4, 3): their side half-planes in lattice indices
 
 
 @dataclass
@@ -305,12 +133,17 @@ class FastPhases:
         self.ys = lattice.origin[1] + np.arange(ny) * res
         radius = scenario.robot.radius
         self.radius = radius
-        area, margin = scenario.area, -radius  # check_action: area.contains_disc(target, radius, tol=1e-9)
-        self.fits_x = (self.xs >= (area.min_x - margin) - 1e-9) & (self.xs <= (area.max_x + margin) + 1e-9)
-        self.fits_y = (self.ys >= (area.min_y - margin) - 1e-9) & (self.ys <= (area.max_y + margin) + 1e-9)
-        self.blockers = _rects(rect for _, rect in base_blockers(scenario))
-        self.sweeps = sweep_table(self.blockers, radius)
+        domain = area_domain(lattice, scenario.area, radius)  # check_action's area test of the action's cell
+        self.fits_x = (np.arange(nx) >= domain.i_lo) & (np.arange(nx) <= domain.i_hi)
+        self.fits_y = (np.arange(ny) >= domain.j_lo) & (np.arange(ny) <= domain.j_hi)
+        self.walls = [rect for _, rect in move_blockers(scenario)]  # the tables and obstacles the base moves around
+        rows = np.array([octagon_rows(lattice, r, radius) for r in self.walls], dtype=np.int64)
+        self.bits = grid_bits(rows.reshape(-1, REGIONS, 3), lattice.shape)  # (nx, ny, walls): octagon regions held
+        fits = self.fits_x[:, None] & self.fits_y[None, :]
+        self._stand = fits & (self.bits != 0).all(axis=2)  # in the area and outside every octagon
+        self._act = fits & ((self.bits & ALL_SIDES) != 0).all(axis=2)  # and on a side of each (rules.pose_refusal)
         self.obstacles = _rects(o.rect for o in scenario.obstacles)
+        self._obstacle_rows = _side_rows(lattice, (o.rect for o in scenario.obstacles))
         postures = scenario.robot.postures
         self.reach = np.array(
             [
@@ -329,11 +162,8 @@ class FastPhases:
                 for h in HEADINGS
             ]
         ).astype(np.int64)  # (4, nf, nl, 2): cells from a pose to its target, world frame
-        self._stand = self._stand_grid()  # (nx, ny) bool: where the base may stand
-        self._stops: dict = {}  # move_stop of a zero-length move at off-lattice points (push ends)
         self._waypoints = self._waypoint_cells()
         self._edges = self._edge_lines()
-        self._edge_cells = self._edge_line_cells()
         self._items: dict = {}
         c, d, k = (a.ravel() for a in np.indices((len(scenario.clutter), 4, 3)))
         self._push_grid = (c, d, PUSH_HEADING[d, k])
@@ -345,8 +175,7 @@ class FastPhases:
         moves = self._moves(state, items.approaches, HEADINGS.index(state.heading))
         groups = [items.picks, items.places, moves]  # every candidate whose end is a lattice point, moves last
         index, ci, cj, heading, posture = (np.concatenate([getattr(g, f) for g in groups]) for f in _FIELDS)
-        bx, by = state.base
-        keep = moves_free(bx, by, self.xs[ci], self.ys[cj], self.radius, self.blockers, self.sweeps)
+        keep = self._reached(state.base, ci, cj)
         start = index.size - moves.index.size
         allowed = np.flatnonzero(keep[start:]) + start
         _, first = np.unique(ci[allowed] * self.lattice.shape[1] + cj[allowed], return_index=True)
@@ -365,6 +194,23 @@ class FastPhases:
                 [pushes.ci, pushes.cj, pushes.heading, pushes.posture, np.full(pushes.index.size, pushes.mode)], axis=1
             )
         return PhaseTable(mask, actions)
+
+    def _reached(self, base: Point, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
+        """True where the move rule lets the base go from ``base`` to lattice point ``(ci, cj)`` (rules.move_refusal).
+
+        The ends are in the area (their candidates were kept only where the base fits);
+        the base must be too, and share a region of every octagon with each end.
+        """
+        if not in_area(self.scenario, self.lattice, base):
+            return np.zeros(ci.size, dtype=bool)
+        return ((self.bits[ci, cj] & self._point_bits(base)) != 0).all(axis=1)
+
+    def _point_bits(self, point: Point) -> np.ndarray:
+        """``(walls,)`` uint8: the octagon regions of every table and obstacle that hold a base at ``point``."""
+        cell = lattice_cell(self.lattice, point)
+        if cell is not None:
+            return self.bits[cell]
+        return np.array([octagon_bits(self.lattice, r, self.radius, point) for r in self.walls], dtype=np.uint8)
 
     # ------------------------------------------------------------------ what the items decide
     def _items_of(self, state: WorldState) -> _Items:
@@ -391,15 +237,18 @@ class FastPhases:
             [not self._hand_blocked(state, rects, item.id, point) for point in row]
             for item, row in zip(scenario.clutter, contacts, strict=True)
         ]
+        array = _rects(rects)
         return _Pieces(
             rects,
-            _rects(rects),
+            array,
             np.array(contacts, dtype=float).reshape(-1, 4, 2),
             tables,
             np.array(
                 [(t.rect.min_x, t.rect.min_y, t.rect.max_x, t.rect.max_y) if t else (np.nan,) * 4 for t in tables]
             ).reshape(-1, 4),
             np.array(hand_free, dtype=bool).reshape(-1, 4),
+            np.concatenate([self.obstacles, array]),
+            np.concatenate([self._obstacle_rows, _side_rows(self.lattice, rects)]),
         )
 
     def _acts(self, state: WorldState, mode: Mode, pieces: _Pieces) -> _Offers:
@@ -420,15 +269,36 @@ class FastPhases:
                 np.prod(layout.window)
             )
             offers, _g = self._window_offers(first, [_index(self.lattice, target)] * 4, np.arange(4), [target] * 4)
-            offers = offers.take(self._fits(offers.ci, offers.cj) & self._stand_at(offers.ci, offers.cj))
+            offers = offers.take(self._act[offers.ci, offers.cj])  # in the area, on a side of every wall
             offers.mode = int(mode)
-            keep = ~arm_crosses(
-                self.xs[offers.ci], self.ys[offers.cj], target[0], target[1], pieces.arm_rects(self.obstacles, None)
-            )
+            keep = self._arm_clear(pieces, (offers.ci, offers.cj), (), ([target[0]], [target[1]]))
             if mode == Mode.PICK:
                 keep &= self._picks_take(state, offers, slot)
             groups.append(offers.take(keep))
         return _concat(groups, int(mode))
+
+    def _arm_clear(
+        self,
+        pieces: _Pieces,
+        cells: tuple[np.ndarray, np.ndarray],
+        more_cells: tuple[tuple[np.ndarray, np.ndarray], ...],
+        *hands: tuple[np.ndarray, np.ndarray],
+        ignore: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """rules.arm_refusal for lattice bases, per candidate: True where every arm blocker has a common side.
+
+        ``cells`` (and ``more_cells``: a stroke's other end) are the bases' lattice points,
+        ``hands`` the hand points ``(x, y)`` (metres), one per candidate each; ``ignore`` the
+        pushed piece's slot per candidate (its column is left out).
+        """
+        common = cells_bits(pieces.arm_rows, *cells)
+        for more in more_cells:
+            common &= cells_bits(pieces.arm_rows, *more)
+        for hx, hy in hands:
+            common &= hands_bits(pieces.arm_array, hx, hy)
+        if ignore is not None:
+            common[np.arange(ignore.size), self.obstacles.shape[0] + ignore] = ALL_SIDES
+        return (common != 0).all(axis=1)
 
     def _picks_take(self, state: WorldState, offers: _Offers, slot: int) -> np.ndarray:
         """True where the object nearest the posture's centre within reach is the candidate's own (_check_pick)."""
@@ -492,7 +362,9 @@ class FastPhases:
 
         rules._check_push from a base at the pose, for the push of piece ``c`` along
         ``d`` to cell ``(ei, ej)``: the piece alone in reach (else check_action decides),
-        on a table after the stroke, room for the hand, the arm line clear.
+        on a table after the stroke, room for the hand, both ends of the stroke on one
+        common side of every table and obstacle (the pose rule, which implies the move
+        rule for the stroke), and the arm rule at both ends.
         """
         px, py = self.xs[offers.ci], self.ys[offers.cj]
         dx, dy = self.xs[ei] - px, self.ys[ej] - py
@@ -503,11 +375,10 @@ class FastPhases:
         keep = pieces.hand_free[c, d] & (rect[:, 0] + lx >= t[:, 0] - 1e-6) & (rect[:, 1] + ly >= t[:, 1] - 1e-6)
         keep &= (rect[:, 2] + lx <= t[:, 2] + 1e-6) & (rect[:, 3] + ly <= t[:, 3] + 1e-6)
         alone = self._reaches_all(offers, pieces.contacts[:, d].transpose(1, 0, 2)).sum(axis=1) == 1
-        cross = arm_crossings(
-            px, py, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1], pieces.arm_rects(self.obstacles, None)
-        )
-        cross[np.arange(c.size), self.obstacles.shape[0] + c] = False  # rules._arm_blocker ignores the pushed piece
-        keep &= alone & ~cross.any(axis=1)
+        keep &= alone & ((self.bits[offers.ci, offers.cj] & self.bits[ei, ej] & ALL_SIDES) != 0).all(axis=1)
+        cx, cy = pieces.contacts[c, d, 0], pieces.contacts[c, d, 1]
+        hand_end = cx + UNIT[d, 0] * length, cy + UNIT[d, 1] * length
+        keep &= self._arm_clear(pieces, (offers.ci, offers.cj), ((ei, ej),), (cx, cy), hand_end, ignore=c)
         for n in np.flatnonzero(~alone):
             keep[n] = self._push_exact(state, offers, n, (int(ei[n]), int(ej[n])), self.scenario.clutter[int(c[n])].id)
         return keep
@@ -536,20 +407,16 @@ class FastPhases:
 
     # ------------------------------------------------------------------ what the base decides
     def _moves(self, state: WorldState, approaches: _Offers, heading: int) -> _Offers:
-        """Approach, waypoint and edge moves allowed but for the swept-disc test and the one-per-action rule."""
+        """Approach, waypoint and edge moves allowed but for the move rule and the one-per-action rule."""
         bx, by = state.base
-        fixed_x, ix, in_x, jy, in_y, eindex = self._edge_cells
-        ci_b, in_bx = self._cell_of(bx, 0)
-        cj_b, in_by = self._cell_of(by, 1)
-        inside = np.zeros(eindex.size, dtype=bool)  # the end (line's x, base's y) or (base's x, line's y) inside
-        if in_by:
-            inside |= in_x
-        if in_bx:
-            inside |= in_y
-        ei = np.where(fixed_x, ix, ci_b)[inside]
-        ej = np.where(fixed_x, cj_b, jy)[inside]
-        eindex = eindex[inside]
-        keep = self._fits(ei, ej) & self._stand_at(ei, ej)
+        axis, line, eindex = self._edges
+        here = _index(self.lattice, state.base)
+        ei = np.where(axis == 0, line, here[0])  # an edge move ends on its line at the base's other coordinate
+        ej = np.where(axis == 0, here[1], line)
+        nx, ny = self.lattice.shape
+        on = (ei >= 0) & (ei < nx) & (ej >= 0) & (ej < ny)
+        ei, ej, eindex = ei[on], ej[on], eindex[on]
+        keep = self._stand_at(ei, ej)
         wi, wj, windex = self._waypoints
         index = np.concatenate([approaches.index, windex, eindex[keep]])
         ci = np.concatenate([approaches.ci, wi, ei[keep]])
@@ -588,7 +455,7 @@ class FastPhases:
     def _strokes_allowed(
         self, state: WorldState, pieces: _Pieces, offers: _Offers, c: np.ndarray, d: np.ndarray
     ) -> np.ndarray:
-        """rules._check_push from the base, then the stroke's end free and reached (``_offer``), per push candidate."""
+        """rules._check_push from the base, per push candidate: the piece, its table, the hand, the stroke's rules."""
         bx, by = state.base
         dx, dy = self.xs[offers.ci] - bx, self.ys[offers.cj] - by
         dx, dy = np.where(np.abs(dx) <= 1e-6, 0.0, dx), np.where(np.abs(dy) <= 1e-6, 0.0, dy)
@@ -612,24 +479,10 @@ class FastPhases:
         lx, ly = ux[sel] * length[sel], uy[sel] * length[sel]  # Rect.translate of the piece by the stroke
         ok = pieces.hand_free[slot, way] & (rect[:, 0] + lx >= t[:, 0] - 1e-6) & (rect[:, 1] + ly >= t[:, 1] - 1e-6)
         ok &= (rect[:, 2] + lx <= t[:, 2] + 1e-6) & (rect[:, 3] + ly <= t[:, 3] + 1e-6)  # NaN: no table, refused
-        for piece, stroke in set(zip(slot[ok].tolist(), way[ok].tolist(), strict=True)):
-            cx, cy = pieces.contacts[piece, stroke]
-            if arm_crosses(bx, by, cx, cy, pieces.arm_rects(self.obstacles, piece))[0]:
-                ok &= ~((slot == piece) & (way == stroke))
-        ex, ey = bx + ux[sel] * length[sel], by + uy[sel] * length[sel]  # where the stroke ends (ResolvedPhase.base)
         ends = np.flatnonzero(ok)
         if ends.size:
-            x, y = ex[ends], ey[ends]
-            free = moves_free(
-                np.r_[x, np.full(x.size, bx)],
-                np.r_[y, np.full(y.size, by)],
-                np.r_[x, x],
-                np.r_[y, y],
-                self.radius,
-                self.blockers,
-                self.sweeps,
-            )
-            ok[ends] = free[: x.size] & free[x.size :]  # stands free at the end, and gets there
+            n = sel[ends]
+            ok[ends] = self._stroke_clear(state.base, pieces, slot[ends], way[ends], length[n])
         keep[sel] = ok
         for n in np.flatnonzero(aligned & ~plain):
             action = Action(
@@ -638,19 +491,49 @@ class FastPhases:
             keep[n] = self._push_allowed(state, action, self.scenario.clutter[int(c[n])].id)
         return keep
 
+    def _stroke_clear(
+        self, base: Point, pieces: _Pieces, slot: np.ndarray, way: np.ndarray, length: np.ndarray
+    ) -> np.ndarray:
+        """The stroke's rules from ``base`` (rules._check_push): moves, poses and the arm, per stroke.
+
+        A stroke of piece ``slot`` along ``way`` of ``length`` metres ends at ``base + u *
+        length`` (on the lattice when the base is, else tested by the scalar comparisons).
+        """
+        bx, by = base
+        ux, uy = UNIT[way, 0], UNIT[way, 1]
+        ex, ey = bx + ux * length, by + uy * length  # where the stroke ends (ResolvedPhase.base)
+        ends = [(float(x), float(y)) for x, y in zip(ex.tolist(), ey.tolist(), strict=True)]
+        start_bits = self._point_bits(base)
+        ok = np.array([in_area(self.scenario, self.lattice, end) for end in ends], dtype=bool)
+        ok &= in_area(self.scenario, self.lattice, base)
+        end_bits = np.array([self._point_bits(end) for end in ends], dtype=np.uint8).reshape(len(ends), -1)
+        ok &= ((start_bits & end_bits) != 0).all(axis=1)  # the move rule (Eq. 18)
+        ok &= ((start_bits & end_bits & ALL_SIDES) != 0).all(axis=1)  # the pose rule: one common side
+        common = self._arm_point_bits(pieces, base)[None, :] & np.array(
+            [self._arm_point_bits(pieces, end) for end in ends], dtype=np.uint8
+        ).reshape(len(ends), -1)
+        cx, cy = pieces.contacts[slot, way, 0], pieces.contacts[slot, way, 1]
+        hand_end = hands_bits(pieces.arm_array, cx + ux * length, cy + uy * length)
+        common &= hands_bits(pieces.arm_array, cx, cy) & hand_end
+        common[np.arange(slot.size), self.obstacles.shape[0] + slot] = ALL_SIDES  # the pushed piece is left out
+        return ok & (common != 0).all(axis=1)
+
+    def _arm_point_bits(self, pieces: _Pieces, point: Point) -> np.ndarray:
+        """``(A,)`` uint8: the side half-planes of each arm blocker holding a base at ``point`` (rules.arm_refusal)."""
+        cell = lattice_cell(self.lattice, point)
+        if cell is not None:
+            return cells_bits(pieces.arm_rows, [cell[0]], [cell[1]])[0]
+        rects = [*(o.rect for o in self.scenario.obstacles), *pieces.rects]
+        return np.array([side_bits(self.lattice, rect, point) for rect in rects], dtype=np.uint8)
+
     def _push_allowed(self, state: WorldState, action: Action, item: str) -> bool:
-        """``_Enumerator._offer`` for a push: the env accepts it on ``item``, the stroke's end is free and reached."""
+        """``_Enumerator._offer`` for a push: the env accepts it on ``item``."""
         phase = check_action(self.scenario, state, self.lattice, action)
-        if isinstance(phase, str) or phase.target != item:
-            return False
-        end = phase.base
-        if end not in self._stops:
-            self._stops[end] = move_stop(self.scenario, end, end)[1] is None
-        return self._stops[end] and move_stop(self.scenario, state.base, end)[1] is None
+        return not isinstance(phase, str) and phase.target == item
 
     # ------------------------------------------------------------------ helpers
     def _window_offers(
-        self, first: ArrayLike, centers: ArrayLike, headings: ArrayLike, targets: ArrayLike
+        self, first: np.ndarray | float, centers: np.ndarray | list, headings: np.ndarray, targets: np.ndarray | list
     ) -> tuple[_Offers, np.ndarray]:
         """The on-lattice poses of each group's window with the first posture reaching its target, and their group.
 
@@ -702,107 +585,44 @@ class FastPhases:
         return self.fits_x[ci] & self.fits_y[cj]
 
     def _stand_at(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
-        """True where a base standing at the lattice point fits in the area and touches nothing.
+        """True where a base at the lattice point fits in the area and lies outside every octagon.
 
-        ``check_action``'s area test and ``move_stop`` of a zero-length move there (every
-        use asks both).
+        Every move that ends there must have that end in the area and in a region of
+        every octagon (rules.move_refusal): the test of the end alone, per lattice point.
         """
         return self._stand[ci, cj]
 
-    def _stand_grid(self) -> np.ndarray:
-        """``(nx, ny)``: where the base fits in the area and a zero-length move reports no contact.
-
-        Each blocker is tested at the lattice points of its window only (the points whose
-        base box can overlap it, with a cell to spare): elsewhere no test can fail.
-        """
-        fits = self.fits_x[:, None] & self.fits_y[None, :]
-        r, res = self.radius, self.lattice.resolution
-        ii, jj, mm = [], [], []
-        for m, (x0, y0, x1, y1) in enumerate(self.blockers.tolist()):
-            i = np.flatnonzero(self.fits_x & (self.xs > x0 - r - res) & (self.xs < x1 + r + res))
-            j = np.flatnonzero(self.fits_y & (self.ys > y0 - r - res) & (self.ys < y1 + r + res))
-            gi, gj = np.meshgrid(i, j, indexing="ij")
-            ii.append(gi.ravel())
-            jj.append(gj.ravel())
-            mm.append(np.full(gi.size, m))
-        ii, jj, mm = np.concatenate(ii), np.concatenate(jj), np.concatenate(mm)
-        x, y = self.xs[ii], self.ys[jj]
-        blocked = _standing_blocked(x, y, r, self.blockers[mm])
-        fits[ii[blocked], jj[blocked]] = False
-        return fits
-
     def _waypoint_cells(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(ci, cj, candidate)`` of the waypoints that fit in the area and where the base may stand."""
-        layout, lattice, res = self.layout, self.lattice, self.lattice.resolution
-        first = round(self.radius / res)
+        """``(ci, cj, candidate)`` of the waypoints on the lattice where a base may stand (:func:`waypoint_cell`)."""
+        layout, lattice = self.layout, self.lattice
         start, cells = layout.offsets["waypoint"], layout.corner_cells
-        rows = []
+        (nx, ny), rows = lattice.shape, []
         for slot, rect in self._blocker_slots():
-            for corner, (sx, sy) in enumerate(CORNERS):
-                cx = rect.max_x if sx > 0 else rect.min_x
-                cy = rect.max_y if sy > 0 else rect.min_y
-                for i in range(layout.corner_cells):
-                    for j in range(layout.corner_cells):
-                        point = (cx + sx * (first + i) * res, cy + sy * (first + j) * res)
-                        if inside_lattice(lattice, point):
-                            rows.append(
-                                (*_index(lattice, point), start + ((slot * 4 + corner) * cells + i) * cells + j)
-                            )
+            for corner in range(len(CORNERS)):
+                for i in range(cells):
+                    for j in range(cells):
+                        ci, cj = waypoint_cell(lattice, rect, self.radius, corner, i, j)
+                        if 0 <= ci < nx and 0 <= cj < ny:
+                            rows.append((ci, cj, start + ((slot * 4 + corner) * cells + i) * cells + j))
         ci, cj, index = (
             (np.array(v, dtype=np.int64) for v in zip(*rows, strict=True)) if rows else (np.zeros(0, int),) * 3
         )
-        keep = self._fits(ci, cj) & self._stand_at(ci, cj)
+        keep = self._stand_at(ci, cj)
         return ci[keep], cj[keep], index[keep]
 
     def _edge_lines(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(x, y, candidate)`` of every edge move's line: x for a line across x (y NaN: the base's), or y."""
-        layout, lattice, res = self.layout, self.lattice, self.lattice.resolution
-        half, (nx, ny) = res / 2, lattice.shape
-        ox, oy = lattice.origin
-        self._inside = (ox - half, oy - half, ox + (nx - 1) * res + half, oy + (ny - 1) * res + half)
-        first = round(self.radius / res)
-        start = layout.offsets["edge"]
+        """``(axis, line, candidate)`` of every edge move: its lattice line (:func:`side_line`) and its number."""
+        layout, start = self.layout, self.layout.offsets["edge"]
         rows = []
         for slot, rect in self._blocker_slots():
             for side, heading in enumerate(HEADINGS):
-                ux, uy = heading_vector(heading)
                 for i in range(layout.corner_cells):
-                    out = (first + i) * res
-                    if ux:
-                        line = (rect.max_x + out if ux > 0 else rect.min_x - out, math.nan)
-                    else:
-                        line = (math.nan, rect.max_y + out if uy > 0 else rect.min_y - out)
-                    rows.append((*line, start + (slot * 4 + side) * layout.corner_cells + i))
-        x, y, index = (np.array(v, dtype=float) for v in zip(*rows, strict=True)) if rows else (np.zeros(0),) * 3
-        return x, y, index.astype(np.int64)
-
-    def _edge_line_cells(self) -> tuple:
-        """What of the edge moves depends on their lines alone: ``(fixed_x, i, in_x, j, in_y, candidate)``.
-
-        ``fixed_x``: the line is across x (else across y); ``i``: the x lines' lattice column,
-        ``in_x``: an x line within the lattice's cells; ``j``, ``in_y`` the same of the y lines.
-        An edge move ends on its line at the base's other coordinate: the lattice cell along
-        the line's own axis and whether it lies within the lattice's cells there are the
-        line's (``_moves`` completes them with the base's).
-        """
-        ex, ey, eindex = self._edges
-        fixed_x = ~np.isnan(ex)  # a line across x: the end's x is the line's, its y the base's
-        lo_x, lo_y, hi_x, hi_y = self._inside
-        x, y = np.where(fixed_x, ex, 0.0), np.where(fixed_x, 0.0, ey)
-        i, j = self._cells(x, 0), self._cells(y, 1)
-        in_x = fixed_x & (x >= lo_x) & (x <= hi_x)
-        in_y = ~fixed_x & (y >= lo_y) & (y <= hi_y)
-        return fixed_x, i, in_x, j, in_y, eindex
-
-    def _cells(self, values: np.ndarray, axis: int) -> np.ndarray:
-        """The lattice index along ``axis`` of each coordinate (metres): nearest, clipped (as Lattice.index)."""
-        origin, res, count = self.lattice.origin[axis], self.lattice.resolution, self.lattice.shape[axis]
-        return np.minimum(np.maximum(np.rint((values - origin) / res), 0), count - 1).astype(np.int64)
-
-    def _cell_of(self, value: float, axis: int) -> tuple[int, bool]:
-        """:meth:`_cells` of one coordinate (metres), and whether it lies within the lattice's cells on that axis."""
-        low, high = self._inside[axis], self._inside[axis + 2]
-        return int(self._cells(np.array([value], dtype=float), axis)[0]), bool(low <= value <= high)
+                    axis, line = side_line(self.lattice, rect, self.radius, heading, i)
+                    rows.append((axis, line, start + (slot * 4 + side) * layout.corner_cells + i))
+        if not rows:
+            return (np.zeros(0, dtype=np.int64),) * 3
+        axis, line, index = (np.array(v, dtype=np.int64) for v in zip(*rows, strict=True))
+        return axis, line, index
 
     def _blocker_slots(self) -> list:
         """``(slot, rectangle)`` of every table and obstacle (``_Enumerator._blockers``)."""
@@ -819,7 +639,7 @@ def _index(lattice: Lattice, point: tuple[float, float]) -> tuple[int, int]:
 
 
 def _hand_offset(
-    h: np.ndarray, bx: ArrayLike, by: ArrayLike, tx: ArrayLike, ty: ArrayLike
+    h: np.ndarray, bx: np.ndarray | float, by: np.ndarray | float, tx: np.ndarray | float, ty: np.ndarray | float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``kinematics.hand_offset`` over arrays: robot-frame ``(forward, lateral)`` of the target (metres)."""
     dx, dy = tx - bx, ty - by

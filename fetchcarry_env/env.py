@@ -32,7 +32,7 @@ from fetchcarry_env.kinematics import (
 )
 from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
 from fetchcarry_env.observations import OBS_MODES, ImageObservations
-from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action, move_stop
+from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
 from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
 from fetchcarry_env.sim.client import check_display, display_available
@@ -58,15 +58,14 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     One step is one phase of the paper's formulation: the base slides in a straight
     line to a point of a lattice over the floor, turns to a heading, and the arm, in
-    one of the robot's postures, does nothing, picks, places or pushes. The world is
-    simulated in PyBullet: the base stops at the first contact with a table, an
-    obstacle or the edge of the area (an exact swept-disc test, nothing tunnels; a
-    move that grazes a blocker within 1 µm, the plan validator's tolerance, is free),
-    and the arm then does nothing; a picked object is lifted 5 cm and attached to the
-    hand; a placed object is released standing on the table and settles; a push
-    drives the hand through the stroke (1 cm per simulation step at most, with at most
-    30 N) and PyBullet moves the clutter, which may shove a neighbour, or jam (the
-    stroke then stops where the hand is).
+    one of the robot's postures, does nothing, picks, places or pushes. The rules of
+    motion and of the arm are the MILP expert's model stated exactly
+    (:mod:`fetchcarry_env.rules`, ``docs/design.md``), so that the expert's proven
+    optima are optima of the env. The world is simulated in PyBullet: a picked object
+    is lifted 5 cm and attached to the hand; a placed object is released standing on
+    the table and settles; a push drives the hand through the stroke (1 cm per
+    simulation step at most, with at most 30 N) and PyBullet moves the clutter, which
+    may shove a neighbour, or jam (the stroke then stops where the hand is).
 
     The scenario is fixed (``scenario=``) or drawn at every reset from a family
     (``family=``, by default ``"push"``). The whole geometry is in the observation,
@@ -92,8 +91,22 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     against the piece of clutter whose rear face the posture reaches (nearest the
     middle of the ranges). The hand may be empty or hold an object (the paper's push
     while carrying the object to be placed): the held object touches nothing, keeps
-    its offset from the base and moves with it. A push whose base touches something
-    during the stroke stops there.
+    its offset from the base and moves with it.
+
+    The rules (``fetchcarry_env/rules.py``; lattice points are tested with exact integer
+    bounds, other points such as the start in metres with a 5e-7 m tolerance):
+
+    - a move of the base from ``p`` to ``q`` (a move, the move to a pick's or a place's
+      pose, a push stroke) keeps the base disc in the area at both ends and, for every
+      table and obstacle, has both ends in one common region of its *octagon*: the
+      rectangle grown by the base's radius with its corners cut at 45 degrees (the four
+      sides beyond it, ``x >= max_x + r`` and so on, and the four cut corners). Such a
+      move touches nothing; any other move is refused (never stopped at a contact);
+    - a pick or a place acts from a base on one side of every table and obstacle grown
+      by the radius (not in a corner cut); a push stroke keeps both ends on one common side;
+    - the arm (the paper's Eq. 19): for every obstacle and piece of clutter (but the one
+      pushed) one side half-plane of its rectangle (``x >= max_x`` and so on) holds the
+      base (both ends of a stroke) and the hand (both ends of a stroke).
 
     :meth:`action_masks` gives MaskablePPO's flat mask (length ``nx + ny + 4 +
     capacity.postures + 4``): lattice columns and rows where the base disc does not fit
@@ -179,8 +192,10 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
     goals), ``path_length`` (metres the base has travelled this episode),
     ``travel_cost`` (the paper's cost of those moves so far: Manhattan plus the diagonal term),
     ``task_cost`` (the task's cost so far: minus the return, see Rewards),
-    ``collisions`` (contacts so far), ``invalid_action`` (a short reason, or None),
-    ``contact`` (the id of what the base touched this step, or None), ``travel`` and
+    ``collisions`` (contacts so far: always 0 under the rules, kept for the interface),
+    ``invalid_action`` (a short reason, or None; a refused move names the table or
+    obstacle whose octagon it breaks), ``contact`` (what the base touched this step:
+    always None, as no accepted move touches anything), ``travel`` and
     ``penalty`` (this step's travel cost and penalties), ``previous_achieved_goal``
     (the objects' centres before the step) and ``push`` (after a push: the clutter's id, the
     stroke asked and travelled in metres, whether it jammed).
@@ -229,6 +244,12 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
 
     - v0: first version; a push may be made while holding an object (the paper's
       push-aside while carrying), masks allow it.
+    - v0, the rules become the planner's model (the id stays v0, as the project's
+      interface requires): a move is allowed when each table's and obstacle's octagon has
+      a region holding both its ends, else refused as an invalid action (it was stopped at
+      its first contact, with the contact penalty); acting poses lie on a side of each
+      table and obstacle; the arm rule is the common side half-plane. No accepted move
+      touches anything, so ``contact`` is None and ``collisions`` 0.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
@@ -365,16 +386,16 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         scenario, state = self.scenario, self.state
         self._sync_sim()
         phase = check_action(scenario, state, self.lattice, decoded)
-        contact: str | None = None
+        contact: str | None = None  # an accepted move never touches anything (rules.move_refusal)
         push_report: dict[str, Any] | None = None
         if isinstance(phase, str):
             invalid, travel, penalty = phase, 0.0, INVALID_ACTION_PENALTY
         elif phase.mode == Mode.PUSH:
             invalid = None
-            contact, push_report = self._push(phase)
+            push_report = self._push(phase)
         else:
             invalid = None
-            contact = self._move_and_act(phase)
+            self._move_and_act(phase)
         if invalid is None:
             travel = travel_cost(state.base, self._state.base)
             penalty = COLLISION_PENALTY if contact is not None else 0.0
@@ -460,36 +481,27 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         return copy.deepcopy(self)
 
     # ------------------------------------------------------------------ internals
-    def _move_and_act(self, phase: ResolvedPhase) -> str | None:
-        """Execute a move, pick or place phase; return what the base touched, if anything."""
+    def _move_and_act(self, phase: ResolvedPhase) -> None:
+        """Execute a move, pick or place phase (the rules allowed the move: it touches nothing)."""
         state = self._state
-        end, contact = move_stop(self._scenario, state.base, phase.base)
+        end = phase.base
         held = self._sim.move(end, phase.heading, state.holding)
         objects = dict(state.objects)
         if held is not None:
             objects[state.holding] = held
         self._state = state = replace(state, base=end, heading=phase.heading, objects=objects)
-        if contact is not None:
-            return contact
         if phase.mode == Mode.PICK:
             lifted = self._sim.pick(phase.target, end, phase.heading)
             self._state = replace(state, holding=phase.target, objects={**objects, phase.target: lifted})
         elif phase.mode == Mode.PLACE:
             poses = self._sim.place(phase.target, end, phase.heading, phase.hand)
             self._state = self._with_poses(replace(state, holding=None), poses)
-        return None
 
-    def _push(self, phase: ResolvedPhase) -> tuple[str | None, dict[str, Any]]:
-        """Execute a push phase; return what the base touched (if anything) and a report of the stroke."""
+    def _push(self, phase: ResolvedPhase) -> dict[str, Any]:
+        """Execute a push phase (the rules allowed the stroke: the base touches nothing); report the stroke."""
         state = self._state
-        end, contact = move_stop(self._scenario, state.base, phase.base)
-        length = math.dist(state.base, end)
+        length = math.dist(state.base, phase.base)
         report = {"clutter": phase.target, "stroke": phase.stroke, "travelled": 0.0, "stalled": False}
-        if length <= 0.0:
-            held = self._sim.move(state.base, phase.heading, state.holding)
-            objects = state.objects if held is None else {**state.objects, state.holding: held}
-            self._state = replace(state, heading=phase.heading, objects=objects)
-            return contact, report
         offset = hand_offset(state.base, phase.heading, phase.hand)
         outcome = self._sim.push(phase.target, state.base, phase.heading, offset, phase.direction, length)
         ux, uy = heading_vector(phase.direction)
@@ -498,7 +510,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         moved = replace(state, base=base, heading=phase.heading, objects=objects)
         self._state = self._with_poses(moved, self._sim.poses)
         report.update(travelled=outcome.travelled, stalled=outcome.stalled)
-        return contact, report
+        return report
 
     def _with_poses(self, state: WorldState, poses: Mapping[str, tuple]) -> WorldState:
         """``state`` with every item that is not held where the simulation has it."""

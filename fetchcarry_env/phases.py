@@ -4,19 +4,19 @@ The env's own action is a ``MultiDiscrete`` grid of absolute lattice points, who
 per-component masks cannot say "no pick here". This module numbers a fixed list of
 *candidate phases* instead, relative to the things in the world, and decides which of
 them are possible from a state by asking the env's own rules
-(:func:`fetchcarry_env.rules.check_action` and :func:`fetchcarry_env.rules.move_stop`),
+(:func:`fetchcarry_env.rules.check_action`, which holds the move, pose and arm rules),
 never a copy of them. Each candidate stands for one env action; a candidate is
 *allowed* when
 
 1. its slot is filled (the object, piece of clutter or blocker exists) and its pose
    lies on the lattice,
 2. ``check_action`` accepts its env action, acting on the candidate's own item (a pick
-   candidate for object 0 whose pose would make the env take object 1 is not allowed),
-3. the base reaches the phase's end without a contact (``move_stop``: the env would
-   otherwise stop the base there and the arm would do nothing), and
-4. no earlier candidate of the list has the same env action (so that allowed
+   candidate for object 0 whose pose would make the env take object 1 is not allowed;
+   the env refuses a move that breaks the move rule, so an allowed candidate's base
+   reaches its end and touches nothing), and
+3. no earlier candidate of the list has the same env action (so that allowed
    candidates and the env actions they stand for are one to one), and
-5. it is not a move that goes nowhere (to the point where the base stands: it would
+4. it is not a move that goes nowhere (to the point where the base stands: it would
    change nothing, and a deterministic learner that picks it once picks it forever).
 
 The list, in this order (``o``: object slot, ``c``: clutter slot, ``h``: heading index
@@ -36,12 +36,14 @@ kind          numbered by                     env action
 ``approach``  ``c, d, k, f, l``               move to a pose around the push contact of clutter
                                               ``c`` along ``d`` from which the env would accept a
                                               one-cell push of ``c`` along ``d`` at that heading
-``waypoint``  ``b, corner, i, j``             move to a point ``i``, ``j`` cells (plus the robot's
-                                              radius) outward from a corner of blocker ``b``
-                                              (tables, then obstacles): the way around it
-``edge``      ``b, side, i``                  move straight along x or y to the line ``i`` cells
-                                              (plus the radius) outside side ``side`` (in heading
-                                              order) of blocker ``b``: to get clear of it
+``waypoint``  ``b, corner, i, j``             move to the lattice point ``i``, ``j`` cells outward
+                                              from the first one beyond both sides of a corner of
+                                              blocker ``b`` (tables, then obstacles) grown by the
+                                              robot's radius: the way around it
+``edge``      ``b, side, i``                  move straight along x or y to the lattice line ``i``
+                                              cells outward from the first one beyond side ``side``
+                                              (in heading order) of blocker ``b`` grown by the
+                                              radius: to get clear of it
 ============  ==============================  =====================================================
 
 :func:`enumerate_phases` is the reference: one candidate at a time, through the rules
@@ -70,7 +72,8 @@ from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector, to_world_frame
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
 from fetchcarry_env.observation import Capacity, WorldState
-from fetchcarry_env.rules import check_action, clutter_rect, move_stop
+from fetchcarry_env.regions import index_at_least, index_at_most
+from fetchcarry_env.rules import check_action, clutter_rect
 from fetchcarry_env.scenario import DEFAULT_POSTURES, Posture, Scenario
 
 KINDS: tuple[str, ...] = ("pick", "place", "push", "approach", "waypoint", "edge")
@@ -241,38 +244,52 @@ CORNERS: tuple[tuple[int, int], ...] = ((-1, -1), (1, -1), (1, 1), (-1, 1))
 """Outward directions of a rectangle's corners, in waypoint order: min-min, max-min, max-max, min-max."""
 
 
-def enumerate_phases(
-    layout: PhaseLayout,
-    scenario: Scenario,
-    state: WorldState,
-    lattice: Lattice,
-    standing: dict[Point, bool] | None = None,
-) -> PhaseTable:
+def side_line(lattice: Lattice, rect: Rect, radius: float, side: Heading, cells: int) -> tuple[int, int]:
+    """``(axis, index)`` of the lattice line ``cells`` outward from the first one beyond side ``side`` of ``rect``.
+
+    ``rect`` is grown by ``radius``; the first line beyond its side is the first whose
+    lattice points lie in that side's move region (the planner's exact rounding,
+    :func:`fetchcarry_env.regions.side_regions`).
+    """
+    ux, uy = heading_vector(side)
+    axis, sign = (0, ux) if ux else (1, uy)
+    if sign > 0:
+        first = index_at_least(lattice, axis, rect.max[axis] + radius)
+    else:
+        first = index_at_most(lattice, axis, rect.min[axis] - radius)
+    return axis, first + sign * cells
+
+
+def waypoint_cell(lattice: Lattice, rect: Rect, radius: float, corner: int, i: int, j: int) -> tuple[int, int]:
+    """The lattice point of waypoint ``(corner, i, j)`` of ``rect``: beyond both sides of that corner (unclipped).
+
+    It lies in two side regions of ``rect`` grown by ``radius``, so outside its octagon,
+    and a move from anywhere in either region reaches it (as far as ``rect`` goes).
+    """
+    sx, sy = CORNERS[corner]
+    return (
+        side_line(lattice, rect, radius, "+x" if sx > 0 else "-x", i)[1],
+        side_line(lattice, rect, radius, "+y" if sy > 0 else "-y", j)[1],
+    )
+
+
+def enumerate_phases(layout: PhaseLayout, scenario: Scenario, state: WorldState, lattice: Lattice) -> PhaseTable:
     """Which candidates are allowed in ``state`` (see the module docstring), and their env actions.
 
     The reference computation (a few to tens of milliseconds a state): the fast mask of
     :mod:`fetchcarry_env.candidate_mask` must give the same table.
-
-    ``standing`` caches, per point, whether the base may stand there without touching a
-    table, an obstacle or the edge (``move_stop`` of a zero-length move). That depends
-    on the scenario only, so one dict may serve every state of an episode; it is filled
-    as the enumeration goes.
     """
-    return _Enumerator(layout, scenario, state, lattice, {} if standing is None else standing).run()
+    return _Enumerator(layout, scenario, state, lattice).run()
 
 
 class _Enumerator:
-    """One enumeration: the state, the table being filled and a cache of base moves."""
+    """One enumeration: the state and the table being filled."""
 
-    def __init__(
-        self, layout: PhaseLayout, scenario: Scenario, state: WorldState, lattice: Lattice, standing: dict[Point, bool]
-    ) -> None:
+    def __init__(self, layout: PhaseLayout, scenario: Scenario, state: WorldState, lattice: Lattice) -> None:
         self.layout, self.scenario, self.state, self.lattice = layout, scenario, state, lattice
         self.mask = np.zeros(layout.size, dtype=bool)
         self.actions = np.zeros((layout.size, 5), dtype=np.int64)
         self.lookup: dict[tuple[int, ...], int] = {}
-        self._stops: dict[Point, bool] = {}
-        self._ends = standing
         self._heading = HEADINGS.index(state.heading)
 
     def run(self) -> PhaseTable:
@@ -354,39 +371,27 @@ class _Enumerator:
         return not isinstance(phase, str) and phase.target == item
 
     def _waypoints(self) -> None:
-        """Moves to the points just outside each corner of each table and obstacle (the way around it)."""
-        layout = self.layout
-        res = self.lattice.resolution
-        first = round(self.scenario.robot.radius / res)
+        """Moves to the lattice points just beyond each corner of each table and obstacle (the way around it)."""
+        layout, radius = self.layout, self.scenario.robot.radius
         for slot, rect in self._blockers():
-            for corner, (sx, sy) in enumerate(CORNERS):
-                cx = rect.max_x if sx > 0 else rect.min_x
-                cy = rect.max_y if sy > 0 else rect.min_y
+            for corner in range(len(CORNERS)):
                 for i in range(layout.corner_cells):
                     for j in range(layout.corner_cells):
-                        point = (cx + sx * (first + i) * res, cy + sy * (first + j) * res)
-                        if not inside_lattice(self.lattice, point):
-                            continue
-                        index = layout.index("waypoint", slot, corner, i, j)
-                        self._offer(index, self._move(self.lattice.index(point)), None)
+                        cell = waypoint_cell(self.lattice, rect, radius, corner, i, j)
+                        if self._on_lattice(cell):
+                            self._offer(layout.index("waypoint", slot, corner, i, j), self._move(cell), None)
 
     def _edges(self) -> None:
-        """Straight moves from the base, along x or y, to the line just outside each side of each blocker."""
-        layout = self.layout
-        res = self.lattice.resolution
-        first = round(self.scenario.robot.radius / res)
-        bx, by = self.state.base
+        """Straight moves from the base, along x or y, to the lattice lines just beyond each side of each blocker."""
+        layout, radius = self.layout, self.scenario.robot.radius
+        here = self.lattice.index(self.state.base)
         for slot, rect in self._blockers():
             for side, heading in enumerate(HEADINGS):
-                ux, uy = heading_vector(heading)
                 for i in range(layout.corner_cells):
-                    out = (first + i) * res
-                    if ux:
-                        point = (rect.max_x + out if ux > 0 else rect.min_x - out, by)
-                    else:
-                        point = (bx, rect.max_y + out if uy > 0 else rect.min_y - out)
-                    if inside_lattice(self.lattice, point):
-                        self._offer(layout.index("edge", slot, side, i), self._move(self.lattice.index(point)), None)
+                    axis, line = side_line(self.lattice, rect, radius, heading, i)
+                    cell = (line, here[1]) if axis == 0 else (here[0], line)
+                    if self._on_lattice(cell):
+                        self._offer(layout.index("edge", slot, side, i), self._move(cell), None)
 
     def _blockers(self) -> list[tuple[int, Rect]]:
         """``(slot, rectangle)`` of every table and obstacle (tables first, as in the observation)."""
@@ -423,7 +428,7 @@ class _Enumerator:
         return 0 <= cell[0] < self.lattice.shape[0] and 0 <= cell[1] < self.lattice.shape[1]
 
     def _offer(self, index: int, action: Action, target: str | None, also: Callable[[], bool] | None = None) -> None:
-        """Allow candidate ``index`` if the env accepts ``action`` on ``target``, without a contact, and first.
+        """Allow candidate ``index`` if the env accepts ``action`` on ``target``, and it is the action's first.
 
         ``also`` is a further condition, asked once the cheap tests have passed.
         """
@@ -435,34 +440,8 @@ class _Enumerator:
             return
         if phase.mode == Mode.MOVE and math.dist(phase.base, self.state.base) <= STILL:
             return  # a move that goes nowhere does nothing: not a phase worth choosing
-        if not self._end_free(phase.base) or (also is not None and not also()) or not self._free(phase.base):
+        if also is not None and not also():
             return
         self.mask[index] = True
         self.actions[index] = key
         self.lookup[key] = index
-
-    def _end_free(self, end: Point) -> bool:
-        """False when a base standing at ``end`` already touches something (so no move gets there freely).
-
-        ``move_stop`` of the zero-length move at the end: cheap (its box holds few
-        blockers), and it rules most impossible poses out before a whole move is swept.
-        """
-        if end not in self._ends:
-            self._ends[end] = move_stop(self.scenario, end, end)[1] is None
-        return self._ends[end]
-
-    def _free(self, end: Point) -> bool:
-        """True when the base goes from where it stands to ``end`` without a contact (``move_stop``)."""
-        if end not in self._stops:
-            self._stops[end] = move_stop(self.scenario, self.state.base, end)[1] is None
-        return self._stops[end]
-
-
-def inside_lattice(lattice: Lattice, point: Point) -> bool:
-    """True when ``point`` lies within half a cell of the lattice's extent."""
-    half = lattice.resolution / 2
-    nx, ny = lattice.shape
-    return (
-        lattice.origin[0] - half <= point[0] <= lattice.origin[0] + (nx - 1) * lattice.resolution + half
-        and lattice.origin[1] - half <= point[1] <= lattice.origin[1] + (ny - 1) * lattice.resolution + half
-    )

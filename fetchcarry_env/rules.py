@@ -5,11 +5,29 @@ either a :class:`ResolvedPhase` (what to execute: where the base goes, what the 
 where the hand goes) or a short reason why the action is impossible, which the
 environment reports in ``info["invalid_action"]``. :func:`action_mask` is the part of
 these checks that can be said per action component (MaskablePPO's convention).
-:func:`move_stop` says where a base move ends: at the first contact with a table, an
-obstacle or the edge of the area (exact swept-disc test, nothing tunnels).
 
-The semantics are those of :mod:`fetchcarry_env.actions` and ``docs/design.md``; the
-MILP expert models the same rules. Units are metres.
+The motion and arm rules are the MILP expert's model stated exactly
+(``docs/design.md``, "The env's rules are the planner's model";
+:mod:`fetchcarry_env.regions` holds the geometry both use):
+
+- **moves** (:func:`move_refusal`): a move of the base from ``p`` to ``q`` (a move
+  phase, the move to a pick's or place's pose, a push stroke) is allowed when both ends
+  keep the base disc inside the area and, for every table and obstacle, ``p`` and ``q``
+  lie in one common region of its octagon (Eq. 18). Such a move never touches anything;
+  any other is refused, not stopped at a contact;
+- **acting poses** (:func:`pose_refusal`): a pick or place acts from a base that lies
+  on one side of every table and obstacle grown by the radius (the square's four sides,
+  not a corner cut); a push stroke keeps both its ends on one common such side;
+- **the arm** (:func:`arm_refusal`, Eq. 19): for every obstacle and piece of clutter
+  (but the one pushed), the base (both ends of a stroke) and the hand (both ends of a
+  stroke) lie in one common side half-plane of its rectangle.
+
+Lattice points are tested in lattice indices with the planner's exact integer bounds,
+other points (the start, a base after a jammed push) in metres with its tolerance.
+:func:`move_stop` is the physical test (where a sliding base first touches a table, an
+obstacle or the edge of the area), which the plan validator's file format uses.
+
+The semantics are those of :mod:`fetchcarry_env.actions` and ``docs/design.md``. Units are metres.
 """
 
 from __future__ import annotations
@@ -22,8 +40,17 @@ import numpy as np
 
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, first_contact, heading_of, heading_vector
-from fetchcarry_env.kinematics import arm_line_clear, hand_blocker, hand_offset, push_contact, push_headings
+from fetchcarry_env.kinematics import hand_blocker, hand_offset, push_contact, push_headings
 from fetchcarry_env.observation import WorldState
+from fetchcarry_env.regions import (
+    ALL_SIDES,
+    GEOM_TOL,
+    area_domain,
+    hand_bits,
+    lattice_cell,
+    octagon_bits,
+    side_bits,
+)
 from fetchcarry_env.scenario import Posture, Scenario
 
 ALIGN_TOLERANCE = 1e-6  # metres: a stroke whose cross-axis component is below this is axis-aligned
@@ -59,19 +86,18 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
     """The flat boolean mask of length ``nx + ny + 4 + max_postures + 4`` (MaskablePPO's convention).
 
     False marks what no action with that component can do: lattice columns or rows where
-    the base disc does not fit in the area, postures the robot does not have, pick with
-    a full hand, place with an empty one, push when there is no clutter (a push may be
-    made with an empty hand or holding an object). Every
-    component keeps at least one allowed value (``move`` always is: MaskablePPO needs one).
+    the base disc does not fit in the area (:func:`fetchcarry_env.regions.area_domain`),
+    postures the robot does not have, pick with a full hand, place with an empty one, push
+    when there is no clutter (a push may be made with an empty hand or holding an object).
+    Every component keeps at least one allowed value (``move`` always is: MaskablePPO needs one).
     """
-    radius = scenario.robot.radius
-    area = scenario.area
+    domain = area_domain(lattice, scenario.area, scenario.robot.radius)
     parts = []
-    for axis, (low, high) in enumerate(((area.min_x, area.max_x), (area.min_y, area.max_y))):
-        coords = lattice.axis_points(axis)
-        fits = (coords >= low + radius - 1e-9) & (coords <= high - radius + 1e-9)
+    for axis in (0, 1):
+        index = np.arange(lattice.shape[axis])
+        fits = (index >= domain.lo(axis)) & (index <= domain.hi(axis))
         if not fits.any():
-            fits[int(np.argmin(np.abs(coords - state.base[axis])))] = True
+            fits[int(np.argmin(np.abs(lattice.axis_points(axis) - state.base[axis])))] = True
         parts.append(fits)
     parts.append(np.ones(len(HEADINGS), dtype=bool))
     parts.append(np.arange(max_postures) < len(scenario.robot.postures))
@@ -84,19 +110,109 @@ def action_mask(scenario: Scenario, state: WorldState, lattice: Lattice, max_pos
 
 def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action: Action) -> ResolvedPhase | str:
     """The phase ``action`` asks for, or a short reason why it is impossible from ``state``."""
-    target = lattice.point(*action.cell)
-    if not scenario.area.contains_disc(target, scenario.robot.radius, tol=1e-9):
+    if not area_domain(lattice, scenario.area, scenario.robot.radius).contains(*action.cell):
         return "cell outside the area"
     if action.posture >= len(scenario.robot.postures):
         return f"no posture {action.posture}"
     posture = scenario.robot.postures[action.posture]
+    target = lattice.point(*action.cell)
+    if action.mode == Mode.PUSH:
+        return _check_push(scenario, state, lattice, target, action.heading, posture)
+    refusal = move_refusal(scenario, lattice, state.base, target)
+    if refusal is not None:
+        return refusal
     if action.mode == Mode.MOVE:
         return ResolvedPhase(Mode.MOVE, target, action.heading)
     if action.mode == Mode.PICK:
-        return _check_pick(scenario, state, target, action.heading, posture)
-    if action.mode == Mode.PLACE:
-        return _check_place(scenario, state, target, action.heading, posture)
-    return _check_push(scenario, state, target, action.heading, posture)
+        phase = _check_pick(scenario, state, target, action.heading, posture)
+    else:
+        phase = _check_place(scenario, state, target, action.heading, posture)
+    if isinstance(phase, str):
+        return phase
+    bases, hands = (target,), (phase.hand,)
+    refusal = pose_refusal(scenario, lattice, bases) or arm_refusal(scenario, state, lattice, bases, hands)
+    return phase if refusal is None else refusal
+
+
+def move_blockers(scenario: Scenario) -> list[tuple[str, Rect]]:
+    """What the base moves around, by id: every table and obstacle (the octagons of the move rule)."""
+    return [*((t.id, t.rect) for t in scenario.tables), *((o.id, o.rect) for o in scenario.obstacles)]
+
+
+def in_area(scenario: Scenario, lattice: Lattice | None, point: Point) -> bool:
+    """Whether a base at ``point`` keeps its disc inside the area (Eq. 27).
+
+    A lattice point is tested in lattice indices (:func:`~fetchcarry_env.regions.area_domain`),
+    another point in metres, with the same tolerance (:data:`~fetchcarry_env.regions.GEOM_TOL`).
+    """
+    cell = lattice_cell(lattice, point)
+    if cell is not None:
+        return area_domain(lattice, scenario.area, scenario.robot.radius).contains(*cell)
+    return scenario.area.contains_disc(point, scenario.robot.radius, tol=GEOM_TOL)
+
+
+def move_refusal(scenario: Scenario, lattice: Lattice | None, start: Point, end: Point) -> str | None:
+    """Why the base may not move from ``start`` to ``end`` (metres), or None: the move rule (Eq. 18, Eq. 27).
+
+    Refused when an end leaves the base disc outside the area, or when, for some table or
+    obstacle, no region of its octagon (:func:`fetchcarry_env.regions.octagon_regions`)
+    holds both ends; the reason names that table or obstacle. An allowed move keeps the
+    swept disc off every table and obstacle and inside the area. ``lattice`` None tests
+    every point in metres (:func:`~fetchcarry_env.regions.lattice_cell`): never more
+    lenient than the env's own test, for callers that do not know the env's lattice.
+    """
+    if not (in_area(scenario, lattice, start) and in_area(scenario, lattice, end)):
+        return "move leaves the area"
+    radius = scenario.robot.radius
+    for name, rect in move_blockers(scenario):
+        if not octagon_bits(lattice, rect, radius, start) & octagon_bits(lattice, rect, radius, end):
+            return f"move passes {name!r}: no region of its octagon holds both ends"
+    return None
+
+
+def pose_refusal(scenario: Scenario, lattice: Lattice | None, bases: tuple[Point, ...]) -> str | None:
+    """Why the arm may not act from ``bases`` (a pose, or a stroke's two ends), or None.
+
+    Every table and obstacle must have one side of its rectangle grown by the radius that
+    holds every base (a corner cut of its octagon does not count): the planner's poses.
+    """
+    radius = scenario.robot.radius
+    for name, rect in move_blockers(scenario):
+        common = ALL_SIDES
+        for base in bases:
+            common &= octagon_bits(lattice, rect, radius, base)
+        if not common:
+            return f"acting base in a corner zone of {name!r}: on no side of it"
+    return None
+
+
+def arm_refusal(
+    scenario: Scenario,
+    state: WorldState,
+    lattice: Lattice | None,
+    bases: tuple[Point, ...],
+    hands: tuple[Point, ...],
+    ignore: str | None = None,
+) -> str | None:
+    """Why the arm may not reach ``hands`` from ``bases``, or None: Eq. 19 as the planner states it.
+
+    For every obstacle and piece of clutter (where ``state`` has it; but ``ignore``, the
+    piece pushed) one side half-plane of its rectangle (``x >= max_x``, ``x <= min_x``,
+    ``y >= max_y``, ``y <= min_y``) must hold every base and every hand point (bases on the
+    lattice by the index test, hands with :data:`~fetchcarry_env.regions.HAND_TOL`); then
+    no arm line from a base to a hand crosses it.
+    """
+    blockers = [(o.id, o.rect) for o in scenario.obstacles]
+    blockers += [(c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != ignore]
+    for name, rect in blockers:
+        common = ALL_SIDES
+        for base in bases:
+            common &= side_bits(lattice, rect, base)
+        for hand in hands:
+            common &= hand_bits(rect, hand)
+        if not common:
+            return f"arm line crosses {name!r}: base and hand on no common side of it"
+    return None
 
 
 def move_stop(scenario: Scenario, start: Point, end: Point) -> tuple[Point, str | None]:
@@ -150,16 +266,6 @@ def clutter_rect(scenario: Scenario, state: WorldState, clutter_id: str) -> Rect
     return Rect.around(state.clutter[clutter_id], size_x / 2, size_y / 2)
 
 
-def _arm_blocker(scenario: Scenario, state: WorldState, base: Point, hand: Point, ignore: str | None) -> str | None:
-    """The id of an obstacle or piece of clutter the arm line (Eq. 19) crosses, or None."""
-    blockers = [(o.id, o.rect) for o in scenario.obstacles]
-    blockers += [(c.id, clutter_rect(scenario, state, c.id)) for c in scenario.clutter if c.id != ignore]
-    for name, rect in blockers:
-        if not arm_line_clear(base, hand, (rect,)):
-            return name
-    return None
-
-
 def _nearest_in_reach(
     points: Iterable[tuple[str, Point]], base: Point, heading: Heading, posture: Posture
 ) -> str | None:
@@ -180,21 +286,19 @@ def _nearest_in_reach(
 def _check_pick(
     scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
 ) -> ResolvedPhase | str:
+    """The object a pick from ``base`` takes, or why none (the arm's rules are checked by the caller)."""
     if state.holding is not None:
         return "pick with a full hand"
     best = _nearest_in_reach(((obj.id, state.objects[obj.id][:2]) for obj in scenario.objects), base, heading, posture)
     if best is None:
         return "nothing to pick within reach"
-    hand = state.objects[best][:2]
-    blocker = _arm_blocker(scenario, state, base, hand, ignore=None)
-    if blocker is not None:
-        return f"arm line crosses {blocker!r}"
-    return ResolvedPhase(Mode.PICK, base, heading, posture, best, hand)
+    return ResolvedPhase(Mode.PICK, base, heading, posture, best, state.objects[best][:2])
 
 
 def _check_place(
     scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
 ) -> ResolvedPhase | str:
+    """The place of the held object at its goal from ``base``, or why not (the caller checks the arm's rules)."""
     if state.holding is None:
         return "place with an empty hand"
     obj = scenario.object(state.holding)
@@ -206,14 +310,11 @@ def _check_place(
     for item in scenario.clutter:
         if clutter_rect(scenario, state, item.id).overlaps_disc(obj.goal, obj.radius):
             return f"goal of {obj.id!r} occupied by {item.id!r}"
-    blocker = _arm_blocker(scenario, state, base, obj.goal, ignore=None)
-    if blocker is not None:
-        return f"arm line crosses {blocker!r}"
     return ResolvedPhase(Mode.PLACE, base, heading, posture, obj.id, obj.goal)
 
 
 def _check_push(
-    scenario: Scenario, state: WorldState, end: Point, heading: Heading, posture: Posture
+    scenario: Scenario, state: WorldState, lattice: Lattice, end: Point, heading: Heading, posture: Posture
 ) -> ResolvedPhase | str:
     # The hand may be empty or hold an object (the paper's push while carrying): the held
     # object goes with the hand and touches nothing, so it neither blocks the hand nor is pushed.
@@ -250,8 +351,13 @@ def _check_push(
     )
     if in_the_way is not None:
         return f"no room for the hand behind {best!r}: {in_the_way!r} is there"
-    blocker = _arm_blocker(scenario, state, start, contact, ignore=best)
-    if blocker is not None:
-        return f"arm line crosses {blocker!r}"
     stroke_end = (start[0] + ux * length, start[1] + uy * length)
+    hand_end = (contact[0] + ux * length, contact[1] + uy * length)
+    refusal = (
+        move_refusal(scenario, lattice, start, stroke_end)
+        or pose_refusal(scenario, lattice, (start, stroke_end))
+        or arm_refusal(scenario, state, lattice, (start, stroke_end), (contact, hand_end), ignore=best)
+    )
+    if refusal is not None:
+        return refusal
     return ResolvedPhase(Mode.PUSH, stroke_end, heading, posture, best, contact, direction, length)

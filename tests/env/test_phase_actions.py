@@ -145,7 +145,10 @@ def test_the_mask_follows_the_rules_not_a_copy_of_them(monkeypatch):
     env.reset(seed=3)
     base = env.unwrapped
     layout = env.get_wrapper_attr("layout")
-    holding = type(base.state)(base.state.base, base.state.heading, "bottle", base.state.objects, base.state.clutter)
+    goal_table = base.scenario.table_under_rect(base.scenario.clutter[0].rect)  # beside it, pushes are one move away
+    corner = phases.waypoint_cell(base.lattice, goal_table.rect, base.scenario.robot.radius, 0, 0, 0)
+    beside = base.lattice.point(*corner)
+    holding = type(base.state)(beside, base.state.heading, "bottle", base.state.objects, base.state.clutter)
     pushes = np.r_[layout.kind_slice("push"), layout.kind_slice("approach")]
     assert enumerate_phases(layout, base.scenario, holding, base.lattice).mask[pushes].any()
 

@@ -29,7 +29,7 @@ from sim_worlds import (
 
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.geometry import Rect
-from fetchcarry_env.kinematics import WAIT_COST, hand_offset
+from fetchcarry_env.kinematics import INVALID_ACTION_PENALTY, WAIT_COST, hand_offset
 from fetchcarry_env.observation import LIFT_HEIGHT
 from fetchcarry_env.sim import physics, stroke_profile
 from fetchcarry_env.sim.client import pybullet, silenced_file_descriptors
@@ -371,27 +371,26 @@ def test_a_push_while_holding_is_deterministic_and_copies_continue_bit_for_bit()
 
 
 # ---------------------------------------------------------------------- the base
-def test_the_base_stops_at_the_first_contact_with_a_wall_and_nothing_tunnels():
+def test_a_move_through_a_wall_is_refused_and_nothing_moves():
+    """No move is stopped at a contact: one that breaks the move rule (here: through a wall) does nothing."""
     env = make(thin_wall())
+    before = env.unwrapped.state
     _, reward, _, _, info = env.step(action(env, (2.5, 1.5), "+x", FAR, Mode.MOVE))
-    assert info["contact"] == "wall"
-    assert info["collisions"] == 1
-    base = env.unwrapped.state.base
-    assert base[0] == pytest.approx(1.5 - 0.22, abs=1e-9)  # touching the 2 cm wall, not through it
+    assert "'wall'" in info["invalid_action"] and info["contact"] is None and info["collisions"] == 0
+    assert env.unwrapped.state == before and info["travel"] == 0.0
     waiting = WAIT_COST * (len(env.unwrapped.scenario.objects) - info["delivered"])
-    assert reward == pytest.approx(-(base[0] - 0.5) - 0.1 * (base[0] - 0.5) - 1.0 - waiting)
+    assert reward == pytest.approx(-INVALID_ACTION_PENALTY - waiting)
     sim = env.unwrapped._sim
-    assert sim.robot.base_position() == pytest.approx(base)
-    closest = sim.client.getClosestPoints(sim.body_id("robot"), sim.body_id("wall"), 0.01, -1, -1)
-    assert closest and min(p[8] for p in closest) == pytest.approx(0.0, abs=1e-4)
+    assert sim.robot.base_position() == pytest.approx(before.base)
     env.close()
 
 
-def test_a_move_along_a_table_at_exactly_the_radius_is_free():
-    """Plans keep a clearance of at least the radius less 1 µm (docs/plan-format.md): the env must agree."""
-    for closer, touches in ((0.0, False), (5e-7, False), (1e-4, True)):
+def test_a_move_along_a_table_at_exactly_the_radius_is_allowed_and_closer_is_refused():
+    """The move rule's side of the table grown by the radius, with its 5e-7 m tolerance; no move touches anything."""
+    for closer, allowed in ((0.0, True), (4e-7, True), (1e-4, False)):
         table = ((1.0, 1.0), (2.0, 2.03 + closer))  # the path at y = 2.25 passes its edge at 0.22 - closer
         env = make(room(start=(0.5, 2.25), table=table))
         _, _, _, _, info = env.step(action(env, (2.5, 2.25), "+x", FAR, Mode.MOVE))
-        assert (info["contact"] == "table") is touches, closer
+        assert (info["invalid_action"] is None) is allowed, closer
+        assert info["contact"] is None and info["collisions"] == 0
         env.close()

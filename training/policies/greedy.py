@@ -12,8 +12,8 @@ It fixes the task first, greedily, and only then the motion, one phase at a time
    the base clears every table, obstacle and the area's edge; steps cost the paper's
    travel cost).
 3. **Motion**: the phase itself when the straight move to its pose is free; otherwise a
-   move to the farthest point of the searched path that a straight move reaches
-   without a contact (:func:`fetchcarry_env.rules.move_stop`).
+   move to the farthest point of the searched path that the env's move rule lets a
+   straight move reach (:func:`fetchcarry_env.rules.move_refusal`).
 
 It never looks ahead: the pose chosen for a pick ignores where the place will be, which
 is what the MILP's joint task-and-motion optimisation buys. Like the expert it plans from
@@ -43,7 +43,7 @@ from fetchcarry_env.kinematics import (
 )
 from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.phases import PhaseLayout
-from fetchcarry_env.rules import check_action, clutter_rect, move_stop
+from fetchcarry_env.rules import check_action, clutter_rect, move_refusal
 from fetchcarry_env.scenario import Scenario
 
 CLEARANCE_MARGIN = 0.01  # metres kept beyond the base radius by the lattice search
@@ -90,9 +90,9 @@ class GreedyPolicy:
         if action.mode == Mode.PUSH:  # the pose is where the stroke starts
             if math.dist(target, world.base) <= AT_POSE:
                 return best[2]
-            if move_stop(scenario, world.base, target)[1] is None:
+            if move_refusal(scenario, self.lattice, world.base, target) is None:
                 return Action(action.cell, world.heading, 0, Mode.MOVE)
-        elif move_stop(scenario, world.base, target)[1] is None:
+        elif move_refusal(scenario, self.lattice, world.base, target) is None:
             return action
         return self._step_along(scenario, world, action.cell, previous)
 
@@ -119,7 +119,8 @@ class GreedyPolicy:
         out = []
         for heading, cell, posture in self._window(scenario, point):
             action = Action(cell, heading, posture, mode)
-            phase = check_action(scenario, world, self.lattice, action)
+            there = replace(world, base=self.lattice.point(*cell))  # the phase alone: the motion is searched
+            phase = check_action(scenario, there, self.lattice, action)
             if not isinstance(phase, str) and phase.target == item:
                 out.append(action)
         return out
@@ -144,7 +145,7 @@ class GreedyPolicy:
                 phase = check_action(scenario, replace(world, base=start, heading=heading), self.lattice, push)
                 if isinstance(phase, str) or phase.target != item:
                     continue
-                if move_stop(scenario, start, phase.base)[1] is not None:
+                if move_refusal(scenario, self.lattice, start, phase.base) is not None:
                     continue
                 out.append((Action(cell, heading, posture, Mode.PUSH), travel_cost(start, phase.base), push))
         return out
@@ -230,7 +231,7 @@ class GreedyPolicy:
             path.append(previous[path[-1]])
         path.reverse()
         for cell in reversed(path[1:]):
-            if move_stop(scenario, world.base, self.lattice.point(*cell))[1] is None:
+            if move_refusal(scenario, self.lattice, world.base, self.lattice.point(*cell)) is None:
                 return Action(cell, world.heading, 0, Mode.MOVE)
         return Action(path[1] if len(path) > 1 else goal, world.heading, 0, Mode.MOVE)
 
