@@ -49,6 +49,13 @@ rule 9 (hand room)
     uses (``kinematics.hand_blocker``), overlaps no other piece of clutter and no object
     but the one held.
 
+The format's rules are physical (clearance, the exact arm line). The environment's
+rules are the planner's model, a little stricter (``docs/design.md``, "The env's rules
+are the planner's model"): :func:`env_refusals` lists, apart from the violations and
+without making a plan invalid, the phases the env refuses under them (a move with no
+common region of some octagon, an acting pose in a corner zone, an arm whose base and
+hand share no side of an obstacle or clutter).
+
 Units are metres.
 """
 
@@ -59,6 +66,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 from expert.plans import Phase, Plan, plan_objective
+from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import (
     Heading,
     Point,
@@ -76,6 +84,8 @@ from fetchcarry_env.kinematics import (
     push_headings,
     swept_rect,
 )
+from fetchcarry_env.observation import WorldState
+from fetchcarry_env.rules import arm_refusal, move_refusal, pose_refusal
 from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
 TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (docs/plan-format.md)
@@ -149,6 +159,67 @@ def validate_plan(scenario: Scenario, plan: Plan, *, holding: str | None = None)
         *_rule8_objective(scenario, plan),
         *_each_step(context, _rule9_hand_room),
     ]
+
+
+def env_refusals(
+    scenario: Scenario, plan: Plan, *, holding: str | None = None, lattice: Lattice | None = None
+) -> list[str]:
+    """The phases of ``plan`` that the env refuses under its move, pose and arm rules, one message each.
+
+    Not violations of the file format (a plan may be valid and still be listed here): the
+    env's rules are the planner's model stated exactly, a little stricter than the
+    format's physical ones, so a hand-written plan that clears a corner by less than the
+    octagon's margin, or reaches past an obstacle's corner, is flagged with its phase.
+    ``lattice`` is the env's action lattice; None tests every base in metres (never more
+    lenient than the env's lattice test). Phases the format refuses for their structure
+    (unknown ids, missing items) are skipped: the violations name them.
+    """
+    if plan.status not in ("optimal", "feasible") or not plan.phases:
+        return []
+    context = _Context.of(scenario, plan, holding)
+    out = []
+    for k, before, after in context.steps():
+        reason = _env_refusal(context, lattice, before, after)
+        if reason is not None:
+            out.append(
+                f"env rules: phase {k} {after.action} from {_pt(before.base)} to {_pt(after.base)}: "
+                f"the env refuses it: {reason}"
+            )
+    return out
+
+
+def _env_refusal(context: _Context, lattice: Lattice | None, before: Phase, after: Phase) -> str | None:
+    """Why the env refuses the step from ``before`` to ``after`` (fetchcarry_env.rules), or None."""
+    scenario = context.scenario
+    if after.action == "push":
+        return _env_push_refusal(context, lattice, before, after)
+    refusal = move_refusal(scenario, lattice, before.base, after.base)
+    if refusal is not None or after.action not in ("pick", "place") or after.target not in context.object_ids:
+        return refusal
+    hand = (before if after.action == "pick" else after).objects.get(after.target)
+    if hand is None or set(after.clutter) != set(context.clutter):
+        return None
+    state = WorldState(after.base, after.heading, before.holding, {}, dict(after.clutter))
+    bases = (after.base,)
+    return pose_refusal(scenario, lattice, bases) or arm_refusal(scenario, state, lattice, bases, (hand[:2],))
+
+
+def _env_push_refusal(context: _Context, lattice: Lattice | None, before: Phase, after: Phase) -> str | None:
+    """Why the env refuses the push stroke from ``before`` to ``after``: its move, its poses, its arm; or None."""
+    scenario = context.scenario
+    refusal = move_refusal(scenario, lattice, before.base, after.base)
+    start_rect = context.clutter_rect(after.target, before) if after.target in context.clutter else None
+    direction = heading_of(_snap_small((after.base[0] - before.base[0], after.base[1] - before.base[1])))
+    if refusal is not None or start_rect is None or direction is None or set(before.clutter) != set(context.clutter):
+        return refusal
+    bases = (before.base, after.base)
+    stroke = (after.base[0] - before.base[0], after.base[1] - before.base[1])
+    contact = push_contact(start_rect, direction)
+    hands = (contact, (contact[0] + stroke[0], contact[1] + stroke[1]))
+    state = WorldState(before.base, after.heading, before.holding, {}, dict(before.clutter))
+    return pose_refusal(scenario, lattice, bases) or arm_refusal(
+        scenario, state, lattice, bases, hands, ignore=after.target
+    )
 
 
 def _each_step(context: _Context, check: Callable[[_Context, int, Phase, Phase], list[str]]) -> list[str]:

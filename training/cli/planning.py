@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from expert.plans import Phase, Plan, phase_rows, plan_length
-from expert.validate import validate_plan
+from expert.validate import env_refusals, validate_plan
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
@@ -348,18 +348,22 @@ def run_validate(args: argparse.Namespace) -> int:
     scenario = load_scenario(Path(args.scenario))
     plan = load_plan(Path(args.plan))
     violations = validate_plan(scenario, plan)
+    refused = env_refusals(scenario, plan)  # notes, not violations: the exit status does not count them
     if plot_path is not None:
         from expert.plot import plot_plan  # matplotlib only when a picture is asked for
 
         plot_plan(scenario, plan, plot_path)
     if args.json:
         report = {"scenario": args.scenario, "plan": args.plan, "valid": not violations, "violations": violations}
-        print(json.dumps(report, indent=2))
+        print(json.dumps({**report, "env_refusals": refused}, indent=2))
     elif violations:
         echo(f"{args.plan}: INVALID for {args.scenario}: {len(violations)} violation(s)")
         echo("\n".join(f"  - {v}" for v in violations))
     else:
         echo(f"{args.plan}: valid for {args.scenario} ({plan.status}, {plan_length(len(plan.phases))})")
+    if refused and not args.json:
+        echo(f"note: the env refuses {len(refused)} phase(s) under its move and arm rules (not a format violation):")
+        echo("\n".join(f"  - {r}" for r in refused))
     if plot_path is not None and not args.json:
         echo(f"plot written to {plot_path}")
     return 1 if violations else 0
