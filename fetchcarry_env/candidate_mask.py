@@ -41,6 +41,7 @@ from fetchcarry_env.observation import WorldState
 from fetchcarry_env.phases import CORNERS, STILL, PhaseLayout, PhaseTable, side_line, waypoint_cell
 from fetchcarry_env.regions import (
     ALL_SIDES,
+    GEOM_TOL,
     REGIONS,
     SIDES,
     area_domain,
@@ -56,7 +57,6 @@ from fetchcarry_env.regions import (
 from fetchcarry_env.rules import check_action, clutter_rect, in_area, move_blockers
 from fetchcarry_env.scenario import DeliveryObject, Scenario
 
-REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance (the rules use the default)
 UNIT = np.array([heading_vector(h) for h in HEADINGS], dtype=np.int64)  # (4, 2): heading index -> unit vector
 _FIELDS = ("index", "ci", "cj", "heading", "posture")  # an _Offers' arrays
 PUSH_HEADING = np.array([[HEADINGS.index(h) for h in push_headings(d)] for d in HEADINGS], dtype=np.int64)  # (4, 3)
@@ -145,13 +145,16 @@ class FastPhases:
         self.obstacles = _rects(o.rect for o in scenario.obstacles)
         self._obstacle_rows = _side_rows(lattice, (o.rect for o in scenario.obstacles))
         postures = scenario.robot.postures
-        self.reach = np.array(
+        self.reach = np.array(  # Posture.reaches(tol=GEOM_TOL): the reach of a base off the lattice (regions.in_reach)
             [
-                (p.forward[0] - REACH_TOL, p.forward[1] + REACH_TOL, p.lateral[0] - REACH_TOL, p.lateral[1] + REACH_TOL)
+                (p.forward[0] - GEOM_TOL, p.forward[1] + GEOM_TOL, p.lateral[0] - GEOM_TOL, p.lateral[1] + GEOM_TOL)
                 for p in postures
             ],
             dtype=float,
         ).reshape(-1, 4)
+        self.spans = np.array(  # (4 headings, postures, 4): max dx, min dx, max dy, min dy of regions.reach_box
+            [[_offset_span(h, p) for p in postures] for h in HEADINGS], dtype=float
+        ).reshape(len(HEADINGS), -1, 4)
         nf, nl = layout.window
         self.window = np.array(
             [
@@ -435,8 +438,7 @@ class FastPhases:
         if not self.scenario.clutter:
             return _empty(int(Mode.PUSH))
         c, d, h = self._push_grid  # (piece, direction, heading) of every push candidate's first stroke
-        bx, by = state.base
-        posture = self._first_posture(*_hand_offset(h, bx, by, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1]))
+        posture = self._first_posture_from(state.base, h, pieces.contacts[c, d, 0], pieces.contacts[c, d, 1])
         g = np.flatnonzero(posture >= 0)  # the strokes' (piece, direction, heading) whose contact is within reach
         if g.size == 0:
             return _empty(int(Mode.PUSH))
@@ -468,9 +470,8 @@ class FastPhases:
         plain = keep.copy()  # decided here; the rest (another direction, two pieces in reach) by check_action
         sel = np.flatnonzero(keep)
         contacts = pieces.contacts[:, d[sel]].transpose(1, 0, 2)  # (S, pieces, 2): every piece's, along the stroke
-        fwd, lat = _hand_offset(offers.heading[sel][:, None], bx, by, contacts[..., 0], contacts[..., 1])
-        r = self.reach[offers.posture[sel]][:, None, :]
-        single = ((r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])).sum(axis=1) == 1
+        h, k = offers.heading[sel][:, None], offers.posture[sel][:, None]
+        single = self._reach_from(state.base, h, k, contacts[..., 0], contacts[..., 1]).sum(axis=1) == 1
         plain[sel[~single]] = False
         keep[sel[~single]] = False
         sel = sel[single]
@@ -551,34 +552,54 @@ class FastPhases:
         on = (ci >= 0) & (ci < self.lattice.shape[0]) & (cj >= 0) & (cj < self.lattice.shape[1])
         ci, cj, index, group = ci[on], cj[on], index[on], group[on]
         h = headings[group]
-        fwd, lat = _hand_offset(h, self.xs[ci], self.ys[cj], targets[group, 0], targets[group, 1])
-        posture = self._first_posture(fwd, lat)
+        postures = range(len(self.scenario.robot.postures))
+        reach = [self._in_boxes(ci, cj, h, k, targets[group, 0], targets[group, 1]) for k in postures]
+        posture = _first_true(reach, ci.size)
         ok = posture >= 0
         return _Offers(index[ok], ci[ok], cj[ok], h[ok], posture[ok], -1), group[ok]
 
-    def _first_posture(self, fwd: np.ndarray, lat: np.ndarray) -> np.ndarray:
-        """The first posture whose ranges hold each robot-frame offset (metres), or -1 (``Posture.reaches``)."""
-        r = self.reach
-        ok = (
-            (r[:, 0] <= fwd[:, None])
-            & (fwd[:, None] <= r[:, 1])
-            & (r[:, 2] <= lat[:, None])
-            & (lat[:, None] <= r[:, 3])
+    def _in_boxes(self, ci, cj, h, k, tx, ty) -> np.ndarray:
+        """Whether lattice pose ``(ci, cj)`` lies in ``regions.reach_box`` of target ``(tx, ty)`` at heading ``h``
+        with posture ``k`` (arrays broadcast together): the box's exact rounding, operation for operation."""
+        (ox, oy), res = self.lattice.origin, self.lattice.resolution
+        span = self.spans[h, k]  # (..., 4)
+        lo_x, hi_x, lo_y, hi_y = tx - span[..., 0], tx - span[..., 1], ty - span[..., 2], ty - span[..., 3]
+        return (
+            (np.ceil((lo_x - GEOM_TOL - ox) / res - 1e-12) <= ci)
+            & (ci <= np.floor((hi_x + GEOM_TOL - ox) / res + 1e-12))
+            & (np.ceil((lo_y - GEOM_TOL - oy) / res - 1e-12) <= cj)
+            & (cj <= np.floor((hi_y + GEOM_TOL - oy) / res + 1e-12))
         )
-        return np.where(ok.any(axis=1), ok.argmax(axis=1), -1)
+
+    def _reach_from(self, base: Point, h, k, tx, ty) -> np.ndarray:
+        """``regions.in_reach`` from one base (the state's: on the lattice or not), for arrays of headings,
+        postures and targets (metres) broadcast together."""
+        cell = lattice_cell(self.lattice, base)
+        if cell is not None:
+            return self._in_boxes(cell[0], cell[1], h, k, tx, ty)
+        fwd, lat = _hand_offset(h, base[0], base[1], tx, ty)
+        r = self.reach[k]
+        return (r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])
+
+    def _first_posture_from(self, base: Point, h: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
+        """The first posture reaching each target from ``base`` at heading ``h`` (``_Enumerator._posture``), or -1."""
+        postures = range(len(self.scenario.robot.postures))
+        return _first_true([self._reach_from(base, h, np.full(h.shape, k), tx, ty) for k in postures], h.size)
 
     def _reaches_all(self, offers: _Offers, points: np.ndarray) -> np.ndarray:
         """``(N, J)``: True where candidate ``n``'s posture, from its pose, reaches point ``j`` (metres).
 
         ``points`` is ``(J, 2)``, or ``(N, J, 2)``: points per candidate.
         """
-        h = offers.heading[:, None]
         points = points if points.ndim == 3 else points[None]
-        fwd, lat = _hand_offset(
-            h, self.xs[offers.ci][:, None], self.ys[offers.cj][:, None], points[..., 0], points[..., 1]
+        return self._in_boxes(
+            offers.ci[:, None],
+            offers.cj[:, None],
+            offers.heading[:, None],
+            offers.posture[:, None],
+            points[..., 0],
+            points[..., 1],
         )
-        r = self.reach[offers.posture][:, None, :]
-        return (r[..., 0] <= fwd) & (fwd <= r[..., 1]) & (r[..., 2] <= lat) & (lat <= r[..., 3])
 
     def _fits(self, ci: np.ndarray, cj: np.ndarray) -> np.ndarray:
         """True where the base disc at the lattice point fits in the area (check_action's first test)."""
@@ -630,6 +651,21 @@ class FastPhases:
         return [(k, t.rect) for k, t in enumerate(scenario.tables)] + [
             (tables + k, o.rect) for k, o in enumerate(scenario.obstacles)
         ]
+
+
+def _offset_span(heading: str, posture) -> tuple[float, float, float, float]:
+    """``(max dx, min dx, max dy, min dy)`` of the posture's range corners at ``heading`` (``regions.reach_box``)."""
+    offsets = [to_world_frame(heading, f, lat) for f in posture.forward for lat in posture.lateral]
+    dxs, dys = [o[0] for o in offsets], [o[1] for o in offsets]
+    return (max(dxs), min(dxs), max(dys), min(dys))
+
+
+def _first_true(masks: list[np.ndarray], size: int) -> np.ndarray:
+    """Per element, the index of the first mask that holds there, or -1."""
+    out = np.full(size, -1, dtype=np.int64)
+    for k in reversed(range(len(masks))):
+        out = np.where(masks[k], k, out)
+    return out
 
 
 def _index(lattice: Lattice, point: tuple[float, float]) -> tuple[int, int]:

@@ -70,14 +70,14 @@ import numpy as np
 
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, heading_vector, to_world_frame
-from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
+from fetchcarry_env.kinematics import push_contact, push_headings
 from fetchcarry_env.observation import Capacity, WorldState
-from fetchcarry_env.regions import index_at_least, index_at_most
+from fetchcarry_env.regions import in_reach, index_at_least, index_at_most
 from fetchcarry_env.rules import check_action, clutter_rect
 from fetchcarry_env.scenario import DEFAULT_POSTURES, Posture, Scenario
 
 KINDS: tuple[str, ...] = ("pick", "place", "push", "approach", "waypoint", "edge")
-REACH_TOL = 1e-3  # metres: Posture.reaches' default tolerance, used to size the pose windows
+REACH_TOL = 1e-3  # metres beyond the postures' ranges that the pose windows hold (more than the env's reach needs)
 STILL = 1e-9  # metres: a move whose end is this close to the base goes nowhere
 
 
@@ -411,10 +411,12 @@ class _Enumerator:
                     yield f, lat, cell
 
     def _posture(self, base: Point, heading: Heading, point: Point) -> int | None:
-        """The first of the robot's postures that puts the hand over ``point`` from the base pose, or None."""
-        offset = hand_offset(base, heading, point)
+        """The first of the robot's postures that puts the hand over ``point`` from the base pose, or None.
+
+        The env's reach (:func:`fetchcarry_env.regions.in_reach`).
+        """
         for k, posture in enumerate(self.scenario.robot.postures):
-            if posture.reaches(*offset):
+            if in_reach(self.lattice, base, heading, posture, point):
                 return k
         return None
 

@@ -33,7 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.geometry import Point, Rect
+from fetchcarry_env.geometry import Heading, Point, Rect, to_world_frame
+from fetchcarry_env.kinematics import hand_offset
+from fetchcarry_env.scenario import Posture
 
 GEOM_TOL = 5e-7  # metres: this close outside an exact bound counts as inside (covers float32 observations)
 HAND_TOL = 5e-7  # metres: a hand point this close to a side half-plane counts as inside (float32 observations)
@@ -245,6 +247,41 @@ def lattice_cell(lattice: Lattice | None, point: Point) -> tuple[int, int] | Non
     if abs(x - point[0]) > ON_LATTICE_TOL or abs(y - point[1]) > ON_LATTICE_TOL:
         return None
     return (i, j)
+
+
+def box_between(lattice: Lattice, lo: Point, hi: Point) -> IndexBox:
+    """Lattice points inside the box ``[lo, hi]`` (inclusive, metres, with :data:`GEOM_TOL`)."""
+    return IndexBox(
+        index_at_least(lattice, 0, lo[0]),
+        index_at_most(lattice, 0, hi[0]),
+        index_at_least(lattice, 1, lo[1]),
+        index_at_most(lattice, 1, hi[1]),
+    )
+
+
+# ---------------------------------------------------------------------- the arm's reach
+def reach_box(lattice: Lattice, hand: Point, heading: Heading, posture: Posture, margin: float = 0.0) -> IndexBox:
+    """Lattice points from which ``posture`` at ``heading`` puts the hand on ``hand`` (ranges widened by ``margin``)."""
+    offsets = [to_world_frame(heading, f, lat) for f in posture.forward for lat in posture.lateral]
+    dxs, dys = [o[0] for o in offsets], [o[1] for o in offsets]
+    return box_between(
+        lattice,
+        (hand[0] - max(dxs) - margin, hand[1] - max(dys) - margin),
+        (hand[0] - min(dxs) + margin, hand[1] - min(dys) + margin),
+    )
+
+
+def in_reach(lattice: Lattice | None, base: Point, heading: Heading, posture: Posture, point: Point) -> bool:
+    """Whether ``posture`` at ``heading`` puts the hand over ``point`` from a base at ``base`` (the planner's reach).
+
+    A lattice base is tested against :func:`reach_box` (the posture's exact ranges rounded
+    to the lattice with :data:`GEOM_TOL`), another base by its robot-frame offset, the
+    ranges widened by :data:`GEOM_TOL` (metres).
+    """
+    cell = lattice_cell(lattice, base)
+    if cell is not None:
+        return reach_box(lattice, point, heading, posture).contains(*cell)
+    return posture.reaches(*hand_offset(base, heading, point), tol=GEOM_TOL)
 
 
 # ---------------------------------------------------------------------- a rectangle's regions

@@ -20,7 +20,11 @@ The motion and arm rules are the MILP expert's model stated exactly
   not a corner cut); a push stroke keeps both its ends on one common such side;
 - **the arm** (:func:`arm_refusal`, Eq. 19): for every obstacle and piece of clutter
   (but the one pushed), the base (both ends of a stroke) and the hand (both ends of a
-  stroke) lie in one common side half-plane of its rectangle.
+  stroke) lie in one common side half-plane of its rectangle;
+- **reach** (:func:`fetchcarry_env.regions.in_reach`): a posture reaches a point from a
+  lattice base when the base lies in the planner's reach box (the posture's exact ranges
+  rounded to the lattice), from another base when the offset lies within the ranges
+  widened by 5e-7 m (it was 1 mm, which let the env take poses the planner does not have).
 
 Lattice points are tested in lattice indices with the planner's exact integer bounds,
 other points (the start, a base after a jammed push) in metres with its tolerance.
@@ -47,6 +51,7 @@ from fetchcarry_env.regions import (
     GEOM_TOL,
     area_domain,
     hand_bits,
+    in_reach,
     lattice_cell,
     octagon_bits,
     side_bits,
@@ -124,9 +129,9 @@ def check_action(scenario: Scenario, state: WorldState, lattice: Lattice, action
     if action.mode == Mode.MOVE:
         return ResolvedPhase(Mode.MOVE, target, action.heading)
     if action.mode == Mode.PICK:
-        phase = _check_pick(scenario, state, target, action.heading, posture)
+        phase = _check_pick(scenario, state, lattice, target, action.heading, posture)
     else:
-        phase = _check_place(scenario, state, target, action.heading, posture)
+        phase = _check_place(scenario, state, lattice, target, action.heading, posture)
     if isinstance(phase, str):
         return phase
     bases, hands = (target,), (phase.hand,)
@@ -267,42 +272,43 @@ def clutter_rect(scenario: Scenario, state: WorldState, clutter_id: str) -> Rect
 
 
 def _nearest_in_reach(
-    points: Iterable[tuple[str, Point]], base: Point, heading: Heading, posture: Posture
+    points: Iterable[tuple[str, Point]], lattice: Lattice, base: Point, heading: Heading, posture: Posture
 ) -> str | None:
-    """The id of the point nearest ``posture``'s centre among those within its ranges from ``base``, or None.
+    """The id of the point nearest ``posture``'s centre among those within its reach from ``base``, or None.
 
-    The hand's offset is measured in the robot frame of ``(base, heading)``; of a tie, the first point wins.
+    Reach is the planner's (:func:`fetchcarry_env.regions.in_reach`); the hand's offset is
+    measured in the robot frame of ``(base, heading)``; of a tie, the first point wins.
     """
     best, best_distance = None, math.inf
     for item_id, point in points:
-        offset = hand_offset(base, heading, point)
-        if posture.reaches(*offset):
-            distance = math.dist(offset, posture.center)
+        if in_reach(lattice, base, heading, posture, point):
+            distance = math.dist(hand_offset(base, heading, point), posture.center)
             if distance < best_distance:
                 best, best_distance = item_id, distance
     return best
 
 
 def _check_pick(
-    scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
+    scenario: Scenario, state: WorldState, lattice: Lattice, base: Point, heading: Heading, posture: Posture
 ) -> ResolvedPhase | str:
     """The object a pick from ``base`` takes, or why none (the arm's rules are checked by the caller)."""
     if state.holding is not None:
         return "pick with a full hand"
-    best = _nearest_in_reach(((obj.id, state.objects[obj.id][:2]) for obj in scenario.objects), base, heading, posture)
+    objects = ((obj.id, state.objects[obj.id][:2]) for obj in scenario.objects)
+    best = _nearest_in_reach(objects, lattice, base, heading, posture)
     if best is None:
         return "nothing to pick within reach"
     return ResolvedPhase(Mode.PICK, base, heading, posture, best, state.objects[best][:2])
 
 
 def _check_place(
-    scenario: Scenario, state: WorldState, base: Point, heading: Heading, posture: Posture
+    scenario: Scenario, state: WorldState, lattice: Lattice, base: Point, heading: Heading, posture: Posture
 ) -> ResolvedPhase | str:
     """The place of the held object at its goal from ``base``, or why not (the caller checks the arm's rules)."""
     if state.holding is None:
         return "place with an empty hand"
     obj = scenario.object(state.holding)
-    if not posture.reaches(*hand_offset(base, heading, obj.goal)):
+    if not in_reach(lattice, base, heading, posture, obj.goal):
         return f"goal of {obj.id!r} out of reach"
     for other in scenario.objects:
         if other.id != obj.id and math.dist(state.objects[other.id][:2], obj.goal) < other.radius + obj.radius - 1e-9:
@@ -332,7 +338,7 @@ def _check_push(
     if heading not in push_headings(direction):
         return f"heading {heading} cannot push along {direction}"
     contacts = ((item.id, push_contact(clutter_rect(scenario, state, item.id), direction)) for item in scenario.clutter)
-    best = _nearest_in_reach(contacts, start, heading, posture)
+    best = _nearest_in_reach(contacts, lattice, start, heading, posture)
     if best is None:
         return "no clutter to push within reach"
     rect = clutter_rect(scenario, state, best)

@@ -96,12 +96,7 @@ class Grid:
 
     def box_between(self, lo: Point, hi: Point) -> IndexBox:
         """Lattice points inside the world box ``[lo, hi]`` (inclusive, metres)."""
-        return IndexBox(
-            self.index_at_least(0, lo[0]),
-            self.index_at_most(0, hi[0]),
-            self.index_at_least(1, lo[1]),
-            self.index_at_most(1, hi[1]),
-        )
+        return regions.box_between(self.lattice, lo, hi)
 
     def point(self, i: int, j: int) -> Point:
         return self.lattice.point(i, j)

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
-from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance, to_world_frame
+from fetchcarry_env import regions
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
 from fetchcarry_env.regions import GEOM_TOL, hand_in_side
 from fetchcarry_env.scenario import Posture, Scenario
@@ -76,18 +77,16 @@ class ObjectAt:
     where: str
 
 
-CONFUSION_MARGIN = 2e-3  # metres: another item confuses an action when it is in reach within the env's 1 mm
-# tolerance plus this, and at most this much farther from the middle of the ranges (float32 observations)
+CONFUSION_MARGIN = 2e-3  # metres: another item confuses an action when it is in reach within 1 mm (more than
+# the env's reach tolerance) plus this, and at most this much farther from the middle of the ranges: conservative
 
 
 def reach_box(grid: Grid, hand: Point, heading: Heading, posture: Posture, margin: float = 0.0) -> IndexBox:
-    """Lattice points from which ``posture`` at ``heading`` puts the hand on ``hand`` (ranges widened by ``margin``)."""
-    offsets = [to_world_frame(heading, f, lat) for f in posture.forward for lat in posture.lateral]
-    dxs, dys = [o[0] for o in offsets], [o[1] for o in offsets]
-    return grid.box_between(
-        (hand[0] - max(dxs) - margin, hand[1] - max(dys) - margin),
-        (hand[0] - min(dxs) + margin, hand[1] - min(dys) + margin),
-    )
+    """Lattice points from which ``posture`` at ``heading`` puts the hand on ``hand`` (ranges widened by ``margin``).
+
+    The env's reach test for lattice bases (:func:`fetchcarry_env.regions.reach_box`).
+    """
+    return regions.reach_box(grid.lattice, hand, heading, posture, margin)
 
 
 def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[int, int]) -> tuple[HalfPlane, ...]:
@@ -220,7 +219,7 @@ def split_by_choice(
     forbidden while the item stands there), or is dropped if the item never moves.
     Returns boxes with their tag sets; lattice points with the same tags are merged.
     """
-    tol = 1e-3 + CONFUSION_MARGIN  # the env's reach tolerance (Posture.reaches), widened
+    tol = 1e-3 + CONFUSION_MARGIN  # wider than the env's reach (regions.in_reach): never misses an item it takes
     near = [(p, t) for p, t in others if not reach_box(grid, p, heading, posture, tol).intersect(box).empty]
     if not near:
         return [(box, frozenset())]

@@ -91,6 +91,13 @@ def test_a_push_stroke_whose_ends_share_no_side_of_an_obstacle_is_refused():
     env.close()
 
 
+def test_a_pick_half_a_millimetre_beyond_the_posture_s_range_is_refused():
+    """The env's reach is the planner's (the exact ranges); its 1 mm tolerance took poses the planner does not have."""
+    env = make(room(start=(2.45, 1.2), objects=[{"id": "bottle", "start": [1.7495, 1.2], "goal": [1.8, 1.8]}]))
+    _refused(env, ((2.45, 1.2), "-x", FAR, Mode.PICK), "reach")  # forward 0.7005 m, the range 0.55-0.70 m
+    env.close()
+
+
 @pytest.mark.parametrize("family", ["basic", "corridor", "push", "apartment", "unseen-layouts"])
 def test_every_move_the_rule_accepts_is_physically_clear(family):
     """Random moves between lattice points and from the start: accepted means the swept disc touches nothing."""

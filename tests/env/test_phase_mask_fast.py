@@ -124,7 +124,7 @@ def test_fast_mask_is_the_reference_mask_on_random_walks(family):
 
 def test_the_masks_after_pushes_that_jam_are_the_reference_masks():
     tally = Tally()
-    assert compare_walk("push", seed=10, states=100, tally=tally, pushy=True) == []
+    assert compare_walk("push", seed=0, states=100, tally=tally, pushy=True) == []
     assert tally.pushes >= 20 and tally.jams >= 1
 
 
