@@ -6,34 +6,34 @@ where they are, as if delivered; pushed clutter where it was pushed). Single-obj
 models solve in tens of milliseconds, so the whole plan comes quickly. It is a valid
 plan of the full problem (every sub-plan obeys the same rules, and the state carries
 over exactly), usually with as many phases as the optimum or a few more, and a
-higher Eq. 1. :func:`expert.planner.plan` makes one first, nearest object first
-with SCIP stopped at its first solution of each sub-plan (before any bound of the whole
-problem, so that a short time limit has a valid plan), and uses it as the answer of last resort
-(status ``feasible``) and, when it has no more phases than the model being solved,
-as SCIP's first incumbent (:mod:`expert.milp.warm`).
+higher task cost. :func:`expert.planner.plan` makes them as first plans: the answer of last
+resort (status ``feasible``) and, when one has no more phases than the model being solved,
+SCIP's first incumbent (:mod:`expert.milp.warm`). Every sub-plan is a planning call within
+a counted budget (SCIP nodes), so a decoupled plan is the same at any load.
 
-Units are metres and seconds.
+Units are metres.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import time
 from collections.abc import Callable, Sequence
 
 from expert.approach import FreeLattice, approach, carry, moves_along, pick_leg, shortcut
-from expert.milp.deadline import Deadline, TimeUp
 from expert.milp.decode import SolvedPhase
 from expert.milp.problem import Problem
-from expert.plans import Phase, Plan, plan_objective
+from expert.plans import Phase, Plan, task_cost
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import Scenario
 
 Planner = Callable[..., Plan]
-SHORTER_SUB_PLAN_S = 1.0  # seconds the fallback gives the optimal sub-plan after a first solution of more than one step
-WHOLE_LEGS_S = 5.0  # seconds, at most, for the fallback's second try (the MILP for each whole delivery)
+"""``planner(scenario, holding=None, lower_bound=True, optimal=False) -> Plan``: a sub-plan within its node budget.
+
+``optimal`` False may stop at SCIP's first solution; ``lower_bound`` starts the phase counts at the
+relaxation's bound. It raises :class:`~expert.milp.deadline.TimeUp` when the caller's safety stop came.
+"""
 PLACE_KEEP = 1.0  # metres of path before the goal where the fallback's moves stop and the MILP takes over
 
 
@@ -41,7 +41,6 @@ def decoupled_plan(
     scenario: Scenario,
     order: Sequence[str],
     lattice: Lattice,
-    deadline: Deadline,
     planner: Planner,
     lookahead: int = 1,
     nearest: bool = False,
@@ -56,9 +55,8 @@ def decoupled_plan(
     standing where they are) and keeps its phases up to its first place: with
     ``lookahead = 2`` the place of one object is chosen knowing the next one (fewer
     phases at the junctions, at the price of two-object models).
-    ``planner`` is :func:`expert.planner.plan` (passed in to avoid an import circle).
+    ``planner`` makes each sub-plan (:data:`Planner`; passed in to avoid an import circle).
     ``holding``: an object already in the hand at the start; it is delivered first.
-    Raises :class:`~expert.milp.deadline.TimeUp` when ``deadline`` passes.
     """
     phases: list[Phase] = []
     base, heading = scenario.robot.start, scenario.robot.heading
@@ -71,12 +69,9 @@ def decoupled_plan(
         if nearest and holding is None:
             todo.sort(key=lambda i: math.dist(objects[i], base))
         for first in range(1 if holding is not None else len(todo)):
-            left = deadline.left()
-            if left <= 0:
-                raise TimeUp
             targets = (todo[first:] + todo[:first])[: 1 if holding is not None else lookahead]
             sub = _sub_problem(scenario, targets, base, heading, objects, clutter)
-            result = planner(sub, time_limit=left, lattice=lattice, holding=holding)
+            result = planner(sub, holding=holding)
             if result.found:
                 break
         else:
@@ -101,7 +96,6 @@ def decoupled_apart(
     scenario: Scenario,
     order: Sequence[str],
     lattice: Lattice,
-    deadline: Deadline,
     planner: Planner,
     holding: str | None = None,
 ) -> tuple[Phase, ...] | None:
@@ -112,10 +106,9 @@ def decoupled_apart(
     the single-object MILP for the whole delivery from there, as :func:`decoupled_plan`),
     then moves towards the goal stopping ``PLACE_KEEP`` metres of path before it, and the
     single-object MILP with the object in the hand for what is left (pushes, the place; from the pick when that fails).
-    ``planner`` takes ``first=False`` for an optimal sub-plan (it stops at SCIP's first
-    solution otherwise): tried for ``SHORTER_SUB_PLAN_S`` after a first solution of more
-    than one step, and kept when it has no more phases.
-    Raises :class:`~expert.milp.deadline.TimeUp` when ``deadline`` passes.
+    ``planner`` takes ``optimal=True`` for an optimal sub-plan (it may stop at SCIP's first
+    solution otherwise): tried after a first solution of more than one step, and kept
+    when it costs less.
     """
     space = FreeLattice(scenario, lattice)
     current = Phase(
@@ -133,7 +126,7 @@ def decoupled_apart(
         if current.holding is None:
             todo.sort(key=lambda i: math.dist(current.objects[i], current.base))
         target = todo[0]
-        leg = _one_object(scenario, space, current, target, lattice, deadline, planner)
+        leg = _one_object(scenario, space, current, target, lattice, planner)
         if leg is None:
             return None
         phases.extend(leg)
@@ -143,53 +136,47 @@ def decoupled_apart(
 
 
 def _one_object(
-    scenario: Scenario, space: FreeLattice, current: Phase, target: str, lattice: Lattice, deadline: Deadline,
-    planner: Planner,
-) -> list[Phase] | None:  # fmt: skip
+    scenario: Scenario, space: FreeLattice, current: Phase, target: str, lattice: Lattice, planner: Planner
+) -> list[Phase] | None:
     """The phases after ``current`` that deliver ``target`` (see :func:`decoupled_apart`); None if none found."""
     picked: list[Phase] = []
     if current.holding is None:
         objects3 = {k: (v[0], v[1], 0.0) for k, v in current.objects.items()}
         picked = pick_leg(space, current, target, objects3) or []
         if not picked:  # (a push first, say): moves towards the object, then the MILP for the whole delivery
-            return _towards_then_plan(scenario, space, current, current.objects[target], target, lattice, deadline,
-                                      planner)  # fmt: skip
+            return _towards_then_plan(scenario, space, current, current.objects[target], target, lattice, planner)
     at = picked[-1] if picked else current
-    rest = _towards_then_plan(scenario, space, at, scenario.object(target).goal, target, lattice, deadline, planner)
+    rest = _towards_then_plan(scenario, space, at, scenario.object(target).goal, target, lattice, planner)
     return None if rest is None else [*picked, *rest]
 
 
 def _towards_then_plan(
     scenario: Scenario, space: FreeLattice, at: Phase, point: tuple[float, float], target: str, lattice: Lattice,
-    deadline: Deadline, planner: Planner,
+    planner: Planner,
 ) -> list[Phase] | None:  # fmt: skip
     """Moves from ``at`` towards ``point`` (stopping ``PLACE_KEEP`` metres of path before it), then the MILP for
     ``target`` from there; from ``at`` itself when that finds nothing; None if neither does."""
     ends = approach(space, at.base, point, PLACE_KEEP)
     for start in (moves_along(at, ends), []) if ends else ([],):
-        rest = _sub_plan(scenario, start[-1] if start else at, [target], lattice, deadline, planner)
+        rest = _sub_plan(scenario, start[-1] if start else at, [target], planner)
         if rest is not None:
             return [*start, *rest]
     return None
 
 
-def _sub_plan(scenario, current: Phase, targets, lattice, deadline, planner) -> list[Phase] | None:
+def _sub_plan(scenario: Scenario, current: Phase, targets: Sequence[str], planner: Planner) -> list[Phase] | None:
     """The single-object MILP's phases after ``current`` through its first place; None without a plan."""
-    left = deadline.left()
-    if left <= 0:
-        raise TimeUp
     sub = _sub_problem(scenario, targets, current.base, current.heading, current.objects, current.clutter)
     # With the object in the hand (a short leg) no relaxation bound: on an apartment's lattice it outlasts the
     # leg's own solves; a whole delivery keeps it (deepening from 3 phases would prove too many counts infeasible).
     bound = current.holding is None
-    result = planner(sub, time_limit=left, lattice=lattice, holding=current.holding, lower_bound=bound)
+    result = planner(sub, holding=current.holding, lower_bound=bound)
     if not result.found:
         return None
-    if len(result.phases) > 2 and deadline.left() > SHORTER_SUB_PLAN_S:  # the optimal sub-plan, if it comes quickly
-        limit, held = SHORTER_SUB_PLAN_S, current.holding
-        shorter = planner(sub, time_limit=limit, lattice=lattice, holding=held, first=False, lower_bound=bound)
-        if shorter.found and len(shorter.phases) <= len(result.phases):
-            result = shorter
+    if len(result.phases) > 2:  # more than one step: the optimal sub-plan, within its budget
+        better = planner(sub, holding=current.holding, lower_bound=bound, optimal=True)
+        if better.found and task_cost(sub, better.phases) < task_cost(sub, result.phases) - 1e-9:
+            result = better
     kept = _through_first_place(result.phases)
     return None if kept is None else kept[1:]
 
@@ -198,55 +185,48 @@ def fallback_plan(
     scenario: Scenario,
     order: Sequence[str],
     lattice: Lattice,
-    deadline: Deadline,
     planner: Planner,
     holding: str | None = None,
 ) -> Plan:
-    """The decoupled plan, nearest object first, as a :class:`Plan` with status ``feasible``, or ``time_limit``.
+    """The decoupled plan, nearest object first, as a :class:`Plan` with status ``feasible``, or ``infeasible``.
 
-    The answer of last resort of a caller whose planning call found no plan in time
-    (:class:`expert.policy.ExpertPolicy`): one single-object MILP per object, no bound
-    of the whole problem, so it comes in about a second where the whole problem's
-    bounds alone outlast the time limit (eight objects). It is a valid plan, never
-    claimed optimal (``stats["optimality"]``). ``planner`` should stop at its sub-plans'
-    first solutions (SCIP's ``limits/solutions = 1``); each gets the time left before
-    ``deadline``. ``order``: the objects still to deliver (the held one included).
-    Two tries, the plan with fewer phases kept: :func:`decoupled_apart` (long legs without
-    the MILP: comes in a few seconds in an apartment), then, in what is left of at most
-    ``WHOLE_LEGS_S``, :func:`decoupled_plan` (the MILP for each whole delivery: fewer
-    phases where the objects are a few phases apart, too slow across rooms); each without
-    the moves a straight slide makes unnecessary (:func:`expert.approach.shortcut`).
-    ``status`` is ``infeasible`` when some object has no single-object plan.
+    The answer of last resort of a caller whose planning call found no plan within its
+    budget (:class:`expert.policy.ExpertPolicy`): one single-object MILP per object, no bound
+    of the whole problem. It is a valid plan, never claimed optimal (``stats["optimality"]``).
+    ``order``: the objects still to deliver (the held one included). Two tries, the plan with
+    fewer phases kept (the likelier to fit an episode's steps), the cheaper of two as long:
+    :func:`decoupled_apart` (long legs without the MILP: comes in a few seconds
+    in an apartment), then :func:`decoupled_plan` (the MILP for each whole delivery: fewer
+    phases where the objects are a few phases apart); each without the moves a straight
+    slide makes unnecessary (:func:`expert.approach.shortcut`). Both are budgeted by the
+    sub-plans' node limits, so the answer is the same at any load. ``status`` is
+    ``infeasible`` when some object has no single-object plan.
     """
-    started = time.perf_counter()
     stats: dict[str, object] = {}
-    phases, status = None, "infeasible"
-    attempts = (("apart", decoupled_apart, deadline), ("whole legs", _nearest_first, None))
-    for how, make, budget in attempts:
-        if budget is None:  # the second try: a shorter plan, in what is left of WHOLE_LEGS_S
-            budget = Deadline(min(deadline.at, time.perf_counter() + WHOLE_LEGS_S))
-        try:
-            found = make(scenario, order, lattice, budget, planner, holding=holding)
-            found = None if found is None else carry(shortcut(scenario, found))
-        except TimeUp:
-            found = None
-            status = status if phases is not None or budget is not deadline else "time_limit"
-        if found is not None and (phases is None or len(found) < len(phases)):
-            phases, status = found, "feasible"
+    phases = None
+    for how, make in (("apart", decoupled_apart), ("whole legs", _nearest_first)):
+        found = make(scenario, order, lattice, planner, holding=holding)
+        found = None if found is None else carry(shortcut(scenario, found))
+        if found is not None and (phases is None or _shorter(scenario, found, phases)):
+            phases = found
             stats["decoupled"] = f"fallback, nearest object first, {how}"
-        if deadline.left() <= 0:
-            break
-    stats["total_s"] = time.perf_counter() - started
     if phases is None:
-        stats["optimality"] = f"no plan (status {status}), so no claim of optimality"
-        return Plan(scenario.name, status, None, (), stats)
+        stats["optimality"] = "no plan (status infeasible), so no claim of optimality"
+        return Plan(scenario.name, "infeasible", None, (), stats)
     stats["optimality"] = "not proven optimal: the decoupled plan (one object at a time, nearest first), no bound"
     stats["decoupled_phases"] = len(phases)
-    return Plan(scenario.name, "feasible", plan_objective(scenario, phases), phases, stats)
+    return Plan(scenario.name, "feasible", task_cost(scenario, phases), phases, stats)
 
 
-def _nearest_first(scenario, order, lattice, deadline, planner, holding=None) -> tuple[Phase, ...] | None:
-    return decoupled_plan(scenario, order, lattice, deadline, planner, nearest=True, holding=holding)
+def _shorter(scenario: Scenario, phases: tuple[Phase, ...], than: tuple[Phase, ...]) -> bool:
+    """Fewer phases, or as many and a lower task cost."""
+    if len(phases) != len(than):
+        return len(phases) < len(than)
+    return task_cost(scenario, phases) < task_cost(scenario, than) - 1e-9
+
+
+def _nearest_first(scenario, order, lattice, planner, holding=None) -> tuple[Phase, ...] | None:
+    return decoupled_plan(scenario, order, lattice, planner, nearest=True, holding=holding)
 
 
 def _through_first_place(phases: Sequence[Phase]) -> list[Phase] | None:

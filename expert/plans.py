@@ -21,7 +21,7 @@ from typing import Any, Literal
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.geometry import HEADINGS, Heading, Point
 from fetchcarry_env.jsontext import describe, read_json_or
-from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from fetchcarry_env.kinematics import WAIT_COST, travel_cost
 from fetchcarry_env.scenario import Scenario
 
 FORMAT = "fetchcarry-plan/1"
@@ -214,26 +214,50 @@ def phase_rows(plan: Plan, row: Callable[[int, Phase], str], limit: int, more: s
     return rows
 
 
-GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered in Eq. 1
+GOAL_TOL = 1e-3  # metres: an object this close to its goal, and not held, counts as delivered
 
 
-def plan_objective(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
-    """The paper's Eq. 1 for a plan: ``-W1 * sum_{i,k} delta_{i,k} + sum_k travel_cost(base_{k-1}, base_k)``.
-
-    ``delta_{i,k}`` is 1 when object ``i`` is not held and stands within ``GOAL_TOL`` of its
-    goal at the end of phase ``k`` (phase 0 included); ``travel_cost`` is Eq. 2-3's
-    ``|dx| + |dy| + W2 ||dx| - |dy||`` (metres). Phases that lack an object count it as not delivered.
-    """
-    bonus = sum(
+def waiting(scenario: Scenario, phase: Phase) -> int:
+    """How many objects are not at their goals at the end of ``phase`` (held, elsewhere, or missing from it)."""
+    return sum(
         1
-        for phase in phases
         for obj in scenario.objects
-        if phase.holding != obj.id
-        and obj.id in phase.objects
-        and math.dist(phase.objects[obj.id], obj.goal) <= GOAL_TOL
+        if phase.holding == obj.id
+        or obj.id not in phase.objects
+        or math.dist(phase.objects[obj.id], obj.goal) > GOAL_TOL
     )
+
+
+def task_cost(scenario: Scenario, phases: tuple[Phase, ...]) -> float:
+    """The task's cost of a plan (metres): its travel plus ``W1`` for each phase after the start that
+    ends with an object not at its goal, one count per such object.
+
+    ``sum_k travel_cost(base_{k-1}, base_k) + W1 * sum_{k >= 1} waiting(phase_k)``, with Eq. 2-3's
+    ``travel_cost`` (``|dx| + |dy| + W2 ||dx| - |dy||``) and ``W1 = WAIT_COST``: the paper's Eq. 1
+    counted over the whole task (``docs/formulation.md``, "The task cost"). The env charges
+    the same one step at a time, so an episode's return is minus this; a plan's ``objective``
+    is it. Idle phases after the last delivery cost nothing.
+    """
     travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
-    return -DELIVERY_BONUS * bonus + travel
+    return travel + WAIT_COST * sum(waiting(scenario, phase) for phase in phases[1:])
+
+
+plan_objective = task_cost
+"""The name :func:`task_cost` had while a plan's objective was the paper's Eq. 1 over its own phases."""
+
+
+def eq1_value(scenario: Scenario, phases: tuple[Phase, ...], n_phases: int) -> float:
+    """The paper's Eq. 1 of ``phases`` counted over ``n_phases`` phases (idle ones after its end), as the MILP's
+    objective with ``n_phases`` phases measures it: ``-W1 * sum_{i,k} delta_{i,k} + travel``, phase 0 included.
+
+    It differs from :func:`task_cost` by a constant of the model (:func:`eq1_offset`).
+    """
+    return task_cost(scenario, phases) - eq1_offset(scenario, phases[0], n_phases)
+
+
+def eq1_offset(scenario: Scenario, start: Phase, n_phases: int) -> float:
+    """``task cost - Eq. 1`` for every plan of a model with ``n_phases`` phases that starts at ``start``."""
+    return WAIT_COST * (len(scenario.objects) * n_phases - waiting(scenario, start))
 
 
 def plan_length(phases: int) -> str:

@@ -23,16 +23,16 @@ expert plans again from this state; if the fresh plan's action is refused too, i
 stuck. A base that stopped in a corner gap the MILP cannot plan from first moves out of
 it (:mod:`expert.escape`).
 
-When a planning call runs out of time without a plan (``time_limit``: the whole problem's
-bounds alone can outlast the limit from seven or eight objects, and in an apartment), the
-expert makes the decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a
-time, nearest first: the long legs by a lattice search and the env's own rules,
-:mod:`expert.approach`, the rest by single-object MILPs) within ``fallback_time_limit``
-more seconds (by default three times ``time_limit``: at a load of 12 on two cores the
-fallback took 8-30 s of wall clock in an apartment), and follows it: a valid plan, status ``feasible``,
-never claimed optimal; it replans in closed loop as after any plan. A call that finds a
-plan is answered as before, so the expert's plans where it succeeded within its limit do
-not change.
+When a planning call ends without a plan (status ``time_limit``: its node budget, or the
+safety stop of ``time_limit`` seconds, came before a plan; the whole problem's bounds alone
+can outlast it from seven or eight objects, and in an apartment), the expert makes the
+decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a time, nearest
+first: the long legs by a lattice search and the env's own rules, :mod:`expert.approach`,
+the rest by single-object MILPs, each within its node budget; ``fallback_time_limit``
+seconds is its safety stop), and follows it: a valid plan, status ``feasible``, never
+claimed optimal; it replans in closed loop as after any plan. Every budget is counted, so
+the expert's episodes are the same at any load unless a safety stop decided (the plan's
+``stats["clock_stopped"]`` says so).
 
 When it cannot act (the planner and the fallback find no plan, or the env would refuse a fresh plan's
 action) the policy returns the idle action (a ``move`` to the lattice point nearest the
@@ -58,7 +58,6 @@ caller that labels or executes them itself (the phases env's ``index_of`` and
 
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import asdict, dataclass, replace
 from typing import Any
@@ -69,7 +68,7 @@ from expert import planner
 from expert.candidates import NEAREST_RULES, UNEXPRESSIBLE, acts_in_candidates, candidate_answer
 from expert.decoupled import fallback_plan
 from expert.escape import corner_gap, escape_move
-from expert.milp.deadline import Deadline
+from expert.milp.deadline import Deadline, TimeUp
 from expert.plans import Plan
 from expert.tracking import PlannedAction, Track, departure, on_lattice, solved
 from fetchcarry_env.actions import Action, Lattice, Mode
@@ -77,10 +76,11 @@ from fetchcarry_env.observation import Capacity, WorldState, decode
 from fetchcarry_env.rules import check_action
 from fetchcarry_env.scenario import Scenario
 
-DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included
+DEFAULT_TIME_LIMIT = 10.0  # seconds per planning call, model building included: the safety stop
+DEFAULT_NODE_LIMIT = 20_000  # SCIP nodes per model of a planning call: the expert's counted budget
 BASE_TOLERANCE = 0.01  # metres: the base is where the plan put it
 ITEM_TOLERANCE = 0.02  # metres: an object or a piece of clutter is where the plan put it
-FALLBACK_FACTOR = 3.0  # the decoupled fallback plan's seconds, by default, per second of the planner's time limit
+FALLBACK_FACTOR = 3.0  # the decoupled fallback plan's safety stop, by default, per second of the planner's
 INTERFACES = ("env", "phases")  # what the expert answers: env actions, or candidate indices of a phases env
 
 
@@ -97,7 +97,7 @@ class ExpertStats:
     fallbacks: int = 0  # idle actions returned because the expert could not act
     planning_s: float = 0.0  # seconds spent in the planner (and the fallback plan)
     last_status: str | None = None  # status of the last planning call
-    last_objective: float | None = None  # objective (Eq. 1) of the last plan found
+    last_objective: float | None = None  # objective (the task cost) of the last plan found
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -140,16 +140,18 @@ class ExpertPolicy:
 
     ``env`` is the env (wrapped or not) or a ``VecEnv`` whose observations it will see; its
     ``lattice`` and ``capacity`` fix how actions and observations are laid out (pass them
-    explicitly to use the policy without an env). ``time_limit`` (seconds) bounds each
-    planning call; ``base_tolerance`` and ``item_tolerance`` (metres) say how far the state
-    may drift from the plan before the expert replans. ``fallback_time_limit`` (seconds,
-    default ``FALLBACK_FACTOR * time_limit``; 0 turns the fallback off) bounds the decoupled plan made when a
-    planning call ran out of time without a plan. ``interface`` is what it answers: ``"env"``
+    explicitly to use the policy without an env). ``time_limit`` (seconds) is each planning
+    call's safety stop; its counted budget is ``node_limit`` SCIP nodes per model (a planner
+    option, ``DEFAULT_NODE_LIMIT`` by default). ``base_tolerance`` and ``item_tolerance`` (metres)
+    say how far the state may drift from the plan before the expert replans.
+    ``fallback_time_limit`` (seconds, default ``FALLBACK_FACTOR * time_limit``; 0 turns the
+    fallback off) is the safety stop of the decoupled plan made when a planning call found no
+    plan. ``interface`` is what it answers: ``"env"``
     (the env actions it plans in) or ``"phases"`` (the candidate index of a single
     ``FetchCarryPushPhases-v0`` env); None, the default: the env's own (``"phases"`` for a
     phases env). ``projection`` (``"end"`` or ``"detour"``) says which allowed move stands
     in for a move no candidate expresses (:func:`expert.candidates.nearest_move`).
-    ``planner_options`` go to :func:`expert.planner.plan`. ``ValueError`` for an
+    ``planner_options`` are fields of :class:`expert.planner.PlannerOptions`. ``ValueError`` for an
     interface the env cannot take (a vector env of phases envs answered in candidates).
     """
 
@@ -184,7 +186,7 @@ class ExpertPolicy:
         self.fallback_time_limit = FALLBACK_FACTOR * time_limit if fallback_time_limit is None else fallback_time_limit
         self.base_tolerance = base_tolerance
         self.item_tolerance = item_tolerance
-        self.planner_options = planner_options
+        self.planner_options = planner.PlannerOptions(node_limit=DEFAULT_NODE_LIMIT).with_fields(**planner_options)
         self._tracks: list[Track] = []
         self._stats = ExpertStats()
         self.last_decisions: list[Decision] = []
@@ -315,8 +317,9 @@ class ExpertPolicy:
         """Plan from ``world`` and make the result the track's plan (an empty one if none was found)."""
         replanned = track.started
         started = time.perf_counter()
+        options = self.planner_options
         result = planner.plan(
-            scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, **self.planner_options
+            scenario, time_limit=self.time_limit, lattice=self.lattice, holding=world.holding, options=options
         )
         decoupled = result.status == "time_limit" and self.fallback_time_limit > 0
         if decoupled:
@@ -337,16 +340,18 @@ class ExpertPolicy:
         return _Planned(result, seconds, replanned)
 
     def _fallback(self, scenario: Scenario, world: WorldState, timed_out: Plan) -> Plan:
-        """The decoupled plan (:func:`expert.decoupled.fallback_plan`) after a call that ran out of time.
+        """The decoupled plan (:func:`expert.decoupled.fallback_plan`) after a call that found no plan.
 
-        Its stats keep the timed-out call's under ``stats["planner"]``; without a plan the
-        answer is the timed-out call's status (``time_limit``) with both stats.
+        Its stats keep the call's under ``stats["planner"]``; without a plan the answer is the
+        call's status (``time_limit``) with both stats.
         """
         delivered = set(world.delivered(scenario))
         order = [o.id for o in scenario.objects if o.id not in delivered or o.id == world.holding]
-        budget = Deadline.after(self.fallback_time_limit)
-        sub_planner = functools.partial(_sub_plan, self.planner_options)
-        result = fallback_plan(scenario, order, self.lattice, budget, sub_planner, holding=world.holding)
+        sub_planner = planner.SubPlanner(self.planner_options, Deadline.after(self.fallback_time_limit), self.lattice)
+        try:
+            result = fallback_plan(scenario, order, self.lattice, sub_planner, holding=world.holding)
+        except TimeUp:  # its safety stop came first
+            return replace(timed_out, stats={**timed_out.stats, "fallback": "stopped by its time limit"})
         stats = {**result.stats, "planner": timed_out.stats}
         if not result.found:
             return replace(timed_out, stats=stats)
@@ -378,14 +383,6 @@ class ExpertPolicy:
     def _idle(self, world: WorldState) -> Action:
         """A move to the lattice point nearest the base, keeping the heading: the do-nothing action."""
         return Action(self.lattice.index(world.base), world.heading, 0, Mode.MOVE)
-
-
-_FIRST_SOLUTION = {"presolving": "fast", "heuristics": "fast", "params": {"limits/solutions": 1}}  # SCIP, sub-plans
-
-
-def _sub_plan(options: dict[str, Any], scenario: Scenario, *, first: bool = True, **kwargs: Any) -> Plan:
-    """:func:`expert.planner.plan` for the fallback's sub-plans: SCIP's first solution, or (``first=False``) optimal."""
-    return planner.plan(scenario, **{**options, **(_FIRST_SOLUTION if first else {})}, **kwargs)
 
 
 def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:

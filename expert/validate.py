@@ -40,8 +40,8 @@ rule 7 (held object)
     it, at the robot-frame offset it was picked with, so it moves (and turns) with the
     base, a push stroke included.
 rule 8 (objective)
-    ``objective`` is finite and equals Eq. 1 recomputed from the phases
-    (:func:`plan_objective`, within ``OBJECTIVE_RTOL``); it is null only when the status
+    ``objective`` is finite and equals the task cost recomputed from the phases
+    (:func:`task_cost`, within ``OBJECTIVE_RTOL``); it is null only when the status
     has no plan.
 rule 9 (hand room)
     At a push the contact (where the hand meets the piece) lies within the posture's
@@ -65,7 +65,7 @@ import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
-from expert.plans import Phase, Plan, plan_objective
+from expert.plans import Phase, Plan, task_cost
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import (
     Heading,
@@ -90,7 +90,7 @@ from fetchcarry_env.scenario import Clutter, Posture, Scenario
 
 TOL = 1e-3  # metres: tolerance of positions, reach ranges and overlaps (docs/plan-format.md)
 CLEARANCE_SLACK = 1e-6  # metres: a base segment may come this much closer than the radius (rule 1)
-OBJECTIVE_RTOL = 1e-6  # relative tolerance of the objective against Eq. 1 recomputed (rule 8)
+OBJECTIVE_RTOL = 1e-6  # relative tolerance of the objective against the task cost recomputed (rule 8)
 
 
 @dataclass(frozen=True)
@@ -566,13 +566,13 @@ def _rule8_objective(scenario: Scenario, plan: Plan) -> list[str]:
         return [] if objective is None else [f"{what} has no plan, so the objective must be null, not {objective!r}"]
     if not plan.phases:
         return []
-    expected = plan_objective(scenario, plan.phases)
+    expected = task_cost(scenario, plan.phases)
     if objective is None:
-        return [f"{what} has a plan, so the objective must be Eq. 1 of its phases ({expected:.6g}), not null"]
+        return [f"{what} has a plan, so the objective must be the task cost of its phases ({expected:.6g}), not null"]
     if not math.isfinite(objective):
-        return [f"{what}: the objective {objective!r} is not a finite number (Eq. 1 of the phases is {expected:.6g})"]
+        return [f"{what}: the objective {objective!r} is not a finite number (the phases' task cost is {expected:.6g})"]
     if not math.isclose(objective, expected, rel_tol=OBJECTIVE_RTOL, abs_tol=1e-9):
-        return [f"{what}: the objective {objective:.6g} is not Eq. 1 recomputed from the phases, {expected:.6g}"]
+        return [f"{what}: the objective {objective:.6g} is not the phases' task cost recomputed, {expected:.6g}"]
     return []
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from expert.plans import Phase, Plan, plan_objective
+from expert.plans import Phase, Plan, task_cost
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.geometry import HEADINGS
 from fetchcarry_env.observation import Capacity, WorldState
@@ -60,7 +60,7 @@ def rollout_plan(policy: str, scenario: Scenario) -> Plan:
     phases = episode_phases(scenario, record.states, actions, record.infos["invalid_action"][1:])
     delivered = bool(record.info.get("is_success"))
     stats = {"policy": spec.name, "rollout_s": time.perf_counter() - started, "delivered": delivered}
-    objective = plan_objective(scenario, phases) if delivered else None
+    objective = task_cost(scenario, phases) if delivered else None
     return Plan(scenario.name, "feasible" if delivered else "time_limit", objective, phases, stats)
 
 

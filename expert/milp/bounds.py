@@ -24,7 +24,7 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
 from expert.milp.problem import Problem
 from expert.milp.skeleton_graph import ActionGraph, SkeletonGraph, all_done, skeleton_moves
-from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from fetchcarry_env.kinematics import WAIT_COST, travel_cost
 
 
 def counting_bound(problem: Problem) -> int:
@@ -247,7 +247,7 @@ def skeleton(problem: Problem, pairs: PairCosts | None = None, deadline: Deadlin
 
 
 def min_travel(problem: Problem, pairs: PairCosts | None = None, deadline: Deadline = NEVER) -> float:
-    """A lower bound (metres) on the travel term of Eq. 1 of any plan: the cheapest order of actions.
+    """A lower bound (metres) on the travel of any plan: the cheapest order of actions.
 
     The same graph as :func:`skeleton`'s, each step costed by ``travel_cost`` over the
     gap between the previous pose box (or the start) and the next (``travel_cost`` is a
@@ -266,15 +266,16 @@ def min_objective(
     deadline: Deadline = NEVER,
     last_at_end: bool = False,
 ) -> float:
-    """A lower bound on Eq. 1 for plans with ``n_phases`` phases (the skeleton search, timed).
+    """A lower bound on the task cost of plans with ``n_phases`` phases (the skeleton search, timed).
 
-    With ``t_i`` the phase of object ``i``'s delivery, Eq. 1 is
-    ``travel - W1 * sum_i (N - t_i)`` (``delta_{i,k} = 1`` from ``t_i`` on) plus the constant of
-    objects already delivered. The search walks the skeleton's states extended by the
-    phase reached, per pair of consecutive actions at the least phases and the least
-    travel of any of their pose pairs (both lower bounds), adds ``W1 * t`` at each place,
-    and stops at ``t <= N - 1``; the cheapest finished path minus ``W1 * n * N`` bounds
-    Eq. 1 from below. Returns ``-inf`` when the search finds no path (no cut).
+    With ``t_i`` the phase of object ``i``'s delivery, the task cost is
+    ``travel + W1 * sum_i (t_i - 1)`` (object ``i`` waits ``t_i - 1`` phases after the start;
+    objects already delivered cost nothing): the MILP's objective, Eq. 1 up to a constant of
+    the model. The search walks the skeleton's states extended by the phase reached, per pair
+    of consecutive actions at the least phases and the least travel of any of their pose pairs
+    (both lower bounds), adds ``W1 * t`` at each place, and stops at ``t <= N - 1``; the
+    cheapest finished path minus ``W1 * n`` bounds the task cost from below. Returns ``-inf``
+    when the search finds no path (no cut).
 
     ``last_at_end``: every plan's last action is a place at phase ``N - 1`` (``N - 1``
     phases admit no plan, :mod:`expert.milp.fewest`); a path's last place then counts
@@ -297,7 +298,7 @@ def cheapest_schedule(
     so it may not be feasible; the planner uses its order of actions as a first guess.
     """
     pair = pair or PairCosts(problem, deadline=deadline)
-    constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n_phases
+    constant = -WAIT_COST * len(problem.deliver)  # the task cost counts W1 (t - 1) for a delivery at phase t
     step = pair.step
 
     def expand(state):
@@ -311,7 +312,7 @@ def cheapest_schedule(
                     continue
                 if last:
                     reached = n_phases - 1
-                bonus = DELIVERY_BONUS * reached if key[0] == "place" else 0.0
+                bonus = WAIT_COST * reached if key[0] == "place" else 0.0
                 yield travel + bonus, (d, h, p, key, reached, exit_box)
 
     start = (frozenset(), problem.holding, frozenset(), None, 0, None)

@@ -1,27 +1,27 @@
-"""Eq. 1's lower bound given where and when an action is done: the skeleton search run both ways.
+"""The task cost's lower bound given where and when an action is done: the skeleton search run both ways.
 
-:func:`expert.milp.bounds.min_objective` bounds Eq. 1 over every plan: the cheapest path
+:func:`expert.milp.bounds.min_objective` bounds the task cost (the MILP's objective) over every plan: the cheapest path
 of a relaxation whose states are (delivered, held, pushed, last action, its exit pose
 box) and whose steps cost the least phases and the least travel between pose boxes, plus
 ``W1 t`` at each place done at phase ``t``. Every plan maps onto a path of that graph
 with its actual phases (a step may take more phases than the least: "slack"), whose
-cost is at most the plan's Eq. 1.
+cost is at most the plan's task cost.
 
 Here the same graph is searched forwards from the start and backwards from the finished
 states, with slack, phase by phase: ``F[s][t]`` is the cheapest path from the start that
 reaches state ``s`` at phase ``t``, ``B[s][t]`` the cheapest way to finish from there, so
-``F + B`` (plus Eq. 1's constant) bounds every plan that passes through ``s`` at ``t``. The
+``F + B`` (plus the task cost's constant) bounds every plan that passes through ``s`` at ``t``. The
 least of it over the states of one action and pose box gives :class:`Conditional`:
-``bound[(kind, target), exit box][t]``, a lower bound on Eq. 1 of every plan that does
+``bound[(kind, target), exit box][t]``, a lower bound on the task cost of every plan that does
 the action from a pose of that box at phase ``t`` (``inf``: no plan does).
 
 The MILP uses it twice (:func:`add_conditional_cuts`, :func:`fix_above`), both exact:
 
 - every action is done exactly once, so for each action ``a``
-  ``Eq. 1 >= sum_{k, o in a} bound(o, k) z[k][o]`` is valid; the LP then pays for an
+  ``cost >= sum_{k, o in a} bound(o, k) z[k][o]`` is valid; the LP then pays for an
   action done at a costly phase or pose, in every node of the search (the single bound
-  ``Eq. 1 >= min_objective`` stays at the root's value);
-- with a known plan of Eq. 1 ``U`` in the model (the warm start), ``z[k][o] = 0`` where
+  ``cost >= min_objective`` stays at the root's value);
+- with a known plan of task cost ``U`` in the model (the warm start), ``z[k][o] = 0`` where
   ``bound(o, k) > U``: no plan through it is better than the one at hand.
 """
 
@@ -40,14 +40,14 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.problem import Problem
 from expert.milp.skeleton_graph import SkeletonGraph, run_starts
-from fetchcarry_env.kinematics import DELIVERY_BONUS
+from fetchcarry_env.kinematics import WAIT_COST
 
 Key = tuple[str, str]
 
 
 @dataclass(frozen=True)
 class Conditional:
-    """Lower bounds on Eq. 1 per action, exit pose box and phase (:func:`conditional_bounds`)."""
+    """Lower bounds on the task cost per action, exit pose box and phase (:func:`conditional_bounds`)."""
 
     n_phases: int
     bound: dict[tuple[Key, IndexBox], np.ndarray]  # per phase 0..N-1; inf where no plan does it
@@ -94,7 +94,7 @@ def conditional_bounds(
     the objects in that order only (:meth:`expert.milp.skeleton_graph.SkeletonGraph.in_order`).
     """
     n = n_phases
-    constant = -DELIVERY_BONUS * (len(problem.deliver) + len(problem.delivered)) * n
+    constant = -WAIT_COST * len(problem.deliver)  # the task cost counts W1 (t - 1) for a delivery at phase t
     graph = pair.graph(deadline).within(n)
     if order is not None:
         graph = graph.in_order(order, problem.deliver)
@@ -151,13 +151,13 @@ def _leave(graph: SkeletonGraph, n: int, bonus: np.ndarray, deadline: Deadline) 
 
 
 def _arrival_bonus(graph: SkeletonGraph, n: int, last_at_end: bool) -> np.ndarray:
-    """``[t, s]``: Eq. 1's W1 t for arriving at state s at phase t (inf where a last place cannot be)."""
+    """``[t, s]``: the W1 t of arriving at state s at phase t (inf where a last place cannot be)."""
     bonus = np.zeros((n, len(graph.states)))
-    bonus[:, graph.placed] = DELIVERY_BONUS * np.arange(n)[:, None]
+    bonus[:, graph.placed] = WAIT_COST * np.arange(n)[:, None]
     if last_at_end:
         last = graph.placed & graph.finished
         bonus[: n - 1, last] = math.inf
-        bonus[n - 1, last] = DELIVERY_BONUS * (n - 1)
+        bonus[n - 1, last] = WAIT_COST * (n - 1)
     return bonus
 
 
@@ -213,9 +213,9 @@ def fix_unreached(milp, conditional: Conditional) -> list:
 
 
 def fix_above(milp, conditional: Conditional, incumbent: float) -> int:
-    """Fix to 0 the options whose bound exceeds ``incumbent``, Eq. 1 of a plan checked feasible in this model.
+    """Fix to 0 the options whose bound exceeds ``incumbent``, the task cost of a plan checked feasible in this model.
 
-    The caller passes the Eq. 1 of a warm start only when :func:`expert.milp.warm.add_warm_start`
+    The caller passes the task cost of a warm start only when :func:`expert.milp.warm.add_warm_start`
     returned True (the plan passed ``checkSol``); an unchecked plan could cut the optimum off.
 
     No plan through them beats the one at hand, so the optimum stays in the model. Returns how many.

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from expert.milp.options import PoseOption
 from expert.milp.problem import Problem
-from expert.plans import Phase, plan_objective  # noqa: F401  (plan_objective: imported from here by the planner)
+from expert.plans import Phase
 from fetchcarry_env.geometry import Heading, Point, to_robot_frame, to_world_frame
 
 

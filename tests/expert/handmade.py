@@ -5,9 +5,10 @@ The plan for ``examples/push_basic.json`` (start (0, 0), the bottle from the tab
 drive round the tables, push the block 0.15 m along +y off the goal, fetch the bottle
 from the west side of its table and place it from the south of the goal table.
 The comments give the numbers that make each phase valid (reach_far: 0.55-0.70 m ahead).
-Its objective (Eq. 1) is worked out here apart from the validator: every move is
-axis-aligned, so the travel cost is 1.1 x the 13.06 m driven, and the bottle stands at
-its goal (not held) in one phase, the last: 14.366 - 10 = 4.366.
+Its objective (the task cost) is worked out here apart from the validator: every move is
+axis-aligned, so the travel cost is 1.1 x the 13.06 m driven, and the bottle reaches its
+goal in the last of the eight phases, so it waits six (phases 1 to 6 end without it at its
+goal): 14.366 + 10 x 6 = 74.366.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ BOTTLE_START = (2.0, 2.0)
 BLOCK_START = (4.0, 4.0)
 BLOCK_PUSHED = (4.0, 4.15)  # 0.15 m along +y: off the goal disc, still on table_goal
 BOTTLE_GOAL = (4.0, 4.0)
-HAND_OBJECTIVE = 1.1 * 13.06 - 10.0  # Eq. 1 of HAND_PHASES (see above)
+HAND_OBJECTIVE = 1.1 * 13.06 + 10.0 * 6  # the task cost of HAND_PHASES (see above)
 
 
 def _phase(base, heading, action, target=None, posture=None, holding=None, bottle=BOTTLE_START, block=BLOCK_START):
@@ -41,25 +42,25 @@ HAND_PHASES = (
 )
 
 
-def eq1(phases) -> float:
-    """The paper's Eq. 1 for phases of the example scenario (one object, the bottle), from its definition.
+def cost(phases) -> float:
+    """The task cost of phases of the example scenario (one object, the bottle), from its definition.
 
-    ``-10`` per phase in which the bottle is not held and within 1 mm of its goal, plus
-    ``|dx| + |dy| + 0.1 * ||dx| - |dy||`` per move.
+    ``10`` per phase after the start that ends with the bottle held or away from its goal
+    (farther than 1 mm), plus ``|dx| + |dy| + 0.1 * ||dx| - |dy||`` per move.
     """
-    bonus = sum(
-        p.holding != "bottle" and math.dist(p.objects.get("bottle", (1e9, 1e9)), BOTTLE_GOAL) <= 1e-3 for p in phases
+    waiting = sum(
+        p.holding == "bottle" or math.dist(p.objects.get("bottle", (1e9, 1e9)), BOTTLE_GOAL) > 1e-3 for p in phases[1:]
     )
     travel = 0.0
     for a, b in itertools.pairwise(phases):
         dx, dy = abs(b.base[0] - a.base[0]), abs(b.base[1] - a.base[1])
         travel += dx + dy + 0.1 * abs(dx - dy)
-    return travel - 10.0 * bonus
+    return travel + 10.0 * waiting
 
 
 def with_phases(plan: Plan, phases) -> Plan:
-    """``plan`` with these phases and its objective recomputed (Eq. 1), so only the fault put in is wrong."""
-    return replace(plan, phases=tuple(phases), objective=eq1(phases))
+    """``plan`` with these phases and its objective recomputed (the task cost), so only the fault put in is wrong."""
+    return replace(plan, phases=tuple(phases), objective=cost(phases))
 
 
 def with_phase(plan: Plan, k: int, **changes) -> Plan:

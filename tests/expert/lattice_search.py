@@ -7,7 +7,7 @@ with an arm line that crosses no obstacle. Phases are layers of a dynamic progra
 over (lattice point, stage), stage 0: not picked, 1: held, 2: placed; each phase is a
 straight move (possibly of length zero) followed by at most one arm action, as in a
 plan. It returns the fewest phases that deliver the object and, for that number, the
-least Eq. 1 (travel minus W1 for the one delivered phase, the last).
+least task cost (travel plus W1 for each phase the object waits: all but the start and the last).
 
 Units are metres. Only for small rooms and coarse lattices: it looks at every pair of
 lattice points.
@@ -22,7 +22,7 @@ import numpy as np
 
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import HEADINGS
-from fetchcarry_env.kinematics import DELIVERY_BONUS, DIAGONAL_WEIGHT, arm_line_clear, reaches
+from fetchcarry_env.kinematics import DIAGONAL_WEIGHT, WAIT_COST, arm_line_clear, reaches
 from fetchcarry_env.scenario import Scenario
 
 SLACK = 1e-6  # metres: a move this much closer than the radius still counts as clear
@@ -32,7 +32,7 @@ TERNARY_STEPS = 60  # iterations of the ternary search for the segment-rectangle
 @dataclass(frozen=True)
 class SearchResult:
     phases: int | None  # the fewest phases (the start included), None: no plan within max_phases
-    objective: float | None  # the least Eq. 1 with that many phases
+    objective: float | None  # the least task cost with that many phases
     path: tuple[tuple[tuple[float, float], str | None], ...] = ()  # one optimal plan: (base, action) per phase
 
 
@@ -126,7 +126,7 @@ def search(scenario: Scenario, lattice: Lattice, max_phases: int = 8) -> SearchR
         parents.append([(came[0], 0), (np.where(picked, came[0], came[1]), np.where(picked, 0, 1)), (came[1], 1)])
         if np.isfinite(best[2]).any():
             path = _path(points, parents, int(np.argmin(best[2])))
-            return SearchResult(steps + 1, float(best[2].min()) - DELIVERY_BONUS, path)
+            return SearchResult(steps + 1, float(best[2].min()) + WAIT_COST * (steps - 1), path)
     return SearchResult(None, None)
 
 

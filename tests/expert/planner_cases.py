@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import math
 
-from expert.milp.decode import plan_objective
-from expert.plans import Plan
+from expert.plans import Plan, task_cost
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import Rect
@@ -101,7 +100,7 @@ def check_plan(scenario: Scenario, plan: Plan, lattice: Lattice | None = None, h
     assert last.holding is None
     for obj in scenario.objects:
         assert math.dist(last.objects[obj.id], obj.goal) < 1e-9
-    assert plan.objective is not None and math.isclose(plan.objective, plan_objective(scenario, plan.phases))
+    assert plan.objective is not None and math.isclose(plan.objective, task_cost(scenario, plan.phases))
     for key in ("solver", "phases_tried", "build_s", "solve_s", "total_s"):
         assert key in plan.stats
     assert validate_plan(scenario, plan, holding=holding) == []

@@ -289,11 +289,11 @@ def test_the_optimality_sentence_says_only_what_holds(capsys, tmp_path):
     stats = json.loads(out)["stats"]
     assert status == 1 and "optimal for" not in stats["optimality"] and "no claim of optimality" in stats["optimality"]
     assert Plan.load(output).stats["optimality"] == stats["optimality"]
-    feasible = optimality(0, "feasible")
-    assert feasible.startswith("not proven optimal") and "fewest_phases_objective" not in feasible
-    assert "proven optimal among those" in optimality(2, "feasible", fewest_proven=True)
-    result = plan(get_family("multi-4").sample(np.random.default_rng(1)), time_limit=0.1)  # any status may come
-    assert result.stats["optimality"] == optimality(0, result.status)
+    feasible = optimality(0, "feasible", {"stopped_by": "node_limit"})
+    assert feasible.startswith("not proven optimal: the node budget ran out") and "fewest phases" in feasible
+    assert "safety stop" in optimality(None, "feasible", {"stopped_by": "clock"})
+    result = plan(get_family("multi-4").sample(np.random.default_rng(1)), node_limit=1)  # any status may come
+    assert result.stats["optimality"] == optimality(None, result.status, result.stats)
     assert result.stats["optimality"].startswith("optimal for") == (result.status == "optimal")
 
 

@@ -273,18 +273,19 @@ def test_bounds_and_cuts_keep_the_optimum(scenario):
 
 # ---------------------------------------------------------------------- model and decoding
 def test_milp_objective_is_the_plans_objective():
-    """With integer bases the MILP's optimum is Eq. 1 of the decoded plan exactly (no snapping)."""
+    """With integer bases the MILP's optimum is the task cost of the decoded plan exactly (no snapping)."""
     scenario = draw_paper_multi(np.random.default_rng(6), 2)
     result = plan(scenario)
     assert result.objective == pytest.approx(result.stats["milp_objective"])
 
 
-def test_objects_already_delivered_count_every_phase():
+def test_objects_already_delivered_cost_nothing():
+    """An object standing at its goal from the start waits no phase (Eq. 1 counts it W1 in all 3: a constant)."""
     scenario = one_table()
     done = DeliveryObject("done", (2.0, 1.5), (2.0, 1.5))
     scenario = dataclasses.replace(scenario, objects=(*scenario.objects, done))
     result = plan(scenario)
-    assert result.objective == pytest.approx(-8.79 - 10 * 3)  # 'done' is delivered in all 3 phases
+    assert result.objective == pytest.approx(11.21)  # the cup's plan alone (test_planner's hand-worked optimum)
     assert result.stats["milp_objective"] == pytest.approx(result.objective)
 
 
@@ -303,7 +304,7 @@ def carry_push_scene():
     Eq. 1, so every plan travels at least 0.11 m and has at least 4 phases (start, pick,
     push, place). Pick from the start, push +y holding the bottle (the contact (1.22, 1.5)
     is in reach_far from the start), place from the stroke's end (the goal is in reach
-    there): 4 phases, 0.11 m, Eq. 1 = 0.11 - 10, the optimum. With an empty hand the pick
+    there): 4 phases, 0.11 m, the bottle waits 2 (task cost 20.11), the optimum. With an empty hand the pick
     must come after the push, and the bottle is out of reach from the stroke's end: the
     base has to go back and forth.
     """
@@ -331,7 +332,7 @@ def test_the_planner_pushes_while_holding_where_that_is_cheaper():
     pick, push, place = result.phases[1:]
     assert pick.base == pytest.approx(scenario.robot.start) and push.holding == "bottle"
     assert push.base == pytest.approx((0.6, 1.6)) and place.base == push.base  # no move between stroke and place
-    assert result.objective == pytest.approx(1.1 * 0.10 - 10.0)
+    assert result.objective == pytest.approx(1.1 * 0.10 + 2 * 10.0)
 
 
 def test_the_planner_pushes_with_an_empty_hand_where_that_is_cheaper():
@@ -339,7 +340,8 @@ def test_the_planner_pushes_with_an_empty_hand_where_that_is_cheaper():
 
     Empty hand: push from the start (0.11), fetch the bottle (1.815) and come back to the
     stroke's end to place (1.815): 3.74. Holding, the base must come back further, to a
-    stroke's start: +y from the start (3.96) or -y from (0.6, 1.65) (3.80).
+    stroke's start: +y from the start (3.96) or -y from (0.6, 1.65) (3.80). Either way the
+    bottle waits two phases (20).
     """
     near = carry_push_scene()
     far = dataclasses.replace(near.tables[0], id="far", rect=Rect(1.0, 3.0, 2.0, 3.6))
@@ -353,7 +355,7 @@ def test_the_planner_pushes_with_an_empty_hand_where_that_is_cheaper():
     assert result.status == "optimal"
     assert [p.action for p in result.phases] == ["start", "push", "pick", "place"]
     assert result.phases[1].holding is None
-    assert result.objective == pytest.approx(-10.0 + 0.11 + 2 * 1.815)
+    assert result.objective == pytest.approx(2 * 10.0 + 0.11 + 2 * 1.815)
 
 
 def test_an_object_held_at_the_start_may_have_a_covered_goal(spec_example):

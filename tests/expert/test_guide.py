@@ -13,7 +13,7 @@ from expert.decoupled import steps_of
 from expert.guide import compact_phases, guide_steps, snapped_steps
 from expert.milp.problem import prepare
 from expert.planner import plan
-from expert.plans import Phase, Plan, plan_objective
+from expert.plans import Phase, Plan, task_cost
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_covered, draw_paper_multi
@@ -77,7 +77,7 @@ def test_a_rollout_is_a_valid_plan(greedy_guide):
     scenario, guide = greedy_guide
     assert guide.status == "feasible" and guide.stats["delivered"]
     assert validate_plan(scenario, guide) == []
-    assert guide.objective == pytest.approx(plan_objective(scenario, guide.phases))
+    assert guide.objective == pytest.approx(task_cost(scenario, guide.phases))
 
 
 @pytest.mark.parametrize("branching", [False, True])

@@ -7,7 +7,6 @@ import math
 import numpy as np
 import pytest
 
-import expert.planner as planner
 from expert.milp.bounds import PairCosts
 from expert.milp.build import build
 from expert.milp.conditional import add_conditional_cuts, conditional_bounds, fix_unreached
@@ -76,7 +75,7 @@ def test_the_options_outside_the_order_fixed_keep_its_best_plan_and_are_freed_af
     assert milp.model.getObjVal() < fixed_order - 1.0  # the restriction and the fixings are gone
 
 
-def test_the_planner_frees_the_fixings_for_the_whole_model(monkeypatch):
+def test_the_planner_frees_the_fixings_for_the_whole_model():
     """Three covered goals (seed 7100): the relaxation's order is not the optimum's. The ordered plan (with
     options fixed) is beaten by the unrestricted solve, and the answer is the one without the fixings."""
     scenario = draw_paper_covered(np.random.default_rng(7100), 3)
@@ -84,8 +83,7 @@ def test_the_planner_frees_the_fixings_for_the_whole_model(monkeypatch):
     assert result.status == "optimal" and result.stats["ordered"]["fixed"] > 0
     assert result.stats["decoupled"] == "pick order of the relaxation"
     assert result.objective < result.stats["decoupled_objective"] - 1.0
-    monkeypatch.setattr(planner, "ORDER_FIXINGS", False)
-    unfixed = plan(scenario, time_limit=60.0)
+    unfixed = plan(scenario, time_limit=60.0, order_fixings=False)
     assert unfixed.status == "optimal" and unfixed.stats["ordered"]["fixed"] == 0
     assert len(result.phases) == len(unfixed.phases)
     assert result.objective == pytest.approx(unfixed.objective, abs=1e-6)
@@ -97,7 +95,7 @@ def test_an_order_no_plan_follows_has_every_option_fixed():
     scenario = draw_paper_multi(np.random.default_rng(3), 3)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
     pairs = PairCosts(problem)
-    assert conditional_bounds(problem, 9, pairs, order=["object_2", "object_1", "object_3"]).least < 0
+    assert conditional_bounds(problem, 9, pairs, order=["object_2", "object_1", "object_3"]).least < math.inf
     blocked = conditional_bounds(problem, 9, pairs, order=["object_1", "object_2", "object_3"])
     assert blocked.least == math.inf
     milp = build(problem, 9)
@@ -105,12 +103,11 @@ def test_an_order_no_plan_follows_has_every_option_fixed():
 
 
 @pytest.mark.parametrize(("draw", "count", "seed"), [(draw_paper_multi, 5, 2024), (draw_paper_covered, 3, 7000)])
-def test_the_answer_is_the_one_without_it(monkeypatch, draw, count, seed):
-    """Same phases and Eq. 1 as the planner with the decoupled first plan instead (the optimum is unchanged)."""
+def test_the_answer_is_the_one_without_it(draw, count, seed):
+    """Same phases and task cost as the planner with the decoupled first plan instead (the optimum is unchanged)."""
     scenario = draw(np.random.default_rng(seed), count)
     ordered = plan(scenario, time_limit=60.0)
-    monkeypatch.setattr(planner, "ORDERED_FIRST_PLAN", False)
-    decoupled = plan(scenario, time_limit=60.0)
+    decoupled = plan(scenario, time_limit=60.0, ordered_first_plan=False)
     assert ordered.status == decoupled.status == "optimal"
     assert ordered.stats["decoupled"] == "pick order of the relaxation"
     assert ordered.stats["ordered"]["status"] == "optimal"
@@ -120,18 +117,17 @@ def test_the_answer_is_the_one_without_it(monkeypatch, draw, count, seed):
     assert validate_plan(scenario, ordered) == []
 
 
-def test_without_time_for_it_the_decoupled_plan_comes_instead(monkeypatch):
-    """No time for the ordered model (its share 0): the decoupled passes run, and the answer is still optimal."""
+def test_without_nodes_for_it_the_decoupled_plan_comes_instead():
+    """One node for the ordered model, which finds no plan in it: the decoupled passes run; the answer is optimal."""
     scenario = draw_paper_multi(np.random.default_rng(2024), 4)
-    monkeypatch.setattr(planner, "ORDERED_SHARE", 0.0)
-    result = plan(scenario, time_limit=60.0)
-    assert result.stats["ordered"]["status"] == "timelimit"
+    result = plan(scenario, time_limit=60.0, ordered_nodes=1)
+    assert result.stats["ordered"]["status"] == "nodelimit"
     assert result.stats["decoupled"].startswith("schedule")
     assert result.status == "optimal"
     assert validate_plan(scenario, result) == []
 
 
-def test_a_model_infeasible_at_its_root_is_solved_no_further(monkeypatch):
+def test_a_model_infeasible_at_its_root_is_solved_no_further():
     """Three covered goals (seed 7007): the first model (14 phases) and its relaxation's order admit no plan.
 
     The root proof settles the model (no second solve of it), the decoupled plans aim at
@@ -143,8 +139,7 @@ def test_a_model_infeasible_at_its_root_is_solved_no_further(monkeypatch):
     assert result.stats["ordered"]["status"] == "infeasible" and result.stats["ordered"]["root"] == "infeasible"
     assert first["status"] == "infeasible" and first["root_proof"] is True
     assert last["phases"] == first["phases"] + 1 and last["warm_start"] is True
-    monkeypatch.setattr(planner, "ORDERED_FIRST_PLAN", False)
-    plain = plan(scenario, time_limit=120.0)
+    plain = plan(scenario, time_limit=120.0, ordered_first_plan=False)
     assert result.status == plain.status == "optimal"
     assert len(result.phases) == len(plain.phases)
     assert result.objective == pytest.approx(plain.objective, abs=1e-6)

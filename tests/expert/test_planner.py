@@ -40,7 +40,8 @@ def test_no_obstacle_optimum():
 
     Every other pose is farther from the start (1.0, 1.2) (the south pose (2.0, 0.7)
     alone costs 1.55 m). Travel: 0.5 + 0.1 * 0.5 then 0.6 + 0.1 * 0.6 = 1.21 m;
-    delivered in the last of 3 phases: -10. Eq. 1 = -8.79.
+    delivered in the last of 3 phases, so the cup waits one (held after phase 1): task cost 11.21
+    (the paper's Eq. 1: 1.21 - 10 = -8.79).
     """
     scenario = one_table()
     result = plan(scenario)
@@ -48,7 +49,7 @@ def test_no_obstacle_optimum():
     assert result.status == "optimal"
     assert actions(result) == [("pick", "cup"), ("place", "cup")]
     assert_bases(result.phases[1:], [(1.5, 1.2), (1.5, 1.8)])
-    assert result.objective == pytest.approx(-8.79)
+    assert result.objective == pytest.approx(11.21)
     assert result.stats["phases_tried"] == [3]
 
 
@@ -59,7 +60,8 @@ def test_obstacle_forces_a_detour():
     picked from the east (2.5, 1.2). The start (x <= 1.0) and the east poses (x >= 2.4)
     share no side of the table, nor of the wall below y = 1.8: the base goes up to
     y >= 2.2 (above the grown table) twice, at (1.0, 2.2) and (2.4, 2.2). Travel:
-    1.1 + 1.54 + 1.19 + 0.66 = 4.49 m; delivered in the last of 5 phases: Eq. 1 = -5.51.
+    1.1 + 1.54 + 1.19 + 0.66 = 4.49 m; delivered in the last of 5 phases, so the cup waits three:
+    task cost 34.49 (Eq. 1 = -5.51).
     """
     scenario = one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),))
     result = plan(scenario)
@@ -67,7 +69,7 @@ def test_obstacle_forces_a_detour():
     assert result.status == "optimal"
     assert actions(result) == [("move", None), ("move", None), ("pick", "cup"), ("place", "cup")]
     assert_bases(result.phases[1:], [(1.0, 2.2), (2.4, 2.2), (2.5, 1.2), (2.5, 1.8)])
-    assert result.objective == pytest.approx(-5.51)
+    assert result.objective == pytest.approx(34.49)
 
 
 def test_table_reachable_from_one_side_only():
@@ -256,7 +258,7 @@ def test_time_limit_without_a_plan():
     scenario = draw_paper_multi(np.random.default_rng(1), 3)
     result = plan(scenario, time_limit=1e-4)
     assert result.status == "time_limit" and result.phases == ()
-    assert result.stats["total_s"] < 1.0
+    assert result.stats["clock_stopped"] and result.stats["stopped_by"] == "clock"
 
 
 def test_holding_an_object_places_it_first():
@@ -300,7 +302,7 @@ def test_continuous_and_integer_bases_agree(integral):
     scenario = one_table(obstacles=(Rect(1.2, 0.0, 1.4, 1.6),))
     result = plan(scenario, integral=integral)
     check_plan(scenario, result)
-    assert result.objective == pytest.approx(-5.51)
+    assert result.objective == pytest.approx(34.49)
 
 
 def test_same_input_same_plan():
@@ -380,29 +382,31 @@ def test_lattice_outside_the_area_is_infeasible():
 
 @pytest.mark.parametrize("extra", [1, 2])
 def test_extra_phases_never_worse_over_the_longer_horizon(extra):
-    """With ``extra_phases=k`` the answer is optimal over horizons up to N + k, warm-started from the N plan.
+    """With ``extra_phases=k`` the answer is optimal over plans of up to N + k phases, warm-started from the N plan.
 
-    Compared over N + k phases (a shorter plan padded with idle phases gains W1 per
-    delivered object per idle phase), the answer is at least as good as the fewest-phases plan.
+    Its task cost (shorter plans padded with idle phases cost nothing more) is at most the
+    fewest-phases plan's, and SCIP's objective is that cost.
     """
-    from fetchcarry_env.kinematics import DELIVERY_BONUS
-
     scenario = draw_paper_multi(np.random.default_rng(4), 2)
-    fewest = plan(scenario)
+    fewest = plan(scenario, extra_phases=0)
     longer = plan(scenario, extra_phases=extra)
     check_plan(scenario, longer)
     assert longer.status == "optimal"
     n = fewest.stats["phases_tried"][-1]
     assert longer.stats["fewest_phases"] == n and f"N + {extra}" in longer.stats["optimality"]
     assert longer.stats["solves"][-1]["phases"] == n + extra and longer.stats["solves"][-1]["warm_start"]
-    count = len(scenario.objects)
-
-    def padded(result):
-        return result.objective - DELIVERY_BONUS * count * (n + extra - len(result.phases))
-
     assert len(longer.phases) <= n + extra
-    assert padded(longer) <= padded(fewest) + 1e-6
-    assert longer.stats["milp_objective"] == pytest.approx(padded(longer))
+    assert longer.objective <= fewest.objective + 1e-6
+    assert longer.stats["milp_objective"] == pytest.approx(longer.objective)
+
+
+def test_the_default_is_optimal_over_every_phase_count():
+    """The phase bound: no plan of more phases is cheaper, so the answer needs no longer model here."""
+    scenario = draw_paper_multi(np.random.default_rng(4), 2)
+    result = plan(scenario)
+    assert result.status == "optimal" and "whatever their number of phases" in result.stats["optimality"]
+    assert result.stats["phase_cap"] == len(result.phases) == result.stats["fewest_phases"]
+    assert result.objective <= plan(scenario, extra_phases=2).objective + 1e-6
 
 
 def test_extra_phases_must_be_a_whole_number():

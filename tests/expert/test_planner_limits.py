@@ -20,7 +20,8 @@ import pytest
 from planner_cases import largest_scenario, many_obstacles
 from pyscipopt import SCIP_EVENTTYPE, Eventhdlr
 
-import expert.planner as planner
+import expert.planning.solving as solving
+from expert.milp import deadline as deadline_module
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env.families import draw_paper_multi
@@ -43,14 +44,14 @@ LP_SCENARIO_SEED = 2  # draw_paper_multi(default_rng(2), 4) solves LPs (seeds 0 
 
 
 def test_scip_user_interrupt_raises_keyboard_interrupt(monkeypatch):
-    built = planner.build
+    built = solving.build
 
     def build_with_interrupt(*args, **kwargs):
         milp = built(*args, **kwargs)
         milp.model.includeEventhdlr(_InterruptAtFirstLp(), "interrupt", "interrupts the solve")
         return milp
 
-    monkeypatch.setattr(planner, "build", build_with_interrupt)
+    monkeypatch.setattr(solving, "build", build_with_interrupt)
     with pytest.raises(KeyboardInterrupt):
         plan(draw_paper_multi(np.random.default_rng(LP_SCENARIO_SEED), 4))
 
@@ -61,6 +62,7 @@ SIGINT_SCRIPT = textwrap.dedent(
     import numpy as np
     from pyscipopt import SCIP_EVENTTYPE, Eventhdlr
     import expert.planner as planner
+    import expert.planning.solving as solving
     from fetchcarry_env.families import draw_paper_multi
 
     class Slow(Eventhdlr):
@@ -70,13 +72,13 @@ SIGINT_SCRIPT = textwrap.dedent(
             print("IN_SOLVE", flush=True)  # the SIGINT arrives during this second, inside SCIP's solve
             time.sleep(1.0)
 
-    built = planner.build
+    built = solving.build
     def build(*args, **kwargs):
         milp = built(*args, **kwargs)
         milp.model.includeEventhdlr(Slow(), "slow", "slows the solve down")
         return milp
 
-    planner.build = build
+    solving.build = build
     result = planner.plan(draw_paper_multi(np.random.default_rng(2), 4), time_limit=60.0)  # LP_SCENARIO_SEED
     print("PLAN", result.status, flush=True)
     """
@@ -90,28 +92,42 @@ def test_sigint_during_a_solve_stops_the_call_without_a_plan():
         [sys.executable, "-c", SIGINT_SCRIPT], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
     )
     try:
-        assert proc.stdout.readline().strip() == "IN_SOLVE"
-        sent = time.monotonic()
+        assert proc.stdout.readline().strip() == "IN_SOLVE"  # a state, not a time: the solve is under way
         proc.send_signal(signal.SIGINT)
-        out, err = proc.communicate(timeout=30)
+        out, err = proc.communicate(timeout=300)  # a safety stop against a hang, not a speed bound
     finally:
         proc.kill()
-    assert time.monotonic() - sent < 5.0
     assert "PLAN" not in out
     assert proc.returncode != 0 and "KeyboardInterrupt" in err
 
 
-# ---------------------------------------------------------------------- the deadline
-GRACE_S = 2.0  # seconds: generous against a loaded machine; the benchmark measures the exact overshoot
+# ---------------------------------------------------------------------- the safety stop
+class _ClockRunningOut:
+    """A clock for :mod:`expert.milp.deadline` that passes every deadline after its ``reads``-th reading.
+
+    It makes the safety stop come at a chosen point of the call (a count of clock readings,
+    the same at any load), so the test checks what happens there; how long the call takes
+    after its deadline is measured by ``fetchcarry bench planner``, not asserted here.
+    """
+
+    def __init__(self, reads: int) -> None:
+        self.reads, self.read = reads, 0
+
+    def perf_counter(self) -> float:
+        self.read += 1
+        return time.perf_counter() + (1e9 if self.read > self.reads else 0.0)
 
 
-@pytest.mark.parametrize(
-    ("name", "limit"),
-    [("multi-10", 0.5), ("multi-12", 0.5), ("obstacles-400", 1.0), ("obstacles-1000", 1.0), ("largest", 0.5)],
-)
-def test_every_part_of_plan_counts_against_the_time_limit(name, limit):
+@pytest.mark.parametrize("reads", [1, 3, 30, 300, 3000])
+@pytest.mark.parametrize("name", ["multi-10", "obstacles-400", "largest"])
+def test_the_safety_stop_ends_the_call_wherever_it_comes_and_says_so(monkeypatch, name, reads):
     """Before: 10 objects took 9 s and 12 objects 53 s at a 0.5 s limit (the lower-bound search ran
-    outside it), 1,000 obstacles raised RecursionError, the largest scenario spent 5 s preprocessing."""
+    outside it), 1,000 obstacles raised RecursionError, the largest scenario spent 5 s preprocessing.
+
+    Now every part checks the one deadline: wherever it passes (after 1 to 3,000 clock readings:
+    preprocessing, the bounds, the first plans, building, solving), the call ends with what it has,
+    says the clock stopped it, and makes no more than a few readings after that.
+    """
     if name.startswith("multi"):
         scenario = draw_paper_multi(np.random.default_rng(0), int(name.split("-")[1]))
     elif name.startswith("obstacles"):
@@ -119,11 +135,14 @@ def test_every_part_of_plan_counts_against_the_time_limit(name, limit):
     else:
         scenario = largest_scenario()
     assert check_rules(scenario) == []
-    started = time.perf_counter()
-    result = plan(scenario, time_limit=limit)
-    elapsed = time.perf_counter() - started
-    assert elapsed < limit + GRACE_S, (name, elapsed, result.stats)
+    clock = _ClockRunningOut(reads)
+    monkeypatch.setattr(deadline_module, "time", clock)
+    result = plan(scenario, time_limit=3600.0)
     assert result.status in ("time_limit", "feasible", "optimal", "infeasible")
+    if clock.read > reads:  # the deadline passed before the call ended
+        assert result.stats["clock_stopped"] and result.stats["stopped_by"] == "clock"
+        assert (result.status != "optimal" and "safety stop" in result.stats["optimality"]) or not result.found
+        assert clock.read - reads <= 3, clock.read - reads
     if result.found:
         assert validate_plan(scenario, result) == []
 

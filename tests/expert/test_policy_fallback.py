@@ -1,8 +1,6 @@
-"""The expert's fallback: a decoupled plan when a planning call runs out of time without one."""
+"""The expert's fallback: a decoupled plan when a planning call ends without one (its budget or its safety stop)."""
 
 from __future__ import annotations
-
-import functools
 
 import gymnasium as gym
 import pytest
@@ -99,9 +97,9 @@ def test_the_fallback_plan_of_a_hard_world_is_valid(family: str, seed: int) -> N
     """Worlds whose first planning call found no plan in 10 s (apartment 8 and objects-8 7 not even in 60 s)."""
     env, _ = _env(family, seed)
     scenario, lattice = env.unwrapped.scenario, env.unwrapped.lattice
-    sub_plan = functools.partial(policy_module._sub_plan, {})
+    sub_plan = planner.SubPlanner(planner.PlannerOptions(), Deadline.after(300.0), lattice)
     order = [o.id for o in scenario.objects]
-    plan = fallback_plan(scenario, order, lattice, Deadline.after(120.0), sub_plan)
+    plan = fallback_plan(scenario, order, lattice, sub_plan)
     assert plan.status == "feasible" and plan.stats["decoupled"].startswith("fallback")
     assert validate_plan(scenario, plan) == []
     assert len(plan.phases) - 1 <= MAX_STEPS  # its actions fit the registered episode

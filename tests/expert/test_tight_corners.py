@@ -22,7 +22,7 @@ from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env.actions import Lattice
-from fetchcarry_env.kinematics import DELIVERY_BONUS
+from fetchcarry_env.kinematics import WAIT_COST
 
 
 def test_corner_poses_keep_the_disc_clear_and_add_the_corner_zone():
@@ -83,7 +83,7 @@ def test_tight_corners_reach_the_exact_rule(scenario):
 
 
 def test_exact_path_is_a_plan_of_the_search():
-    """The search's path has its number of phases, picks before it places, and its travel is Eq. 1."""
+    """The search's path has its number of phases, picks before it places, and its cost is its travel plus the waits."""
     scenario = diagonal_room(np.random.default_rng(8), "diagonal-8")
     exact = search(scenario, Lattice.over(scenario.area, RESOLUTION), max_phases=8)
     assert len(exact.path) + 1 == exact.phases
@@ -91,7 +91,7 @@ def test_exact_path_is_a_plan_of_the_search():
     assert actions == ["pick", "place"] and exact.path[-1][1] == "place"
     bases = np.array([scenario.robot.start, *(base for base, _ in exact.path)])
     travel = float(_travel(bases[:-1], bases[1:]).sum())
-    assert travel - DELIVERY_BONUS == pytest.approx(exact.objective, abs=1e-9)
+    assert travel + WAIT_COST * (exact.phases - 2) == pytest.approx(exact.objective, abs=1e-9)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -11,12 +11,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from handmade import BOTTLE_START, HAND_OBJECTIVE, HAND_PHASES, eq1, with_phase, with_phases
+from handmade import BOTTLE_START, HAND_OBJECTIVE, HAND_PHASES, cost, with_phase, with_phases
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from expert.plans import PHASE_ACTIONS, STATUSES, Phase, Plan
-from expert.validate import plan_objective, validate_plan
+from expert.plans import PHASE_ACTIONS, STATUSES, Phase, Plan, task_cost
+from expert.validate import validate_plan
 from fetchcarry_env.geometry import HEADINGS
 from fetchcarry_env.scenario import Scenario
 
@@ -312,10 +312,10 @@ def test_rule7_held_before_the_plan_starts(spec_example):
     """A mid-episode plan (``holding=``): the object must lie within some posture's ranges."""
     start = HAND_PHASES[0]
     phases = (replace(start, holding="bottle", objects={"bottle": (0.6, 0.0)}),)
-    plan = Plan(spec_example.name, "feasible", eq1(phases), phases)
+    plan = Plan(spec_example.name, "feasible", cost(phases), phases)
     assert not [v for v in validate_plan(spec_example, plan, holding="bottle") if v.startswith("rule 7")]
     phases = (replace(start, holding="bottle", objects={"bottle": (2.0, 0.0)}),)
-    plan = Plan(spec_example.name, "feasible", eq1(phases), phases)
+    plan = Plan(spec_example.name, "feasible", cost(phases), phases)
     assert (
         "rule 7 (held object): phase 0 holding 'bottle': it is at [2.000, 0.000], [2.000, 0.000] ahead/left of the "
         "base, within no posture's ranges"
@@ -323,9 +323,9 @@ def test_rule7_held_before_the_plan_starts(spec_example):
 
 
 # ---------------------------------------------------------------------- rule 8
-def test_rule8_the_hand_plan_objective_is_eq1(spec_example, hand_plan):
-    assert pytest.approx(4.366, abs=1e-12) == HAND_OBJECTIVE
-    assert plan_objective(spec_example, hand_plan.phases) == pytest.approx(HAND_OBJECTIVE, rel=1e-12)
+def test_rule8_the_hand_plan_objective_is_its_task_cost(spec_example, hand_plan):
+    assert pytest.approx(74.366, abs=1e-12) == HAND_OBJECTIVE
+    assert task_cost(spec_example, hand_plan.phases) == pytest.approx(HAND_OBJECTIVE, rel=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -334,31 +334,31 @@ def test_rule8_the_hand_plan_objective_is_eq1(spec_example, hand_plan):
         (
             "optimal",
             -1000.0,
-            "rule 8 (objective): status 'optimal': the objective -1000 is not Eq. 1 recomputed from the phases, 4.366",
+            "rule 8 (objective): status 'optimal': the objective -1000 is not the phases' task cost recomputed, 74.366",
         ),
         (
             "optimal",
             math.nan,
-            "rule 8 (objective): status 'optimal': the objective nan is not a finite number (Eq. 1 of the phases is "
-            "4.366)",
+            "rule 8 (objective): status 'optimal': the objective nan is not a finite number (the phases' task "
+            "cost is 74.366)",
         ),
         (
             "feasible",
             math.inf,
-            "rule 8 (objective): status 'feasible': the objective inf is not a finite number (Eq. 1 of the phases is "
-            "4.366)",
+            "rule 8 (objective): status 'feasible': the objective inf is not a finite number (the phases' task "
+            "cost is 74.366)",
         ),
         (
             "optimal",
             None,
-            "rule 8 (objective): status 'optimal' has a plan, so the objective must be Eq. 1 of its phases (4.366), "
-            "not null",
+            "rule 8 (objective): status 'optimal' has a plan, so the objective must be the task cost of its phases "
+            "(74.366), not null",
         ),
         (
             "optimal",
-            4.366 * (1 + 3e-6),
-            "rule 8 (objective): status 'optimal': the objective 4.36601 is not Eq. 1 recomputed from the phases, "
-            "4.366",
+            74.366 * (1 + 3e-6),
+            "rule 8 (objective): status 'optimal': the objective 74.3662 is not the phases' task cost recomputed, "
+            "74.366",
         ),
     ],
 )
@@ -386,8 +386,8 @@ def test_rule8_no_plan_no_objective(spec_example):
     at_goal=st.lists(st.booleans(), min_size=6, max_size=6),
     held=st.lists(st.booleans(), min_size=6, max_size=6),
 )
-def test_rule8_eq1_matches_a_handmade_count(bases, at_goal, held):
-    """Eq. 1 (one function, shared by the planner and the validator) agrees with handmade.eq1."""
+def test_rule8_the_task_cost_matches_a_handmade_count(bases, at_goal, held):
+    """The task cost (one function, shared by the planner, the env and the validator) agrees with handmade.cost."""
     spec_example = Scenario.load(EXAMPLE)
     phases = tuple(
         Phase(
@@ -399,7 +399,7 @@ def test_rule8_eq1_matches_a_handmade_count(bases, at_goal, held):
         )
         for k, base in enumerate(bases)
     )
-    assert plan_objective(spec_example, phases) == pytest.approx(eq1(phases), rel=1e-12, abs=1e-12)
+    assert task_cost(spec_example, phases) == pytest.approx(cost(phases), rel=1e-12, abs=1e-12)
 
 
 # ---------------------------------------------------------------------- rule 9
@@ -420,7 +420,7 @@ def test_rule9_an_object_where_the_hand_goes(spec_example_dict, hand_plan):
     scenario = Scenario.from_dict(spec_example_dict)
     phases = tuple(replace(p, objects={**p.objects, "cup": (4.03, 3.86)}) for p in hand_plan.phases)
     plan = with_phases(hand_plan, phases)
-    plan = replace(plan, objective=plan_objective(scenario, plan.phases))  # the cup is delivered all along
+    plan = replace(plan, objective=task_cost(scenario, plan.phases))  # the cup is delivered all along
     violations = validate_plan(scenario, plan)
     assert violations == [
         "rule 9 (hand room): phase 3 push 'block': no room for the hand at the push contact [4.000, 3.880]: "

@@ -11,7 +11,7 @@ from expert.milp.deadline import Deadline
 from expert.milp.decode import SolvedPhase
 from expert.milp.problem import prepare
 from expert.milp.warm import add_warm_start
-from expert.planner import plan
+from expert.planner import PlannerOptions, SubPlanner
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_multi
 
@@ -21,7 +21,8 @@ def two_objects():
     """A two-object scenario, its problem and the decoupled plan's steps (a feasible plan)."""
     scenario = draw_paper_multi(np.random.default_rng(1), 2)
     lattice = Lattice.over(scenario.area, 0.05)
-    phases = decoupled_plan(scenario, [o.id for o in scenario.objects], lattice, Deadline.after(60.0), plan)
+    sub_planner = SubPlanner(PlannerOptions(), Deadline.after(120.0), lattice)
+    phases = decoupled_plan(scenario, [o.id for o in scenario.objects], lattice, sub_planner)
     problem = prepare(scenario, lattice)
     return problem, steps_of(problem, phases), len(phases)
 

@@ -299,4 +299,4 @@ def test_validate_with_1024_obstacles(capsys, tmp_path):
 def test_the_valid_files_are_valid():
     """The fuzz suite's starting points: if these broke, every mutation test would test nothing."""
     assert validate_plan(SCENARIO, HAND) == []
-    assert copy.deepcopy(VALID_PLAN)["objective"] == pytest.approx(4.366)
+    assert copy.deepcopy(VALID_PLAN)["objective"] == pytest.approx(74.366)
