@@ -15,7 +15,8 @@ statuses: this package turns its exceptions into them (:mod:`~training.cli.exits
 
 Exit statuses: 0 success, 1 a negative answer (no plan, an invalid plan, a failed
 episode), 2 bad input (a short message, never a traceback), 3 an unexpected internal
-error (a short message and the path of the full report), 130 interrupted (Ctrl-C).
+error (a short message and the path of the full report), 130 interrupted (Ctrl-C), 143
+stopped by SIGTERM (as Ctrl-C).
 """
 
 from __future__ import annotations
@@ -34,7 +35,8 @@ DESCRIPTION = (
 )
 EPILOG = (
     "Exit status: 0 success, 1 a negative answer (no plan, an invalid plan, a failed episode), 2 bad input, "
-    "3 an internal error (the message says where the full report is), 130 interrupted."
+    "3 an internal error (the message says where the full report is), 130 interrupted (Ctrl-C), 143 stopped by "
+    "SIGTERM (what finished is kept, as on Ctrl-C)."
 )
 
 

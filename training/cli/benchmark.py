@@ -41,7 +41,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         epilog="Exit status: 0 done (--check: every record identical), 1 (--check) a record came out differently, "
         "2 bad input (unknown policy or split, missing run folder, unusable "
         "scenario file, a results.json that breaks its schema, another benchmark writing to OUT_DIR), "
-        "130 interrupted (the finished episodes are kept in results.json).",
+        "130 interrupted (the finished episodes are kept in results.json), 143 stopped by SIGTERM (the same).",
     )
     parser.add_argument(
         "--policies",

@@ -47,7 +47,8 @@ GENERATE_COMMAND = Command(
     "interrupted run keeps the seeds it finished and the same command resumes).",
     epilog="Exit status: 0 the dataset is complete (also when it already was, with the same options), 2 bad "
     "input (an existing id made with other options, a partial run with other options, another run working on "
-    "the id, too little disk space), 130 interrupted (run the same command again to resume).",
+    "the id, too little disk space), 130 interrupted (run the same command again to resume), 143 stopped by "
+    "SIGTERM (the same).",
 )
 
 
