@@ -231,12 +231,21 @@ def test_a_policy_without_room_for_the_objects_is_refused():
     runner.check_fits([small], benchmark.split_scenarios("iid", 4))  # one and two objects fit
 
 
-def test_scenario_outside_the_trained_extent_is_refused(tmp_path: Path):
+def test_a_room_larger_than_the_families_floor_is_played_on_its_own(tmp_path: Path):
+    """An 8 x 4 m room, which plan, validate, rollout and gym.make take, was refused by benchmark --scenarios."""
     data = json.loads(EXAMPLE.read_text())
-    data["area"] = {"min": [-1.0, -1.0], "max": [8.0, 6.0]}
+    data["area"] = {"min": [-1.0, -0.5], "max": [7.0, 3.5]}  # 8 x 4 m: wider than the families' 7 m
+    data["tables"][1].update(min=[3.7, 2.3], max=[4.3, 2.9])
+    data["objects"][0]["goal"] = [4.0, 2.6]
+    data["clutter"][0].update(min=[3.9, 2.5], max=[4.1, 2.7])
+    data["obstacles"] = []
     (tmp_path / "wide.json").write_text(json.dumps(data))
-    with pytest.raises(benchmark.BenchmarkError, match=r"wide\.json.*extent"):
-        benchmark.folder_scenarios(tmp_path)
+    items = benchmark.folder_scenarios(tmp_path)
+    assert items[0].floor == {"scenario": items[0].scenario}
+    out = tmp_path / "out"
+    argv = ["benchmark", "--policies", "expert", "--scenarios", str(tmp_path), "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    assert all(r["success"] for r in read_results(out / "results.json") if r["policy"] == "expert")
 
 
 # ------------------------------------------------------------------ metrics

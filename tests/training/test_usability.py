@@ -73,23 +73,6 @@ def test_control_characters_in_names_are_shown_escaped(capsys, tmp_path: Path) -
 
 
 # ---------------------------------------------------------------------- what a new user tripped on
-def test_scenarios_outside_the_extent_are_refused_in_metres(capsys, tmp_path: Path) -> None:
-    """The refusal printed ``Rect(min_x=...)`` and spoke of a "trained extent" for the expert and random."""
-    from training.evaluation.splits import folder_scenarios
-
-    folder = tmp_path / "scenarios"
-    folder.mkdir()
-    data = json.loads(EXAMPLE.read_text())
-    data["area"] = {"min": [-1.0, -1.0], "max": [8.0, 6.0]}
-    (folder / "wide.json").write_text(json.dumps(data))
-    status, _, err = run(capsys, "benchmark", "--policies", "random", "--scenarios", folder, "--out", tmp_path / "b")
-    assert status == 2 and "wide.json: its area (x from -1 to 8 m, y from -1 to 6 m)" in err, err
-    assert "families' extent (x from -1 to 6 m, y from -1 to 6 m)" in err
-    assert "Rect(" not in err and "trained" not in err
-    with pytest.raises(ValueError, match="bc-basic was trained on that extent"):
-        folder_scenarios(folder, learned=["bc-basic"])
-
-
 def _commands(parser, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
     """Every (sub)command of ``parser`` as the words that name it."""
     import argparse

@@ -59,14 +59,15 @@ _MAX_BUILT = 4
 _TORCH_THREADS: list[int] = []  # torch's thread count before the benchmark set it to one (restored by close_all)
 
 
-def _built(spec: PolicySpec) -> tuple[gym.Env, Any]:
-    """The env and the policy of ``spec`` in this process (built once, reused episode after episode)."""
-    key = repr(spec)
+def _built(spec: PolicySpec, item: EvalScenario) -> tuple[gym.Env, Any]:
+    """The env and the policy of ``spec`` for ``item``'s floor in this process (built once, reused episode after
+    episode: every scenario of a split shares the families' extent)."""
+    key = repr((spec, item.floor.get("scenario")))
     if key not in _BUILT:
         if len(_BUILT) >= _MAX_BUILT:
             env, _ = _BUILT.pop(next(iter(_BUILT)))
             env.close()
-        env = make_env(spec.interface, family="basic", **spec.env_options)  # the lattice of the families' extent
+        env = make_env(spec.interface, **item.floor, **spec.env_options)
         policy = build(spec, env)
         _one_torch_thread()
         _BUILT[key] = (env, policy)
@@ -75,7 +76,7 @@ def _built(spec: PolicySpec) -> tuple[gym.Env, Any]:
 
 def benchmark_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool = True) -> dict[str, Any]:
     """One episode of ``spec`` on ``item``'s scenario; its record (see the module docstring)."""
-    env, policy = _built(spec)
+    env, policy = _built(spec, item)
     episode = run_episode(env, policy, item.seed, options={"scenario": item.scenario},
                                   deterministic=deterministic, stop_on_failure=False)  # fmt: skip
     figures, info = episode.figures, episode.info

@@ -120,8 +120,8 @@ class _Recorder:
 
 def reference_episode(item: EvalScenario, time_limit: float = REFERENCE_TIME_LIMIT) -> dict[str, Any]:
     """The expert's episode on ``item`` with ``time_limit`` seconds per plan: one reference record."""
-    # The benchmark's env: the lattice of the families' extent, the split's capacity and physics.
-    env = make_env("env", family="basic", **item.env_options)
+    # The benchmark's env: its floor's lattice (the families' extent), the split's capacity and physics.
+    env = make_env("env", **item.floor, **item.env_options)
     try:
         policy = _Recorder(env, time_limit)
         episode = run_episode(env, policy, item.seed, options={"scenario": item.scenario}, stop_on_failure=False)

@@ -65,7 +65,7 @@ A name without a version means the newest: ``layouts`` is ``layouts-v2:test``.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -80,7 +80,6 @@ from fetchcarry_env.families import (
     draw_push,
     get_family,
 )
-from fetchcarry_env.geometry import Rect
 from fetchcarry_env.observation import Capacity
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from fetchcarry_env.worlds.physics import NO_VARIATION
@@ -169,6 +168,14 @@ class EvalScenario:
     def env_options(self) -> dict[str, object]:
         """The ``gym.make`` options of the env every policy acts in on this scenario: capacity and physics."""
         return {"capacity": self.capacity, "physics": self.physics or NO_VARIATION}
+
+    @property
+    def floor(self) -> dict[str, object]:
+        """Where the env's action lattice lies: the families' extent (the env of family ``basic``), or, for a
+        scenario larger than that, the scenario's own area (the env of that scenario)."""
+        if EXTENT.contains_rect(self.scenario.area):
+            return {"family": "basic"}
+        return {"scenario": self.scenario}
 
 
 def largest(capacities: Iterable[Capacity]) -> Capacity:
@@ -307,27 +314,17 @@ def split_scenarios(split: Split | str, episodes: int | None = None) -> list[Eva
     return out
 
 
-def extent_text(rect: Rect) -> str:
-    """``rect`` in words and metres: ``x from -1 to 6 m, y from -1 to 6 m``."""
-    return f"x from {rect.min_x:g} to {rect.max_x:g} m, y from {rect.min_y:g} to {rect.max_y:g} m"
-
-
 SHOWN_PROBLEMS = 5  # a folder's unusable files named in the message; the rest are counted
 
 
-def folder_scenarios(
-    folder: str | Path, episodes: int | None = None, learned: Sequence[str] = ()
-) -> list[EvalScenario]:
+def folder_scenarios(folder: str | Path, episodes: int | None = None) -> list[EvalScenario]:
     """The scenario files (``*.json``, in name order) of ``folder``, the first ``episodes`` of them.
 
     Their env's capacity is the default's, grown to hold every file's scenario; no physics variation
-    (the scenario format has no masses or frictions).
-
-    Every file must be a valid scenario whose area lies inside the families' extent
-    (``EXTENT``, the floor the benchmark's action lattice covers, for every policy);
-    :class:`BenchmarkError` names every file that is not. ``learned`` names the learned
-    policies of the run: the message says that they were trained on that extent (the
-    expert and random policies were trained on nothing).
+    (the scenario format has no masses or frictions). A scenario whose area lies inside the
+    families' extent is played on that extent's lattice (as the splits are), a larger one on its
+    own area's (:attr:`EvalScenario.floor`). Every file must be a valid scenario;
+    :class:`BenchmarkError` names every file that is not.
     """
     folder = Path(folder)
     if not folder.is_dir():
@@ -343,9 +340,6 @@ def folder_scenarios(
         except (ScenarioError, OSError) as error:
             problems.append(str(error))  # it names the file
             continue
-        if not EXTENT.contains_rect(scenario.area):
-            problems.append(f"{path.name}: its area ({extent_text(scenario.area)}) {_outside(learned)}")
-            continue
         out.append(EvalScenario(index, f"scenarios:{folder.name}", path.name, EVAL_SEED_BASE + index, scenario))
     capacity = Capacity()
     for item in out:
@@ -357,11 +351,3 @@ def folder_scenarios(
             shown.append(f"... and {len(problems) - SHOWN_PROBLEMS} more unusable files of {len(files)}")
         raise BenchmarkError(f"{len(problems)} unusable scenario files in {folder}:\n" + "\n".join(shown))
     return out
-
-
-def _outside(learned: Sequence[str]) -> str:
-    """Why an area outside ``EXTENT`` is refused: the floor every policy acts on, and what was trained on it."""
-    text = f"does not fit inside the families' extent ({extent_text(EXTENT)}), the floor every policy acts on"
-    if learned:
-        text += f"; {', '.join(learned)} {'was' if len(learned) == 1 else 'were'} trained on that extent"
-    return text
