@@ -130,12 +130,14 @@ def _family(name: str, seed: int):
     ],
     ids=["diagonal-3", "room-105", "corridor-1", "push-0"],
 )
-def test_tight_plans_run_in_the_env(make):
-    """A plan with both options, on the env's own lattice, is valid and executes: no invalid action, delivered."""
+def test_tight_plans_are_valid_and_the_env_refuses_the_phases_the_validator_notes(make):
+    """A plan with both options is a valid plan file; the env's rules are the default model's (no corner-zone poses,
+    no tangents), so it refuses the phases that leave them: the first one it refuses is the validator's first note."""
     import gymnasium as gym
 
     import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
     from expert.to_actions import plan_to_actions
+    from expert.validate import env_refusals
 
     scenario = make()
     env = gym.make("FetchCarryPush-v0", scenario=scenario)
@@ -144,10 +146,13 @@ def test_tight_plans_run_in_the_env(make):
         lattice = env.unwrapped.lattice
         result = plan(scenario, lattice=lattice, time_limit=60.0, corner_poses=True, pose_tangents=True)
         assert result.found and validate_plan(scenario, result) == []
-        actions = plan_to_actions(result, scenario, lattice)
-        for action in actions:
-            _, _, terminated, truncated, info = env.step(action.to_array())
-            assert info["invalid_action"] is None and not truncated
-        assert terminated and info["is_success"]
+        noted = env_refusals(scenario, result, lattice=lattice)
+        for k, action in enumerate(plan_to_actions(result, scenario, lattice), start=1):
+            _, _, terminated, _truncated, info = env.step(action.to_array())
+            if info["invalid_action"] is not None:
+                assert noted and noted[0].startswith(f"env rules: phase {k} "), (k, info["invalid_action"], noted)
+                break
+        else:
+            assert not noted and terminated and info["is_success"]
     finally:
         env.close()

@@ -158,9 +158,9 @@ def test_refuses_to_be_made_without_a_lattice() -> None:
         ExpertPolicy(gym.make("FetchCarryPush-v0"), time_limit=0.0)
 
 
-def test_escapes_a_corner_gap_the_milp_cannot_start_from(spec_example: Scenario) -> None:
-    """A base that stopped by a table's corner is clear of it, but inside the octagon the MILP keeps it out of
-    (Eq. 18): the planner has no plan from there, so the expert first moves out, then plans."""
+def test_a_base_inside_an_octagon_cannot_move_and_the_expert_says_it_is_stuck(spec_example: Scenario) -> None:
+    """A base by a table's corner is clear of it, but inside the octagon the MILP keeps it out of (Eq. 18): the
+    planner has no plan from there, and the env, whose move rule is the MILP's, refuses every move from it."""
     from expert import plan
 
     # 0.226 m from table_src's corner (1.7, 1.7) at 22.5 degrees off the x axis: the disc (0.22 m) is clear,
@@ -170,5 +170,7 @@ def test_escapes_a_corner_gap_the_milp_cannot_start_from(spec_example: Scenario)
     assert plan(scenario).status == "infeasible"
     env = gym.make("FetchCarryPush-v0", scenario=scenario)
     record = run_episode(env, ExpertPolicy(env), seed=0)
-    assert record.figures.success and record.figures.repairs == 1
-    assert bool(record.infos["repaired"][1]) and Action.from_array(record.actions[0]).mode == Mode.MOVE
+    assert not record.figures.success and record.figures.outcome == "expert_stuck"
+    env.reset(seed=0)
+    away = env.unwrapped.lattice.index((0.5, 0.5))
+    assert "'table_src'" in env.step(Action(away, "+x", 0, Mode.MOVE).to_array())[4]["invalid_action"]
