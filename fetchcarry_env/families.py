@@ -566,8 +566,9 @@ def _family_per_value(
 
 
 def _objects_capacity(count: int) -> Capacity:
-    """Room for ``count`` objects (at least the default's four)."""
-    return Capacity(objects=max(Capacity().objects, count))
+    """Room for ``count`` objects and as many pieces of clutter (at least the default's four and eight)."""
+    default = Capacity()
+    return Capacity(objects=max(default.objects, count), clutter=max(default.clutter, count))
 
 
 def draw_mixed(rng: np.random.Generator) -> Scenario:

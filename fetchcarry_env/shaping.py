@@ -1,10 +1,10 @@
 """``LearningReward``: a reward to learn from, with the paper's cost kept next to it.
 
-The env's reward is the paper's objective seen one phase at a time (+10 per delivery,
-minus the travel cost); it is what the cost ratio to the expert is measured in, so it
-stays as it is. It is a poor teacher: an impossible action costs 1, less than any move
-longer than about a metre, so a learner that refuses to act loses less than one that
-explores. :class:`LearningReward` adds to it
+The env's reward is minus the task cost, one phase at a time (10 per object not yet
+delivered, plus the travel cost); it is what the cost ratio to the expert is measured in,
+so it stays as it is. It is a poor teacher: an impossible action costs 1 more than doing
+nothing useful, less than any move longer than about a metre, so a learner that refuses
+to act can lose less than one that explores. :class:`LearningReward` adds to it
 
 * potential-based shaping on progress (Ng, Harada and Russell, 1999):
   ``F = gamma * Phi(s') - Phi(s)``, which leaves the optimal policy unchanged; and
@@ -65,8 +65,9 @@ class LearningReward(gym.Wrapper, gym.utils.RecordConstructorArgs):
 
     ``r = r_env + F + refusal``, where
 
-    * ``r_env`` is the env's reward (the paper's: +10 per delivery, minus the travel cost
-      ``|dx| + |dy| + 0.1 ||dx| - |dy||`` in metres, minus 1 per contact), unchanged;
+    * ``r_env`` is the env's reward (minus the task cost: 10 per object not at its goal after
+      the step, plus the travel cost ``|dx| + |dy| + 0.1 ||dx| - |dy||`` in metres, plus 1 per
+      refused action), unchanged;
     * ``F = gamma * Phi(s') - Phi(s)`` with ``Phi(s) = -(stage * stages_left(s) +
       next_distance(s))``: ``stages_left`` counts a pick and a place per object not
       delivered (only the place for the held one) and a push per goal that clutter

@@ -107,6 +107,23 @@ def conditional_bounds(
     return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[by_slot][firsts], least, strict=True)})
 
 
+def least_by_last_phase(problem: Problem, n_phases: int, pair: PairCosts, deadline: Deadline = NEVER) -> np.ndarray:
+    """``[t]`` for ``t < n_phases``: a lower bound on the task cost of every plan whose last place is at phase ``t``
+    (``inf`` where none can be), from one forward search of the skeleton graph.
+
+    The forward table's value at a finished state and phase ``t`` is the cheapest path of the
+    relaxation that does its last place at ``t`` (slack allowed before), with ``W1 t`` counted
+    at every place: every such plan maps onto one of them at no more cost (the module docstring).
+    """
+    graph = pair.graph(deadline).within(n_phases)
+    bonus = _arrival_bonus(graph, n_phases, last_at_end=False)
+    forward = _forward(graph, n_phases, bonus, deadline)
+    finished = forward[:, graph.finished & graph.placed] if (graph.finished & graph.placed).any() else None
+    if finished is None:
+        return np.full(n_phases, math.inf)
+    return finished.min(axis=1) - WAIT_COST * len(problem.deliver)
+
+
 # The searches below keep their tables phase by phase, one row per phase and one column per
 # state: a minimum over the edges into (or out of) a state is then one reduceat along rows,
 # several times faster than along columns.

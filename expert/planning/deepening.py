@@ -17,12 +17,12 @@ Units are metres (costs) and seconds (timings).
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 
 from expert.decoupled import steps_of
 from expert.guide import guide_steps
-from expert.milp.bounds import Connectivity, PairCosts, counting_bound, min_objective, min_travel, skeleton
+from expert.milp.bounds import Connectivity, PairCosts, counting_bound, min_travel, skeleton
+from expert.milp.conditional import least_by_last_phase
 from expert.milp.deadline import TimeUp
 from expert.milp.decode import SolvedPhase, phases_of
 from expert.milp.problem import Problem, prepare
@@ -210,20 +210,20 @@ class Deepening:
         plan of ``N`` phases leaves one object waiting ``N - 2`` phases, and the others at
         least ``1, 3, 5, ...`` (a pick and a place each): with the relaxation's travel bound
         that grows with ``N`` (:func:`_simple_bound`), and past the first ``N`` where it reaches
-        ``cost`` no plan helps. Below it, the skeleton's bound on the task cost with the last place at
-        phase ``N - 1`` (:func:`expert.milp.bounds.min_objective`) rules out more counts.
+        ``cost`` no plan helps. Below it, the skeleton's bound on the task cost of the plans whose last
+        place is at phase ``N - 1`` (:func:`expert.milp.conditional.least_by_last_phase`, one forward
+        search for every ``N``) rules out more counts.
         """
-        run = self.run
-        cap, n = n_phases, n_phases + 1
-        while _simple_bound(problem, n) < cost - 1e-9:
-            bound = -math.inf
-            if pairs is not None:  # -inf: no path of the relaxation has these phases, so no plan does
-                bound = min_objective(problem, n, pairs, run.deadline, last_at_end=True)
-                bound = math.inf if bound == -math.inf else bound
-            if max(bound, _simple_bound(problem, n)) < cost - 1e-9:
-                cap = n
-            n += 1
-        return cap
+        beyond = n_phases + 1
+        while _simple_bound(problem, beyond) < cost - 1e-9:  # every plan of `beyond` or more phases costs more
+            beyond += 1
+        if beyond == n_phases + 1:
+            return n_phases
+        if pairs is None:
+            return beyond - 1
+        by_last = least_by_last_phase(problem, beyond - 1, pairs, self.run.deadline)  # [t]: last place at t
+        cheaper = [n for n in range(n_phases + 1, beyond) if by_last[n - 1] < cost - 1e-9]
+        return max(cheaper, default=n_phases)
 
 
 def _simple_bound(problem: Problem, n_phases: int) -> float:

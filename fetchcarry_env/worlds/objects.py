@@ -1,7 +1,7 @@
-"""``objects-k``: k objects over several tables in one room sized to fit them (k = 1 .. 8).
+"""``objects-k``: k objects over several tables in one room sized to fit them (k = 1 .. 12).
 
-The room is a square of side ``4 + 0.375 k`` metres (4.4 m for one object, 7 m for
-eight) in the corner of the shared extent; its floor is cut into 3 x 3 cells, the robot
+The room is a square of side ``4 + 0.375 k`` metres (4.4 m for one object, 7 m, the
+whole extent, from eight) in the corner of the shared extent; its floor is cut into 3 x 3 cells, the robot
 starts in the corner cell and ``min(6, 2 + k // 2)`` tables (0.6-0.8 m squares,
 jittered within their cells) stand in as many of the other eight cells, drawn at random.
 Each object goes from one table to another. Half of the scenarios have clutter on the
@@ -29,7 +29,7 @@ from fetchcarry_env.worlds.base import (
     uniform,
 )
 
-MAX_OBJECTS = 8  # the largest k
+MAX_OBJECTS = 12  # the largest k
 COVERED_SHARE = 0.5  # of the scenarios, those with clutter on goals
 COVER_CHANCE = 0.4  # each goal's, in those
 ROOM_SIDE = (4.0, 0.375)  # metres: the room's side is ROOM_SIDE[0] + ROOM_SIDE[1] * k

@@ -187,7 +187,10 @@ def test_record_problem_by_hand(saved: Path):
     record = read_results(saved)[0]
     assert record_problem(record) is None
     assert record_problem({**record, "extra": [1]}) is None  # other fields are kept as they are
-    assert record_problem({**record, "cost": 3}) is None  # an integer is a number
+    cost = round(record["cost"])
+    assert record_problem({**record, "cost": cost, "return": -cost, "travel": 0}) is None  # an integer is a number
+    assert "not minus its task cost" in record_problem({**record, "return": record["return"] + 1.0})
+    assert "above its task cost" in record_problem({**record, "travel": record["cost"] + 1.0})
     assert "negative" in record_problem({**record, "pushes": -1})
     assert "delivers 2 of 1" in record_problem({**record, "delivered": 2})
     assert "not a number" in record_problem({**record, "return": float("nan")})

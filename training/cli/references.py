@@ -14,6 +14,7 @@ from training.cli.arguments import add_worker_options, positive_int
 from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
+from training.evaluation.invariant import beaten
 from training.evaluation.references import (
     FOLDER,
     REFERENCE_TIME_LIMIT,
@@ -23,6 +24,7 @@ from training.evaluation.references import (
     part_references,
     write_references,
 )
+from training.evaluation.results import RESULTS, RESULTS_GZIP, read_results
 from training.evaluation.splits import published_splits
 
 REFERENCES_COMMAND = Command(
@@ -32,7 +34,8 @@ REFERENCES_COMMAND = Command(
     "and test parts, and write the split's reference file (every scenario's digest and the expert's cost, "
     "return, phases, pushes and proven status). The benchmark's cost ratio, SPL and score read these files, "
     "never a run's timing. --check samples every published split again and compares every digest.",
-    epilog="Exit status: 0 written (or every file agrees), 1 a file disagrees with its split (--check), 2 bad input.",
+    epilog="Exit status: 0 written (or every file agrees, or no episode beats a proven reference), 1 a file "
+    "disagrees with its split (--check) or an episode beats a proven reference (--invariant), 2 bad input.",
 )
 
 
@@ -70,11 +73,21 @@ def register(commands: argparse._SubParsersAction) -> None:
         help="keep the records of the existing file (same scenario, same --time-limit) and compute only the others",
     )
     parser.add_argument("--check", action="store_true", help="only compare every digest with its split, sampled again")
+    parser.add_argument(
+        "--invariant",
+        nargs="+",
+        type=Path,
+        metavar="RESULTS",
+        help="only check results files (results.json, results.json.gz) or benchmark folders against the invariant: "
+        "no episode earns more than the proven reference on its scenario; lists every episode that does",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run_references(args: argparse.Namespace) -> int:
-    """``fetchcarry references``: 0 written or agreeing, 1 a disagreement (``--check``)."""
+    """``fetchcarry references``: 0 written or agreeing, 1 a disagreement (``--check``, ``--invariant``)."""
+    if args.invariant:
+        return _run_invariant(args.invariant)
     if args.check:
         problems = [line for split in published_splits() for line in digest_mismatches(split)]
         for line in problems[:20]:
@@ -108,3 +121,27 @@ def _summary(content: dict) -> str:
         planning = sum(r["planning_s"] for r in records)
         parts.append(f"{part} {len(records)} ({solved} solved, {proven} proven optimal, planning {planning:.1f} s)")
     return ", ".join(parts)
+
+
+def _run_invariant(paths: list[Path]) -> int:
+    """``--invariant``: the episodes of ``paths`` that earn more than a proven reference; 1 when there is one."""
+    records = [record for path in paths for record in read_results(_results_file(path))]
+    found, compared = beaten(records)
+    for case in found[:20]:
+        echo(
+            f"{case.policy} {case.split} seed {case.seed}: return {case.episode_return:.3f} in {case.phases} steps "
+            f"above the proven reference's {case.reference_return:.3f} in {case.reference_phases}"
+        )
+    if len(found) > 20:
+        echo(f"... and {len(found) - 20} more")
+    echo(f"{len(found)} of {compared} episodes with a proven reference earn more than it ({len(records)} records read)")
+    return 1 if found else 0
+
+
+def _results_file(path: Path) -> Path:
+    """``path`` itself, or the results file of the benchmark folder ``path``."""
+    if path.is_dir():
+        for name in (RESULTS, RESULTS_GZIP):
+            if (path / name).is_file():
+                return path / name
+    return path

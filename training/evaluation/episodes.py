@@ -19,12 +19,12 @@ digest         the sha256 (hex) of the scenario's canonical JSON
 success        every object at its goal and the hand empty (``info["is_success"]``)
 delivered      objects at their goals at the end (``info["delivered"]``)
 objects        objects in the scenario
-cost           the paper's travel cost of the episode, metres (``info["travel_cost"]``,
-               which the env sums over the episode's moves)
-expert_cost    the expert's cost on the same scenario (filled in by the benchmark;
-               ``null`` where the expert failed)
-return         the paper's reward summed over the episode (+10 per delivery, minus
-               travel cost and penalties)
+cost           the episode's task cost (``info["task_cost"]``): its travel plus 10 per
+               object and step not at the goal plus its penalties, minus its return
+travel         the paper's travel cost of the episode, metres (``info["travel_cost"]``)
+expert_cost    the reference's cost on the same scenario (filled in by the benchmark: the
+               proven optimum; ``null`` where the expert failed)
+return         the env's reward summed over the episode: minus the task cost
 phases         decisions taken (env steps)
 pushes         steps that pushed a piece of clutter (``info["push"]`` present)
 invalid_actions steps the env refused (``info["invalid_action"]`` not ``None``)
@@ -90,7 +90,8 @@ def benchmark_episode(spec: PolicySpec, item: EvalScenario, deterministic: bool 
         "success": bool(info["is_success"]),
         "delivered": int(info["delivered"]),
         "objects": len(item.scenario.objects),
-        "cost": float(info["travel_cost"]),
+        "cost": float(info["task_cost"]),
+        "travel": float(info["travel_cost"]),
         "expert_cost": None,
         "return": figures.episode_return,
         "phases": figures.steps,

@@ -1,32 +1,39 @@
-"""The fixed references of every published split: each scenario's digest and the expert's result on it.
+"""The fixed references of every published split: each scenario's digest and the proven optimum on it.
 
 A split's reference file, ``training/evaluation/references/NAME-vN.json`` (in the
 repository, one per split version), pins the split: for each part (``dev``, ``test``)
 it lists every scenario's index, seed, source, name and digest
 (:func:`~training.evaluation.results.scenario_digest`; ``world_digest`` without the
-name, which the protocol's guard compares), and the MILP expert's episode on
-it in the physics env, computed once with a generous planning limit
-(:data:`REFERENCE_TIME_LIMIT` seconds per planning call): success, cost (metres),
-return, phases, pushes, delivered, the planning calls and whether every one was proven
-optimal (``proven``; ``status`` is the first call's SCIP status). The episode runs in the
+name, which the protocol's guard compares), and the MILP expert's episode on it in the
+physics env, planned to proven optimality (no node budget; :data:`REFERENCE_TIME_LIMIT`
+seconds per planning call is only the safety stop): ``cost``, the task cost of the proven
+optimal plan (``docs/formulation.md``, "The task cost"), ``return`` (minus it), ``travel``
+and ``episode_cost`` (what the episode measured in the env), success, phases, pushes,
+delivered, the planning calls, whether every one was proven optimal with no clock stopping
+one (``proven``, ``clock_stopped``) and the first call's status. The episode runs in the
 env the benchmark gives every policy on that split: the split's capacity and physics
 (:attr:`~training.evaluation.splits.EvalScenario.env_options`; ``perturbed``'s clutter
 masses and frictions are drawn from the reset seed, so the reference meets the same ones).
-A split whose plans are slow may be computed with another limit (``time_limit_s`` of its
-file says which); a scenario with no plan proven within it is recorded all the same
-(``proven`` false; ``success`` false when no plan was found).
+A scenario with no proven plan is recorded all the same (``proven`` false, ``cost`` the
+episode's); ``fetchcarry references --check`` counts them.
+
+No episode on the scenario can cost less than a proven ``cost`` (the env's rules are the
+planner's model, and the env's return is minus the task cost): the invariant
+:func:`training.evaluation.invariant.beaten` checks over any results.
 
 The benchmark reads the cost ratio, SPL and the score's 100 from here, never from the
-expert's run, whose wall-clock limit moves with the machine's load; the expert still
-runs, and its disagreements with the reference are reported. ``fetchcarry benchmark
-references --split NAME`` makes (or remakes) a file, on the local pool or on Ray, with the
-same records either way. A test checks that sampling every split again gives every
-digest of its file, so a change in a sampler cannot silently alter a published split.
+expert's run; the expert still runs, and its disagreements with the reference are reported.
+Files of release 0.2 (``fetchcarry-references/1``, the ``v1`` splits) measured another task
+(a reward of +10 per delivery, travel cost as the cost): they stay as published and load,
+marked legacy, and the benchmark refuses to score a split against them.
+``fetchcarry references --split NAME`` makes (or remakes) a file, on the local pool or on
+Ray, with the same records either way. A test checks that sampling every split again gives
+every digest of its file, so a change in a sampler cannot silently alter a published split.
 
 File::
 
-    {"format": "fetchcarry-references/1", "split": "iid-v1", "time_limit_s": 120.0,
-     "parts": {"dev": [{"index": 0, "seed": 1000000000, "digest": "...", "cost": 7.35, ...}, ...],
+    {"format": "fetchcarry-references/2", "split": "iid-v2", "time_limit_s": 600.0,
+     "parts": {"dev": [{"index": 0, "seed": 1008000000, "digest": "...", "cost": 27.35, ...}, ...],
                "test": [...]}}
 """
 
@@ -34,6 +41,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from collections.abc import Iterator, Sequence
 from functools import cache
 from pathlib import Path
@@ -48,11 +56,12 @@ from training.evaluation.splits import SPLITS, EvalScenario, Split, get_split, s
 from training.evaluation.tasks import run_all
 from training.rollout import run_episode
 
-FORMAT = "fetchcarry-references/1"
+FORMAT = "fetchcarry-references/2"
+LEGACY_FORMAT = "fetchcarry-references/1"  # release 0.2's task (v1 splits): kept as published, not scored against
 FOLDER = Path(__file__).parent / "references"
-REFERENCE_TIME_LIMIT = 120.0  # seconds per planning call: generous (the benchmark's expert has 10)
-MAX_BYTES = 4_000_000  # a reference file is read within this size
-FIELDS = (
+REFERENCE_TIME_LIMIT = 600.0  # seconds per planning call: the safety stop only (the expert plans to proven optimality)
+MAX_BYTES = 8_000_000  # a reference file is read within this size
+LEGACY_FIELDS = (
     "index",
     "seed",
     "source",
@@ -70,6 +79,10 @@ FIELDS = (
     "status",
     "planning_s",
 )
+FIELDS = (*LEGACY_FIELDS, "travel", "episode_cost", "clock_stopped")
+NUMBERS = ("cost", "return", "travel", "episode_cost", "planning_s")
+COUNTS = ("index", "seed", "phases", "pushes", "delivered", "plans")
+FLAGS = ("success", "proven", "clock_stopped")
 
 
 class ReferenceError(BenchmarkError):
@@ -83,17 +96,20 @@ def reference_path(split: Split | str, folder: Path = FOLDER) -> Path:
 
 
 class _Recorder:
-    """An :class:`~expert.policy.ExpertPolicy` that keeps the SCIP status of every planning call."""
+    """An :class:`~expert.policy.ExpertPolicy` planning to proven optimality (no node budget; ``time_limit`` is
+    the safety stop) that keeps every planning call's status, first plan and whether a clock stopped it."""
 
     def __init__(self, env: Any, time_limit: float) -> None:
         from expert.policy import ExpertPolicy
 
-        self.expert = ExpertPolicy(env, time_limit=time_limit)
+        self.expert = ExpertPolicy(env, time_limit=time_limit, node_limit=None)
         self.statuses: list[str] = []
+        self.first_plan: Any = None
+        self.clock_stopped = False
 
     def reset(self) -> None:
         self.expert.reset()
-        self.statuses = []
+        self.statuses, self.first_plan, self.clock_stopped = [], None, False
 
     def predict(
         self,
@@ -107,6 +123,10 @@ class _Recorder:
         decision = self.expert.last_decision
         if decision is not None and decision.planned:
             self.statuses.append(str(decision.status))
+            plan = self.expert.last_plan
+            if plan is not None:
+                self.first_plan = self.first_plan or plan
+                self.clock_stopped = self.clock_stopped or bool(plan.stats.get("clock_stopped"))
         return action, state
 
     @property
@@ -119,7 +139,15 @@ class _Recorder:
 
 
 def reference_episode(item: EvalScenario, time_limit: float = REFERENCE_TIME_LIMIT) -> dict[str, Any]:
-    """The expert's episode on ``item`` with ``time_limit`` seconds per plan: one reference record."""
+    """The expert's episode on ``item``, planned to proven optimality (``time_limit`` seconds per plan is the
+    safety stop): one reference record.
+
+    ``cost`` is the task cost of the first plan when every plan of the episode was proven
+    optimal and no clock stopped one (``proven``), the optimum every episode on the scenario
+    is measured against (``return`` is minus it); otherwise the episode's own task cost.
+    ``episode_cost`` is what the episode cost in the env (the same, unless physics made the
+    expert replan), ``travel`` its travel.
+    """
     # The benchmark's env: its floor's lattice (the families' extent), the split's capacity and physics.
     env = make_env("env", **item.floor, **item.env_options)
     try:
@@ -128,6 +156,11 @@ def reference_episode(item: EvalScenario, time_limit: float = REFERENCE_TIME_LIM
     finally:
         env.close()
     figures, info = episode.figures, episode.info
+    success = bool(info["is_success"])
+    proven = success and bool(policy.statuses) and all(s == "optimal" for s in policy.statuses)
+    proven = proven and not policy.clock_stopped
+    optimum = policy.first_plan.objective if proven and policy.first_plan is not None else None
+    cost = float(optimum) if optimum is not None else float(info["task_cost"])
     return {
         "index": item.index,
         "seed": item.seed,
@@ -135,14 +168,17 @@ def reference_episode(item: EvalScenario, time_limit: float = REFERENCE_TIME_LIM
         "scenario": item.scenario.name,
         "digest": scenario_digest(item.scenario),
         "world_digest": scenario_digest(item.scenario, named=False),
-        "success": bool(info["is_success"]),
-        "cost": float(info["travel_cost"]),
-        "return": float(figures.episode_return),
+        "success": success,
+        "cost": cost,
+        "return": -cost if optimum is not None else float(figures.episode_return),
+        "travel": float(info["travel_cost"]),
+        "episode_cost": float(info["task_cost"]),
         "phases": int(figures.steps),
         "pushes": int(figures.pushes),
         "delivered": int(info["delivered"]),
         "plans": len(policy.statuses),
-        "proven": bool(policy.statuses) and all(s == "optimal" for s in policy.statuses),
+        "proven": proven,
+        "clock_stopped": policy.clock_stopped,
         "status": policy.statuses[0] if policy.statuses else None,
         "planning_s": float(figures.planning_s),
     }
@@ -224,7 +260,12 @@ def write_references(content: dict[str, Any], folder: Path = FOLDER) -> Path:
 
 @cache
 def load_references(version: str, folder: Path = FOLDER) -> dict[str, Any] | None:
-    """The reference file of split version ``version``, checked; ``None`` when the version has none."""
+    """The reference file of split version ``version``, checked; ``None`` when the version has none.
+
+    Every record's fields must be there with values of the right type: finite numbers,
+    whole counts, true or false, a status string or null (:class:`ReferenceError` names the
+    first that is not). A file of release 0.2's format (the v1 splits) loads, marked legacy.
+    """
     path = folder / f"{version}.json"
     if not path.is_file():
         return None
@@ -232,12 +273,53 @@ def load_references(version: str, folder: Path = FOLDER) -> dict[str, Any] | Non
         content = read_json(path, max_bytes=MAX_BYTES)
     except (JsonInputError, OSError) as error:
         raise ReferenceError(f"{path}: not a reference file ({error})") from None
-    if not isinstance(content, dict) or content.get("format") != FORMAT or not isinstance(content.get("parts"), dict):
+    if not isinstance(content, dict) or not isinstance(content.get("parts"), dict):
         raise ReferenceError(f"{path}: not a {FORMAT} file")
+    fields = {FORMAT: FIELDS, LEGACY_FORMAT: LEGACY_FIELDS}.get(content.get("format"))
+    if fields is None:
+        raise ReferenceError(f"{path}: not a {FORMAT} file (its format is {content.get('format')!r})")
     for part, records in content["parts"].items():
-        if not isinstance(records, list) or any(not isinstance(r, dict) or set(FIELDS) - set(r) for r in records):
-            raise ReferenceError(f"{path}: part {part!r} is not a list of reference records ({', '.join(FIELDS)})")
+        if not isinstance(records, list) or any(not isinstance(r, dict) or set(fields) - set(r) for r in records):
+            raise ReferenceError(f"{path}: part {part!r} is not a list of reference records ({', '.join(fields)})")
+        for k, record in enumerate(records):
+            problem = _value_problem(record, fields)
+            if problem is not None:
+                raise ReferenceError(f"{path}: part {part!r} record {k}: {problem}")
     return content
+
+
+def _value_problem(record: dict[str, Any], fields: Sequence[str]) -> str | None:
+    """The first field of ``record`` whose value is not of its kind (see :func:`load_references`), or None."""
+    for name in (n for n in NUMBERS if n in fields):
+        value = record[name]
+        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+            return f"{name} = {value!r} is not a finite number"
+    for name in (n for n in COUNTS if n in fields):
+        value = record[name]
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            return f"{name} = {value!r} is not a whole number >= 0"
+    for name in (n for n in FLAGS if n in fields):
+        if not isinstance(record[name], bool):
+            return f"{name} = {record[name]!r} is not true or false"
+    for name in ("source", "scenario", "digest", "world_digest"):
+        if not isinstance(record[name], str):
+            return f"{name} = {record[name]!r} is not a string"
+    if record["status"] is not None and not isinstance(record["status"], str):
+        return f"status = {record['status']!r} is not a string or null"
+    return None
+
+
+def refuse_legacy(split: Split | str, folder: Path = FOLDER) -> None:
+    """:class:`ReferenceError` when ``split``'s reference file is of release 0.2's format (another task)."""
+    split = get_split(split) if isinstance(split, str) else split
+    content = load_references(split.version, folder) if split.part else None
+    if content is not None and content.get("format") == LEGACY_FORMAT:
+        newest = get_split(f"{split.base_name}:{split.part}").name
+        raise ReferenceError(
+            f"{split.version}'s references were made by release 0.2 under its task (a reward of +10 per delivery, "
+            f"travel as the cost), not this release's task cost: benchmark {newest} instead (the published table of "
+            "release 0.2 is reproduced by that release)"
+        )
 
 
 def part_references(split: Split | str, folder: Path = FOLDER) -> list[dict[str, Any]]:
@@ -261,6 +343,7 @@ def reference_for(item: EvalScenario) -> tuple[dict[str, Any] | None, str | None
     """
     if item.split not in SPLITS:
         return None, None
+    refuse_legacy(item.split)
     records = part_references(item.split)
     if item.index >= len(records):
         return None, None

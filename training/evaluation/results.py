@@ -32,7 +32,13 @@ from types import TracebackType
 from typing import Any
 
 from fetchcarry_env.jsontext import JsonInputError, JsonItems, describe, stream_json
-from fetchcarry_env.kinematics import COLLISION_PENALTY, DELIVERY_BONUS, INVALID_ACTION_PENALTY, travel_cost
+from fetchcarry_env.kinematics import (
+    COLLISION_PENALTY,
+    DELIVERY_BONUS,
+    INVALID_ACTION_PENALTY,
+    WAIT_COST,
+    travel_cost,
+)
 from fetchcarry_env.scenario import COORD_LIMIT, Scenario
 from training.data.staging import DatasetBusyError, DatasetLock
 from training.errors import BenchmarkError
@@ -41,7 +47,8 @@ from training.files import write_atomically
 RESULTS = "results.json"
 RESULTS_GZIP = "results.json.gz"  # the same records, gzip-compressed: how the repository keeps the published table's
 LOCK = ".results.lock"  # in the output folder: held (flock) by the benchmark writing there
-SCHEMA_VERSION = 1  # 0: a plain list of records (no digest); 1: {"schema_version": 1, "records": [...]}
+SCHEMA_VERSION = 2  # 0: a plain list of records (no digest); 1: {"schema_version": 1, "records": [...]};
+# 2: the same, each record's cost the task cost (its travel in "travel"): a record with "travel" is of schema 2
 FORMAT_DOC = "docs/results-format.md"
 MAX_RESULTS_BYTES = 256 * 2**20  # bytes: about half a million records; a larger file is refused unread
 
@@ -86,6 +93,7 @@ FIELDS: dict[str, tuple[str, ...]] = {
 """Every record's fields and the JSON kinds each may hold (units: docs/results-format.md). Other fields are kept."""
 
 OPTIONAL: dict[str, tuple[str, ...]] = {
+    "travel": (_NUMBER,),  # schema 2 (cost: the task cost); schema 1's cost is the travel
     "step_ms": (_NUMBER,),
     "references": (_TEXT, _NULL),
     "baseline": (_TEXT,),
@@ -97,7 +105,8 @@ BOUNDS: dict[str, tuple[float, float | None]] = {
     "seed": (0, None),
     "training_seed": (0, None),
     **dict.fromkeys(("delivered", "objects", "phases", "pushes", "invalid_actions", "contacts"), (0, MAX_COUNT)),
-    "cost": (0, None),  # at most what its phases can travel (record_problem)
+    "cost": (0, None),  # at most what its phases can travel and wait (record_problem)
+    "travel": (0, None),
     "expert_cost": (0, MAX_COST_M),
     **dict.fromkeys(("decision_ms", "mask_ms", "step_ms"), (0, MAX_MS)),
 }
@@ -207,6 +216,8 @@ def _agreement_problem(record: dict[str, Any]) -> str | None:
         return f"delivers {delivered} of {objects} objects"
     if record["success"] and delivered != objects:
         return f"has 'success' = true but delivers {delivered} of {objects} objects"
+    if "travel" in record:
+        return _task_cost_problem(record)
     if cost > phases * MAX_PHASE_COST_M:
         return (
             f"has 'cost' = {_shown(cost)}, more than its {phases} phases can travel "
@@ -218,6 +229,22 @@ def _agreement_problem(record: dict[str, Any]) -> str | None:
             f"has 'return' = {_shown(record['return'])}, more in size than {_figure(most)}, what {objects} objects "
             f"and {phases} phases can earn or lose"
         )
+    return None
+
+
+def _task_cost_problem(record: dict[str, Any]) -> str | None:
+    """Schema 2: the cost is the task cost, minus the return; at most what the phases can travel, wait and lose."""
+    objects, phases, cost, travel = record["objects"], record["phases"], record["cost"], record["travel"]
+    most = phases * (MAX_PHASE_COST_M + WAIT_COST * objects + COLLISION_PENALTY + INVALID_ACTION_PENALTY)
+    if cost > most:
+        return (
+            f"has 'cost' = {_shown(cost)}, more than its {phases} phases can travel, wait and lose "
+            f"(at most {_figure(most)})"
+        )
+    if travel > cost + 1e-6 * max(1.0, cost):
+        return f"has 'travel' = {_shown(travel)} above its task cost {_shown(cost)}"
+    if abs(record["return"] + cost) > 1e-6 * max(1.0, cost):
+        return f"has 'return' = {_shown(record['return'])}, not minus its task cost {_shown(cost)}"
     return None
 
 

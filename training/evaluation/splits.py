@@ -39,6 +39,15 @@ split                  scenarios
                        episode, so a push lands elsewhere than planned): robustness
 =====================  ===========================================================
 
+Version 2 (``layouts-v3``) of every split: ``iid-v2``, ``more-objects-v2``,
+``push-required-v2``, ``layouts-v3``, ``perturbed-v2``, ``objects-v2`` (``objects-1`` ..
+``objects-12`` in turn) and ``apartment-v2``, on fresh seeds (blocks 8 to 14), each with a
+``dev`` part of 100 and a ``test`` part of 300 episodes, referenced under this release's
+task cost and the env's octagon rule, every reference proven optimal. Earlier versions
+were referenced under release 0.2's task (a reward of +10 per delivery, the expert's
+Eq. 1 over its own phases): their files stay as published, and the benchmark reports
+them apart (:mod:`training.evaluation.references`).
+
 A name without a version (``iid``) means the newest version. A new version gets a new
 entry here; an existing version never changes.
 
@@ -237,7 +246,7 @@ _GRADED = (
     *_graded(
         "objects-v1",
         "k objects for k = 1..8 (objects-1 .. objects-8 in turn): success and cost ratio against k",
-        _families(*(f"objects-{k}" for k in OBJECT_COUNTS)),
+        _families(*(f"objects-{k}" for k in range(1, 9))),
         4,
         OBJECTS_EPISODES[DEV],
         OBJECTS_EPISODES[TEST],
@@ -268,7 +277,52 @@ _GRADED = (
     ),
 )
 
-SPLITS: dict[str, Split] = {split.name: split for split in (*_V0, *(p for v0 in _V0 for p in _parts(v0)), *_GRADED)}
+# Version 2 of every split (layouts: 3): the task cost (docs/formulation.md, "The task cost") and the env's
+# octagon rule, on fresh seeds (blocks 8 to 14), 100 dev and 300 test episodes each, every reference proven;
+# objects-v2 and apartment-v2 hold the episodes whose proven references are computed so far (docs/protocol.md).
+OBJECTS_V2_EPISODES = {DEV: 24, TEST: 24}
+APARTMENT_V2_EPISODES = {DEV: 10, TEST: 10}
+_V2 = (
+    *_graded("iid-v2", _V0[0].description, _families(*TRAINING_FAMILIES), 8, DEV_EPISODES, TEST_EPISODES),
+    *_graded("more-objects-v2", _V0[1].description, _families("multi-3", "multi-4"), 9, DEV_EPISODES, TEST_EPISODES),
+    *_graded("push-required-v2", _V0[3].description, _V0[3].sources, 10, DEV_EPISODES, TEST_EPISODES),
+    *_graded(
+        "layouts-v3",
+        "topologies no training family draws: T-junction, U corridor, rooms in a row, table in a dead end",
+        _families(*UNSEEN_LAYOUT_FAMILIES),
+        11,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    *_graded(
+        "perturbed-v2",
+        "iid scenarios moved a little, with distractors and clutter mass and friction varied (physics home)",
+        _families("perturbed"),
+        12,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    *_graded(
+        "objects-v2",
+        "k objects for k = 1..12 (objects-1 .. objects-12 in turn): success and cost ratio against k",
+        _families(*(f"objects-{k}" for k in OBJECT_COUNTS)),
+        13,
+        OBJECTS_V2_EPISODES[DEV],
+        OBJECTS_V2_EPISODES[TEST],
+    ),
+    *_graded(
+        "apartment-v2",
+        "2-4 rooms joined by doors and corridors, 3-6 tables, 2-5 objects",
+        _families("apartment"),
+        14,
+        APARTMENT_V2_EPISODES[DEV],
+        APARTMENT_V2_EPISODES[TEST],
+    ),
+)
+
+SPLITS: dict[str, Split] = {
+    split.name: split for split in (*_V0, *(p for v0 in _V0 for p in _parts(v0)), *_GRADED, *_V2)
+}
 """Every split (and part) by its full name: ``iid-v0``, ``iid-v1:dev``, ``iid-v1:test``, ..."""
 
 
