@@ -304,16 +304,20 @@ class FastPhases:
         return (common != 0).all(axis=1)
 
     def _picks_take(self, state: WorldState, offers: _Offers, slot: int) -> np.ndarray:
-        """True where the object nearest the posture's centre within reach is the candidate's own (_check_pick)."""
+        """True where the object nearest the posture's centre within reach is the candidate's own (_check_pick).
+
+        Where another object is in reach too, ``check_action`` decides from a base standing at
+        the pose (what it takes does not depend on where the base comes from; the move there
+        is tested per state, and this answer is cached per placement of the items).
+        """
         scenario = self.scenario
         points = np.array([state.objects[o.id][:2] for o in scenario.objects], dtype=float)
         reaching = self._reaches_all(offers, points)
         keep = reaching.sum(axis=1) == 1  # only its own object in reach (it always reaches its own)
         for n in np.flatnonzero(~keep):
-            action = Action(
-                (int(offers.ci[n]), int(offers.cj[n])), HEADINGS[offers.heading[n]], int(offers.posture[n]), Mode.PICK
-            )
-            phase = check_action(scenario, state, self.lattice, action)
+            cell = (int(offers.ci[n]), int(offers.cj[n]))
+            action = Action(cell, HEADINGS[offers.heading[n]], int(offers.posture[n]), Mode.PICK)
+            phase = check_action(scenario, replace(state, base=self.lattice.point(*cell)), self.lattice, action)
             keep[n] = not isinstance(phase, str) and phase.target == scenario.objects[slot].id
         return keep
 

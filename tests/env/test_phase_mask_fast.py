@@ -193,3 +193,28 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def test_a_pick_decided_by_the_rules_is_cached_apart_from_where_the_base_stands():
+    """Two objects within reach of one pose: check_action decides which the pick takes, and what it decides about
+    the pick must not depend on the base it was first asked from (the move there is the move rule's, per base)."""
+    from dataclasses import replace
+
+    from sim_worlds import room
+
+    scenario = room(
+        start=(2.5, 1.5),
+        objects=[
+            {"id": "near", "start": [1.8, 1.5], "goal": [1.3, 1.2]},
+            {"id": "far", "start": [1.7, 1.5], "goal": [1.3, 1.8]},
+        ],
+    )
+    env = gym.make(ENV_ID, scenario=scenario)
+    env.reset(seed=0)
+    layout, lattice = env.get_wrapper_attr("layout"), env.unwrapped.lattice
+    behind = replace(env.unwrapped.state, base=lattice.point(*lattice.index((0.5, 1.5))))  # the poses are not one move
+    fast = FastPhases(layout, scenario, lattice)
+    fast.table(behind)  # fills the per-items cache from a base the poses are not one move from
+    here = env.unwrapped.state
+    assert same_table(fast.table(here), enumerate_phases(layout, scenario, here, lattice))
+    env.close()
