@@ -106,7 +106,10 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
       by the radius (not in a corner cut); a push stroke keeps both ends on one common side;
     - the arm (the paper's Eq. 19): for every obstacle and piece of clutter (but the one
       pushed) one side half-plane of its rectangle (``x >= max_x`` and so on) holds the
-      base (both ends of a stroke) and the hand (both ends of a stroke).
+      base (both ends of a stroke) and the hand (both ends of a stroke);
+    - reach: a posture reaches a point from a lattice base inside the planner's reach
+      box (its exact ranges rounded to the lattice), from another base within its
+      ranges widened by 5e-7 m.
 
     :meth:`action_masks` gives MaskablePPO's flat mask (length ``nx + ny + 4 +
     capacity.postures + 4``): lattice columns and rows where the base disc does not fit
@@ -248,8 +251,9 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
       interface requires): a move is allowed when each table's and obstacle's octagon has
       a region holding both its ends, else refused as an invalid action (it was stopped at
       its first contact, with the contact penalty); acting poses lie on a side of each
-      table and obstacle; the arm rule is the common side half-plane. No accepted move
-      touches anything, so ``contact`` is None and ``collisions`` 0.
+      table and obstacle; the arm rule is the common side half-plane; reach is the
+      planner's (it had 1 mm of tolerance). No accepted move touches anything, so
+      ``contact`` is None and ``collisions`` 0.
     """
 
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
