@@ -14,7 +14,9 @@ from training.evaluation import episodes, references, runner
 from training.evaluation.references import part_references
 from training.evaluation.splits import (
     APARTMENT_EPISODES,
+    APARTMENT_V2_EPISODES,
     OBJECTS_EPISODES,
+    OBJECTS_V2_EPISODES,
     TEST_EPISODES,
     folder_scenarios,
     get_split,
@@ -22,21 +24,32 @@ from training.evaluation.splits import (
 )
 from training.resolve import PolicySpec, resolve
 
-GRADED = {  # split version -> (its families, the capacity's objects, its physics)
-    "objects-v1": (tuple(f"objects-{k}" for k in OBJECT_COUNTS), 8, None),
-    "layouts-v2": (("unseen-layouts",), 4, None),
-    "apartment-v1": (("apartment",), 5, None),
-    "perturbed-v1": (("perturbed",), 4, "home"),
+V1_OBJECT_COUNTS = tuple(range(1, 9))  # objects-v1: objects-1 .. objects-8
+GRADED = {  # split version -> (its families, the capacity's objects and clutter, its physics)
+    "objects-v1": (tuple(f"objects-{k}" for k in V1_OBJECT_COUNTS), (8, 8), None),
+    "layouts-v2": (("unseen-layouts",), (4, 8), None),
+    "apartment-v1": (("apartment",), (5, 8), None),
+    "perturbed-v1": (("perturbed",), (4, 8), "home"),
+    "objects-v2": (tuple(f"objects-{k}" for k in range(1, 13)), (12, 12), None),
+    "layouts-v3": (("unseen-layouts",), (4, 8), None),
+    "apartment-v2": (("apartment",), (5, 8), None),
+    "perturbed-v2": (("perturbed",), (4, 8), "home"),
+}
+SHORT_TESTS = {  # test parts of fewer than 300 episodes: their references were slow to compute (docs/protocol.md)
+    "objects-v1:test": OBJECTS_EPISODES["test"],
+    "apartment-v1:test": APARTMENT_EPISODES["test"],
+    "objects-v2:test": OBJECTS_V2_EPISODES["test"],
+    "apartment-v2:test": APARTMENT_V2_EPISODES["test"],
 }
 
 
 @pytest.mark.parametrize("version", list(GRADED))
 def test_a_graded_split_cycles_its_families_with_their_capacity_and_physics(version: str) -> None:
-    families, objects, physics = GRADED[version]
+    families, (objects, clutter), physics = GRADED[version]
     for part in ("dev", "test"):
         split = get_split(f"{version}:{part}")
         assert [s.name for s in split.sources] == list(families)
-        assert split.capacity.objects == objects and split.physics == physics
+        assert (split.capacity.objects, split.capacity.clutter) == (objects, clutter) and split.physics == physics
         items = split_scenarios(split, len(families) + 1)
         assert [i.source for i in items] == [*families, families[0]]
         for item in items:
@@ -45,24 +58,33 @@ def test_a_graded_split_cycles_its_families_with_their_capacity_and_physics(vers
         assert len(part_references(split)) == split.episodes  # its reference file holds the whole part
 
 
-def test_objects_episode_k_has_k_mod_8_plus_1_objects_and_names_the_newest_versions() -> None:
-    assert [len(i.scenario.objects) for i in split_scenarios("objects", 16)] == [*OBJECT_COUNTS] * 2
-    assert get_split("objects").name == "objects-v1:test" and get_split("layouts").name == "layouts-v2:test"
+def test_objects_episode_k_has_k_mod_12_plus_1_objects_and_names_the_newest_versions() -> None:
+    assert len(OBJECT_COUNTS) == 12 and OBJECT_COUNTS[-1] == 12
+    assert [len(i.scenario.objects) for i in split_scenarios("objects", 24)] == [*OBJECT_COUNTS] * 2
+    assert [len(i.scenario.objects) for i in split_scenarios("objects-v1", 16)] == [*V1_OBJECT_COUNTS] * 2
+    assert get_split("objects").name == "objects-v2:test" and get_split("layouts").name == "layouts-v3:test"
+    assert get_split("apartment").name == "apartment-v2:test" and get_split("perturbed").name == "perturbed-v2:test"
     assert get_split("layouts-v1").sources[0].name == "turned-room"  # the old versions stay as they were
-    assert get_split("layouts:dev").name == "layouts-v2:dev"
+    assert get_split("layouts-v2").name == "layouts-v2:test" and get_split("objects-v1").episodes == 160
+    assert get_split("layouts:dev").name == "layouts-v3:dev"
 
 
 def test_test_parts_hold_300_episodes_but_where_the_reference_did_not_fit() -> None:
-    short = {"objects-v1:test": OBJECTS_EPISODES["test"], "apartment-v1:test": APARTMENT_EPISODES["test"]}
     for version in GRADED:
         test = get_split(f"{version}:test")
-        assert test.episodes == short.get(test.name, TEST_EPISODES)
-    assert OBJECTS_EPISODES["test"] % len(OBJECT_COUNTS) == 0  # as many episodes of every object count
+        assert test.episodes == SHORT_TESTS.get(test.name, TEST_EPISODES)
+    # as many episodes of every object count, in each part
+    assert all(n % len(V1_OBJECT_COUNTS) == 0 for n in OBJECTS_EPISODES.values())
+    assert all(n % len(OBJECT_COUNTS) == 0 for n in OBJECTS_V2_EPISODES.values())
+    assert get_split("objects:dev").episodes == OBJECTS_V2_EPISODES["dev"] == 24
+    assert get_split("apartment:dev").episodes == APARTMENT_V2_EPISODES["dev"] == 10
 
 
 def test_the_split_capacity_is_the_largest_of_its_families() -> None:
-    assert get_split("objects").capacity == get_family("objects-8").capacity
-    assert get_split("iid").capacity == Capacity()  # the splits that existed act in the env they did
+    assert get_split("objects").capacity == get_family("objects-12").capacity
+    assert (get_split("objects").capacity.objects, get_split("objects").capacity.clutter) == (12, 12)
+    assert get_split("objects-v1").capacity == get_family("objects-8").capacity  # as it was published
+    assert get_split("iid").capacity == Capacity()  # the splits of the training families act in the default env
 
 
 def _run_folder(tmp_path: Path, encoder: str) -> PolicySpec:
@@ -75,7 +97,7 @@ def _run_folder(tmp_path: Path, encoder: str) -> PolicySpec:
 def test_a_set_encoder_acts_at_the_split_capacity_and_a_flat_network_is_refused(tmp_path: Path) -> None:
     items = split_scenarios("objects", 8)
     expert = runner.acting_spec(resolve("expert"), items[0])
-    assert expert.env_options == {"capacity": get_family("objects-8").capacity, "physics": "none"}
+    assert expert.env_options == {"capacity": get_family("objects-12").capacity, "physics": "none"}
     set_run, flat_run = _run_folder(tmp_path, "set"), _run_folder(tmp_path, "mlp")
     assert runner.acting_spec(set_run, items[0]).env_options["capacity"] == items[0].capacity
     assert runner.acting_spec(flat_run, items[0]).env_options["capacity"] == Capacity(objects=4)
@@ -99,10 +121,10 @@ def test_the_benchmark_builds_each_split_env_with_its_capacity_and_physics(tmp_p
     monkeypatch.setattr(episodes, "make_env", recording)
     report = runner.run_benchmark(["greedy"], split=["objects", "perturbed"], episodes=1, out=tmp_path)
     assert {(r["policy"], r["split"]) for r in report.records} == {
-        (p, s) for p in ("expert", "random-phases", "greedy") for s in ("objects-v1:test", "perturbed-v1:test")
+        (p, s) for p in ("expert", "random-phases", "greedy") for s in ("objects-v2:test", "perturbed-v2:test")
     }
-    eight, home = get_family("objects-8").capacity, get_family("perturbed").physics
-    assert set(built) == {(eight, None), (Capacity(), home)}
+    twelve, home = get_family("objects-12").capacity, get_family("perturbed").physics
+    assert set(built) == {(twelve, None), (Capacity(), home)}
     assert len(built) == 6  # one env per policy and split
     assert all(r["success"] for r in report.records if r["policy"] == "expert")
 
@@ -118,11 +140,11 @@ def test_extending_a_reference_file_keeps_its_records_and_runs_only_the_new_epis
     calls = []
     original = references._reference_task
     monkeypatch.setattr(references, "_reference_task", lambda task: calls.append(task[1].index) or original(task))
-    first = part_references("iid-v1:dev")[0]
-    kept = {"split": "iid-v1", "time_limit_s": 5.0, "parts": {"dev": [first, {**first, "index": 1}]}}
-    content = references.compute_references("iid-v1", episodes={"dev": 2, "test": 1}, time_limit=5.0, keep=kept)
+    first = part_references("iid-v2:dev")[0]
+    kept = {"split": "iid-v2", "time_limit_s": 5.0, "parts": {"dev": [first, {**first, "index": 1}]}}
+    content = references.compute_references("iid-v2", episodes={"dev": 2, "test": 1}, time_limit=5.0, keep=kept)
     assert content["parts"]["dev"][0] == first  # kept as it was, planning time and all
     assert calls == [1, 0]  # dev episode 1 (the kept record is another scenario's), then test episode 0
     assert content["parts"]["dev"][1]["seed"] == first["seed"] + 1
-    with pytest.raises(references.ReferenceError, match=r"6 s limit, not of iid-v1 with 5\.0 s"):
-        references.compute_references("iid-v1", episodes={"dev": 1, "test": 1}, time_limit=6.0, keep=kept)
+    with pytest.raises(references.ReferenceError, match=r"6 s limit, not of iid-v2 with 5\.0 s"):
+        references.compute_references("iid-v2", episodes={"dev": 1, "test": 1}, time_limit=6.0, keep=kept)
