@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from fetchcarry_env.families import EXTENT, FAMILIES, HELD_OUT_FAMILIES, turn_quarter
+from fetchcarry_env.kinematics import WAIT_COST
 from fetchcarry_env.scenario import Scenario
 from training import benchmark
 from training.cli import main
@@ -32,6 +33,7 @@ KEYS = {
     "delivered": int,
     "objects": int,
     "cost": float,
+    "travel": float,
     "return": float,
     "phases": int,
     "pushes": int,
@@ -64,19 +66,26 @@ def test_expert_and_random_end_to_end(tiny: Path):
     for record in records:
         for key, kind in KEYS.items():
             assert isinstance(record[key], kind), key
-        assert record["split"] == "iid-v1:test"
+        assert record["split"] == "iid-v2:test"
         assert record["seed"] >= benchmark.EVAL_SEED_BASE
         assert 0 <= record["delivered"] <= record["objects"]
         assert record["decision_ms"] > 0
+        assert record["cost"] == -record["return"] and record["travel"] <= record["cost"]  # the task cost
     expert = [r for r in records if r["policy"] == "expert"]
-    assert all(r["success"] and r["expert_cost"] == r["cost"] and r["invalid_actions"] == 0 for r in expert)
+    assert all(r["success"] and r["invalid_actions"] == 0 for r in expert)
+    # the expert plays the proven optimum its reference holds: the task cost of the reference's plan
+    assert [r["cost"] for r in expert] == pytest.approx([r["expert_cost"] for r in expert], rel=1e-9)
     assert expert[1]["pushes"] >= 1  # the push family's clutter stands on the goal
     random = [r for r in records if r["policy"] == "random"]
-    assert [r["expert_cost"] for r in random] == [r["cost"] for r in expert]
+    assert [r["expert_cost"] for r in random] == [r["expert_cost"] for r in expert]
+    # the task cost: travel plus W1 for every object not at its goal after each step; the expert's one object
+    # reaches its goal by its last step, the random policy's is not there after its last
+    assert [r["cost"] for r in expert] == pytest.approx([r["travel"] + WAIT_COST * (r["phases"] - 1) for r in expert])
+    assert all(r["cost"] >= r["travel"] + WAIT_COST * (r["objects"] - r["delivered"]) > r["travel"] for r in random)
     summary = (tiny / "summary.md").read_text()
-    assert "| expert | iid-v1:test | 2 | 100.0% [" in summary and "| random | iid-v1:test | 2 |" in summary
+    assert "| expert | iid-v2:test | 2 | 100.0% [" in summary and "| random | iid-v2:test | 2 |" in summary
     assert "the zero is random-phases" in summary and "fixed reference" in summary
-    assert "Per scenario source (iid-v1:test)" in summary and "| policy | basic | push |" in summary
+    assert "Per scenario source (iid-v2:test)" in summary and "| policy | basic | push |" in summary
     assert "| expert | 100% [21%, 100%] (1.00) | 100% [21%, 100%] (1.00) |" in summary  # one episode each
     assert "| random | 0% [0%, 79%] (-) | 0% [0%, 79%] (-) |" in summary
     assert (tiny / "splits.png").read_bytes()[:4] == b"\x89PNG"
@@ -97,11 +106,10 @@ def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path,
     again = read_results(tmp_path / "results.json")
     assert _untimed(first) == _untimed(again)
     rows = json.loads(capsys.readouterr().out)
-    assert [(r["policy"], r["success"], r["cost_ratio"]) for r in rows][::2] == [
-        ("expert", 1.0, 1.0),
-        ("random", 0.0, None),
-    ]
-    assert rows[1]["policy"] == "random-phases" and rows[1]["score"] == 0.0 and rows[0]["score"] == 100.0
+    assert [r["policy"] for r in rows] == ["expert", "random-phases", "random"]
+    assert (rows[0]["success"], rows[2]["success"]) == (1.0, 0.0)
+    assert rows[0]["cost_ratio"] == pytest.approx(1.0, rel=1e-9) and rows[2]["cost_ratio"] is None
+    assert rows[1]["score"] == 0.0 and rows[0]["score"] == pytest.approx(100.0, rel=1e-9)
 
 
 def test_scenario_folder(tmp_path: Path):
@@ -171,16 +179,16 @@ def test_interrupt_keeps_finished_records_and_exits_130(tmp_path: Path, monkeypa
 def test_resume_keeps_the_records_of_other_policies_and_splits(tiny: Path, tmp_path: Path):
     shutil.copy(tiny / "results.json", tmp_path / "results.json")
     before = read_results(tmp_path / "results.json")
-    benchmark.run_benchmark(["random"], split="layouts-v1", episodes=1, out=tmp_path, resume=True)
+    benchmark.run_benchmark(["random"], split="layouts", episodes=1, out=tmp_path, resume=True)
     records = read_results(tmp_path / "results.json")
     assert [(r["policy"], r["split"]) for r in records[: -len(before)]] == [
-        ("expert", "layouts-v1:test"),
-        ("random-phases", "layouts-v1:test"),
-        ("random", "layouts-v1:test"),
+        ("expert", "layouts-v3:test"),
+        ("random-phases", "layouts-v3:test"),
+        ("random", "layouts-v3:test"),
     ]
     assert records[-len(before) :] == before
     summary = (tmp_path / "summary.md").read_text()
-    assert "Benchmark: layouts-v1:test, iid-v1:test" in summary  # this run's split first, then the file's others
+    assert "Benchmark: layouts-v3:test, iid-v2:test" in summary  # this run's split first, then the file's others
 
 
 # ------------------------------------------------------------------ bad input
@@ -337,13 +345,16 @@ def test_split_seeds_are_disjoint_from_training_seeds_and_from_each_other():
 
 
 def test_split_names_and_versions():
-    assert benchmark.get_split("iid").name == "iid-v1:test"
+    assert benchmark.get_split("iid").name == "iid-v2:test" and benchmark.get_split("iid:dev").name == "iid-v2:dev"
     assert benchmark.get_split("more-objects-v0").sources[0].name == "multi-3"
     iid = benchmark.split_scenarios("iid", 8)
     assert [item.source for item in iid] == list(TRAINING_FAMILIES) * 2
-    assert [s.scenario for s in benchmark.split_scenarios("iid:dev", 8)] == [
+    assert [s.scenario for s in benchmark.split_scenarios("iid-v1:dev", 8)] == [
         s.scenario for s in benchmark.split_scenarios("iid-v0", 8)
     ]
+    assert [s.source for s in benchmark.split_scenarios("iid:dev", 8)] == list(TRAINING_FAMILIES) * 2
+    older = {s.scenario.name for v in ("iid-v0", "iid-v1:test") for s in benchmark.split_scenarios(v, 8)}
+    assert not older & {s.scenario.name for s in benchmark.split_scenarios("iid:dev", 8)}  # fresh seeds
     assert [len(item.scenario.objects) for item in benchmark.split_scenarios("more-objects", 4)] == [3, 4, 3, 4]
 
 
@@ -364,17 +375,27 @@ def test_a_split_version_never_changes():
 
 
 def test_several_splits_in_one_run(tmp_path: Path):
-    report = benchmark.run_benchmark(["random"], split=["layouts-v1", "push-required"], episodes=1, out=tmp_path)
+    report = benchmark.run_benchmark(["random"], split=["layouts", "push-required"], episodes=1, out=tmp_path)
     assert [(r["policy"], r["split"]) for r in report.records] == [
-        ("expert", "layouts-v1:test"),
-        ("expert", "push-required-v1:test"),
-        ("random-phases", "layouts-v1:test"),
-        ("random-phases", "push-required-v1:test"),
-        ("random", "layouts-v1:test"),
-        ("random", "push-required-v1:test"),
+        ("expert", "layouts-v3:test"),
+        ("expert", "push-required-v2:test"),
+        ("random-phases", "layouts-v3:test"),
+        ("random-phases", "push-required-v2:test"),
+        ("random", "layouts-v3:test"),
+        ("random", "push-required-v2:test"),
     ]
     assert [(row.policy, row.split) for row in report.rows] == [(r["policy"], r["split"]) for r in report.records]
-    assert "Benchmark: layouts-v1:test, push-required-v1:test" in (tmp_path / "summary.md").read_text()
+    assert "Benchmark: layouts-v3:test, push-required-v2:test" in (tmp_path / "summary.md").read_text()
+
+
+@pytest.mark.parametrize(("split", "newest"), [("iid-v1", "iid-v2:test"), ("layouts-v2:dev", "layouts-v3:dev")])
+def test_a_v1_split_is_refused_naming_the_split_to_use(split: str, newest: str, tmp_path: Path, capsys) -> None:
+    """Its references were made under release 0.2's task: no score against them, exit 2 before any episode."""
+    argv = ["benchmark", "--policies", "random", "--split", split, "--episodes", "1", "--no-progress"]
+    assert _status([*argv, "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert f"benchmark {newest} instead" in error and "release 0.2" in error and "Traceback" not in error
+    assert not (tmp_path / "out" / "results.json").exists()
 
 
 def test_push_required_scenarios_have_clutter_on_a_goal():
