@@ -3,14 +3,19 @@
 from __future__ import annotations
 
 import importlib.util
+import json
+from pathlib import Path
 
 import pytest
 
 from training.evaluation import references
 from training.evaluation.metrics import fill_expert_costs, summarise
 from training.evaluation.references import (
+    FOLDER,
+    ReferenceError,
     compute_references,
     digest_mismatches,
+    load_references,
     part_references,
     reference_for,
     references_digest,
@@ -18,7 +23,11 @@ from training.evaluation.references import (
 from training.evaluation.splits import EvalScenario, get_split, published_splits, split_scenarios
 from training.resolve import EXPERT
 
-SHORT_PARTS = {"objects-v1:dev", "objects-v1:test", "apartment-v1:dev", "apartment-v1:test"}
+SHORT_PARTS = {
+    f"{version}:{part}"
+    for version in ("objects-v1", "apartment-v1", "objects-v2", "apartment-v2")
+    for part in ("dev", "test")
+}
 """Parts with fewer episodes than the protocol's 300 (test) and 100 (dev): their references were slow to compute."""
 
 
@@ -36,20 +45,32 @@ def test_a_changed_sampler_is_caught_on_a_late_scenario(monkeypatch: pytest.Monk
 
     def changed(split: object, episodes: int | None = None) -> list[EvalScenario]:
         items = original(split, episodes)
-        other = original("iid-v1:dev", 1)[0].scenario  # another scenario at episode 250
+        other = original("iid-v2:dev", 1)[0].scenario  # another scenario at episode 250
         items[250] = EvalScenario(250, items[250].split, items[250].source, items[250].seed, other)
         return items
 
     monkeypatch.setattr(references, "split_scenarios", changed)
-    assert [line.split(":")[1].split()[0] for line in digest_mismatches("iid-v1:test")] == ["test"]
-    item = split_scenarios("iid-v1:test", 251)[250]
+    assert [line.split(":")[1].split()[0] for line in digest_mismatches("iid-v2:test")] == ["test"]
+    item = split_scenarios("iid-v2:test", 251)[250]
     with pytest.raises(references.ReferenceError, match="sampler changed"):
         reference_for(
-            EvalScenario(250, item.split, item.source, item.seed, split_scenarios("iid-v1:dev", 1)[0].scenario)
+            EvalScenario(250, item.split, item.source, item.seed, split_scenarios("iid-v2:dev", 1)[0].scenario)
         )
+    assert reference_for(item)[0] == part_references("iid-v2:test")[250]  # the scenario itself is its reference's
+
+
+def test_a_v1_split_loads_as_legacy_and_is_not_scored_against() -> None:
+    """Release 0.2's files stay as published and load; the benchmark refuses to score against them."""
+    legacy = load_references("iid-v1")
+    assert legacy["format"] == references.LEGACY_FORMAT and len(legacy["parts"]["test"]) == 300
+    assert "travel" not in legacy["parts"]["test"][0]
+    assert load_references("iid-v2")["format"] == references.FORMAT
+    with pytest.raises(ReferenceError, match="benchmark iid-v2:test instead"):
+        reference_for(split_scenarios("iid-v1:test", 1)[0])
 
 
 def _record(policy: str, item: EvalScenario, success: bool, cost: float) -> dict:
+    """A schema-2 record of ``policy`` on ``item`` of task cost ``cost`` (its return minus it, travel within it)."""
     ref = part_references(item.split)[item.index]
     return {
         "policy": policy,
@@ -59,11 +80,12 @@ def _record(policy: str, item: EvalScenario, success: bool, cost: float) -> dict
         "seed": item.seed,
         "digest": ref["digest"],
         "success": success,
-        "delivered": 1,
+        "delivered": int(success),
         "objects": 1,
         "cost": cost,
+        "travel": cost / 2,
         "expert_cost": None,
-        "return": 10 - cost,
+        "return": -cost,
         "phases": 4,
         "pushes": 0,
         "invalid_actions": 0,
@@ -74,8 +96,8 @@ def _record(policy: str, item: EvalScenario, success: bool, cost: float) -> dict
 
 
 def test_cost_ratio_reads_the_reference_not_the_expert_run() -> None:
-    items = split_scenarios("iid-v1:test", 3)
-    fixed = [part_references("iid-v1:test")[k]["cost"] for k in range(3)]
+    items = split_scenarios("iid-v2:test", 3)
+    fixed = [part_references("iid-v2:test")[k]["cost"] for k in range(3)]
     # the expert of this run hit a time limit on scenario 1 (under load): it does not move the learner's figures
     records = [
         _record(EXPERT, items[0], True, fixed[0]),
@@ -85,7 +107,7 @@ def test_cost_ratio_reads_the_reference_not_the_expert_run() -> None:
     records += [_record("learner", item, True, 1.5 * cost) for item, cost in zip(items, fixed, strict=True)]
     fill_expert_costs(records)
     assert [r["expert_cost"] for r in records[3:]] == fixed
-    assert {r["references"] for r in records} == {references_digest(part_references("iid-v1:test"))}
+    assert {r["references"] for r in records} == {references_digest(part_references("iid-v2:test"))}
     rows = {row.policy: row for row in summarise(records)}
     assert rows["learner"].cost_ratio == pytest.approx(1.5)
     assert rows["learner"].spl == pytest.approx(1 / 1.5)
@@ -95,8 +117,8 @@ def test_cost_ratio_reads_the_reference_not_the_expert_run() -> None:
 
 
 def test_cost_ratio_interval_is_never_negative_nor_of_zero_width_at_one() -> None:
-    items = split_scenarios("iid-v1:test", 2)
-    fixed = [part_references("iid-v1:test")[k]["cost"] for k in range(2)]
+    items = split_scenarios("iid-v2:test", 2)
+    fixed = [part_references("iid-v2:test")[k]["cost"] for k in range(2)]
     records = [_record("a", items[0], True, 3 * fixed[0]), _record("a", items[1], False, 1.0)]
     row = summarise(records)[0]
     assert row.cost_ratio == pytest.approx(3) and row.cost_ratio_low != row.cost_ratio_low  # nan: no interval at n=1
@@ -115,8 +137,25 @@ def _stable(content: dict) -> dict:
 @pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="Ray is not installed")
 def test_references_on_ray_are_the_pools_records() -> None:
     episodes = {"dev": 2, "test": 2}
-    local = compute_references("push-required-v1", episodes=episodes)
-    on_ray = compute_references("push-required-v1", episodes=episodes, workers=2, backend="ray")
+    local = compute_references("push-required-v2", episodes=episodes)
+    on_ray = compute_references("push-required-v2", episodes=episodes, workers=2, backend="ray")
     assert _stable(local) == _stable(on_ray)
-    shipped = {part: part_references(f"push-required-v1:{part}")[:2] for part in episodes}
+    shipped = {part: part_references(f"push-required-v2:{part}")[:2] for part in episodes}
     assert _stable(local) == _stable({"parts": shipped})  # and the shipped file's, made once
+
+
+@pytest.mark.parametrize(
+    ("token", "shown"), [('"10"', "'10'"), ("NaN", "nan"), ("1e400", "inf")], ids=["string", "nan", "1e400"]
+)
+def test_a_reference_cost_that_is_no_finite_number_is_refused_naming_the_field(
+    token: str, shown: str, tmp_path: Path
+) -> None:
+    """The JSON reader takes ``NaN`` and ``1e400`` as floats (nan, inf): the loader refuses them, and a string."""
+    records = [json.dumps(r, sort_keys=True) for r in part_references("iid-v2:test")[:2]]
+    records[1] = records[1].replace(f'"cost": {json.loads(records[1])["cost"]!r}', f'"cost": {token}', 1)
+    assert f'"cost": {token}' in records[1]
+    head = '{"format": "fetchcarry-references/2", "split": "iid-v2", "time_limit_s": 600.0, "parts": '
+    (tmp_path / "iid-v2.json").write_text(head + '{"test": [' + ",\n".join(records) + "]}}")
+    with pytest.raises(ReferenceError, match=rf"part 'test' record 1: cost = {shown} is not a finite number"):
+        load_references("iid-v2", tmp_path)
+    assert load_references("iid-v2", FOLDER) is not None  # the package's file is read apart from the cache's copy
