@@ -54,7 +54,7 @@ def test_a_users_factory_is_merged_with_two_other_folders(folders: dict, capsys:
     argv = ["leaderboard", str(folders["mine"]), str(folders["theirs"]), str(folders["seeds"]), "--json"]
     assert main(argv) == 0
     board = json.loads(capsys.readouterr().out)
-    entries = board["iid-v1:test"]
+    entries = board["iid-v2:test"]
     methods = [e["policy"] for e in entries]
     assert set(methods) == {"expert", "random-phases", "my_policies:make_policy", "greedy", "made"}
     assert [e["rank"] for e in entries] == list(range(1, len(entries) + 1))
@@ -98,7 +98,7 @@ def test_different_versions_references_or_a_method_twice_are_refused(folders: di
     v0 = _copy(folders, "v0", {"split": "iid-v0", "references": None})
     other = _copy(folders, "other", {"references": "0" * 64})
     assert main(["leaderboard", str(folders["mine"]), str(v0)]) == 2
-    assert "different versions of iid: iid-v1" in capsys.readouterr().err
+    assert "different versions of iid: iid-v2" in capsys.readouterr().err
     assert main(["leaderboard", str(folders["theirs"]), str(other)]) == 2
     assert "different references" in capsys.readouterr().err
     assert main(["leaderboard", str(folders["mine"]), str(folders["mine"])]) == 2

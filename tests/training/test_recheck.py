@@ -37,14 +37,15 @@ def test_an_untouched_file_comes_out_identical(greedy: Path, capsys) -> None:
 
 def test_a_tampered_record_is_reported_and_a_changed_timing_is_not(greedy: Path, tmp_path: Path, capsys) -> None:
     records = read_results(greedy)
-    (k,) = [k for k, r in enumerate(records) if r["policy"] == "greedy" and r["seed"] == 1000500001]
+    (k,) = [k for k, r in enumerate(records) if r["policy"] == "greedy" and r["seed"] == 1008500001]
     timed = [{**r, "step_ms": r["step_ms"] * 3, "decision_ms": 0.0} if r["policy"] == "greedy" else r for r in records]
     write_results(tmp_path / "timed.json", timed)
     status, out, _ = run(capsys, "benchmark", "--check", tmp_path / "timed.json", "--policies", "greedy",
                          "--no-progress")  # fmt: skip
     assert status == 0 and "2 of 2 records identical" in out
     tampered = [dict(r) for r in records]
-    tampered[k]["cost"] += 0.25
+    tampered[k]["cost"] += 0.25  # a task cost a quarter higher, its return a quarter lower: still a valid record
+    tampered[k]["return"] -= 0.25
     tampered[k]["phases"] += 1
     write_results(tmp_path / "tampered.json", tampered)
     status, out, _ = run(capsys, "benchmark", "--check", tmp_path / "tampered.json", "--policies", "greedy",
@@ -52,12 +53,15 @@ def test_a_tampered_record_is_reported_and_a_changed_timing_is_not(greedy: Path,
     assert status == 1
     assert "1 of 2 records identical" in out
     cost = records[k]["cost"]
-    line = f"greedy iid-v1:test seed 1000500001: cost {cost + 0.25:.6g} recorded, {cost:.6g} re-run; phases"
+    line = (
+        f"greedy iid-v2:test seed 1008500001: cost {cost + 0.25:.6g} recorded, {cost:.6g} re-run; "
+        f"return {-cost - 0.25:.6g} recorded, {-cost:.6g} re-run; phases"
+    )
     assert line in out
 
 
 def test_only_the_splits_asked_for_are_run_again(greedy: Path, capsys) -> None:
-    status, out, _ = run(capsys, "benchmark", "--check", greedy, "--policies", "greedy", "--split", "iid-v1:test",
+    status, out, _ = run(capsys, "benchmark", "--check", greedy, "--policies", "greedy", "--split", "iid-v2:test",
                          "--no-progress")  # fmt: skip
     assert status == 0 and "2 of 2" in out
     status, _, err = run(capsys, "benchmark", "--check", greedy, "--policies", "greedy", "--split", "layouts")
@@ -108,5 +112,6 @@ def test_the_expert_is_wall_clock_bound_where_its_reference_was_slow_or_unproven
     assert wall_clock_bound(expert)
     assert wall_clock_bound({**expert, "seed": 1006500000})  # proven, in 55 s
     assert not wall_clock_bound({**expert, "split": "iid-v1:test", "seed": 1000500000})  # proven in 0.06 s
+    assert not wall_clock_bound({**expert, "split": "iid-v2:test", "seed": 1008500000})  # proven in 0.04 s
     assert not wall_clock_bound({**expert, "policy": "greedy"})
     assert wall_clock_bound({**expert, "split": "scenarios:mine", "seed": 0})  # no fixed reference
