@@ -1,7 +1,7 @@
 """MaskablePPO's learning curves: a ``metrics.csv`` row per rollout, with the success on held-out seeds.
 
 :func:`curves_callback` is the SB3 callback of ``fetchcarry train ppo``. After every
-rollout ``metrics.csv`` gains a row: the env steps, the wall-clock seconds of training
+rollout and the update made on it, ``metrics.csv`` gains a row: the env steps, the wall-clock seconds of training
 (``seconds``: rollouts and updates; the held-out evaluations are left out and counted in
 ``eval_seconds``), and the training episodes finished in that rollout (``success``,
 ``return`` in the learning reward, ``paper_return``, ``travel_cost`` in metres). Every
@@ -77,6 +77,7 @@ def curves_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOption
             super().__init__()
             self.returns = self.paper = 0.0
             self.finished: list[tuple[bool, float, float, float]] = []
+            self.row: dict[str, Any] | None = None  # the last rollout's row, until its update is done
             self.saved_at = last.get("steps", 0)
             self.episodes = int(last.get("episodes", 0))
             evaluated = [row["steps"] for row in rows if row["heldout_success"] == row["heldout_success"]]
@@ -99,10 +100,25 @@ def curves_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOption
             return True
 
         def _on_rollout_end(self) -> None:
+            """The rollout's training columns; its row is finished once the update it feeds is done."""
             done, steps = self.finished, self.num_timesteps
             self.episodes += len(done)
-            row = {"steps": steps, "seconds": time.perf_counter() - self.started - self.eval_seconds,
-                   "episodes": self.episodes, **_training_columns(done)}  # fmt: skip
+            self.row = {"steps": steps, "seconds": math.nan, "episodes": self.episodes, **_training_columns(done)}
+            self.finished = []
+
+        def _on_rollout_start(self) -> None:
+            self._finish_row()  # the previous rollout's: SB3 updated the model on it in between
+
+        def _on_training_end(self) -> None:
+            self._finish_row()  # the last rollout's, after its update: the weights the run folder saves
+
+        def _finish_row(self) -> None:
+            """Append the last rollout's row, with the held-out columns of the updated actor when due; write and
+            checkpoint."""
+            if self.row is None:
+                return
+            row, steps, self.row = self.row, self.row["steps"], None
+            row["seconds"] = time.perf_counter() - self.started - self.eval_seconds
             due = steps - self.evaluated_at >= options.eval_every or steps >= options.steps
             heldout = {"heldout_success": math.nan, "heldout_cost": math.nan}
             if options.eval_episodes > 0 and due:
@@ -112,7 +128,6 @@ def curves_callback(rows: list[dict[str, Any]], folder: Path, options: PPOOption
                 self.evaluated_at = steps
                 bar.set_postfix_str(f"held-out success {heldout['heldout_success']:.0%}", refresh=False)
             rows.append({**row, **heldout, "eval_seconds": self.eval_seconds})
-            self.finished = []
             runs.write_metrics(folder, rows)
             if steps - self.saved_at >= options.checkpoint_every:
                 save(self.model)
