@@ -26,13 +26,13 @@ from training.reproduce.table import REFERENCES, baselines
 from training.reproduce.weights import weights_digest
 
 SPLITS = (
-    "iid-v1:test",
-    "more-objects-v1:test",
-    "layouts-v2:test",
-    "push-required-v1:test",
-    "objects-v1:test",
-    "apartment-v1:test",
-    "perturbed-v1:test",
+    "iid-v2:test",
+    "more-objects-v2:test",
+    "layouts-v3:test",
+    "push-required-v2:test",
+    "objects-v2:test",
+    "apartment-v2:test",
+    "perturbed-v2:test",
 )
 MAIN = ("bc-mlp", "bc-set", "dagger", "dagger-aimed", "ppo-scratch", "ppo-bc")
 
@@ -53,9 +53,11 @@ def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
         assert f"## {split}" in summary
     for name in (*REFERENCES, *MAIN):
         assert f"| {name} |" in summary
-    assert "Per scenario source (iid-v1:test)" in summary and "| baseline | basic | push |" in summary
-    records = read_results(out / "results.json")  # schema 1, checked
-    assert json.loads((out / "results.json").read_text())["schema_version"] == 1
+    assert "Per scenario source (iid-v2:test)" in summary and "| baseline | basic | push |" in summary
+    records = read_results(out / "results.json")  # schema 2, checked: every cost is minus its return
+    assert json.loads((out / "results.json").read_text())["schema_version"] == 2
+    assert [r["cost"] for r in records] == pytest.approx([-r["return"] for r in records])
+    assert all(0 <= r["travel"] <= r["cost"] for r in records)
     seen = {(r["baseline"], r["split"]) for r in records}
     for split in SPLITS:
         for name in (*REFERENCES, *MAIN):
@@ -64,7 +66,7 @@ def test_smoke_writes_every_baseline_on_every_split(smoke: Path) -> None:
     assert {r["training_seed"] for r in records if r["baseline"] in REFERENCES} == {None}
     # the demonstrations curve's runs are measured on iid only
     curve = {r["split"] for r in records if r["baseline"].startswith("bc-mlp-n")}
-    assert curve == {"iid-v1:test"}
+    assert curve == {"iid-v2:test"}
     for plot in ("splits.png", "ppo_curves.png", "demonstrations.png"):
         assert (out / plot).stat().st_size > 1000, plot
     for job in training_jobs(out, 1, SMOKE):
@@ -96,10 +98,10 @@ def test_a_second_call_skips_every_finished_stage(smoke: Path, tmp_path: Path, c
     assert all(p.stat().st_mtime_ns == mtime for p, mtime in weights.items())  # nothing finished trained again
     n = SMOKE.episodes
     everywhere = 4 + sum(len(b.runs) for b in baselines(1, SMOKE) if not b.label.startswith("bc-mlp-n"))
-    assert f"benchmark iid-v1:test: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
-    assert "benchmark more-objects-v1:test: already complete" in stdout
-    assert f"benchmark layouts-v2:test: {everywhere * n} episodes (0 resumed)" in stdout
-    assert f"benchmark push-required-v1:test: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
+    assert f"benchmark iid-v2:test: {(everywhere + 1) * n} episodes ({(everywhere + 1) * n - 3} resumed)" in stdout
+    assert "benchmark more-objects-v2:test: already complete" in stdout
+    assert f"benchmark layouts-v3:test: {everywhere * n} episodes (0 resumed)" in stdout
+    assert f"benchmark push-required-v2:test: {everywhere * n} episodes ({(everywhere - 1) * n} resumed)" in stdout
     records = read_results(out / "results.json")
     assert len(records) == len(read_results(smoke / "results.json"))
     assert {(r["baseline"], r["split"]) for r in records} == {
@@ -263,11 +265,12 @@ def test_benchmark_check_reproduces_a_runs_records_and_finds_a_tampered_one(smok
     others = len(read_results(smoke / "results.json")) - 16
     assert f"16 of 16 records identical (timings aside: decision_ms, mask_ms, step_ms); {others} records" in out
     records = read_results(smoke / "results.json")
-    (k,) = [k for k, r in enumerate(records) if r["policy"] == "bc-mlp-s0" and r["seed"] == 1003500001]
+    (k,) = [k for k, r in enumerate(records) if r["policy"] == "bc-mlp-s0" and r["seed"] == 1010500001]
     flipped = {"success": not records[k]["success"], "delivered": records[k]["objects"]}  # a success delivers all
-    records[k] = {**records[k], **flipped, "cost": records[k]["cost"] + 1.0}
+    costlier = {"cost": records[k]["cost"] + 1.0, "return": records[k]["return"] - 1.0}  # still minus each other
+    records[k] = {**records[k], **flipped, **costlier}
     write_results(tmp_path / "results.json", records)
     status, out, _ = run(capsys, "benchmark", "--check", tmp_path / "results.json", *argv)
     assert status == 1
     assert "15 of 16 records identical" in out
-    assert "bc-mlp-s0 push-required-v1:test seed 1003500001: success" in out and "; cost" in out
+    assert "bc-mlp-s0 push-required-v2:test seed 1010500001: success" in out and "; cost" in out
