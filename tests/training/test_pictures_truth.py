@@ -336,10 +336,12 @@ def test_the_benchmark_notebook_gives_the_score_and_the_splits_the_tables_use() 
     build = notebook_build()
     text = "\n".join(cell.source for cell in build.BENCHMARK if cell.cell_type == "markdown")
     assert "100 (R - R_zero) / (R_reference - R_zero)" in text and f"`{SCORE_ZERO}`" in text
-    for name in ("iid", "more-objects", "layouts", "push-required"):
+    for name in ("iid", "more-objects", "layouts", "push-required", "objects", "apartment", "perturbed"):
         split = get_split(name)
+        assert split.version_number == (3 if name == "layouts" else 2)  # the task cost's splits
         assert f"`{name}` (`{split.name}`): {split.description}" in text
-    assert "T-junction" in get_split("layouts").description  # layouts is layouts-v2 (the unseen topologies)
+    assert "T-junction" in get_split("layouts").description  # layouts is layouts-v3 (the unseen topologies)
+    assert "refuses to score them" in text and "task cost" in text
 
 
 def test_the_committed_notebooks_are_built_from_their_source() -> None:
