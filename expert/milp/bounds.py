@@ -14,14 +14,14 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import IndexBox, move_regions, point_in_move_region, start_tangents
+from expert.milp.grid import IndexBox
+from expert.milp.moves import LeastMoves, problem_moves
 from expert.milp.problem import Problem
 from expert.milp.skeleton_graph import ActionGraph, SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import WAIT_COST, travel_cost
@@ -79,136 +79,6 @@ class _Action:
     kind: str
     target: str
     poses: tuple[tuple[IndexBox, IndexBox], ...]
-
-
-MAX_PIECES = 256  # boxes listed for the points one move away before the two-move test gives up (optimistically)
-
-
-class Connectivity:
-    """One-move connectivity between base sets under Eq. 18 (the octagons of :func:`move_regions`).
-
-    Optimistic where it must approximate (a box cut by a diagonal region is replaced by
-    its bounding box), so that every bound built on it stays a lower bound.
-    """
-
-    def __init__(self, problem: Problem, deadline: Deadline = NEVER) -> None:
-        scenario = problem.scenario
-        radius = scenario.robot.radius
-        self.start = scenario.robot.start
-        self.domain = problem.grid.domain
-        self.deadline = deadline
-        rects = [t.rect for t in scenario.tables] + [o.rect for o in scenario.obstacles]
-        self.blockers = []
-        for rect in rects:
-            deadline.check()
-            planes = move_regions(problem.grid, rect, radius)
-            if any(self.domain.inside(p) for p in planes):
-                continue  # the rectangle lies outside the domain: no move can hit it
-            regular = len(planes)
-            at_start = tuple(
-                n for n in range(regular) if point_in_move_region(problem.grid, self.start, rect, radius, n)
-            )
-            tangents = (
-                start_tangents(problem.grid, self.start, rect, radius) if problem.grid.first_move_tangents else ()
-            )  # as the MILP's first move
-            planes = (*planes, *tangents)
-            self.blockers.append((planes, at_start + tuple(range(regular, len(planes))), regular))
-        self._from_start: dict = {}  # answers about the start: this problem's own
-        geometry = (self.domain, tuple(planes[:regular] for planes, _, regular in self.blockers))
-        self._between = _shared_memo(geometry)  # answers between two boxes: any problem of this geometry's
-
-    def _memo(self, a: IndexBox | None) -> dict:
-        """Where answers about moves from ``a`` are kept: the start's depend on it, the others on the geometry alone."""
-        return self._from_start if a is None else self._between
-
-    def _branches(self, a: IndexBox | None, w: IndexBox, depth: int):
-        """The ways past blocker ``depth``: one ``(a, w)`` pair per usable region (clipped), or ``[(a, w)]``."""
-        planes, at_start, regular = self.blockers[depth]
-        regions = at_start if a is None else range(regular)
-        usable = [n for n in regions if w.meets(planes[n]) and (a is None or a.meets(planes[n]))]
-        if any(w.inside(planes[n]) and (a is None or a.inside(planes[n])) for n in usable):
-            return [(a, w)]
-        return [(None if a is None else a.clip(planes[n]), w.clip(planes[n])) for n in usable]
-
-    def _walk(self, a: IndexBox | None, w: IndexBox) -> Iterator[IndexBox]:
-        """Depth-first over the blockers (no recursion: thousands of obstacles): the leaves' ``w`` boxes."""
-        stack = [(a, w, 0)]
-        while stack:
-            a, w, depth = stack.pop()
-            if w.empty or (a is not None and a.empty):
-                continue
-            if depth == len(self.blockers):
-                yield w
-                continue
-            self.deadline.check()
-            stack.extend((a2, w2, depth + 1) for a2, w2 in reversed(self._branches(a, w, depth)))
-
-    def connectable(self, a: IndexBox | None, b: IndexBox) -> bool:
-        """True when one straight move can join a point of ``a`` (None: the exact start) to a point of ``b``."""
-        memo, key = self._memo(a), (a, b)
-        if key not in memo:
-            memo[key] = next(self._walk(a, b), None) is not None
-        return memo[key]
-
-    def connectable_in_two(self, a: IndexBox | None, b: IndexBox) -> bool:
-        """True when two straight moves can join ``a`` to ``b``: some lattice point is one move from both.
-
-        Optimistic (True) when the sets one move away are too fragmented to list, so the
-        bounds stay valid.
-        """
-        memo, key = self._memo(a), ("two", a, b)
-        if key not in memo:
-            from_a, from_b = self.one_move_from(a), self.one_move_from(b)
-            memo[key] = True if from_a is None or from_b is None else any_overlap(from_a, from_b)
-        return memo[key]
-
-    def one_move_from(self, a: IndexBox | None) -> np.ndarray | None:
-        """Boxes covering the free lattice points one move from ``a`` (None if more than ``MAX_PIECES``).
-
-        One row ``(i_lo, i_hi, j_lo, j_hi)`` per box, none of them empty.
-        """
-        memo, key = self._memo(a), ("from", a)
-        if key not in memo:
-            pieces: list[IndexBox] = []
-            for piece in self._walk(a, self.domain):
-                pieces.append(piece)
-                if len(pieces) > MAX_PIECES:
-                    break
-            rows = [(p.i_lo, p.i_hi, p.j_lo, p.j_hi) for p in pieces]
-            memo[key] = None if len(pieces) > MAX_PIECES else np.array(rows, dtype=np.int64).reshape(-1, 4)
-        return memo[key]
-
-
-SHARED_GEOMETRIES = 4  # the geometries whose answers are kept between problems (the most recently used)
-_SHARED: OrderedDict[Hashable, dict] = OrderedDict()
-
-
-def _shared_memo(geometry: Hashable) -> dict:
-    """The answers kept for one geometry (the domain and the blockers' regions), shared by every problem of it.
-
-    The decoupled plan's sub-problems and the expert's replanning within one episode
-    share their tables and obstacles, so each asks the same questions again; an answer
-    depends on the geometry alone, so sharing it changes no bound. The
-    ``SHARED_GEOMETRIES`` most recently used are kept.
-    """
-    memo = _SHARED.pop(geometry, None)
-    _SHARED[geometry] = memo = {} if memo is None else memo
-    while len(_SHARED) > SHARED_GEOMETRIES:
-        _SHARED.popitem(last=False)
-    return memo
-
-
-def any_overlap(first: np.ndarray, second: np.ndarray) -> bool:
-    """Whether a box of ``first`` and a box of ``second`` share a lattice point (rows ``i_lo, i_hi, j_lo, j_hi``).
-
-    All pairs at once: the scalar ``not a.intersect(b).empty`` over every pair, as arrays.
-    """
-    if not len(first) or not len(second):
-        return False
-    a, b = first[:, None, :], second[None, :, :]
-    meet_i = np.maximum(a[..., 0], b[..., 0]) <= np.minimum(a[..., 1], b[..., 1])
-    meet_j = np.maximum(a[..., 2], b[..., 2]) <= np.minimum(a[..., 3], b[..., 3])
-    return bool((meet_i & meet_j).any())
 
 
 @dataclass(frozen=True)
@@ -334,10 +204,10 @@ class PairCosts:
     :class:`~expert.milp.skeleton_graph.SkeletonGraph` that :meth:`graph` builds.
     """
 
-    def __init__(self, problem: Problem, free: Connectivity | None = None, deadline: Deadline = NEVER) -> None:
+    def __init__(self, problem: Problem, deadline: Deadline = NEVER) -> None:
         self.problem = problem
         self.actions = _actions_by_key(problem)
-        self.free = free or Connectivity(problem, deadline)
+        self.moves = problem_moves(problem)
         self.steps: dict = {}
         self._graph: SkeletonGraph | None = None
 
@@ -360,7 +230,7 @@ class PairCosts:
             travel = _gap_cost(grid, start, where, entry)
             if kind == "push":
                 travel += _gap_cost(grid, start, entry, exit_box, touching=True)
-            found = self.steps[key] = (_step_cost(self.free, self.problem, where, kind, entry), travel)
+            found = self.steps[key] = (_step_cost(self.moves, self.problem, where, kind, entry), travel)
         return found
 
 
@@ -491,14 +361,11 @@ def _skeleton_actions(problem: Problem) -> list[_Action]:
     return [_Action(kind, target, tuple(poses)) for (kind, target), poses in groups.items()]
 
 
-def _step_cost(free: Connectivity, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
-    """Phases needed at least from base set ``where`` (None: the start) to the end of an action entered at ``entry``."""
-    moves = 1 if free.connectable(where, entry) else 2 if free.connectable_in_two(where, entry) else 3
-    if kind != "push":
-        return moves
-    if where is None:
-        if problem.start_index is not None and entry.contains(*problem.start_index):
-            return 1
-    elif not where.intersect(entry).empty:
-        return 1
-    return moves + 1
+def _step_cost(moves: LeastMoves, problem: Problem, where: IndexBox | None, kind: str, entry: IndexBox) -> int:
+    """Phases needed at least from base set ``where`` (None: the start) to the end of an action entered at ``entry``.
+
+    A pick or a place is done from the last of its moves (at least one phase); a push's
+    stroke is a phase of its own after the moves to where it starts.
+    """
+    least = moves.steps(problem, where, entry)
+    return least + 1 if kind == "push" else max(1, least)

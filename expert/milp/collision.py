@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING
 from pyscipopt import quicksum
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import DiagonalPlane, Plane, move_regions, point_in_move_region, start_tangents
+from expert.milp.grid import DiagonalPlane, Plane, move_regions, point_in_move_region
 
 if TYPE_CHECKING:
     from expert.milp.variables import Milp
@@ -64,16 +64,11 @@ def add_collision_constraints(milp: Milp, deadline: Deadline = NEVER) -> None:
     rects = [(t.id, t.rect) for t in scenario.tables] + [(o.id, o.rect) for o in scenario.obstacles]
     for name, rect in rects:
         deadline.check()
-        regular = move_regions(grid, rect, radius)
-        planes = (
-            *regular,
-            *(start_tangents(grid, start, rect, radius) if grid.first_move_tangents else ()),
-        )  # the tangents: the first move only
-        usable = [n for n, plane in enumerate(regular) if domain.meets(plane)]
+        planes = move_regions(grid, rect, radius)
+        usable = [n for n, plane in enumerate(planes) if domain.meets(plane)]
         if any(domain.inside(planes[n]) for n in usable):
             continue
         at_start = [n for n in usable if point_in_move_region(grid, start, rect, radius, n)]
-        at_start += [n for n in range(len(regular), len(planes)) if domain.meets(planes[n])]
         for k in range(1, milp.n_phases):
             ends = (k - 1, k) if k > 1 else (k,)
             regions = [n for n in (at_start if k == 1 else usable) if _possible(milp, planes[n], ends)]

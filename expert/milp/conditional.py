@@ -229,17 +229,20 @@ def fix_unreached(milp, conditional: Conditional) -> list:
     return fixed
 
 
-def fix_above(milp, conditional: Conditional, incumbent: float) -> int:
+def fix_above(milp, conditional: Conditional, incumbent: float, keep_ties: bool = True) -> int:
     """Fix to 0 the options whose bound exceeds ``incumbent``, the task cost of a plan checked feasible in this model.
 
     The caller passes the task cost of a warm start only when :func:`expert.milp.warm.add_warm_start`
     returned True (the plan passed ``checkSol``); an unchecked plan could cut the optimum off.
+    With ``keep_ties=False`` (a model asked only for plans costing less than ``incumbent``,
+    the best plan's cost) the options whose bound equals it are fixed too.
 
     No plan through them beats the one at hand, so the optimum stays in the model. Returns how many.
     """
+    limit = incumbent + 1e-6 if keep_ties else incumbent - 1e-6
     fixed = 0
     for _, value, z in _bounded_options(milp, conditional):
-        if math.isfinite(value) and value > incumbent + 1e-6:
+        if math.isfinite(value) and value > limit:
             milp.model.chgVarUb(z, 0.0)
             fixed += 1
     return fixed

@@ -17,12 +17,8 @@ and ``u <= a`` when they are integer (the default, so no snapping is needed at a
 
 from __future__ import annotations
 
-import functools
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-
-import numpy as np
 
 from fetchcarry_env import regions
 from fetchcarry_env.actions import Lattice
@@ -32,7 +28,6 @@ from fetchcarry_env.regions import (
     HalfPlane,
     IndexBox,
     Plane,
-    point_beyond_tangent,
     point_in_side,
     side_regions,
 )
@@ -51,24 +46,11 @@ class Grid:
     lattice: Lattice
     domain: IndexBox
     integral: bool = True
-    corner_detail: int = 1  # the corner tangents of Eq. 18: corner_directions(corner_detail)
-    first_move_tangents: bool = False  # the first move also gets the start's tangents (start_tangents)
-    # Further corner tangents per rectangle, (rect, normals): the directions seen from pose points (pose_normals).
-    extra_normals: tuple[tuple[Rect, tuple[tuple[int, int], ...]], ...] = ()
 
     @classmethod
-    def for_area(
-        cls,
-        lattice: Lattice,
-        area: Rect,
-        radius: float,
-        integral: bool = True,
-        corner_detail: int = 1,
-        first_move_tangents: bool = False,
-    ) -> Grid:
+    def for_area(cls, lattice: Lattice, area: Rect, radius: float, integral: bool = True) -> Grid:
         """The grid whose domain is every lattice point at which the base disc lies inside ``area`` (Eq. 27)."""
-        domain = regions.area_domain(lattice, area, radius)
-        return cls(lattice, domain, integral, corner_detail, first_move_tangents)
+        return cls(lattice, regions.area_domain(lattice, area, radius), integral)
 
     @property
     def resolution(self) -> float:
@@ -142,131 +124,22 @@ def base_regions(grid: Grid, rect: Rect, margin: float) -> tuple[HalfPlane, ...]
     return side_regions(grid.lattice, rect, margin)
 
 
-SQRT2 = math.sqrt(2.0)
-CORNERS = regions.CORNERS  # outward signs of the corners: NE, NW, SW, SE
-MAX_CORNER_DETAIL = 6  # the largest corner_detail accepted (11 tangents a corner at 4; 6 gives 23)
-
-
-@functools.cache
-def corner_directions(detail: int) -> tuple[tuple[int, int], ...]:
-    """Normals ``(a, b)`` (NE quadrant) of the tangents cut at every corner: coprime ``1 <= a, b <= detail``.
-
-    ``detail = 1`` gives ``(1, 1)`` alone, the octagon; 2 adds ``(2, 1), (1, 2)`` (a 16-gon),
-    3 a 32-gon, 4 a 48-gon (``docs/formulation.md``, "Collision model", measures them).
-    Ordered by angle. Mirrored to each corner.
-    """
-    pairs = {(a, b) for a in range(1, detail + 1) for b in range(1, detail + 1) if math.gcd(a, b) == 1}
-    return tuple(sorted(pairs, key=lambda p: math.atan2(p[1], p[0])))
-
-
-@functools.cache
-def corner_normals(detail: int) -> tuple[tuple[int, int], ...]:
-    """The normals ``(su * a, sv * b)`` of the corner tangents, per corner (NE, NW, SW, SE), as in move_regions."""
-    return tuple((su * a, sv * b) for su, sv in CORNERS for a, b in corner_directions(detail))
-
-
-def rect_normals(grid: Grid, rect: Rect) -> tuple[tuple[int, int], ...]:
-    """The normals of ``rect``'s corner tangents: :func:`corner_normals` and the grid's ``extra_normals`` for it."""
-    extra = next((normals for r, normals in grid.extra_normals if r == rect), ())
-    regular = corner_normals(grid.corner_detail)
-    return regular + tuple(n for n in extra if n not in regular)
-
-
 def move_regions(grid: Grid, rect: Rect, radius: float) -> tuple[Plane, ...]:
-    """The regions of Eq. 18 in our tighter model: outside a polygon around ``rect`` grown by ``radius``.
+    """The regions of Eq. 18 in our tighter model: outside the octagon around ``rect`` grown by ``radius``.
 
-    The first four are :func:`base_regions` (the sides of the grown rectangle); the
-    others cut its corners, one per normal of :func:`rect_normals` (by default those of
-    :func:`corner_directions`, ``grid.corner_detail``, NE, NW, SW, SE):
-    ``a x + b y >= a cx + b cy + radius |(a, b)|`` at corner ``(cx, cy)``, the tangent to
-    the corner's quarter circle with that normal. With ``((1, 1),)`` (the octagon) the
-    cut is at 45 degrees. The polygon holds the rectangle's disc-swept shape (every point
-    outside it is ``radius`` or more from ``rect``) and touches it on every side. With the
-    default ``corner_detail`` and no extra normals these are exactly the env's regions,
-    :func:`fetchcarry_env.regions.octagon_regions`.
+    The first four are :func:`base_regions` (the sides of the grown rectangle); the other
+    four cut its corners at 45 degrees, ``a x + b y >= a cx + b cy + radius sqrt(2)`` at corner
+    ``(cx, cy)`` with ``a, b = +-1``, the tangent to the corner's quarter circle. The octagon
+    holds the rectangle's disc-swept shape (every point outside it is ``radius`` or more from
+    ``rect``) and touches it on every side. These are exactly the env's regions
+    (:func:`fetchcarry_env.regions.octagon_regions`): a move the env accepts is one the model does.
     """
-    out: list[Plane] = list(base_regions(grid, rect, radius))
-    for a, b in rect_normals(grid, rect):
-        out.append(regions.corner_cut(grid.lattice, rect, radius, a, b))
-    return tuple(out)
-
-
-START_TANGENT_COEFFICIENT = 1000  # the largest whole coefficient of a start tangent's normal
-START_TANGENT_SLACK = 1e-5  # metres: a start tangent keeps at least this between its line and the grown rectangle
-
-
-@functools.lru_cache(maxsize=65536)
-def start_tangents(grid: Grid, point: Point, rect: Rect, radius: float) -> tuple[DiagonalPlane, ...]:
-    """The lines through the exact start ``point`` that (nearly) touch ``rect`` grown by ``radius``, as regions.
-
-    Each is ``a i + b j >= c`` with whole ``a``, ``b`` (a normal within a hair of the
-    tangent's, turned 3 mrad away from the rectangle so that the line separates it from the
-    disc by at least :data:`START_TANGENT_SLACK`) through ``point``: a move from the start
-    to a lattice point on the far side clears the rectangle (the segment stays in the
-    half-plane). They make the first move exact (up to that turn) where it passes a corner
-    at any angle, and hold only for moves from ``point``. Empty when ``point`` is inside the
-    grown rectangle; an axis-parallel tangent is left out (a side of the rectangle covers it).
-    """
-    corners = [(x, y) for x in (rect.min_x, rect.max_x) for y in (rect.min_y, rect.max_y)]
-    px, py = point
-
-    def slack(theta: float) -> float:
-        nx, ny = math.cos(theta), math.sin(theta)
-        return nx * px + ny * py - max(nx * cx + ny * cy for cx, cy in corners) - radius
-
-    thetas = np.linspace(0.0, 2 * math.pi, 720, endpoint=False)
-    nx, ny = np.cos(thetas), np.sin(thetas)
-    support = np.max(np.stack([nx * cx + ny * cy for cx, cy in corners]), axis=0)
-    ok = nx * px + ny * py - support - radius > 0
-    if ok.all() or not ok.any():
-        return ()
-    out = []
-    for edge in np.flatnonzero(ok != np.roll(ok, 1)):  # ok changes between thetas[edge - 1] and thetas[edge]
-        lo, hi = float(thetas[edge - 1]) - (2 * math.pi if edge == 0 else 0.0), float(thetas[edge])
-        inside_hi = bool(ok[edge])
-        for _ in range(40):
-            mid = (lo + hi) / 2
-            if (slack(mid) > 0) == inside_hi:
-                hi = mid
-            else:
-                lo = mid
-        theta = hi + 3e-3 if inside_hi else lo - 3e-3  # into the separating arc (radians)
-        a, b = round(START_TANGENT_COEFFICIENT * math.cos(theta)), round(START_TANGENT_COEFFICIENT * math.sin(theta))
-        if a == 0 or b == 0 or slack(math.atan2(b, a)) < START_TANGENT_SLACK:
-            continue
-        out.append(grid.diagonal_at_least(a, b, a * px + b * py))
-    return tuple(out)
-
-
-POSE_NORMAL_MERGE = 2e-3  # radians: a pose tangent this close in angle to one kept already is left out
-
-
-def pose_normals(grid: Grid, points: Iterable[Point], rect: Rect, radius: float) -> tuple[tuple[int, int], ...]:
-    """Corner tangent normals of ``rect`` seen from ``points`` (pose bases): those of :func:`start_tangents`.
-
-    Each is the normal of a line through a point that separates it from ``rect`` grown by
-    ``radius`` (turned 3 mrad into the point's side), so the tangent of ``rect``'s rounded
-    corner with that normal (a region of :func:`move_regions`) holds the point: a move from
-    the point to any lattice point beyond that tangent clears ``rect`` exactly. Normals
-    within :data:`POSE_NORMAL_MERGE` of one kept (in angle) are left out (the kept one still
-    holds the point: it is at least 1 mrad inside the point's side). Ordered by angle.
-    """
-    found = {(p.su, p.sv) for point in points for p in start_tangents(grid, point, rect, radius)}
-    ordered = sorted(found, key=lambda n: math.atan2(n[1], n[0]))
-    kept: list[tuple[int, int]] = []
-    for normal in ordered:
-        angle = math.atan2(normal[1], normal[0])
-        if not kept or angle - math.atan2(kept[-1][1], kept[-1][0]) > POSE_NORMAL_MERGE:
-            kept.append(normal)
-    return tuple(kept)
+    return regions.octagon_regions(grid.lattice, rect, radius)
 
 
 def point_in_move_region(grid: Grid, point: Point, rect: Rect, radius: float, region: int) -> bool:
     """Exact test of an off-lattice point against region ``region`` of :func:`move_regions`."""
-    if region < 4:
-        return point_in_side(point, rect, radius, region)
-    a, b = rect_normals(grid, rect)[region - 4]
-    return point_beyond_tangent(point, rect, radius, a, b)
+    return regions.point_in_octagon_region(point, rect, radius, region)
 
 
 point_in_region = point_in_side  # exact test of an off-lattice point against a region of base_regions (same order)

@@ -35,9 +35,9 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, base_regions, split_box
 from expert.milp.strokes import PushCandidate, PushPlan
 from fetchcarry_env import regions
-from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect, segment_rect_distance
+from fetchcarry_env.geometry import HEADINGS, Heading, Point, Rect
 from fetchcarry_env.kinematics import hand_offset, push_contact, push_headings
-from fetchcarry_env.regions import GEOM_TOL, hand_in_side
+from fetchcarry_env.regions import hand_in_side
 from fetchcarry_env.scenario import Posture, Scenario
 
 
@@ -103,16 +103,6 @@ def arm_regions(grid: Grid, rect: Rect, hands: tuple[Point, ...], cells: tuple[i
     return tuple(out)
 
 
-def _near(grid: Grid, box: IndexBox, cells: tuple[int, int], rect: Rect, radius: float) -> bool:
-    """Whether ``rect`` grown by ``radius`` meets the world box of ``box`` or of ``box`` moved by ``cells``."""
-    grown = rect.inflate(radius)
-    for b in (box, box.shifted(*cells)):
-        lo, hi = grid.point(b.i_lo, b.j_lo), grid.point(b.i_hi, b.j_hi)
-        if lo[0] <= grown.max_x and hi[0] >= grown.min_x and lo[1] <= grown.max_y and hi[1] >= grown.min_y:
-            return True
-    return False
-
-
 def _with_stroke(plane: HalfPlane, cells: tuple[int, int]) -> HalfPlane:
     """The half-plane for a base that must satisfy ``plane`` before and after a stroke of ``cells``."""
     shift = cells[plane.axis]
@@ -129,9 +119,7 @@ class _Blockers:
         pushes: PushPlan,
         deliver: tuple[str, ...],
         holding: str | None,
-        corner_poses: bool = False,
     ) -> None:
-        self.corner_poses = corner_poses  # the base disc tested per point (clear), not by the grown rectangle
         radius = scenario.robot.radius
         self.grid = grid
         self.scenario = scenario
@@ -146,27 +134,13 @@ class _Blockers:
         self.arm_dynamic = {c: pushes.positions(c) for c in pushes.pushable}
         self.solid = [*(t.rect for t in scenario.tables), *self._obstacles(scenario)]
 
-    def clear(self, box: IndexBox, cells: tuple[int, int]) -> list[IndexBox]:
-        """The lattice points of ``box`` whose base disc, swept along the stroke ``cells`` (none for a pick or place),
-        stays off every table and obstacle, exactly (a corner zone's points included), as boxes."""
-        radius, keep = self.scenario.robot.radius, set()
-        near = [r for r in self.solid if _near(self.grid, box, cells, r, radius)]
-        for i in range(box.i_lo, box.i_hi + 1):
-            for j in range(box.j_lo, box.j_hi + 1):
-                a, b = self.grid.point(i, j), self.grid.point(i + cells[0], j + cells[1])
-                if all(segment_rect_distance(a, b, r) >= radius - GEOM_TOL for r in near):  # the stroke's sweep
-                    keep.add((i, j))
-        return _rectangles(keep)
-
     @staticmethod
     def _obstacles(scenario: Scenario) -> list[Rect]:
         return [o.rect for o in scenario.obstacles]
 
-    def conditions(
-        self, hands: tuple[Point, ...], cells: tuple[int, int], pushed: str | None, base: bool = True
-    ) -> list[Condition]:
-        """The static rules as box conditions; ``base`` False: without the base disc's four sides (tested per point)."""
-        out = [Condition(tuple(_with_stroke(p, cells) for p in planes)) for planes in self.base] if base else []
+    def conditions(self, hands: tuple[Point, ...], cells: tuple[int, int], pushed: str | None) -> list[Condition]:
+        """The static rules as box conditions: the base on a side of every grown table and obstacle, the arm's."""
+        out = [Condition(tuple(_with_stroke(p, cells) for p in planes)) for planes in self.base]
         out += [Condition(arm_regions(self.grid, rect, hands, cells)) for rect in self.arm_static]
         for clutter_id, positions in self.arm_dynamic.items():
             if clutter_id == pushed:
@@ -262,15 +236,9 @@ def pose_options(
     holding: str | None,
     pushes: PushPlan,
     deadline: Deadline = NEVER,
-    corner_poses: bool = False,
 ) -> list[PoseOption]:
-    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``.
-
-    ``corner_poses``: the base disc is tested exactly per lattice point (a pose in the corner
-    zone of a table or obstacle, off its rounded corner, is offered) instead of by the four
-    sides of the rectangle grown by the radius.
-    """
-    blockers = _Blockers(scenario, grid, pushes, deliver, holding, corner_poses)
+    """Every pick, place and push pose option of the problem (see the module docstring); checks ``deadline``."""
+    blockers = _Blockers(scenario, grid, pushes, deliver, holding)
     out: list[PoseOption] = []
     for obj in scenario.objects:
         if obj.id not in deliver:
@@ -310,9 +278,8 @@ def _options(
             if box.empty:
                 continue
             if conditions is None:
-                conditions = blockers.conditions(hands, cells, target if push else None, not blockers.corner_poses)
-            clear = blockers.clear(box, cells) if blockers.corner_poses else [box]
-            for piece, blocked in (cut for part in clear for cut in split_box(part, conditions)):
+                conditions = blockers.conditions(hands, cells, target if push else None)
+            for piece, blocked in split_box(box, conditions):
                 for part, tags in split_by_choice(grid, piece, hand, heading, posture, others):
                     forbidden = blocked | frozenset(t for t in tags if not isinstance(t, ObjectAt))
                     confusers = frozenset(t for t in tags if isinstance(t, ObjectAt))

@@ -21,7 +21,6 @@ from expert.milp.area import area_is_empty
 from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import Grid
 from expert.milp.options import PoseOption, pose_options
-from expert.milp.pose_tangents import pose_grid
 from expert.milp.strokes import PushPlan, plan_pushes
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.geometry import discs_overlap
@@ -60,22 +59,13 @@ def prepare(
     holding: str | None = None,
     integral: bool = True,
     deadline: Deadline = NEVER,
-    corner_detail: int = 1,
-    first_move_tangents: bool = False,
-    corner_poses: bool = False,
-    pose_tangents: bool = False,
 ) -> Problem:
     """Preprocess ``scenario`` on ``lattice``; ``holding`` is the id of an object already in the hand.
-
-    ``corner_detail``: the corner tangents of Eq. 18 (:func:`expert.milp.grid.corner_directions`);
-    ``corner_poses``: poses in a table's or obstacle's corner zone are offered
-    (:func:`expert.milp.options.pose_options`); ``pose_tangents``: every rectangle also gets
-    the corner tangents seen from the pose options' lattice points (:func:`expert.milp.pose_tangents.pose_grid`).
 
     Raises :class:`~expert.milp.deadline.TimeUp` once ``deadline`` has passed.
     """
     robot = scenario.robot
-    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral, corner_detail, first_move_tangents)
+    grid = Grid.for_area(lattice, scenario.area, robot.radius, integral)
     ids = {o.id for o in scenario.objects}
     if holding is not None and holding not in ids:
         raise ValueError(f"holding {holding!r} is not an object of scenario {scenario.name!r}")
@@ -93,9 +83,7 @@ def prepare(
     start_index = lattice.index(robot.start) if lattice.on_lattice(robot.start) else None
     if start_index is not None and not grid.domain.contains(*start_index):
         start_index = None
-    options = pose_options(scenario, grid, deliver, holding, pushes, deadline, corner_poses)
-    if pose_tangents:
-        grid = pose_grid(scenario, grid, options, deadline)
+    options = pose_options(scenario, grid, deliver, holding, pushes, deadline)
     problem = Problem(
         scenario=scenario,
         grid=grid,

@@ -39,7 +39,7 @@ import numpy as np
 from scipy import ndimage
 
 from expert.milp.deadline import NEVER, Deadline
-from expert.milp.grid import DiagonalPlane, IndexBox, move_regions, point_in_move_region, start_tangents
+from expert.milp.grid import DiagonalPlane, IndexBox, move_regions, point_in_move_region
 from expert.milp.problem import Problem
 from fetchcarry_env.geometry import Rect
 
@@ -85,9 +85,6 @@ def free_and_seed(problem: Problem, deadline: Deadline = NEVER) -> tuple[np.ndar
                 cut |= _member(plane, wi, wj)
             free[i0 - domain.i_lo : i1 - domain.i_lo + 1, j0 - domain.j_lo : j1 - domain.j_lo + 1] &= cut
         with_start = [plane for n, plane in enumerate(planes) if point_in_move_region(grid, start, rect, radius, n)]
-        with_start += (
-            start_tangents(grid, start, rect, radius) if grid.first_move_tangents else ()
-        )  # the first move's own regions (Eq. 18 at k = 1)
         near = np.zeros_like(free)
         for plane in with_start:  # exactly: the seed needs no connectivity argument
             near |= _member(plane, ii, jj, relaxed=False)

@@ -5,11 +5,11 @@
 (:mod:`expert.milp.bounds`), then solves the MILP with ``N0``, ``N0 + 1``, ... phases until
 one admits a plan (the paper's iterative deepening, Section V-A). That plan is optimal for
 the task cost among the plans with the fewest phases. A plan with more phases can still
-cost less (shorter travel for later deliveries), so :meth:`Deepening.phase_cap` bounds the
-phases of any cheaper plan (each phase before the last delivery costs at least ``W1``) and,
-when that bound exceeds the phases found, one model with that many phases (shorter plans
-are in it, followed by idle phases that cost nothing) is solved, warm-started from the
-best plan: its optimum is the task cost's optimum over every phase count.
+cost less (shorter travel for later deliveries), so :meth:`Deepening.cheaper_counts` lists
+the phase counts that may hold a cheaper plan (each phase before the last delivery costs
+at least ``W1``, and the skeleton bounds the cost of a plan by where its last place is),
+and :meth:`Deepening.longer` solves each as a model of exactly that many phases, cut off at
+the best plan's cost: the best found is the task cost's optimum over every phase count.
 
 Units are metres (costs) and seconds (timings).
 """
@@ -19,12 +19,13 @@ from __future__ import annotations
 import dataclasses
 import time
 
-from expert.decoupled import steps_of
+import numpy as np
+
 from expert.guide import guide_steps
-from expert.milp.bounds import Connectivity, PairCosts, counting_bound, min_travel, skeleton
+from expert.milp.bounds import PairCosts, counting_bound, min_travel, skeleton
 from expert.milp.conditional import least_by_last_phase
 from expert.milp.deadline import TimeUp
-from expert.milp.decode import SolvedPhase, phases_of
+from expert.milp.decode import phases_of
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
 from expert.planning.first_plans import FirstPlans, SubPlanner
@@ -49,6 +50,7 @@ class Deepening:
     guide: Plan | None = None
 
     def __post_init__(self) -> None:
+        self.by_last: np.ndarray | None = None  # least task cost of the plans whose last place is at phase t
         self.solver = Solver(self.run)
         self.first_plans = FirstPlans(self.run, self.solver, self.lattice, self.sub_planner)
 
@@ -69,10 +71,6 @@ class Deepening:
             holding=self.holding,
             integral=options.integral,
             deadline=run.deadline,
-            corner_detail=options.corner_detail,
-            first_move_tangents=options.first_move_tangents,
-            corner_poses=options.corner_poses,
-            pose_tangents=options.pose_tangents,
         )
         stats["prepare_s"] = time.perf_counter() - run.started
         stats["options"] = len(problem.options)
@@ -119,7 +117,7 @@ class Deepening:
         pairs = None
         proven = counting_bound(problem)
         if run.options.lower_bound:
-            pairs = PairCosts(problem, Connectivity(problem, run.deadline), run.deadline)
+            pairs = PairCosts(problem, run.deadline)
             relaxation = skeleton(problem, pairs, run.deadline)
             problem = dataclasses.replace(
                 problem, earliest=relaxation.earliest, min_travel=min_travel(problem, pairs, run.deadline)
@@ -171,59 +169,62 @@ class Deepening:
             self.longer(problem, pairs, n_phases)
 
     def longer(self, problem: Problem, pairs: PairCosts | None, n_phases: int) -> None:
-        """The model of more phases that holds every plan cheaper than the best (:meth:`phase_cap`), solved.
+        """Look for a cheaper plan among the plans of more than ``n_phases`` phases, one phase count at a time.
 
-        Its shorter plans end in idle phases, which are dropped from the answer. The best
-        plan stays ``optimal`` when no cheaper plan has more phases, or when the longer model
-        is solved to its optimum; ``feasible`` when a stop came first.
+        Each count ``N`` that may hold a plan cheaper than the best (:meth:`cheaper_counts`) is
+        solved as a model of exactly ``N`` phases (the last a place, none idle: the fewest-phase
+        cuts), asked only for plans cheaper than the best (an objective cutoff); every cheaper
+        plan found lowers the cutoff and can rule out the counts left. The best plan stays
+        ``optimal`` when every count was settled (solved, or proven to hold nothing cheaper),
+        ``feasible`` when a stop left one open.
         """
         run, stats = self.run, self.run.stats
         best = run.best[1]
         stats["fewest_phases"] = n_phases
         stats["fewest_phases_objective"] = run.cost(best)
-        if run.extra_phases is not None:
-            cap = n_phases + run.extra_phases
-        else:
-            cap = self.phase_cap(problem, pairs, n_phases, run.cost(best))
+        cap = n_phases + run.extra_phases if run.extra_phases is not None else None
         if self.max_phases is not None:
-            cap = min(cap, self.max_phases)
-        stats["phase_cap"] = cap
-        if cap <= n_phases:  # no plan of more phases is cheaper than the best, the fewest phases' optimum or better
-            run.best = ("optimal", best)
-            return
-        stats["phases_tried"].append(cap)
-        warm = steps_of(problem, best) if len(best) <= cap else None
-        outcome = self.solver.solve(problem, cap, pairs, warm=warm)
-        if isinstance(outcome, tuple):
-            longer_status, steps = outcome
-            found = phases_of(problem, _without_trailing_idle(steps))
-            if run.better(found, best):
-                best = found
-            run.best = (longer_status, best)
-        else:  # a stop before any plan of the longer model, or none cheaper in it
-            run.best = ("optimal" if outcome == "infeasible" else "feasible", best)
+            cap = self.max_phases if cap is None else min(cap, self.max_phases)
+        counts = self.cheaper_counts(problem, pairs, n_phases, run.cost(best), cap)
+        stats["phase_cap"] = max(counts, default=n_phases)
+        settled = True
+        while counts:
+            count = counts[0]
+            stats["phases_tried"].append(count)
+            outcome = self.solver.solve(problem, count, pairs, fewest=True, cutoff=run.cost(best))
+            if isinstance(outcome, tuple):
+                status, steps = outcome
+                found = phases_of(problem, steps)
+                if run.better(found, best):
+                    best = found
+                settled = settled and status == "optimal"
+            elif outcome == "no_plan":  # a stop before this count was settled
+                settled = False
+            counts = [n for n in self.cheaper_counts(problem, pairs, n_phases, run.cost(best), cap) if n > count]
+        run.best = ("optimal" if settled else "feasible", best)
 
-    def phase_cap(self, problem: Problem, pairs: PairCosts | None, n_phases: int, cost: float) -> int:
-        """The most phases a plan costing less than ``cost`` can have (at least ``n_phases``).
+    def cheaper_counts(
+        self, problem: Problem, pairs: PairCosts | None, n_phases: int, cost: float, cap: int | None
+    ) -> list[int]:
+        """The phase counts above ``n_phases`` (up to ``cap``, None: no cap) whose plans may cost less than ``cost``.
 
         A plan's phases end with its last delivery (anything after it only adds cost), so a
         plan of ``N`` phases leaves one object waiting ``N - 2`` phases, and the others at
         least ``1, 3, 5, ...`` (a pick and a place each): with the relaxation's travel bound
-        that grows with ``N`` (:func:`_simple_bound`), and past the first ``N`` where it reaches
-        ``cost`` no plan helps. Below it, the skeleton's bound on the task cost of the plans whose last
-        place is at phase ``N - 1`` (:func:`expert.milp.conditional.least_by_last_phase`, one forward
-        search for every ``N``) rules out more counts.
+        that grows with ``N`` (:func:`_simple_bound`), and from the first ``N`` where it reaches
+        ``cost`` on no plan is cheaper. Below it, the skeleton's bound on the task cost of the
+        plans whose last place is at phase ``N - 1`` (:func:`expert.milp.conditional.least_by_last_phase`,
+        one forward search for every ``N``, kept for the call) rules out more counts.
         """
         beyond = n_phases + 1
-        while _simple_bound(problem, beyond) < cost - 1e-9:  # every plan of `beyond` or more phases costs more
+        while _simple_bound(problem, beyond) < cost - 1e-9 and (cap is None or beyond <= cap):
             beyond += 1
-        if beyond == n_phases + 1:
-            return n_phases
-        if pairs is None:
-            return beyond - 1
-        by_last = least_by_last_phase(problem, beyond - 1, pairs, self.run.deadline)  # [t]: last place at t
-        cheaper = [n for n in range(n_phases + 1, beyond) if by_last[n - 1] < cost - 1e-9]
-        return max(cheaper, default=n_phases)
+        counts = range(n_phases + 1, beyond)
+        if pairs is None or not counts:
+            return list(counts)
+        if self.by_last is None or len(self.by_last) < beyond - 1:
+            self.by_last = least_by_last_phase(problem, beyond - 1, pairs, self.run.deadline)  # [t]: last place at t
+        return [n for n in counts if self.by_last[n - 1] < cost - 1e-9]
 
 
 def _simple_bound(problem: Problem, n_phases: int) -> float:
@@ -233,11 +234,3 @@ def _simple_bound(problem: Problem, n_phases: int) -> float:
     held = 1 if problem.holding is not None else 0
     others = max(todo - 1, 0) ** 2 - (held if todo > 1 else 0)  # 1 + 3 + ... + (2m - 1), one phase less if held
     return problem.min_travel + WAIT_COST * (n_phases - 2 + others)
-
-
-def _without_trailing_idle(steps: list[SolvedPhase]) -> list[SolvedPhase]:
-    """``steps`` without the idle phases at the end (no action, no move): the padding of a shorter plan."""
-    out = list(steps)
-    while len(out) > 1 and out[-1].option is None and out[-1].cell == out[-2].cell:
-        out.pop()
-    return out

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from expert.milp.build import SolverSettings
-from expert.milp.grid import MAX_CORNER_DETAIL
 
 
 @dataclass(frozen=True)
@@ -26,9 +25,6 @@ class PlannerOptions:
 
     - ``integral``: integer lattice bases (default); False solves with continuous bases and
       snaps them (faster with several objects, at most a few decimetres longer paths).
-    - ``corner_detail`` (1-6, default 1: the octagon, the env's own rule), ``first_move_tangents``,
-      ``corner_poses``, ``pose_tangents``: further tangents of rounded corners (``docs/formulation.md``,
-      "Collision model"); off by default.
 
     Bounds and cuts (each only speeds up the search: the optimum is the same without it):
 
@@ -55,10 +51,6 @@ class PlannerOptions:
     """
 
     integral: bool = True
-    corner_detail: int = 1
-    first_move_tangents: bool = False
-    corner_poses: bool = False
-    pose_tangents: bool = False
     lower_bound: bool = True
     fewest_cuts: bool = True
     conditional: bool = True
@@ -78,9 +70,6 @@ class PlannerOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        detail = self.corner_detail
-        if not isinstance(detail, int) or isinstance(detail, bool) or not 1 <= detail <= MAX_CORNER_DETAIL:
-            raise ValueError(f"corner_detail must be a whole number from 1 to {MAX_CORNER_DETAIL}, got {detail!r}")
         for name in ("ordered_nodes", "sub_plan_nodes", "decoupled_from"):
             _check_count(name, getattr(self, name))
         if self.node_limit is not None:

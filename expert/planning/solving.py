@@ -32,7 +32,8 @@ from expert.planning.run import Run
 
 RESERVE_S = 0.01  # seconds of the safety stop kept back from each solve for decoding and bookkeeping
 INFEASIBLE = ("infeasible", "inforunbd")
-"""SCIP's statuses that prove a model has no solution."""
+"""SCIP's statuses that prove a model has no solution (below its objective limit, when it has one)."""
+CUTOFF_TOL = 1e-6  # metres of task cost: a plan must beat a cutoff by this much (ties are no improvement)
 
 FirstModelHook = Callable[[Milp, Problem], bool]
 """Called on a model after its cuts, before its warm starts; True: the model is proven infeasible (no solve)."""
@@ -80,12 +81,17 @@ class Solver:
         warm: list[SolvedPhase] | None = None,
         fewest: bool = False,
         first_model: FirstModelHook | None = None,
+        cutoff: float | None = None,
     ) -> str | tuple[str, list[SolvedPhase]]:
         """Build and solve with ``n_phases``: ``"infeasible"``, ``"no_plan"`` or ``(status, steps)``.
 
-        ``fewest``: ``n_phases - 1`` phases are proven to admit no plan (adds :mod:`expert.milp.fewest`'s
-        cuts). ``first_model``: run on the model before its warm starts (the first plan in the
-        relaxation's order, on the model built once). Recorded in ``stats["solves"]``.
+        ``fewest``: the model holds only plans of exactly ``n_phases`` phases, none idle and the
+        last a place (:mod:`expert.milp.fewest`'s cuts): every other plan of the model is a
+        plan of fewer phases that costs no more. ``cutoff``: only plans of a task cost below it
+        (SCIP's objective limit, and the options whose conditional bound reaches it fixed to
+        0); ``"infeasible"`` then means none. ``first_model``: run on the model before its warm
+        starts (the first plan in the relaxation's order, on the model built once). Recorded
+        in ``stats["solves"]``.
         """
         run, stats = self.run, self.run.stats
         record: dict[str, Any] = {"phases": n_phases, "fewest_cuts": fewest}
@@ -102,6 +108,11 @@ class Solver:
         stats["build_s"] += record["build_s"]
         if cond is not None:
             record["conditional_fixed"] = add_conditional_cuts(milp, cond)
+        if cutoff is not None:
+            record["cutoff"] = cutoff
+            milp.model.setObjlimit(cutoff - CUTOFF_TOL)
+            if cond is not None:
+                record["conditional_fixed"] += fix_above(milp, cond, cutoff, keep_ties=False)
         if first_model is not None and first_model(milp, problem):  # proven infeasible at the root
             record.update(status="infeasible", nodes=stats["ordered"]["root_nodes"], root_proof=True)
             return "infeasible"

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from expert.decoupled import steps_of
-from expert.milp.bounds import Connectivity, PairCosts, cheapest_schedule, min_objective, skeleton
+from expert.milp.bounds import PairCosts, cheapest_schedule, min_objective, skeleton
 from expert.milp.conditional import conditional_bounds, exit_box_of
 from expert.milp.problem import prepare
 from expert.planner import plan
@@ -43,7 +43,7 @@ def test_the_optimum_respects_every_conditional_bound(scenario):
     assert without.status == "optimal"
     lattice = Lattice.over(scenario.area, 0.05)
     problem = prepare(scenario, lattice)
-    pairs = PairCosts(problem, Connectivity(problem))
+    pairs = PairCosts(problem)
     n_phases = len(without.phases)
     last_at_end = without.stats["solves"][-1]["fewest_cuts"]
     conditional = conditional_bounds(problem, n_phases, pairs, last_at_end=last_at_end)
@@ -70,7 +70,7 @@ def test_the_optimum_respects_every_conditional_bound(scenario):
 def test_an_action_at_a_phase_too_early_for_it_has_no_bound():
     scenario = families.draw_paper_multi(np.random.default_rng(11), 3)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
-    pairs = PairCosts(problem, Connectivity(problem))
+    pairs = PairCosts(problem)
     conditional = conditional_bounds(problem, 12, pairs)
     places = {(key, box): row for (key, box), row in conditional.bound.items() if key[0] == "place"}
     assert places and all(math.isinf(row[1]) for row in places.values())  # a place needs a pick before it
@@ -106,7 +106,7 @@ def test_the_order_of_picks_is_the_cheapest_schedules(seed):
     """The decoupled plan's order, read off the bounds, is the one ``cheapest_schedule`` finds."""
     scenario = families.draw_paper_multi(np.random.default_rng(seed), 4)
     problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
-    pairs = PairCosts(problem, Connectivity(problem))
+    pairs = PairCosts(problem)
     n_phases = skeleton(problem, pairs).phases + 1
     _, schedule = cheapest_schedule(problem, n_phases, pairs)
     picks = [key[1] for key, _ in schedule if key[0] == "pick"]

@@ -119,14 +119,14 @@ def test_the_nearest_first_plan_answers_when_the_safety_stop_comes_in_the_bounds
     import expert.planning.deepening as deepening
     from expert.milp.deadline import TimeUp
 
-    connectivity = deepening.Connectivity
+    pair_costs = deepening.PairCosts
 
     def out_of_time(problem, *args, **kwargs):
         if len(problem.deliver) > 1:  # the whole problem, not the decoupled plan's single-object sub-plans
             raise TimeUp
-        return connectivity(problem, *args, **kwargs)
+        return pair_costs(problem, *args, **kwargs)
 
-    monkeypatch.setattr(deepening, "Connectivity", out_of_time)
+    monkeypatch.setattr(deepening, "PairCosts", out_of_time)
     scenario = draw_paper_covered(np.random.default_rng(2024), 3)
     result = plan(scenario, time_limit=300.0, nearest_first_plan=True)
     assert result.status == "feasible"

@@ -19,7 +19,7 @@ from collections.abc import Callable
 
 import numpy as np
 import pytest
-from collision_study import corridor_room, diagonal_room, random_room
+from drawn_rooms import corridor_room, diagonal_room, random_room
 from exhaustive import W1, Exhaustive, plan_eq1, plan_task_cost
 
 import expert

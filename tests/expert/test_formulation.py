@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from planner_cases import BLOCK, bar, one_table, push_scene
 
-from expert.milp.bounds import any_overlap, counting_bound, min_travel, skeleton
+from expert.milp.bounds import counting_bound, min_travel, skeleton
 from expert.milp.build import build
 from expert.milp.collision import Infeasible
 from expert.milp.grid import Condition, Grid, HalfPlane, IndexBox, split_box
@@ -223,26 +223,6 @@ def test_travel_bound_is_below_the_optimal_plans_travel(scenario):
     travel = sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(result.phases))
     assert 0.0 < bound <= travel + 1e-9
     assert bound >= 0.7 * travel  # and it is not a trivial bound on these layouts
-
-
-def test_any_overlap_is_the_pairwise_intersection_test():
-    """The array test of the two-move bound says what ``not a.intersect(b).empty`` over every pair says."""
-    rng = np.random.default_rng(3)
-
-    def boxes(n: int) -> np.ndarray:
-        lo = rng.integers(0, 30, size=(n, 2))
-        size = rng.integers(0, 6, size=(n, 2))
-        return np.stack([lo[:, 0], lo[:, 0] + size[:, 0], lo[:, 1], lo[:, 1] + size[:, 1]], axis=1)
-
-    verdicts = set()
-    for _ in range(400):
-        first, second = boxes(int(rng.integers(0, 6))), boxes(int(rng.integers(0, 6)))
-        pairwise = any(
-            not IndexBox(*map(int, a)).intersect(IndexBox(*map(int, b))).empty for a in first for b in second
-        )
-        assert any_overlap(first, second) == pairwise
-        verdicts.add(pairwise)
-    assert verdicts == {True, False}  # both answers were exercised, edges that touch included
 
 
 def test_reachable_points_follow_the_corridor():

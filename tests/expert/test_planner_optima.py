@@ -3,10 +3,9 @@
 The optima in ``data/recorded_optima.json`` were made by the planner without the
 fewest-phases cuts, the union and order windows and the bound on Eq. 1 per pose box
 (``optima_cases.py`` says how); the
-plans made now with that model (the first move without the start's tangents, added
-since) under the paper's rule (``extra_phases=0``: the fewest phases) must have the same
-status, number of phases and Eq. 1, and pass the validator; with the tangents they must be
-no worse. Over every phase count (the default), a plan never costs more than that.
+plans made now with that model under the paper's rule (``extra_phases=0``: the fewest
+phases) must have the same status, number of phases and Eq. 1, and pass the validator.
+Over every phase count (the default), a plan never costs more than that.
 """
 
 from __future__ import annotations
@@ -17,9 +16,6 @@ from pathlib import Path
 import pytest
 from optima_cases import recorded_cases
 
-import expert.milp.bounds as bounds
-import expert.milp.collision as collision
-import expert.milp.reach as reach
 from expert.planner import plan
 from expert.plans import eq1_value
 from expert.validate import validate_plan
@@ -32,15 +28,8 @@ def test_every_case_has_a_recorded_optimum():
     assert sorted(s.name for s in CASES) == sorted(RECORDED)
 
 
-def without_start_tangents(monkeypatch) -> None:
-    """The model of the recording: Eq. 18's first move without the start's tangents (added later)."""
-    for module in (collision, bounds, reach):
-        monkeypatch.setattr(module, "start_tangents", lambda *args: ())
-
-
 @pytest.mark.parametrize("scenario", CASES, ids=[s.name for s in CASES])
-def test_same_optimum_as_recorded(scenario, monkeypatch):
-    without_start_tangents(monkeypatch)
+def test_same_optimum_as_recorded(scenario):
     expected = RECORDED[scenario.name]
     result = plan(scenario, time_limit=120.0, extra_phases=0)
     assert result.status == expected["status"] == "optimal"
@@ -49,14 +38,3 @@ def test_same_optimum_as_recorded(scenario, monkeypatch):
     assert validate_plan(scenario, result) == []
     every_count = plan(scenario, time_limit=120.0)
     assert every_count.status == "optimal" and every_count.objective <= result.objective + 1e-6
-
-
-@pytest.mark.parametrize("scenario", CASES, ids=[s.name for s in CASES])
-def test_start_tangents_never_make_a_plan_worse(scenario):
-    """The start's tangents only add first moves: never more phases, never a higher Eq. 1 at equal phases."""
-    expected = RECORDED[scenario.name]
-    result = plan(scenario, time_limit=120.0, first_move_tangents=True, extra_phases=0)
-    assert result.status == "optimal" and validate_plan(scenario, result) == []
-    assert len(result.phases) <= expected["phases"]
-    if len(result.phases) == expected["phases"]:
-        assert eq1_value(scenario, result.phases, len(result.phases)) <= expected["objective"] + 1e-6

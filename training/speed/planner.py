@@ -17,21 +17,19 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
-import math
 import statistics
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 import expert  # the planner (and its solver) load at the first expert.plan call
-import expert.planner as expert_planner
 from expert.guide import compact_phases
-from expert.plans import Plan, plan_objective
+from expert.plans import Plan
 from expert.validate import validate_plan
 from fetchcarry_env.families import PAPER_AREAS, PUSH_PATTERNS, draw_paper_covered, draw_paper_multi, get_family
-from fetchcarry_env.kinematics import DELIVERY_BONUS, travel_cost
+from fetchcarry_env.kinematics import travel_cost
 from training.guidance import rollout_plan
 
 DEFAULT_SEED = 2024
@@ -193,25 +191,19 @@ EXTRA_PHASES_CASES = ("2 obj", "3 obj", "cov 2", "cov 3")
 
 
 def extra_phases_rows(seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT, k: int = 1) -> list[dict]:
-    """Each multi-object scenario planned with ``extra_phases=0`` and ``k``: phases, travel, Eq. 1 over ``N + k``.
+    """Each multi-object scenario planned with ``extra_phases=0`` and ``k``: phases, travel, task cost.
 
-    Eq. 1 over ``N + k`` phases of the ``N``-phase plan is its Eq. 1 minus ``W1 n k`` (``k``
-    idle phases at its end, each earning ``W1`` per object); ``gain`` is how much lower the
-    ``extra_phases=k`` plan's is (0: unchanged). Times in seconds, travel in metres.
+    ``gain`` is how much lower the ``extra_phases=k`` plan's task cost is (0: unchanged).
+    Times in seconds, travel and costs in metres.
     """
-
     rows = []
     for case in (c for c in cases() if c.group in EXTRA_PHASES_CASES):
         rng = np.random.default_rng(seed)
         for _ in range(case.repeats):
             scenario = get_family(case.family).sample(rng)
-            base = expert.plan(scenario, time_limit=time_limit)
+            base = expert.plan(scenario, time_limit=time_limit, extra_phases=0)
             longer = expert.plan(scenario, time_limit=time_limit, extra_phases=k)
-            n_objects, horizon = len(scenario.objects), len(base.phases) + k
-            over = [
-                plan_objective(scenario, r.phases) - DELIVERY_BONUS * n_objects * (horizon - len(r.phases))
-                for r in (base, longer)
-            ]
+            costs = [base.objective, longer.objective]
             rows.append(
                 {
                     "group": case.group,
@@ -219,60 +211,11 @@ def extra_phases_rows(seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME
                     "statuses": [base.status, longer.status],
                     "phases": [len(base.phases), len(longer.phases)],
                     "travel_m": [_travel(r.phases) for r in (base, longer)],
-                    "eq1_over_n_plus_k": over,
-                    "gain": over[0] - over[1],
+                    "task_cost": costs,
+                    "gain": costs[0] - costs[1],
                     "time_s": [base.stats["total_s"], longer.stats["total_s"]],
                 }
             )
-    return rows
-
-
-CORNER_CHOICES = {"octagon": 1, "16-gon": 2, "32-gon": 3, "48-gon": 4}
-"""Corner tangents compared by :func:`corner_rows`: name -> ``plan(..., corner_detail=...)``."""
-
-
-UP_TO_THREE_OBJECTS = ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")  # the groups of cases(scale)
-
-
-def corner_rows(scale: float, seed: int = DEFAULT_SEED, time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
-    """Each benchmark scenario (``cases(scale)`` up to three objects) planned with every choice of corner tangents."""
-    choices = {name: {"corner_detail": detail} for name, detail in CORNER_CHOICES.items()}
-    return choice_rows(scale, choices, seed=seed, time_limit=time_limit)
-
-
-def choice_rows(
-    scale: float,
-    choices: dict[str, dict[str, Any]],
-    *,
-    seed: int = DEFAULT_SEED,
-    time_limit: float = DEFAULT_TIME_LIMIT,
-    groups: Sequence[str] = UP_TO_THREE_OBJECTS,
-    each: Callable[[dict[str, Any]], None] | None = None,
-) -> list[dict]:
-    """Each benchmark scenario of ``groups`` (``cases(scale)``) planned with every choice of ``plan()`` options.
-
-    ``choices`` maps a name to ``plan()``'s keyword arguments; ``each`` is given every row
-    when it is made. Interleaved per scenario, so the load moves all choices alike. Times
-    in seconds.
-    """
-    rows = []
-    for case in (c for c in cases(scale) if c.group in groups):
-        rng = np.random.default_rng(seed)
-        for _ in range(case.repeats):
-            scenario = get_family(case.family).sample(rng)
-            row: dict[str, Any] = {"group": case.group, "case": case.name}
-            for name, options in choices.items():
-                result = expert.plan(scenario, time_limit=time_limit, **options)
-                row[name] = {
-                    "status": result.status,
-                    "phases": len(result.phases),
-                    "objective": result.objective,
-                    "total_s": result.stats["total_s"],
-                    "valid": not result.found or validate_plan(scenario, result) == [],
-                }
-            rows.append(row)
-            if each is not None:
-                each(row)
     return rows
 
 
@@ -451,77 +394,6 @@ def _guide_figures(scenario, guide: Plan) -> dict[str, Any]:
     }
 
 
-DECOUPLED_CASES = (("covered", 3, 4), ("multi", 5, 2), ("covered", 4, 1))  # kind, objects, scenarios
-DECOUPLED_VARIANTS = (
-    "base",
-    "no decoupled plan below 4 objects",
-    "no two-at-a-time pass",
-    "two-at-a-time pass of first solutions",
-    "base again",
-)
-
-
-def decoupled_rows(time_limit: float = DEFAULT_TIME_LIMIT) -> list[dict]:
-    """The decoupled first plan's cost and worth: each scenario (drawn as in :func:`scale_rows`) four ways in turn.
-
-    Variants: the planner as it is; without the decoupled plan for three objects with
-    pushes (``DECOUPLED_FROM`` 5); without its second, two-objects-at-a-time pass
-    (``LOOKAHEAD_MIN_S`` infinite); that pass made of SCIP's first solutions
-    (``SECOND_PASS_FIRST_SOLUTIONS``); as it is again. Times in seconds.
-    """
-    planner = expert_planner
-    rows = []
-    for kind, size, count in DECOUPLED_CASES:
-        draw = draw_paper_multi if kind == "multi" else draw_paper_covered
-        for n in range(count):
-            scenario = draw(np.random.default_rng(SCALE_SEED + n), size)
-            row: dict[str, Any] = {"kind": kind, "objects": size, "seed": SCALE_SEED + n}
-            for variant in DECOUPLED_VARIANTS:
-                saved = planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS
-                planner.DECOUPLED_FROM = 5 if variant.startswith("no decoupled") else saved[0]
-                planner.LOOKAHEAD_MIN_S = math.inf if variant.startswith("no two") else saved[1]
-                planner.SECOND_PASS_FIRST_SOLUTIONS = variant.endswith("first solutions") or saved[2]
-                try:
-                    result = expert.plan(scenario, time_limit=time_limit)
-                finally:
-                    planner.DECOUPLED_FROM, planner.LOOKAHEAD_MIN_S, planner.SECOND_PASS_FIRST_SOLUTIONS = saved
-                row[variant] = {
-                    "status": result.status,
-                    "objective": result.objective,
-                    "total_s": result.stats["total_s"],
-                    "decoupled_s": result.stats.get("decoupled_s", 0.0),
-                }
-            rows.append(row)
-            cells = " | ".join(f"{v} {row[v]['total_s']:.2f} s" for v in DECOUPLED_VARIANTS)
-            print(f"{kind} {size} seed {row['seed']}: {cells}", flush=True)
-    return rows
-
-
-def tangent_rows(scale: float, seed: int = DEFAULT_SEED) -> list[dict]:
-    """Each benchmark scenario up to three objects with and without the start's tangents (Eq. 18 at the first move).
-
-    With: the solver option ``first_move_tangents`` on; without: off (the default).
-    Interleaved per scenario; times in seconds.
-    """
-    chosen = [c for c in cases(scale) if c.group in ("V-B", "V-C", "L", "2 obj", "3 obj", "cov 2", "cov 3")]
-    rows = []
-    for case in chosen:
-        rng = np.random.default_rng(seed)
-        for _ in range(case.repeats):
-            scenario = get_family(case.family).sample(rng)
-            row: dict[str, Any] = {"group": case.group}
-            for name in ("with", "without"):
-                result = expert.plan(scenario, time_limit=DEFAULT_TIME_LIMIT, first_move_tangents=name == "with")
-                row[name] = {
-                    "status": result.status,
-                    "phases": len(result.phases),
-                    "objective": result.objective,
-                    "total_s": result.stats["total_s"],
-                }
-            rows.append(row)
-    return rows
-
-
 def _travel(phases) -> float:
     """The travel term of Eq. 1 (metres)."""
     return sum(travel_cost(a.base, b.base) for a, b in itertools.pairwise(phases))
@@ -534,9 +406,6 @@ def main(argv: Sequence[str] | None = None) -> None:
     extra = sub.add_parser("extra-phases", help="extra_phases=1 against 0 on the 30 multi-object scenarios")
     extra.add_argument("--seed", type=int, default=DEFAULT_SEED)
     extra.add_argument("--out", help="write the rows as JSON here")
-    corners = sub.add_parser("corners", help="octagon against finer corner tangents on the benchmark's cases")
-    corners.add_argument("--scale", type=float, default=0.25, help="scenarios per case, times the benchmark's")
-    corners.add_argument("--out", help="write the rows as JSON here")
     scale = sub.add_parser("scale", help="8-10 objects and covered goals, seeded here, proven optimal or not")
     scale.add_argument("--objects", type=int, nargs="*", default=[8, 10])
     scale.add_argument("--covered", type=int, nargs="*", default=[3, 4])
@@ -562,15 +431,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     learned.add_argument("--kinds", nargs="*", default=None, help="cases kept: objects-6 objects-7 objects-8 covered")
     learned.add_argument("--time-limit", type=float, default=30.0, help="seconds per plan() call")
     learned.add_argument("--out", help="write the rows as JSON here")
-    decoupled = sub.add_parser("decoupled", help="the decoupled first plan and its second pass, on and off")
-    decoupled.add_argument("--out", help="write the rows as JSON here")
-    tangents = sub.add_parser("tangents", help="the start's tangents on and off on the benchmark's cases")
-    tangents.add_argument("--scale", type=float, default=0.25)
-    tangents.add_argument("--out", help="write the rows as JSON here")
     args = parser.parse_args(argv)
-    if args.command == "tangents":
-        _print_tangents(tangent_rows(args.scale), args.out)
-        return
     if args.command == "ab":
         _print_ab(ab_rows(args.objects, args.covered, args.count, args.time_limit, args.variants), args.out)
         return
@@ -581,20 +442,11 @@ def main(argv: Sequence[str] | None = None) -> None:
             return
         _print_learned_guide(learned_guide_rows(args.run, args.count, args.time_limit, args.kinds), args.out)
         return
-    if args.command == "decoupled":
-        rows = decoupled_rows()
-        if args.out:
-            with open(args.out, "w", encoding="utf-8") as f:
-                json.dump(rows, f, indent=1)
-        return
     if args.command == "guide":
         _print_guide(guide_rows(args.count, args.time_limit), args.out)
         return
     if args.command == "scale":
         _print_scale(scale_rows(args.objects, args.covered, args.count, args.time_limit, args.options), args.out)
-        return
-    if args.command == "corners":
-        _print_corners(corner_rows(args.scale), args.out)
         return
     rows = extra_phases_rows(args.seed)
     for row in rows:
@@ -608,49 +460,6 @@ def main(argv: Sequence[str] | None = None) -> None:
     if args.out:
         with open(args.out, "w", encoding="utf-8") as f:
             json.dump(rows, f, indent=1)
-
-
-def _print_corners(rows: list[dict], out: str | None) -> None:
-    """Per group: the median time of each choice, its ratio to the octagon's, and the plans that changed."""
-    for group in dict.fromkeys(r["group"] for r in rows):
-        mine = [r for r in rows if r["group"] == group]
-        base = statistics.median(r["octagon"]["total_s"] for r in mine)
-        cells = []
-        for name in CORNER_CHOICES:
-            median = statistics.median(r[name]["total_s"] for r in mine)
-            better = sum(
-                r[name]["phases"] < r["octagon"]["phases"]
-                or (
-                    r[name]["phases"] == r["octagon"]["phases"]
-                    and (r[name]["objective"] or 0) < (r["octagon"]["objective"] or 0) - 1e-6
-                )
-                for r in mine
-            )
-            worst = max(r[name]["total_s"] for r in mine)
-            cells.append(f"{name} {median:.3f} s ({median / base:.2f}x, max {worst:.2f} s, better {better})")
-        print(f"{group:<6} n={len(mine):<3} " + "  ".join(cells))
-    print(f"invalid plans: {sum(not r[n]['valid'] for r in rows for n in CORNER_CHOICES)}")
-    _save(rows, out)
-
-
-def _print_tangents(rows: list[dict], out: str | None) -> None:
-    """Per group: median times with and without the start's tangents and the plans they improve."""
-    for group in dict.fromkeys(r["group"] for r in rows):
-        mine = [r for r in rows if r["group"] == group]
-        with_s = statistics.median(r["with"]["total_s"] for r in mine)
-        without_s = statistics.median(r["without"]["total_s"] for r in mine)
-        better = sum(
-            r["with"]["phases"] < r["without"]["phases"]
-            or (
-                r["with"]["phases"] == r["without"]["phases"]
-                and r["with"]["objective"] < r["without"]["objective"] - 1e-6
-            )
-            for r in mine
-            if r["with"]["objective"] is not None and r["without"]["objective"] is not None
-        )
-        ratio = with_s / without_s
-        print(f"{group:<6} n={len(mine):<3} with {with_s:.3f} s, without {without_s:.3f} s ({ratio:.2f}x)", better)
-    _save(rows, out)
 
 
 def _save(rows: list[dict], out: str | None) -> None:
