@@ -1,15 +1,16 @@
-"""Long motions without the MILP: straight moves along a searched path, and a pick found by the env's rules.
+"""Long motions without the MILP: the fewest straight moves the env's move rule allows, and a pick found by its rules.
 
 The single-object MILP is fast when the object, its goal and the base are a few phases
 apart, and slow when a delivery crosses rooms (in an apartment one object needs 12
 phases, and proving that 7 to 11 admit no plan took SCIP up to 100 s). The decoupled
 fallback plan (:func:`expert.decoupled.fallback_plan`) therefore makes the long legs
-here: a search over the free lattice points (8-connected, every ``STRIDE``-th point, the
-base kept ``MARGIN`` beyond its radius from tables, obstacles and the area's edge), cut
-into straight moves that the env accepts (its move rule, :func:`fetchcarry_env.rules.move_refusal`),
-and a pick at the reachable lattice pose nearest along that search that the env accepts
-(:func:`fetchcarry_env.rules.check_action`).
-The MILP then plans only what is left near the goal (pushes and the place).
+here: the least number of straight moves between two places is a breadth-first search on
+the octagon-region signatures of the lattice points (:class:`expert.milp.moves.LeastMoves`,
+the env's own move rule: points of one signature reach the same points in one move), and
+a route of that many moves picks, signature by signature, the lattice point that keeps the
+travel short (:class:`Routes`). A pick is made at the pose nearest in moves from which the env
+accepts it (:func:`fetchcarry_env.rules.check_action`). The MILP then plans only what is
+left near the goal (pushes and the place).
 
 Every move keeps the heading. Units are metres.
 """
@@ -17,194 +18,202 @@ Every move keeps the heading. Units are metres.
 from __future__ import annotations
 
 import dataclasses
-import heapq
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
+from expert.milp.moves import UNREACHABLE, LeastMoves, geometry_moves
 from expert.plans import Phase
 from fetchcarry_env.actions import Action, Lattice, Mode
 from fetchcarry_env.geometry import HEADINGS, Point, first_contact, to_world_frame
 from fetchcarry_env.kinematics import hand_offset
 from fetchcarry_env.observation import WorldState
-from fetchcarry_env.rules import base_blockers, check_action, move_refusal
+from fetchcarry_env.regions import area_domain
+from fetchcarry_env.rules import base_blockers, check_action, move_blockers, move_refusal
 from fetchcarry_env.scenario import Scenario
 
-STRIDE = 2  # lattice points between the searched points (0.1 m on the env's 5 cm lattice)
-MARGIN = 0.05  # metres kept beyond the base's radius by the searched points and the moves between them
 PICK_RADIUS = 0.9  # metres: lattice poses this close to the object are tried for the pick
-_STEPS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if (di, dj) != (0, 0)]
 
 
-class FreeLattice:
-    """The lattice points (every ``STRIDE``-th) where the base stands ``MARGIN`` clear of every blocker."""
+class Routes:
+    """The fewest straight moves between the base and the lattice points of one scenario (the module docstring)."""
 
     def __init__(self, scenario: Scenario, lattice: Lattice) -> None:
         self.scenario, self.lattice = scenario, lattice
-        self.blockers = [rect for _, rect in base_blockers(scenario)]
-        self.bounds = np.array([(r.min_x, r.min_y, r.max_x, r.max_y) for r in self.blockers], dtype=float)
-        self.clearance = scenario.robot.radius + MARGIN
-        xs = lattice.axis_points(0)[::STRIDE]
-        ys = lattice.axis_points(1)[::STRIDE]
-        gx, gy = np.meshgrid(xs, ys, indexing="ij")
-        free = np.ones(gx.shape, dtype=bool)
-        for rect in self.blockers:
-            dx = np.maximum(np.maximum(rect.min_x - gx, 0.0), gx - rect.max_x)
-            dy = np.maximum(np.maximum(rect.min_y - gy, 0.0), gy - rect.max_y)
-            free &= np.hypot(dx, dy) > self.clearance
-        self.free = free
+        radius = scenario.robot.radius
+        rects = tuple(rect for _, rect in move_blockers(scenario))
+        self.moves: LeastMoves = geometry_moves(lattice, area_domain(lattice, scenario.area, radius), rects, radius)
+        domain = self.moves.domain
+        cells = np.argwhere(self.moves.cell >= 0)  # the free lattice points, domain-relative
+        self.signature = self.moves.cell[cells[:, 0], cells[:, 1]]
+        self.cells = cells + np.array([domain.i_lo, domain.j_lo])  # lattice indices
+        self.x = lattice.origin[0] + self.cells[:, 0] * lattice.resolution
+        self.y = lattice.origin[1] + self.cells[:, 1] * lattice.resolution
 
-    def point(self, cell: tuple[int, int]) -> Point:
-        return self.lattice.point(cell[0] * STRIDE, cell[1] * STRIDE)
+    @property
+    def usable(self) -> bool:
+        """Whether the signature graph was built (not for thousands of obstacles: no route then)."""
+        return self.moves.joined is not None
 
-    def clear(self, a: Point, b: Point, exact: bool = False) -> bool:
-        """True when the env allows the move from ``a`` to ``b`` and it keeps half of ``MARGIN`` beyond the radius.
+    def point(self, n: int) -> Point:
+        """Free lattice point number ``n``, metres."""
+        return (float(self.x[n]), float(self.y[n]))
 
-        ``exact``: by the env's own move rule alone (for a slide from a base that stands
-        closer than that to a table, as at a pick).
+    def least(self, start: Point) -> np.ndarray:
+        """``(N,)``: the least moves from ``start`` to each free lattice point (0 at ``start`` itself)."""
+        out = self.moves.from_point(start)[self.signature]
+        out[(np.abs(self.x - start[0]) < 1e-9) & (np.abs(self.y - start[1]) < 1e-9)] = 0
+        return out
+
+    def near(self, point: Point, radius: float) -> np.ndarray:
+        """The numbers of the free lattice points within ``radius`` metres of ``point``."""
+        return np.flatnonzero(np.hypot(self.x - point[0], self.y - point[1]) <= radius)
+
+    def region(self, point: Point, radius: float = PICK_RADIUS) -> np.ndarray:
+        """The signatures of the free lattice points within ``radius`` metres of ``point``."""
+        return np.unique(self.signature[self.near(point, radius)])
+
+    def route(self, start: Point, end: int) -> list[Point] | None:
+        """The ends of the fewest straight moves from ``start`` to free point ``end`` (the last is its point).
+
+        Each move goes to a point of a signature on a shortest chain (fewest moves to the
+        end's signature), the one that keeps the travel so far plus the straight line to the
+        end least. None when no number of moves joins them (or without the graph).
         """
-        if move_refusal(self.scenario, self.lattice, a, b) is not None:
-            return False
-        if exact:
-            return True
-        radius = self.scenario.robot.radius + MARGIN / 2
-        lo_x, hi_x = min(a[0], b[0]) - radius, max(a[0], b[0]) + radius
-        lo_y, hi_y = min(a[1], b[1]) - radius, max(a[1], b[1]) + radius
-        bounds = self.bounds
-        near = (bounds[:, 0] <= hi_x) & (bounds[:, 2] >= lo_x) & (bounds[:, 1] <= hi_y) & (bounds[:, 3] >= lo_y)
-        return first_contact(a, b, radius, [self.blockers[k] for k in np.flatnonzero(near)]) >= 1.0
-
-    def distances(self, start: Point) -> tuple[dict, dict]:
-        """Path lengths (metres) from the searched points straight-line clear of ``start``, and each point's parent."""
-        nx, ny = self.free.shape
-        cost: dict[tuple[int, int], float] = {}
-        parent: dict[tuple[int, int], tuple[int, int] | None] = {}
-        queue: list[tuple[float, tuple[int, int]]] = []
-        i0, j0 = (round(v / STRIDE) for v in self.lattice.index(start))
-        for di in range(-3, 4):
-            for dj in range(-3, 4):
-                cell = (i0 + di, j0 + dj)
-                inside = 0 <= cell[0] < nx and 0 <= cell[1] < ny
-                if inside and self.free[cell] and self.clear(start, self.point(cell), exact=True):
-                    c = math.dist(start, self.point(cell))
-                    if c < cost.get(cell, math.inf):
-                        cost[cell], parent[cell] = c, None
-                        heapq.heappush(queue, (c, cell))
-        step = self.lattice.resolution * STRIDE
-        while queue:
-            c, (i, j) = heapq.heappop(queue)
-            if c > cost[(i, j)]:
-                continue
-            for di, dj in _STEPS:
-                n = (i + di, j + dj)
-                if not (0 <= n[0] < nx and 0 <= n[1] < ny) or not self.free[n]:
-                    continue
-                if di and dj and not (self.free[i + di, j] and self.free[i, j + dj]):
-                    continue  # no corner cutting
-                total = c + step * (math.sqrt(2.0) if di and dj else 1.0)
-                if total < cost.get(n, math.inf):
-                    cost[n], parent[n] = total, (i, j)
-                    heapq.heappush(queue, (total, n))
-        return cost, parent
-
-    def path_to(self, parent: dict, cell: tuple[int, int]) -> list[Point]:
-        """The searched points from the start's neighbour to ``cell``."""
-        cells: list[tuple[int, int]] = []
-        at: tuple[int, int] | None = cell
-        while at is not None:
-            cells.append(at)
-            at = parent[at]
-        return [self.point(c) for c in reversed(cells)]
-
-    def straight_moves(self, start: Point, path: Sequence[Point]) -> list[Point]:
-        """``path`` cut into straight clear moves from ``start``: the end points, the last one ``path[-1]``.
-
-        Each move goes as far along the path as the straight line stays clear (scanning forwards).
-        """
-        ends: list[Point] = []
-        at, k = start, 0
-        while k < len(path):
-            far = k
-            exact = at == start  # the start may stand closer to a table than the searched points
-            for m in range(k + 1, len(path)):
-                if not self.clear(at, path[m], exact):
-                    break
-                far = m
-            if not self.clear(at, path[far], exact):
-                return []
-            at, k = path[far], far + 1
+        if not self.usable:
+            return None
+        goal = self.point(end)
+        moves = int(self.least(start)[end])
+        if moves >= UNREACHABLE:
+            return None
+        if moves == 0:
+            return []
+        from_start = self.moves.from_point(start)
+        to_end = self.moves.least_from(np.array([self.signature[end]]))
+        ends, here = [], None  # here: the signature of the last end (None: the start)
+        at = start
+        for k in range(1, moves):
+            on_chain = (from_start == k) & (to_end == moves - k)
+            if here is not None:
+                on_chain &= self.moves.joined[here]
+            points = np.flatnonzero(on_chain[self.signature])
+            x, y = self.x[points], self.y[points]
+            length = np.hypot(x - at[0], y - at[1]) + np.hypot(x - goal[0], y - goal[1])
+            n = int(points[np.argmin(length)])
+            at, here = self.point(n), int(self.signature[n])
             ends.append(at)
+        ends.append(goal)
         return ends
 
+    def towards(self, start: Point, target: Point, radius: float) -> list[Point]:
+        """The fewest moves from ``start`` to a free point within ``radius`` of ``target`` (the nearest of those
+        that take fewest); empty when the start is within it, or none is reached."""
+        if math.dist(start, target) <= radius or not self.usable:
+            return []
+        near = self.near(target, radius)
+        least = self.least(start)[near]
+        if not len(near) or least.min() >= UNREACHABLE:
+            return []
+        fewest = near[least == least.min()]
+        end = int(fewest[np.argmin(np.hypot(self.x[fewest] - target[0], self.y[fewest] - target[1]))])
+        return self.route(start, end) or []
 
-def approach(space: FreeLattice, start: Point, target: Point, keep: float) -> list[Point]:
-    """Straight moves from ``start`` towards the searched point nearest ``target``, ``keep`` metres of path short.
 
-    Empty when that point is within ``keep`` of the start along the path, or none is reached.
+MAX_ORDERED = 10  # objects up to which fewest_moves_order tries every order (a dynamic programme on subsets)
+
+
+def fewest_moves_order(routes: Routes, start: Point, jobs: dict[str, tuple[Point, Point]]) -> list[str]:
+    """The delivery order of ``jobs`` (id: object's start, goal) with the fewest moves between deliveries.
+
+    The moves counted are the least from ``start`` to within ``PICK_RADIUS`` of the first
+    object, and from within it of each goal to within it of the next object (a delivery's
+    own moves are the same in any order); ties go to the shorter straight-line tour.
+    Exact up to ``MAX_ORDERED`` objects, the nearest in moves next beyond.
     """
-    cost, parent = space.distances(start)
-    if not cost:
-        return []
-    nearest = min(cost, key=lambda c: (math.dist(space.point(c), target), cost[c]))
-    path = space.path_to(parent, nearest)
-    total = cost[nearest]
-    kept = [p for p, c in zip(path, _cumulative(start, path), strict=True) if c <= total - keep]
-    return space.straight_moves(start, kept) if kept else []
+    ids = list(jobs)
+    if len(ids) <= 1 or not routes.usable:
+        return ids
+    near = {i: routes.region(jobs[i][0]) for i in ids}
+    goal = {i: routes.region(jobs[i][1]) for i in ids}
+    from_start = routes.moves.from_point(start)
 
+    def first(i: str) -> tuple[int, float]:
+        return int(from_start[near[i]].min(initial=UNREACHABLE)), math.dist(start, jobs[i][0])
 
-def _cumulative(start: Point, path: Sequence[Point]) -> list[float]:
-    out, at, length = [], start, 0.0
-    for p in path:
-        length += math.dist(at, p)
-        out.append(length)
-        at = p
-    return out
+    def between(i: str, j: str) -> tuple[int, float]:
+        return routes.moves.between(goal[i], near[j]), math.dist(jobs[i][1], jobs[j][0])
+
+    def plus(a: tuple[int, float], b: tuple[int, float]) -> tuple[int, float]:
+        return a[0] + b[0], a[1] + b[1]
+
+    if len(ids) > MAX_ORDERED:
+        order = [min(ids, key=first)]
+        while len(order) < len(ids):
+            order.append(min((j for j in ids if j not in order), key=lambda j: between(order[-1], j)))
+        return order
+    best: dict[tuple[int, int], tuple[tuple[int, float], int]] = {}  # (visited mask, last): (cost, previous last)
+    for k, i in enumerate(ids):
+        best[(1 << k, k)] = (first(i), -1)
+    for mask in range(1, 1 << len(ids)):
+        for last in range(len(ids)):
+            if (mask, last) not in best:
+                continue
+            cost = best[(mask, last)][0]
+            for k in range(len(ids)):
+                if mask & (1 << k):
+                    continue
+                key, value = (mask | (1 << k), k), plus(cost, between(ids[last], ids[k]))
+                if key not in best or value < best[key][0]:
+                    best[key] = (value, last)
+    full = (1 << len(ids)) - 1
+    last = min(range(len(ids)), key=lambda k: best[(full, k)][0])
+    order, mask = [], full
+    while last >= 0:
+        order.append(ids[last])
+        mask, last = mask & ~(1 << last), best[(mask, last)][1]
+    return order[::-1]
 
 
 def pick_leg(
-    space: FreeLattice,
+    routes: Routes,
     phase: Phase,
     target: str,
     objects3: dict[str, tuple[float, float, float]],
 ) -> list[Phase] | None:
     """Moves and a pick of ``target`` from ``phase`` (empty hand), the pick by the env's rules; None if none.
 
-    The pick pose is the lattice point within ``PICK_RADIUS`` of the object, reached
-    along the search with the least path length, from which some heading and posture
-    pick ``target`` (and nothing else) with a clear arm line; the last straight move to it
-    is checked with the env's own contact rule.
+    The pick pose is the free lattice point within ``PICK_RADIUS`` of the object, fewest
+    moves away (then nearest the object), from which some heading and posture pick
+    ``target`` (and nothing else) with a clear arm line; the pick's own slide into it is
+    checked with the env's rules.
     """
-    scenario, lattice = space.scenario, space.lattice
-    cost, parent = space.distances(phase.base)
+    scenario, lattice = routes.scenario, routes.lattice
+    if not routes.usable:
+        return None
     spot = scenario.object(target).start if target not in objects3 else objects3[target][:2]
-    near = sorted((c for c in cost if math.dist(space.point(c), spot) <= PICK_RADIUS), key=lambda c: cost[c])
+    near = routes.near(spot, PICK_RADIUS)
+    least = routes.least(phase.base)[near]
+    distance = np.hypot(routes.x[near] - spot[0], routes.y[near] - spot[1])
     world = WorldState(phase.base, phase.heading, None, dict(objects3), dict(phase.clutter))
-    for cell in near:
-        around = _poses_around(lattice, space.point(cell))
-        poses = [p for p in around if _pick_at(scenario, world, lattice, None, p, target)]
-        if not poses:
+    for n in near[np.lexsort((distance, least))]:
+        pose = routes.point(int(n))
+        if not _pick_at(scenario, world, lattice, None, pose, target):
             continue
-        path = space.path_to(parent, cell)
-        ends = space.straight_moves(phase.base, path[:-1]) if len(path) > 1 else []
-        for pose in poses:
-            found = _pick_at(scenario, world, lattice, ends[-1] if ends else phase.base, pose, target)
-            if found is None:
-                continue
-            while ends and _pick_at(scenario, world, lattice, ends[-2] if len(ends) > 1 else phase.base, pose, target):
-                ends.pop()  # the pick's own slide reaches the pose from one move earlier
-            heading, posture = _pick_at(scenario, world, lattice, ends[-1] if ends else phase.base, pose, target)
-            moves = moves_along(phase, ends)
-            last = moves[-1] if moves else phase
-            pick = Phase(pose, heading, "pick", target, posture, target, dict(last.objects), dict(last.clutter))
-            return [*moves, pick]
+        route = routes.route(phase.base, int(n))
+        if route is None:
+            break  # the rest are no nearer in moves: none reached
+        ends = route[:-1]  # the pick's own slide makes the last move
+        if _pick_at(scenario, world, lattice, ends[-1] if ends else phase.base, pose, target) is None:
+            continue
+        while ends and _pick_at(scenario, world, lattice, ends[-2] if len(ends) > 1 else phase.base, pose, target):
+            ends.pop()  # the pick's own slide reaches the pose from one move earlier
+        heading, posture = _pick_at(scenario, world, lattice, ends[-1] if ends else phase.base, pose, target)
+        moves = moves_along(phase, ends)
+        last = moves[-1] if moves else phase
+        pick = Phase(pose, heading, "pick", target, posture, target, dict(last.objects), dict(last.clutter))
+        return [*moves, pick]
     return None
-
-
-def _poses_around(lattice: Lattice, point: Point) -> list[Point]:
-    """The lattice points of the searched point's cell of ``STRIDE`` x ``STRIDE``."""
-    i, j = lattice.index(point)
-    return [lattice.point(i + a, j + b) for a in range(STRIDE) for b in range(STRIDE)]
 
 
 def _pick_at(scenario, world, lattice, before: Point | None, pose: Point, target: str) -> tuple[str, str] | None:

@@ -20,7 +20,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 
-from expert.approach import FreeLattice, approach, carry, moves_along, pick_leg, shortcut
+from expert.approach import Routes, carry, fewest_moves_order, moves_along, pick_leg, shortcut
 from expert.milp.decode import SolvedPhase
 from expert.milp.problem import Problem
 from expert.plans import Phase, Plan, task_cost
@@ -34,7 +34,7 @@ Planner = Callable[..., Plan]
 ``optimal`` False may stop at SCIP's first solution; ``lower_bound`` starts the phase counts at the
 relaxation's bound. It raises :class:`~expert.milp.deadline.TimeUp` when the caller's safety stop came.
 """
-PLACE_KEEP = 1.0  # metres of path before the goal where the fallback's moves stop and the MILP takes over
+PLACE_KEEP = 1.0  # metres from the goal within which the fallback's moves stop and the MILP takes over
 
 
 def decoupled_plan(
@@ -99,18 +99,19 @@ def decoupled_apart(
     planner: Planner,
     holding: str | None = None,
 ) -> tuple[Phase, ...] | None:
-    """The decoupled plan, nearest object first, with the long legs made by :mod:`expert.approach`; None if it fails.
+    """The decoupled plan, in the order of fewest moves between deliveries
+    (:func:`expert.approach.fewest_moves_order`), with the long legs made by :mod:`expert.approach`; None if it fails.
 
-    Per object: moves along the searched path and a pick the env's rules accept
+    Per object: the fewest moves to a pick the env's rules accept
     (:func:`expert.approach.pick_leg`; when none is found, moves towards the object and
     the single-object MILP for the whole delivery from there, as :func:`decoupled_plan`),
-    then moves towards the goal stopping ``PLACE_KEEP`` metres of path before it, and the
+    then the fewest moves to within ``PLACE_KEEP`` metres of the goal, and the
     single-object MILP with the object in the hand for what is left (pushes, the place; from the pick when that fails).
     ``planner`` takes ``optimal=True`` for an optimal sub-plan (it may stop at SCIP's first
     solution otherwise): tried after a first solution of more than one step, and kept
     when it costs less.
     """
-    space = FreeLattice(scenario, lattice)
+    routes = Routes(scenario, lattice)
     current = Phase(
         scenario.robot.start,
         scenario.robot.heading,
@@ -120,43 +121,40 @@ def decoupled_apart(
         clutter={c.id: c.rect.center for c in scenario.clutter},
     )
     phases = [current]
-    todo = [holding] if holding is not None else []
-    todo += [i for i in order if i != holding]
-    while todo:
-        if current.holding is None:
-            todo.sort(key=lambda i: math.dist(current.objects[i], current.base))
-        target = todo[0]
-        leg = _one_object(scenario, space, current, target, lattice, planner)
+    jobs = {i: (current.objects[i], scenario.object(i).goal) for i in order if i != holding}
+    start = scenario.object(holding).goal if holding is not None else current.base
+    todo = ([holding] if holding is not None else []) + fewest_moves_order(routes, start, jobs)
+    for target in todo:
+        leg = _one_object(scenario, routes, current, target, lattice, planner)
         if leg is None:
             return None
         phases.extend(leg)
         current = phases[-1]
-        todo.remove(target)
     return tuple(phases)
 
 
 def _one_object(
-    scenario: Scenario, space: FreeLattice, current: Phase, target: str, lattice: Lattice, planner: Planner
+    scenario: Scenario, routes: Routes, current: Phase, target: str, lattice: Lattice, planner: Planner
 ) -> list[Phase] | None:
     """The phases after ``current`` that deliver ``target`` (see :func:`decoupled_apart`); None if none found."""
     picked: list[Phase] = []
     if current.holding is None:
         objects3 = {k: (v[0], v[1], 0.0) for k, v in current.objects.items()}
-        picked = pick_leg(space, current, target, objects3) or []
+        picked = pick_leg(routes, current, target, objects3) or []
         if not picked:  # (a push first, say): moves towards the object, then the MILP for the whole delivery
-            return _towards_then_plan(scenario, space, current, current.objects[target], target, lattice, planner)
+            return _towards_then_plan(scenario, routes, current, current.objects[target], target, lattice, planner)
     at = picked[-1] if picked else current
-    rest = _towards_then_plan(scenario, space, at, scenario.object(target).goal, target, lattice, planner)
+    rest = _towards_then_plan(scenario, routes, at, scenario.object(target).goal, target, lattice, planner)
     return None if rest is None else [*picked, *rest]
 
 
 def _towards_then_plan(
-    scenario: Scenario, space: FreeLattice, at: Phase, point: tuple[float, float], target: str, lattice: Lattice,
+    scenario: Scenario, routes: Routes, at: Phase, point: tuple[float, float], target: str, lattice: Lattice,
     planner: Planner,
 ) -> list[Phase] | None:  # fmt: skip
-    """Moves from ``at`` towards ``point`` (stopping ``PLACE_KEEP`` metres of path before it), then the MILP for
+    """The fewest moves from ``at`` to within ``PLACE_KEEP`` metres of ``point``, then the MILP for
     ``target`` from there; from ``at`` itself when that finds nothing; None if neither does."""
-    ends = approach(space, at.base, point, PLACE_KEEP)
+    ends = routes.towards(at.base, point, PLACE_KEEP)
     for start in (moves_along(at, ends), []) if ends else ([],):
         rest = _sub_plan(scenario, start[-1] if start else at, [target], planner)
         if rest is not None:
@@ -188,15 +186,16 @@ def fallback_plan(
     planner: Planner,
     holding: str | None = None,
 ) -> Plan:
-    """The decoupled plan, nearest object first, as a :class:`Plan` with status ``feasible``, or ``infeasible``.
+    """The decoupled plan (one object at a time) as a :class:`Plan` with status ``feasible``, or ``infeasible``.
 
     The answer of last resort of a caller whose planning call found no plan within its
     budget (:class:`expert.policy.ExpertPolicy`): one single-object MILP per object, no bound
     of the whole problem. It is a valid plan, never claimed optimal (``stats["optimality"]``).
     ``order``: the objects still to deliver (the held one included). Two tries, the plan with
     fewer phases kept (the likelier to fit an episode's steps), the cheaper of two as long:
-    :func:`decoupled_apart` (long legs without the MILP: comes in a few seconds
-    in an apartment), then :func:`decoupled_plan` (the MILP for each whole delivery: fewer
+    :func:`decoupled_apart` (the order of fewest moves between deliveries and the long legs
+    without the MILP: comes in a few seconds in an apartment), then :func:`decoupled_plan`
+    (nearest object first, the MILP for each whole delivery: fewer
     phases where the objects are a few phases apart); each without the moves a straight
     slide makes unnecessary (:func:`expert.approach.shortcut`). Both are budgeted by the
     sub-plans' node limits, so the answer is the same at any load. ``status`` is
@@ -204,16 +203,20 @@ def fallback_plan(
     """
     stats: dict[str, object] = {}
     phases = None
-    for how, make in (("apart", decoupled_apart), ("whole legs", _nearest_first)):
+    tries = (
+        ("fewest moves between deliveries, apart", decoupled_apart),
+        ("nearest object first, whole legs", _nearest_first),
+    )
+    for how, make in tries:
         found = make(scenario, order, lattice, planner, holding=holding)
         found = None if found is None else carry(shortcut(scenario, found))
         if found is not None and (phases is None or _shorter(scenario, found, phases)):
             phases = found
-            stats["decoupled"] = f"fallback, nearest object first, {how}"
+            stats["decoupled"] = f"fallback, {how}"
     if phases is None:
         stats["optimality"] = "no plan (status infeasible), so no claim of optimality"
         return Plan(scenario.name, "infeasible", None, (), stats)
-    stats["optimality"] = "not proven optimal: the decoupled plan (one object at a time, nearest first), no bound"
+    stats["optimality"] = "not proven optimal: the decoupled plan (one object at a time), no bound"
     stats["decoupled_phases"] = len(phases)
     return Plan(scenario.name, "feasible", task_cost(scenario, phases), phases, stats)
 

@@ -2,20 +2,27 @@
 
 The reference search walks lattice point by lattice point with the env's move rule
 (:class:`tests.expert.exhaustive.Exhaustive`), apart from the signature graph it checks.
+The fallback's routes (:mod:`expert.approach`) take that many moves, each one the env allows.
 """
 
 from __future__ import annotations
 
+import itertools
+
+import gymnasium as gym
 import numpy as np
 import pytest
 from drawn_rooms import corridor_room, diagonal_room
 from exhaustive import Exhaustive
 
+import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
+from expert.approach import Routes, fewest_moves_order
 from expert.milp.moves import UNREACHABLE, problem_moves
 from expert.milp.problem import prepare
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import draw_paper_corridor
 from fetchcarry_env.regions import IndexBox
+from fetchcarry_env.rules import move_refusal
 from fetchcarry_env.scenario import Scenario
 
 
@@ -65,3 +72,42 @@ def test_least_moves_from_the_start_and_between_boxes_are_the_point_by_point_cou
             continue
         expected = int(point_moves(search, inside_a)[inside_b].min()) if inside_b.any() else UNREACHABLE
         assert moves.steps(problem, a, b) == expected, (a, b)
+
+
+@pytest.mark.parametrize("seed", [1, 8])
+def test_a_route_takes_the_least_moves_and_the_env_accepts_each(seed: int):
+    """The fallback's legs (:class:`expert.approach.Routes`) in an apartment: the least moves, each allowed."""
+    env = gym.make("FetchCarryPush-v0", family="apartment")
+    env.reset(seed=seed)
+    scenario, lattice = env.unwrapped.scenario, env.unwrapped.lattice
+    routes = Routes(scenario, lattice)
+    start = scenario.robot.start
+    least = routes.least(start)
+    rng = np.random.default_rng(seed)
+    ends = rng.choice(np.flatnonzero(least < UNREACHABLE), size=25, replace=False)
+    assert least[ends].max() >= 4  # across the rooms
+    for end in ends:
+        route = routes.route(start, int(end))
+        assert route is not None and len(route) == least[end] and route[-1] == routes.point(int(end))
+        for a, b in itertools.pairwise([start, *route]):
+            assert move_refusal(scenario, lattice, a, b) is None, (a, b)
+
+
+def test_the_fewest_moves_order_is_the_best_of_every_order():
+    env = gym.make("FetchCarryPush-v0", family="apartment")
+    env.reset(seed=8)
+    scenario, lattice = env.unwrapped.scenario, env.unwrapped.lattice
+    routes = Routes(scenario, lattice)
+    start = scenario.robot.start
+    jobs = {o.id: (o.start, o.goal) for o in scenario.objects}
+
+    def moves(order) -> int:
+        total = int(routes.moves.from_point(start)[routes.region(jobs[order[0]][0])].min())
+        for i, j in itertools.pairwise(order):
+            total += routes.moves.between(routes.region(jobs[i][1]), routes.region(jobs[j][0]))
+        return total
+
+    every = {order: moves(order) for order in itertools.permutations(jobs)}
+    chosen = tuple(fewest_moves_order(routes, start, jobs))
+    assert sorted(chosen) == sorted(jobs) and every[chosen] == min(every.values())
+    assert max(every.values()) > min(every.values())  # the order matters here
