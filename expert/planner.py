@@ -61,11 +61,11 @@ def plan(
         max_phases: the largest number of phases (the start included) to consider.
         lattice: the env's action lattice; default ``Lattice.over(scenario.area, 0.05)``.
         holding: id of an object already in the hand at the start.
-        extra_phases: None (default): optimal over every phase count (the phase bound proves
-            that no plan with more phases is cheaper); ``0``: the paper's rule, optimal
-            among the plans with the fewest phases that admit one; ``k > 0``: among the plans
-            of at most ``N + k`` phases (``N``: the fewest). Shorter plans are in a longer
-            model as plans followed by idle phases, which cost nothing and are dropped.
+        extra_phases: None (default): optimal over every phase count (each count that may
+            hold a cheaper plan is solved, cut off at the best plan's cost; the others are
+            proven to hold none); ``0``: the paper's rule, optimal among the plans with the
+            fewest phases that admit one; ``k > 0``: among the plans of at most ``N + k``
+            phases (``N``: the fewest).
         export_models: an existing folder: every MILP solved is written there as MPS with a
             JSON of its variables' meanings and its optimum (:mod:`expert.milp.export`).
         guide: a plan for this scenario from elsewhere (a learned policy's rollout, an earlier
