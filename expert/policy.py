@@ -26,9 +26,10 @@ it (:mod:`expert.escape`).
 When a planning call ends without a plan (status ``time_limit``: its node budget, or the
 safety stop of ``time_limit`` seconds, came before a plan; the whole problem's bounds alone
 can outlast it from seven or eight objects, and in an apartment), the expert makes the
-decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a time, nearest
-first: the long legs by a lattice search and the env's own rules, :mod:`expert.approach`,
-the rest by single-object MILPs, each within its node budget; ``fallback_time_limit``
+decoupled plan of :func:`expert.decoupled.fallback_plan` (one object at a time, in the
+order of fewest moves between deliveries: the long legs by the fewest straight moves the
+env's move rule allows, :mod:`expert.approach`, the rest by single-object MILPs, each
+within its node budget; ``fallback_time_limit``
 seconds is its safety stop), and follows it: a valid plan, status ``feasible``, never
 claimed optimal; it replans in closed loop as after any plan. Every budget is counted, so
 the expert's episodes are the same at any load unless a safety stop decided (the plan's

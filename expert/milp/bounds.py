@@ -95,13 +95,14 @@ class Skeleton:
 
 
 def skeleton(problem: Problem, pairs: PairCosts | None = None, deadline: Deadline = NEVER) -> Skeleton:
-    """A lower bound on N from the order of actions and one-move connectivity (``docs/formulation.md``).
+    """A lower bound on N from the order of actions and the least moves between poses (``docs/formulation.md``).
 
     Shortest path over the states (delivered, held, pushed, last pose) where each
-    action costs the phases it needs at least: 1 when the previous pose (or the start)
-    is joined to the action's pose by one straight move (Eq. 18), 2 otherwise; a push
-    costs 1 more unless the previous pose can already be the stroke's start (a push
-    acts from the previous phase's base). Poses are boxes of lattice points; taking
+    action costs the phases it needs at least: the least number of straight moves from
+    the previous pose (or the start) to the action's pose (Eq. 18, exactly:
+    :class:`expert.milp.moves.LeastMoves`), at least 1; a push costs 1 more (its stroke)
+    unless the previous pose can already be the stroke's start (a push acts from the
+    previous phase's base). Poses are boxes of lattice points; taking
     any point of a box on entry and any on exit only makes the bound weaker, never wrong.
     The search is over ``pairs``' graph (:class:`expert.milp.skeleton_graph.SkeletonGraph`),
     which the other bounds share.

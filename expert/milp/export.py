@@ -8,8 +8,9 @@ proved. ``fetchcarry plan --export-model DIR`` writes ``<scenario>_N<phases>.mps
 finds the same optimum (``tests/expert/test_export.py``).
 
 The JSON (``fetchcarry-milp/1``): the scenario, the phase count, SCIP's status, the
-optimum (Eq. 1 of the best plan, the objective's constant included; None when none was
-proven), SCIP's dual bound and solve time, the lattice (origin and resolution, metres:
+optimum (the task cost of the best plan, the objective's constant included; None when none
+was proven; a longer count's model is written without the cutoff it was solved with),
+SCIP's dual bound and solve time, the lattice (origin and resolution, metres:
 a base coordinate ``u`` is ``origin_x + resolution * u``) and ``variables``: per
 variable name, its kind and meaning.
 """
@@ -57,7 +58,7 @@ def export_model(milp: Milp, directory: Path, solve: dict[str, Any]) -> tuple[Pa
         "scenario": milp.problem.scenario.name,
         "phases": milp.n_phases,
         "sense": "minimize",
-        "objective": "Eq. 1 of the paper: -W1 * (phases with each object delivered) + travel (metres)",
+        "objective": "the task cost: travel (metres) + W1 * (objects not at their goals after each phase k >= 1)",
         "status": status,
         "optimum": optimum,
         "dual_bound": dual if dual is not None and math.isfinite(dual) and abs(dual) < 1e19 else None,

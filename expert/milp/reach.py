@@ -8,12 +8,7 @@ octilinear convex set (edges along the axes and the diagonals, at whole lattice
 values); the lattice points of such a set are 8-connected (per column they form an
 interval whose ends move by at most one cell from column to column). Hence the points
 reachable by any sequence of moves lie in the 8-connected components of the points
-one move from the start. With corner cuts other than 45 degrees
-(``corner_detail`` above 1, :func:`expert.milp.grid.corner_directions`) the lattice points of
-such a set need not be 8-connected; each such plane ``a i + b j >= c`` is then relaxed
-to ``>= c - floor((|a| + |b|) / 2)``, which holds every lattice point whose cell the
-move's segment crosses (within half a cell of a point of the segment), an 8-connected
-chain, so the components still hold every reachable point. Options outside them can
+one move from the start. Options outside them can
 never be used; if an action loses all its options, the problem is infeasible for every
 number of phases. The planner runs this before any MILP (a few milliseconds: array
 operations over the lattice), so an object or goal that no pose reaches is reported at

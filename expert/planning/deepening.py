@@ -229,7 +229,7 @@ class Deepening:
 
 def _simple_bound(problem: Problem, n_phases: int) -> float:
     """A lower bound on the task cost of a plan of exactly ``n_phases`` phases (its last one a place): see
-    :meth:`Deepening.phase_cap`; it grows by ``W1`` per phase."""
+    :meth:`Deepening.cheaper_counts`; it grows by ``W1`` per phase."""
     todo = len(problem.deliver)
     held = 1 if problem.holding is not None else 0
     others = max(todo - 1, 0) ** 2 - (held if todo > 1 else 0)  # 1 + 3 + ... + (2m - 1), one phase less if held

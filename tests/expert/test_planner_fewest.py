@@ -54,13 +54,16 @@ def test_the_cuts_keep_the_optimum_with_an_object_in_the_hand(spec_example):
     assert validate_plan(spec_example, with_cuts, holding="bottle") == []
 
 
-def test_the_extra_phases_model_has_no_cuts():
-    """Idle phases are how shorter plans live in the N + k model: the cuts would remove them."""
-    scenario = families.draw_paper_multi(np.random.default_rng(3), 2)
-    result = plan(scenario, extra_phases=1)
-    assert result.status == "optimal"
-    solves = result.stats["solves"]
-    assert solves[0]["fewest_cuts"] is True and solves[-1]["fewest_cuts"] is False
+def test_a_longer_count_is_a_model_of_exactly_its_phases_cut_off_at_the_best_cost():
+    """Beyond the fewest phases each count is solved on its own (last a place, none idle), asked to beat the best."""
+    scenario = families.get_family("multi-2").sample(np.random.default_rng(900_009))  # 8 phases cost less than 7
+    result = plan(scenario)
+    assert result.status == "optimal" and len(result.phases) == result.stats["fewest_phases"] + 1
+    fewest, longer = result.stats["solves"][0], result.stats["solves"][-1]
+    assert fewest["phases"] == result.stats["fewest_phases"] and "cutoff" not in fewest
+    assert longer["phases"] == len(result.phases) and longer["fewest_cuts"] is True
+    assert longer["cutoff"] == pytest.approx(result.stats["fewest_phases_objective"])
+    assert result.objective < longer["cutoff"]
 
 
 def test_windows_are_unions_and_the_last_action_is_at_the_end():

@@ -103,10 +103,11 @@ def _add_plan_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--extra-phases",
         type=non_negative_int,
-        default=0,
+        default=None,
         metavar="K",
-        help="also optimise over up to K phases beyond the fewest that admit a plan (idle phases allowed); "
-        "0, the default, is the paper's rule: optimal among plans with the fewest phases",
+        help="optimise only over plans of at most K phases beyond the fewest that admit one; 0 is the paper's "
+        "rule (optimal among the plans with the fewest phases). Default: the least task cost over every "
+        "number of phases (the env's return and the benchmark's cost)",
     )
     parser.add_argument("--plot", metavar="PNG", help="also draw the plan from above into this image file")
     parser.add_argument(
