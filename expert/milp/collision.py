@@ -136,7 +136,7 @@ def add_arm_constraints(milp: Milp) -> None:
     for k in range(1, milp.n_phases):
         groups: dict[tuple[str, str], list] = {}
         for o, z in milp.z[k].items():
-            for state in problem.options[o].forbidden:
+            for state in sorted(problem.options[o].forbidden):  # a fixed order: not the set's, which hashing decides
                 groups.setdefault(state, []).append(z)
         for (clutter_id, position), terms in groups.items():
             if position == "start":

@@ -80,7 +80,7 @@ def add_pick_confusion_constraints(milp: Milp) -> None:
     for k in range(1, milp.n_phases):
         groups: dict = {}
         for o, z in milp.arm_options_at(k):
-            for state in problem.options[o].confusers:
+            for state in sorted(problem.options[o].confusers):  # a fixed order: not the set's, which hashing decides
                 groups.setdefault(state, []).append(z)
         for state, terms in groups.items():
             j = state.object_id
