@@ -97,6 +97,7 @@ class ExpertStats:
     stuck: int = 0  # freshly planned actions the env would refuse
     fallbacks: int = 0  # idle actions returned because the expert could not act
     planning_s: float = 0.0  # seconds spent in the planner (and the fallback plan)
+    clock_stopped: int = 0  # planning calls whose answer the safety stop (the wall clock) decided: not reproducible
     last_status: str | None = None  # status of the last planning call
     last_objective: float | None = None  # objective (the task cost) of the last plan found
 
@@ -134,6 +135,17 @@ class _Planned:
     plan: Plan
     seconds: float
     replanned: bool
+
+
+def clock_decided(result: Plan) -> bool:
+    """Whether the safety stop (the wall clock) decided ``result``: the planner's call, the call a fallback
+    answered, or the fallback itself (which a stop cut short)."""
+    stats = result.stats
+    return bool(
+        stats.get("clock_stopped")
+        or stats.get("planner", {}).get("clock_stopped")
+        or stats.get("fallback") == "stopped by its time limit"
+    )
 
 
 class ExpertPolicy:
@@ -332,6 +344,7 @@ class ExpertPolicy:
             failures=int(not result.found),
             decoupled=int(decoupled and result.found),
             planning_s=seconds,
+            clock_stopped=int(clock_decided(result)),
         )
         self._stats = replace(self._stats, last_status=result.status)
         if result.found:

@@ -52,6 +52,12 @@ INFO_KEYS = (
 )
 
 
+def is_timing(name: str) -> bool:
+    """Whether a figure, info or record field named ``name`` is a wall-clock time (``planning_s``, ``mask_ms``):
+    never reproducible, so left out of datasets and of comparisons between runs."""
+    return name.endswith(("_s", "_ms"))
+
+
 @dataclass(frozen=True)
 class EpisodeFigures:
     """What happened in one episode (units in comments)."""

@@ -48,10 +48,13 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 
 # ---------------------------------------------------------------------------- helpers
-def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True, runs: bool = False) -> None:
+def add_source_arguments(
+    parser: argparse.ArgumentParser, *, policy: bool = True, runs: bool = False, time_limit: float = 10.0
+) -> None:
     """``--scenario``/``--family``, ``--seed``, ``--policy`` and ``--time-limit``: where episodes come from.
 
-    With ``runs``, ``--policy`` also takes a run folder of ``fetchcarry train``.
+    With ``runs``, ``--policy`` also takes a run folder of ``fetchcarry train``. ``time_limit``
+    is the default safety stop of each planning call, seconds.
     """
     source = parser.add_mutually_exclusive_group(required=True)
     source.add_argument("--scenario", metavar="FILE", help="one fixed scenario (fetchcarry-scenario/1 JSON)")
@@ -75,9 +78,10 @@ def add_source_arguments(parser: argparse.ArgumentParser, *, policy: bool = True
     parser.add_argument(
         "--time-limit",
         type=positive_float,
-        default=10.0,
+        default=time_limit,
         metavar="S",
-        help="seconds per planning call of the expert (default 10)",
+        help=f"seconds per planning call of the expert: a safety stop, its plan is decided by a budget of SCIP "
+        f"nodes (the same at any load) unless this stop comes first (default {time_limit:g})",
     )
     parser.add_argument(
         "--capacity",

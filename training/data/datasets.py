@@ -10,10 +10,14 @@ observations, actions, rewards and flags, each episode stores:
 - its ``seed`` (Minari's episode seed) and its ``scenario`` (the ``fetchcarry-scenario/1``
   JSON) in the episode metadata, so it replays exactly, as ManiSkill stores its reset
   arguments; and the episode's figures (``outcome``, ``success``, ``delivered``,
-  ``planning_s``, ``plans``, ``replans``, ``planner_failures``, ``objective``, ...);
-- per-step infos (:data:`training.rollout.INFO_KEYS`): the seconds the planner took
-  before each step, whether it planned or replanned, whether the action was the
-  fallback, refused, or stopped at a contact, and how many objects are delivered.
+  ``plans``, ``replans``, ``planner_failures``, ``objective``, ...);
+- per-step infos (:data:`training.rollout.INFO_KEYS` but the planner's seconds): whether
+  the policy planned or replanned before the step, whether the action was the fallback,
+  refused, or stopped at a contact, and how many objects are delivered.
+
+No wall-clock time is stored (the seconds of planning, simulation and the policy are in
+the generation's report instead): the same command writes the same dataset, byte for
+byte, at any load and with any number of workers.
   A ``phases`` dataset adds each state's candidate mask (``action_mask``), whether each
   step is an expert move projected onto its nearest candidate (``projected``), and the
   episode's count of those in its metadata (``projected``).
@@ -54,7 +58,7 @@ from fetchcarry_env.observation import Capacity
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.policies.phase_expert import PROJECTED_INFO
-from training.rollout import EpisodeRecord
+from training.rollout import EpisodeRecord, is_timing
 
 AUTHOR = "fetchcarry"
 CODE_URL = "https://github.com/fetchcarry/fetchcarry"
@@ -307,7 +311,7 @@ def _buffers(staging: Staging, episodes: range, metadata: list[dict[str, Any]]) 
             rewards=record.rewards,
             terminations=record.terminations,
             truncations=record.truncations,
-            infos=record.infos,
+            infos={key: value for key, value in record.infos.items() if not is_timing(key)},
         )
 
 
@@ -317,8 +321,8 @@ def _episode_metadata(record: EpisodeRecord) -> dict[str, Any]:
     if PROJECTED_INFO in record.infos:  # phases: expert moves projected onto their nearest candidate
         metadata["projected"] = int(np.count_nonzero(record.infos[PROJECTED_INFO]))
     for key, value in record.figures.to_dict().items():
-        if key == "seed":
-            continue  # Minari stores the seed itself
+        if key == "seed" or is_timing(key):
+            continue  # Minari stores the seed itself; wall-clock times would make each run's file differ
         key = "scenario_name" if key == "scenario" else key
         metadata[key] = float("nan") if value is None else value
     return metadata
@@ -536,7 +540,6 @@ def info(dataset_id: str) -> dict[str, Any]:
     kwargs = dict(spec.kwargs) if spec is not None else {}
     scenario = kwargs.get("scenario")
     steps = np.array([e["steps"] for e in episodes])
-    planning = np.array([e["planning_s"] for e in episodes])
     projected = [int(e["projected"]) for e in episodes if "projected" in e]
     return {
         "dataset_id": dataset_id,
@@ -552,8 +555,7 @@ def info(dataset_id: str) -> dict[str, Any]:
         "success_rate": float(np.mean([bool(e["success"]) for e in episodes])),
         "outcomes": dict(Counter(e["outcome"] for e in episodes)),
         "mean_steps": float(steps.mean()),
-        "mean_planning_s": float(planning.mean()),
-        "max_planning_s": float(planning.max()),
+        "plans": int(sum(e["plans"] for e in episodes)),
         "replans": int(sum(e["replans"] for e in episodes)),
         "repairs": int(sum(e["repairs"] for e in episodes)),
         "planner_failures": int(sum(e["planner_failures"] for e in episodes)),

@@ -83,6 +83,7 @@ __all__ = [
     "GenerationConfig",
     "GenerationReport",
     "generate",
+    "run_dataset_episode",
     "run_episodes",
     "run_indexed_episode",
 ]
@@ -117,14 +118,41 @@ class StagingMismatchError(UsageError):
     """A partly generated dataset of this id was made with other options."""
 
 
+class ClockDecidedError(UsageError):
+    """An expert's plan in an episode was decided by its safety stop (the wall clock), so not reproducible."""
+
+
 def run_indexed_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
     """Run episode ``index`` of ``source`` in a fresh env (the function every backend runs)."""
-    seed = source.episode_seed(index)
+    return _run(source, index)[0]
+
+
+def run_dataset_episode(source: EpisodeSource, index: int) -> EpisodeRecord:
+    """:func:`run_indexed_episode` for a dataset: raises :class:`ClockDecidedError` when the
+    safety stop (``source.time_limit``) decided a plan of the episode, since a dataset holds only
+    episodes the planner's counted budgets decided (the same command writes the same dataset at
+    any load).
+    """
+    record, policy = _run(source, index)
+    if getattr(getattr(policy, "stats", None), "clock_stopped", 0):
+        raise ClockDecidedError(
+            f"episode {index} (seed {source.episode_seed(index)}): the safety stop of {source.time_limit:g} s "
+            "decided a plan of the expert under this machine's load, and a dataset holds only plans that the "
+            "planner's node budget decided; run the same command with a larger --time-limit (the finished "
+            "episodes are kept)"
+        )
+    return record
+
+
+def _run(source: EpisodeSource, index: int) -> tuple[EpisodeRecord, Any]:
+    """Episode ``index`` of ``source`` in a fresh env, and the policy that acted in it."""
     env = source.build_env()
     try:
-        return run_episode(env, source.build_policy(env), seed, record_masks=source.interface == "phases")
+        policy = source.build_policy(env)
+        record = run_episode(env, policy, source.episode_seed(index), record_masks=source.interface == "phases")
     finally:
         env.close()
+    return record, policy
 
 
 def generate(
@@ -174,7 +202,10 @@ def generate(
         done = {k for k in staging.staged() if k < config.episodes}
         missing = [k for k in range(config.episodes) if k not in done]
         with progress_bar(config.episodes, config.dataset_id, initial=len(done), enabled=progress) as bar:
-            episodes = run_episodes(config.source, missing, workers=workers, backend=backend, ray_address=ray_address)
+            episodes = run_episodes(
+                config.source, missing, workers=workers, backend=backend, ray_address=ray_address,
+                episode=run_dataset_episode,
+            )  # fmt: skip
             figures = _stage_episodes(staging, episodes, bar, on_episode)
         assembly_s = _assemble_and_publish(config, staging)
     return GenerationReport(

@@ -33,15 +33,11 @@ from training.evaluation.results import read_results
 from training.evaluation.runner import acting_spec, check_fits, run_tasks, with_capacity, with_observations
 from training.evaluation.splits import SPLITS, EvalScenario, get_split, split_scenarios
 from training.resolve import EXPERT, EXPERT_TIME_LIMIT, resolve_all
+from training.rollout import is_timing
 
-TIMING_FIELDS = ("decision_ms", "mask_ms", "step_ms")  # wall time per decision (milliseconds): never reproducible
+RECORD_TIMINGS = ("decision_ms", "mask_ms", "step_ms")  # a record's wall times (is_timing): never reproducible
 MISSING = "(missing)"  # how a field the recorded record lacks is shown
 BOUND_SHARE = 0.25  # an expert run is wall-clock bound where its reference took this share of its limit, or more
-
-
-def is_timing(name: str) -> bool:
-    """Whether the record field ``name`` is a wall-clock time (left out of the comparison)."""
-    return name in TIMING_FIELDS or name.endswith(("_ms", "_s"))
 
 
 def differences(recorded: dict[str, Any], rerun: dict[str, Any]) -> dict[str, tuple[Any, Any]]:
@@ -102,7 +98,7 @@ class Recheck:
     def line(self) -> str:
         others = f"; {self.not_checked} records of other policies or splits not re-run" if self.not_checked else ""
         return (f"{self.identical} of {self.checked} records identical (timings aside: "
-                f"{', '.join(TIMING_FIELDS)}){others}")  # fmt: skip
+                f"{', '.join(RECORD_TIMINGS)}){others}")  # fmt: skip
 
 
 def _shown(value: Any) -> str:
