@@ -33,6 +33,8 @@ HEAVY = {
     "pyscipopt",
     "pybullet",
     "scipy",
+    "highspy",
+    "ortools",
 }
 """Third-party packages that are slow to import or optional: the only reason for an import inside a function."""
 LONGEST_FUNCTION = 100  # lines, docstring included

@@ -115,6 +115,7 @@ def test_walls_around_cover_exactly_what_the_free_rectangles_leave():
 
 
 PINNED = {  # sha256 (first 16 hex digits) of each seed's sorted JSON, seeds 0-2: the draws of the first release
+    # (objects-9 .. objects-12: of the release that added them)
     "objects-1": ("83d342d2812acde8", "f750e27f8b17ec4c", "7121b70fa47fed0e"),
     "objects-2": ("fe11deb0f55bcb32", "f0cf65207da2e6d8", "c7ee5645eb91c2d3"),
     "objects-3": ("887f9e6a71bab9b4", "458de5e18d65061a", "203adb1b04a24808"),
@@ -123,6 +124,10 @@ PINNED = {  # sha256 (first 16 hex digits) of each seed's sorted JSON, seeds 0-2
     "objects-6": ("5f03a375f7517bee", "f4bf2fa2d0d54424", "3582ed56f699cede"),
     "objects-7": ("cc4f87bb9e913d1e", "232d161f3cd79a8b", "c77fa0fac43d7200"),
     "objects-8": ("13d496fc8648b1e9", "c6f16ee585861095", "282488ebea72ce85"),
+    "objects-9": ("c355f9d666822665", "82d3e6c9b370cbe5", "a421cd7ca206af28"),
+    "objects-10": ("74dc042b6b18d834", "5e660019b5c8e09c", "d84ba94bce59d204"),
+    "objects-11": ("465e93c5eeba9f8e", "25bf481ae5c308fc", "e91be4f877dcee5f"),
+    "objects-12": ("36a9a81e9eb226fa", "e01fa154be90c613", "7193bbc7618ae68c"),
     "apartment": ("a2ed3f84979ca48c", "e9c016fc1c9d0b1d", "374d58db72c9d984"),
     "unseen-layouts": ("8577d120f55ac6e1", "35463db726130560", "14733cd538f4a450"),
     "perturbed": ("202f4af3438169eb", "591e7bdfcee077a9", "096c89cc123dde8c"),

@@ -413,10 +413,10 @@ def test_lattice_outside_the_area_is_infeasible():
 
 @pytest.mark.parametrize("extra", [1, 2])
 def test_extra_phases_never_worse_over_the_longer_horizon(extra):
-    """With ``extra_phases=k`` the answer is optimal over plans of up to N + k phases, warm-started from the N plan.
+    """With ``extra_phases=k`` the answer is optimal over plans of up to N + k phases.
 
-    Its task cost (shorter plans padded with idle phases cost nothing more) is at most the
-    fewest-phases plan's, and SCIP's objective is that cost.
+    Its task cost is at most the fewest-phases plan's, only counts up to N + k are solved (a
+    count the bounds rule out is not), and SCIP's objective is that cost.
     """
     scenario = draw_paper_multi(np.random.default_rng(4), 2)
     fewest = plan(scenario, extra_phases=0)
@@ -425,7 +425,7 @@ def test_extra_phases_never_worse_over_the_longer_horizon(extra):
     assert longer.status == "optimal"
     n = fewest.stats["phases_tried"][-1]
     assert longer.stats["fewest_phases"] == n and f"N + {extra}" in longer.stats["optimality"]
-    assert longer.stats["solves"][-1]["phases"] == n + extra and longer.stats["solves"][-1]["warm_start"]
+    assert all(n <= count <= n + extra for count in longer.stats["phases_tried"])
     assert len(longer.phases) <= n + extra
     assert longer.objective <= fewest.objective + 1e-6
     assert longer.stats["milp_objective"] == pytest.approx(longer.objective)

@@ -18,13 +18,13 @@ import json
 import sys
 import time
 
+from expert import plan  # the checkout first on PYTHONPATH
+from fetchcarry_env.actions import Lattice
+from fetchcarry_env.scenario import Scenario
+
 
 def answer(request: dict) -> dict:
     """Plan one request with the checkout on the path; its status, size and seconds."""
-    from expert import plan
-    from fetchcarry_env.actions import Lattice
-    from fetchcarry_env.scenario import Scenario
-
     scenario = Scenario.from_dict(request["scenario"])
     lattice = None
     if request.get("lattice") is not None:
