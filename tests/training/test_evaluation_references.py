@@ -159,3 +159,21 @@ def test_a_reference_cost_that_is_no_finite_number_is_refused_naming_the_field(
     with pytest.raises(ReferenceError, match=rf"part 'test' record 1: cost = {shown} is not a finite number"):
         load_references("iid-v2", tmp_path)
     assert load_references("iid-v2", FOLDER) is not None  # the package's file is read apart from the cache's copy
+
+
+def test_check_plans_a_proven_reference_again_and_catches_a_changed_cost(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A sample is drawn from the proven references by the split's name; planning one again gives its record, and a
+    record whose cost, return or status was changed (x10, NaN aside: the loader refuses it) is a disagreement."""
+    sample = references.replan_sample("push-required-v2:dev", 3)
+    assert [item.index for item in sample] == [
+        item.index for item in references.replan_sample("push-required-v2:dev", 3)
+    ]
+    assert len(sample) == 3 and all(part_references(item.split)[item.index]["proven"] for item in sample)
+    item = sample[0]
+    limit = load_references("push-required-v2")["time_limit_s"]
+    assert references.replan_mismatches(item, limit) == []
+    tampered = [dict(r) for r in part_references(item.split)]
+    tampered[item.index].update(cost=10 * tampered[item.index]["cost"], status="feasible")
+    monkeypatch.setattr(references, "part_references", lambda split, folder=FOLDER: tampered)
+    lines = references.replan_mismatches(item, limit)
+    assert [line.split(": ")[1].split()[0] for line in lines] == ["status", "cost"]

@@ -42,10 +42,13 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import zlib
 from collections.abc import Iterator, Sequence
 from functools import cache
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from fetchcarry_env.jsontext import JsonInputError, read_json
 from training.data.generate import progress_bar
@@ -61,6 +64,8 @@ LEGACY_FORMAT = "fetchcarry-references/1"  # release 0.2's task (v1 splits): kep
 FOLDER = Path(__file__).parent / "references"
 REFERENCE_TIME_LIMIT = 600.0  # seconds per planning call: the safety stop only (the expert plans to proven optimality)
 MAX_BYTES = 8_000_000  # a reference file is read within this size
+REPLANNED = ("success", "proven", "status", "phases", "pushes", "delivered")  # fields a re-plan must give again
+COST_TOLERANCE = 1e-6  # relative: a re-planned cost or return that differs by more is a disagreement
 LEGACY_FIELDS = (
     "index",
     "seed",
@@ -365,3 +370,40 @@ def digest_mismatches(split: Split | str) -> Iterator[str]:
     for item, record in zip(split_scenarios(split, len(records)), records, strict=True):
         if scenario_digest(item.scenario) != record["digest"] or item.seed != record["seed"]:
             yield f"{split.name} episode {item.index} (seed {item.seed}, {item.source}): digest differs"
+
+
+def replan_sample(split: Split | str, count: int) -> list[EvalScenario]:
+    """``count`` scenarios of ``split``'s proven references, drawn by a generator seeded with the split's name.
+
+    Only proven references are drawn: a proven plan is the same whatever the machine's load,
+    so planning it again must give its cost, return and status exactly.
+    """
+    split = get_split(split) if isinstance(split, str) else split
+    records = part_references(split)
+    proven = [r["index"] for r in records if r["proven"]]
+    if not proven or count < 1:
+        return []
+    rng = np.random.default_rng(zlib.crc32(split.name.encode()))
+    chosen = sorted(rng.choice(proven, size=min(count, len(proven)), replace=False).tolist())
+    items = split_scenarios(split, max(chosen) + 1)
+    return [items[k] for k in chosen]
+
+
+def replan_mismatches(item: EvalScenario, time_limit: float) -> list[str]:
+    """Plan ``item`` again as its reference was planned; a line for every field that differs from the file's.
+
+    Compares the cost and return (to :data:`COST_TOLERANCE`, relative), the status, the
+    proven flag, the phases, pushes and deliveries.
+    """
+    record = part_references(item.split)[item.index]
+    fresh = reference_episode(item, time_limit)
+    where = f"{item.split} episode {item.index} (seed {item.seed}, {item.source})"
+    lines = [
+        f"{where}: {name} {record[name]!r} in the file, {fresh[name]!r} planned again"
+        for name in REPLANNED
+        if record[name] != fresh[name]
+    ]
+    for name in ("cost", "return"):
+        if not math.isclose(record[name], fresh[name], rel_tol=COST_TOLERANCE, abs_tol=COST_TOLERANCE):
+            lines.append(f"{where}: {name} {record[name]:.6f} in the file, {fresh[name]:.6f} planned again")
+    return lines
