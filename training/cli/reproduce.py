@@ -54,7 +54,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         "--budget",
         choices=tuple(BUDGETS),
         default=FULL.name,
-        help="full: the published budget (default); smoke: every stage at a toy size, about a minute",
+        help="full: the published budget (default); smoke: every stage at a toy size, a few minutes",
     )
     parser.add_argument(
         "--workers",

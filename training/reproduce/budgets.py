@@ -3,7 +3,7 @@
 Two budgets: ``full`` (the published table; 2 h 42 min measured for three training seeds
 on a shared 2-core machine with two workers, 12,491 CPU s: docs/benchmarks/learning.md,
 "Its time") and ``smoke``
-(every stage at a toy size, in about a minute: what the tests run). Every field is
+(every stage at a toy size: 145 s measured at load 2-6 on 2 cores; what the tests run). Every field is
 saved in ``DIR/reproduce.json``, so a folder is never continued with another budget. A
 budget with counts out of range raises :class:`~fetchcarry_env.errors.InputError`.
 """
