@@ -82,7 +82,7 @@ class EpisodeFigures:
     replans: int  # planning calls after the first
     repairs: int  # actions the expert moved so that the env acts on the planned item
     planner_failures: int  # planning calls that found no plan
-    objective: float | None  # objective (Eq. 1) of the first plan, if the policy plans
+    objective: float | None  # the first plan's objective (its task cost), if the policy plans
     plan_status: str | None = None  # that plan's status: "optimal" (proven), "feasible" (not proven), ...
     fallback_plans: int = 0  # planning calls answered by the expert's unproven decoupled fallback plan
     pushes: int = 0  # steps that pushed a piece of clutter (info["push"] present)

@@ -30,7 +30,7 @@ class PlannerOptions:
 
     - ``lower_bound``: start the phase counts at the relaxation's proven bound, not 3;
     - ``fewest_cuts``: the valid inequalities of a model whose one phase fewer admits no plan;
-    - ``conditional``: Eq. 1's lower bound per action, pose box and phase, as cuts and fixings.
+    - ``conditional``: the task cost's lower bound per action, pose box and phase, as cuts and fixings.
 
     First plans (SCIP's warm starts), from ``decoupled_from`` objects to deliver (one fewer with pushes):
 

@@ -16,7 +16,7 @@ from typing import Any
 from expert.plans import plan_length
 from fetchcarry_env.errors import UsageError
 from fetchcarry_env.families import FAMILY_NAMES
-from fetchcarry_env.kinematics import DELIVERY_BONUS
+from fetchcarry_env.kinematics import WAIT_COST
 from fetchcarry_env.observations import OBS_MODES
 from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
 from training.cli.commands import summary
@@ -157,23 +157,21 @@ def _figures_text(figures: Any, label: str, policy: str, time_limit: float) -> s
 
 
 def return_and_objective(figures: Any) -> list[str]:
-    """The episode's return and the planner's objective, each split into what it is made of.
+    """The episode's return and the planner's objective: the same quantity, the task cost, seen from each side.
 
-    The return is the env's reward summed (+10 per object delivered, minus the travel
-    cost and 1 per collision or invalid action: a gain); the objective is the paper's
-    Eq. 1 of the expert's first plan (the travel cost minus 10 per object for every
-    phase it stands at its goal: a cost the planner minimises, so an earlier delivery
-    counts more). They share the travel cost and differ in how delivery counts.
+    The return is the env's reward summed: minus the episode's task cost (its travel cost,
+    ``WAIT_COST`` per object for every phase it is not yet at its goal, and 1 per collision
+    or refused action). The objective is the task cost of the expert's first plan, which
+    the planner minimises: the return is minus it when the episode follows that plan.
     """
-    bonus = DELIVERY_BONUS * figures.delivered
     lines = [
-        f"return     {figures.episode_return:.2f} (the env's rewards summed, a gain: +{bonus:.2f} for "
-        f"{figures.delivered} object(s) delivered, -{bonus - figures.episode_return:.2f} travel cost and penalties)"
+        f"return     {figures.episode_return:.2f} (the env's rewards summed: minus the episode's task cost, "
+        f"its travel, {WAIT_COST:g} per object for each phase before it reached its goal, and penalties)"
     ]
     if figures.objective is not None:
         lines.append(
-            f"objective  {figures.objective:.3f} (Eq. 1 of the first plan, a cost: its travel cost, "
-            f"-{DELIVERY_BONUS:g} per object for each phase it stands at its goal)"
+            f"objective  {figures.objective:.3f} (the task cost of the first plan, which the planner minimises; "
+            "the return is minus it when the episode follows that plan)"
         )
         lines.append(f"plan       {plan_status_text(figures)}")
     return lines

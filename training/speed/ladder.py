@@ -87,7 +87,7 @@ def policy_episodes(name: str, k: int, seeds: Iterable[int]) -> Iterable[tuple[E
 
     A learned or random policy acts in the candidate phases at the family's capacity;
     ``greedy`` in the env's own actions; the ``expert`` through the candidate phases as
-    its demonstrations were recorded (its 10 s planning limit is wall-clock time).
+    its demonstrations were recorded (within its node budget, its 10 s limit a safety stop).
     """
     spec = resolve(name) if name != EXPERT else None
     interface = spec.interface if spec is not None else "phases"
