@@ -15,6 +15,7 @@ from training.evaluation.references import part_references
 from training.evaluation.splits import (
     APARTMENT_EPISODES,
     APARTMENT_V2_EPISODES,
+    DEV_EPISODES,
     OBJECTS_EPISODES,
     OBJECTS_V2_EPISODES,
     TEST_EPISODES,
@@ -77,7 +78,7 @@ def test_test_parts_hold_300_episodes_but_where_the_reference_did_not_fit() -> N
     assert all(n % len(V1_OBJECT_COUNTS) == 0 for n in OBJECTS_EPISODES.values())
     assert all(n % len(OBJECT_COUNTS) == 0 for n in OBJECTS_V2_EPISODES.values())
     assert get_split("objects:dev").episodes == OBJECTS_V2_EPISODES["dev"] == 24
-    assert get_split("apartment:dev").episodes == APARTMENT_V2_EPISODES["dev"] == 10
+    assert get_split("apartment:dev").episodes == APARTMENT_V2_EPISODES["dev"] == DEV_EPISODES
 
 
 def test_the_split_capacity_is_the_largest_of_its_families() -> None:
