@@ -15,19 +15,19 @@ are one cluster: intervals resample scenarios (:mod:`training.stats`).
 - success rate, with a 95 % interval (Wilson with one episode per scenario, the
   clustered bootstrap over scenarios with several);
 - objects delivered per episode;
-- cost ratio: the policy's travel cost over the reference's on the same scenario,
+- cost ratio: the policy's task cost over the reference's on the same scenario,
   averaged over the episodes both solved where the reference travelled at least
   :data:`MIN_RATIO_COST_M`, with a clustered bootstrap interval (never negative; none
   below two scenarios);
 - SPL-style cost-weighted success, averaged over episodes the reference solved:
   ``success * reference_cost / max(cost, reference_cost)`` (:func:`spl`; Anderson et
-  al.'s SPL with path length replaced by the paper's travel cost);
+  al.'s SPL with path length replaced by the task cost);
 - phases and pushes per episode, next to the reference's on the same scenarios;
 - invalid actions and contacts per episode;
 - time per decision: the policy's ``predict``, the env's action masks handed to it, and
   the whole step (policy, mask and the env's step), next to the planner's;
 - the normalised score ``100 * (R - R_zero) / (R_reference - R_zero)``, ``R`` the mean
-  episode return (the paper's reward summed) over the split, ``R_zero`` that of
+  episode return (the env's reward summed: minus the task cost) over the split, ``R_zero`` that of
   ``random-phases`` (uniform over the allowed candidate phases, the interface learners
   act in; ``random``, the MultiDiscrete masked policy, only where random-phases did not
   run, as :attr:`Row.score_zero` says).
@@ -48,7 +48,7 @@ from training.resolve import EXPERT, RANDOM
 from training.stats import Z_95, cluster_bootstrap, success_interval, wilson  # noqa: F401 (re-exported: training.benchmark)
 
 SCORE_ZERO = "random-phases"  # the normalised score's zero: the random policy of the candidate-phase interface
-COST_AGREES_M = 1e-3  # metres: the expert row reproduces its reference cost within this
+COST_AGREES_M = 1e-3  # task cost (its metres of travel and W1 per waiting phase): the expert row agrees within this
 MIN_RATIO_COST_M = 1e-3  # metres: a reference that travelled less has no cost ratio (it would be huge, or infinite)
 
 
@@ -238,7 +238,7 @@ def _row(
 
 
 def _disagreements(group: list[dict[str, Any]], refs: list[dict[str, Any] | None]) -> int:
-    """Scenarios where the expert's record differs from its fixed reference (success, or cost by 1 mm)."""
+    """Scenarios where the expert's record differs from its fixed reference (success, or cost by 0.001)."""
     return sum(
         1
         for r, ref in zip(group, refs, strict=True)

@@ -89,7 +89,8 @@ def legend(rows: Sequence[Row]) -> list[str]:
         "- success: episodes that delivered every object, with a 95 % interval (Wilson with one episode per "
         "scenario; with training seeds pooled, a bootstrap over scenarios that keeps each scenario's seeds "
         "together). n: episodes (and distinct scenarios when seeds are pooled).",
-        f"- cost ratio: the paper's travel cost over {reference} on the same scenario, mean over episodes both "
+        f"- cost ratio: the episode's task cost (travel, 10 per object and phase before its delivery, penalties: "
+        f"minus the return) over {reference} on the same scenario, mean over episodes both "
         "solved, with a 95 % bootstrap interval over scenarios. SPL (cost): success x reference cost / "
         "max(cost, reference cost), mean over episodes the reference solved.",
         "- phases and pushes per episode, the reference's on the same scenarios in brackets; "
@@ -97,13 +98,13 @@ def legend(rows: Sequence[Row]) -> list[str]:
         "- policy ms: wall time of the policy's decision, the expert's (the planner's) in brackets; "
         "mask ms: the env's action masks handed to the policy; step ms: the whole step (policy, mask and the "
         "env), per decision. Timings depend on the machine's load.",
-        f"- score: 100 x (R - R_zero) / (R_reference - R_zero), R the mean episode return (the paper's reward: "
-        f"+10 per delivery, minus travel cost and penalties); the zero is {' / '.join(zeros)} (uniform over the "
+        f"- score: 100 x (R - R_zero) / (R_reference - R_zero), R the mean episode return (the env's reward: "
+        f"minus the task cost); the zero is {' / '.join(zeros)} (uniform over the "
         "allowed candidate phases, the interface learners act in).",
     ]
     if disagreements:
         lines.append(
-            f"- the expert row against the fixed reference: disagreements (success, or cost by 1 mm) "
+            f"- the expert row against the fixed reference: disagreements (success, or cost by 0.001) "
             f"{'; '.join(disagreements)}."
         )
     return lines
