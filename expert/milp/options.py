@@ -69,9 +69,12 @@ class PoseOption:
         return self.box if self.push is None else self.box.shifted(*self.push.cells)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, order=True)
 class ObjectAt:
-    """A state of another object in which a pick option may not be used: ``where`` is "start" or "goal"."""
+    """A state of another object in which a pick option may not be used: ``where`` is "start" or "goal".
+
+    Ordered (by object id, then ``where``) so that the model adds an option's states in a fixed order.
+    """
 
     object_id: str
     where: str

@@ -27,6 +27,7 @@ from fetchcarry_env.families import (
 )
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject
+from training.evaluation.splits import split_scenarios
 
 
 def actions(result) -> list[tuple[str, str | None]]:
@@ -340,6 +341,15 @@ def test_the_same_plan_whatever_the_string_hashing_of_the_process():
         assert done.returncode == 0, done.stderr
         answers.add(done.stdout.strip())
     assert len(answers) == 1 and next(iter(answers)).startswith("optimal")
+
+
+def test_a_pick_two_other_objects_confuse_is_planned():
+    """more-objects-v2:test episode 239 (multi-4): a pick option two other objects' states confuse; its states
+    are added in sorted order, which raised TypeError on the unordered state type before."""
+    scenario = split_scenarios("more-objects-v2:test", 240)[239].scenario
+    result = plan(scenario)
+    check_plan(scenario, result)
+    assert result.status == "optimal"
 
 
 def test_unknown_option_is_an_error():
