@@ -30,7 +30,7 @@ import training.data.staging
 import training.evaluation.expert
 from expert.plans import Plan
 from training.data.datasets import UnknownEnvError, dataset_path, recover_replaced, trusted_env_spec
-from training.data.generate import EpisodeSource, GenerationConfig, run_indexed_episode
+from training.data.generate import DATASET_TIME_LIMIT, EpisodeSource, GenerationConfig, run_indexed_episode
 from training.data.staging import DatasetLock, Staging, StagingError
 
 DATASET_ID = "fetchcarry/hard-v0"
@@ -269,7 +269,7 @@ def test_a_corrupt_staged_episode_is_set_aside_and_made_again(capsys) -> None:
     other = "fetchcarry/hard-v1"
     staging = Staging(other)
 
-    config = GenerationConfig(other, 3, EpisodeSource(family="basic", policy="random"))
+    config = GenerationConfig(other, 3, EpisodeSource(family="basic", policy="random", time_limit=DATASET_TIME_LIMIT))
     staging.start(config.manifest())
     for index in (0, 1):
         staging.write(index, run_indexed_episode(config.source, index))

@@ -22,6 +22,7 @@ from training.cli.options import Command
 from training.cli.text import echo
 from training.data.datasets import dataset_path, info, replay
 from training.data.generate import (
+    DATASET_TIME_LIMIT,
     DatasetExistsError,
     GenerationConfig,
     GenerationReport,
@@ -52,9 +53,6 @@ GENERATE_COMMAND = Command(
 )
 
 
-GENERATE_TIME_LIMIT = 120.0  # seconds: generate's safety stop, far above what the node budget takes at load
-
-
 def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
     """Add ``generate`` and ``dataset`` to the ``fetchcarry`` parser."""
     _add_generate_options(GENERATE_COMMAND.add(commands, run_generate))
@@ -63,7 +61,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
 
 # ---------------------------------------------------------------------------- generate
 def _add_generate_options(parser: argparse.ArgumentParser) -> None:
-    add_source_arguments(parser, time_limit=GENERATE_TIME_LIMIT)  # a dataset refuses a plan the stop decided
+    add_source_arguments(parser, time_limit=DATASET_TIME_LIMIT)  # a dataset refuses a plan the stop decided
     parser.add_argument("--episodes", type=positive_int, required=True, metavar="N", help="episodes in the dataset")
     parser.add_argument(
         "--interface",

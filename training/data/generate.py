@@ -74,6 +74,7 @@ def check_training_seeds(first: int, count: int, allow_evaluation_seeds: bool = 
 
 
 __all__ = [
+    "DATASET_TIME_LIMIT",
     "DEFAULT_TIME_LIMIT",
     "ENV_ID",
     "EVAL_SEED_BASE",
@@ -89,6 +90,7 @@ __all__ = [
 ]
 
 BACKENDS = ("process", "ray")
+DATASET_TIME_LIMIT = 120.0  # seconds: generate's safety stop a planning call, far above what the node budget takes
 PARENT_CHECK_S = 0.5  # seconds between a pool worker's checks that its parent is alive
 _PR_SET_PDEATHSIG = 1  # Linux prctl option: the signal a process gets when its parent dies
 
