@@ -108,10 +108,13 @@ def test_differences_leave_out_timings_and_fields_beyond_the_benchmarks() -> Non
 
 
 def test_the_expert_is_wall_clock_bound_where_its_reference_was_slow_or_unproven() -> None:
-    expert = {"policy": "expert", "split": "apartment-v1:test", "seed": 1006500001}  # no plan proven in 60 s
+    expert = {"policy": "expert", "split": "apartment-v1:test", "seed": 1006500001, "decision_ms": 40.0, "phases": 5}
+    # (apartment-v1 seed 1006500001: no plan proven in 60 s)
     assert wall_clock_bound(expert)
     assert wall_clock_bound({**expert, "seed": 1006500000})  # proven, in 55 s
     assert not wall_clock_bound({**expert, "split": "iid-v1:test", "seed": 1000500000})  # proven in 0.06 s
     assert not wall_clock_bound({**expert, "split": "iid-v2:test", "seed": 1008500000})  # proven in 0.04 s
     assert not wall_clock_bound({**expert, "policy": "greedy"})
+    # a fast reference, but this episode's decisions took the 10 s safety stop in all: a loaded machine's
+    assert wall_clock_bound({**expert, "split": "iid-v2:test", "seed": 1008500000, "decision_ms": 2000.0})
     assert wall_clock_bound({**expert, "split": "scenarios:mine", "seed": 0})  # no fixed reference

@@ -244,11 +244,11 @@ def test_on_ray_the_smoke_gives_the_pools_records_and_weights(smoke: Path, tmp_p
     assert status == 0 and "[4/4] report" in stdout
     pool, ray = read_results(smoke / "results.json"), read_results(out / "results.json")
     assert [(r["policy"], r["split"], r["seed"]) for r in ray] == [(r["policy"], r["split"], r["seed"]) for r in pool]
-    # every field but the timings; the expert's own run only where its 10 s planning limit cannot bind
-    bound = [a for a in pool if wall_clock_bound(a)]
-    assert 0 < len(bound) <= 4 and {a["policy"] for a in bound} == {"expert"}
-    for a, b in zip(pool, ray, strict=True):
-        assert wall_clock_bound(a) or differences(a, b) == {}, (a["policy"], a["split"], a["seed"])
+    # every field but the timings; the expert's own run only where its 10 s safety stop cannot have bound (in either)
+    exempt = [wall_clock_bound(a) or wall_clock_bound(b) for a, b in zip(pool, ray, strict=True)]
+    assert any(exempt) and {a["policy"] for a, bound in zip(pool, exempt, strict=True) if bound} == {"expert"}
+    for a, b, bound in zip(pool, ray, exempt, strict=True):
+        assert bound or differences(a, b) == {}, (a["policy"], a["split"], a["seed"])
     for job in training_jobs(smoke, 1, SMOKE):  # the same weights, tensor for tensor
         name = Path(job.out).name
         assert weights_digest(Path(job.out) / "model.pt") == weights_digest(out / "runs" / name / "model.pt"), name
