@@ -162,10 +162,8 @@ def test_a_reference_cost_that_is_no_finite_number_is_refused_naming_the_field(
 def test_check_plans_a_proven_reference_again_and_catches_a_changed_cost(monkeypatch: pytest.MonkeyPatch) -> None:
     """A sample is drawn from the proven references by the split's name; planning one again gives its record, and a
     record whose cost, return or status was changed (x10, NaN aside: the loader refuses it) is a disagreement."""
-    sample = references.replan_sample("push-required-v2:dev", 3)
-    assert [item.index for item in sample] == [
-        item.index for item in references.replan_sample("push-required-v2:dev", 3)
-    ]
+    sample, again = (references.replan_sample("push-required-v2:dev", 3) for _ in range(2))
+    assert [item.index for item in sample] == [item.index for item in again]  # drawn alike every time
     assert len(sample) == 3 and all(part_references(item.split)[item.index]["proven"] for item in sample)
     item = sample[0]
     limit = load_references("push-required-v2")["time_limit_s"]
