@@ -24,9 +24,10 @@ import pytest
 from cli_run import POLL_S, SAFETY_TIMEOUT_S, cli_process, finish, run, signal_while_frozen, wait_for
 
 from training.cli.exits import INTERRUPTED, TERMINATED, run_command
-from training.data.generate import run_episodes, worker_setup
+from training.data.generate import run_episodes
 from training.data.staging import Staging
 from training.evaluation.results import RESULTS, read_results
+from training.pool import worker_setup
 
 DATASET_ID = "fetchcarry/signals-v0"
 GENERATE = ("generate", "--family", "basic", "--policy", "random", "--dataset-id", DATASET_ID, "--no-progress")

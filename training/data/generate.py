@@ -19,16 +19,9 @@ optional extra: ``pip install ray``).
 
 from __future__ import annotations
 
-import ctypes
 import json
-import multiprocessing
-import os
-import signal
-import sys
-import threading
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -54,6 +47,7 @@ from training.data.sources import (
     GenerationConfig,
 )
 from training.data.staging import DatasetLock, Staging, StagingError
+from training.pool import first_finished, local_pool
 from training.rollout import EpisodeRecord, run_episode
 
 EVAL_SEED_BASE = 1_000_000_000  # the first evaluation seed; training and dataset seeds stay below it
@@ -91,8 +85,6 @@ __all__ = [
 
 BACKENDS = ("process", "ray")
 DATASET_TIME_LIMIT = 120.0  # seconds: generate's safety stop a planning call, far above what the node budget takes
-PARENT_CHECK_S = 0.5  # seconds between a pool worker's checks that its parent is alive
-_PR_SET_PDEATHSIG = 1  # Linux prctl option: the signal a process gets when its parent dies
 
 
 @dataclass(frozen=True)
@@ -307,71 +299,11 @@ def run_episodes(
 def _run_pool(
     source: Any, indices: list[int], workers: int, episode: Callable[[Any, int], Any]
 ) -> Iterator[tuple[int, Any]]:
-    # spawn: the workers start clean (no simulator or solver state inherited from this process).
-    context = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=worker_setup, initargs=(os.getpid(),)
-    )
-    finished_cleanly = False
-    try:
+    with local_pool(workers) as pool:
         pending = {pool.submit(episode, source, index): index for index in indices}
         while pending:
-            finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in finished:
+            for future in first_finished(pending):
                 yield pending.pop(future), future.result()
-        finished_cleanly = True
-    finally:
-        if not finished_cleanly:  # Ctrl-C, an error, or the caller stopped: do not wait for running episodes
-            _terminate_workers(pool)
-        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
-
-
-def worker_setup(parent: int) -> None:
-    """Initialise a pool worker: it ignores Ctrl-C and SIGTERM (its parent stops it) and dies with its parent.
-
-    Ctrl-C and a service manager's stop signal every process of the group: the parent
-    keeps what finished and kills its workers (:func:`_terminate_workers`), so a worker
-    that died first would only break the pool under it. On Linux the kernel kills the
-    worker when the parent dies, however it dies (``PR_SET_PDEATHSIG``); elsewhere, and as
-    a second guard, a daemon thread checks every :data:`PARENT_CHECK_S` seconds that the
-    parent is still there.
-    """
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        try:
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-        except (OSError, AttributeError):
-            pass
-    if os.getppid() != parent:  # the parent died before the line above took effect
-        os._exit(1)
-    threading.Thread(target=_watch_parent, args=(parent,), name="watch-parent", daemon=True).start()
-
-
-def _watch_parent(parent: int) -> None:
-    while os.getppid() == parent:
-        time.sleep(PARENT_CHECK_S)
-    os._exit(1)
-
-
-def _terminate_workers(pool: ProcessPoolExecutor) -> None:
-    """Kill the pool's worker processes now (the executor has no public way to stop running calls).
-
-    A worker killed in the middle of sending its result leaves the pool's manager thread
-    waiting for the rest of the message, and the interpreter's exit, which joins that
-    thread, with it. This process's own copy of the result pipe's writing end is closed
-    once the workers are gone, so that the wait ends (end of file: the pool is broken).
-    """
-    processes = dict(getattr(pool, "_processes", None) or {})
-    for process in processes.values():
-        if process.is_alive():
-            process.kill()
-    for process in processes.values():
-        process.join(timeout=1.0)
-    results = getattr(pool, "_result_queue", None)
-    if results is not None:  # a worker still alive keeps its own copy: its result, if any, still arrives
-        results._writer.close()
 
 
 def _run_ray(

@@ -8,14 +8,11 @@ and die with their parent. Ray is imported only when asked for (an optional extr
 
 from __future__ import annotations
 
-import multiprocessing
-import os
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
 from training.cluster import ray_session
-from training.data.generate import _terminate_workers, worker_setup
+from training.pool import first_finished, local_pool
 
 
 def run_all(
@@ -41,25 +38,13 @@ def run_all(
 
 
 def _run_pool(function: Callable[[Any], dict], tasks: list[Any], workers: int) -> Iterator[dict[str, Any]]:
-    # The pool of ``fetchcarry generate``: spawned workers that ignore Ctrl-C and die with this process.
-    pool = ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=worker_setup,
-        initargs=(os.getpid(),),
-    )
-    finished_cleanly = False
-    try:
+    with local_pool(workers) as pool:
         pending = {pool.submit(function, task) for task in tasks}
         while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            finished = first_finished(pending)
+            pending -= finished
             for future in finished:
                 yield future.result()
-        finished_cleanly = True
-    finally:
-        if not finished_cleanly:
-            _terminate_workers(pool)
-        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
 
 
 def _run_ray(

@@ -15,18 +15,18 @@ stopped at once; what finished stays, and their checkpoints let the same call co
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
-from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from collections.abc import Iterator
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from training.cluster import ray_session
-from training.data.generate import BACKENDS, _terminate_workers, worker_setup
+from training.data.generate import BACKENDS
 from training.learners import registry
+from training.pool import first_finished, local_pool
 
 MINARI_ENV = "MINARI_DATASETS_PATH"  # where a job's datasets are: handed to every Ray task
 
@@ -103,36 +103,22 @@ def run_jobs(
 
 
 def _run_pool(jobs: list[TrainJob], workers: int) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
-    pool = ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=worker_setup,
-        initargs=(os.getpid(),),
-    )
+    """``workers`` jobs at a time on a local pool, each started once its ``needs`` are done.
+
+    Ctrl-C or an error stops the running jobs at once; their checkpoints stay.
+    """
     waiting, done = list(jobs), set()
     running: dict[Future, TrainJob] = {}
-    finished_cleanly = False
-
-    def start_ready(submit: Callable[[TrainJob], Future]) -> None:
-        for job in [j for j in waiting if set(j.needs) <= done][: workers - len(running)]:
-            waiting.remove(job)
-            running[submit(job)] = job
-
-    try:
-        start_ready(lambda job: pool.submit(run_job, job))
-        while running:
-            finished, _ = wait(running, return_when=FIRST_COMPLETED)
-            for future in finished:
+    with local_pool(workers) as pool:
+        while waiting or running:
+            for job in [j for j in waiting if set(j.needs) <= done][: workers - len(running)]:
+                waiting.remove(job)
+                running[pool.submit(run_job, job)] = job
+            for future in first_finished(running):
                 job = running.pop(future)
                 seconds = future.result()
                 done.add(job.name)
                 yield job, seconds
-            start_ready(lambda job: pool.submit(run_job, job))
-        finished_cleanly = True
-    finally:
-        if not finished_cleanly:  # Ctrl-C or an error: stop the running jobs now (their checkpoints stay)
-            _terminate_workers(pool)
-        pool.shutdown(wait=finished_cleanly, cancel_futures=True)
 
 
 def _run_ray(jobs: list[TrainJob], workers: int, address: str | None) -> Iterator[tuple[TrainJob, tuple[float, float]]]:
