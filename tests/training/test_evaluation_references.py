@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_run import run
 
 from training.evaluation import references
 from training.evaluation.metrics import fill_expert_costs, summarise
@@ -173,3 +174,30 @@ def test_check_plans_a_proven_reference_again_and_catches_a_changed_cost(monkeyp
     monkeypatch.setattr(references, "part_references", lambda split, folder=FOLDER: tampered)
     lines = references.replan_mismatches(item, limit)
     assert [line.split(": ")[1].split()[0] for line in lines] == ["status", "cost"]
+
+
+def test_an_interrupted_references_run_keeps_what_finished_and_extend_continues_it(
+    capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    original, calls = references._reference_task, []
+
+    def interrupted_at_the_second(task: tuple[float, EvalScenario]) -> dict:
+        calls.append(task[1].index)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return original(task)
+
+    command = ("references", "--split", "iid-v2", "--dev-episodes", 2, "--test-episodes", 1, "--time-limit", 5)
+    monkeypatch.setattr(references, "_reference_task", interrupted_at_the_second)
+    status, _, err = run(capsys, *command, "--out", tmp_path, "--no-progress")
+    assert status == 130 and "run the same command with --extend" in err
+    partial = references.load_references("iid-v2.partial", tmp_path)
+    assert [r["index"] for r in partial["parts"]["dev"]] == [0]  # the one episode that finished
+    calls.clear()
+    monkeypatch.setattr(references, "_reference_task", lambda task: calls.append(task[1].index) or original(task))
+    status, _, err = run(capsys, *command, "--out", tmp_path, "--no-progress", "--extend")
+    assert status == 0, err
+    assert calls == [1, 0]  # dev episode 1 and test episode 0: dev episode 0 was kept
+    content = references.load_references("iid-v2", tmp_path)
+    assert content["parts"]["dev"][0] == partial["parts"]["dev"][0]
+    assert not (tmp_path / "iid-v2.partial.json").exists()

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from training.cli.arguments import add_worker_options, non_negative_int, positive_int
 from training.cli.commands import summary
+from training.cli.exits import say
 from training.cli.options import Command
 from training.cli.text import echo
 from training.data.generate import progress_bar
@@ -24,7 +25,9 @@ from training.evaluation.references import (
     compute_references,
     digest_mismatches,
     load_references,
+    merged_records,
     part_references,
+    partial_version,
     replan_mismatches,
     replan_sample,
     write_references,
@@ -79,7 +82,8 @@ def register(commands: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--extend",
         action="store_true",
-        help="keep the records of the existing file (same scenario, same --time-limit) and compute only the others",
+        help="keep the records of the existing file and of an interrupted run (same scenario, same --time-limit) "
+        "and compute only the others",
     )
     parser.add_argument(
         "--check",
@@ -113,7 +117,18 @@ def run_references(args: argparse.Namespace) -> int:
         return _run_check(args.sample, progress=not args.no_progress)
     episodes = {k: v for k, v in (("dev", args.dev_episodes), ("test", args.test_episodes)) if v}
     for version in dict.fromkeys(s.partition(":")[0] for s in args.split):
-        started = time.perf_counter()
+        _make_references(version, args, episodes)
+    return 0
+
+
+def _make_references(version: str, args: argparse.Namespace, episodes: dict[str, int]) -> None:
+    """Compute and write ``version``'s references; an interrupted run keeps what finished in a partial file."""
+    started = time.perf_counter()
+    partial = partial_version(version)
+    keep = None
+    if args.extend:
+        keep = merged_records(load_references(version, args.out), load_references(partial, args.out))
+    try:
         content = compute_references(
             version,
             episodes=episodes,
@@ -122,11 +137,15 @@ def run_references(args: argparse.Namespace) -> int:
             ray_address=args.ray_address,
             time_limit=args.time_limit,
             progress=not args.no_progress,
-            keep=load_references(version, args.out) if args.extend else None,
+            keep=keep,
+            checkpoint=lambda so_far: write_references(so_far, args.out, name=partial),
         )
-        path = write_references(content, args.out)
-        echo(f"{path}: {_summary(content)}, {time.perf_counter() - started:.0f} s")
-    return 0
+    except KeyboardInterrupt:
+        say(f"the finished references are kept in {args.out / partial}.json: run the same command with --extend")
+        raise
+    path = write_references(content, args.out)
+    (args.out / f"{partial}.json").unlink(missing_ok=True)
+    echo(f"{path}: {_summary(content)}, {time.perf_counter() - started:.0f} s")
 
 
 def _run_check(sample: int, progress: bool) -> int:

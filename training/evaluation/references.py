@@ -43,7 +43,7 @@ import hashlib
 import json
 import math
 import zlib
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -199,6 +199,7 @@ def compute_references(
     time_limit: float = REFERENCE_TIME_LIMIT,
     progress: bool = False,
     keep: dict[str, Any] | None = None,
+    checkpoint: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """The reference file's content for split version ``version`` (``iid-v1``): every part's references.
 
@@ -208,6 +209,8 @@ def compute_references(
     ``keep`` is an earlier content of the same file (:func:`load_references`): its records
     whose seed and scenario digest are the episode's are kept, and only the other episodes
     run (a part grown by more episodes); it must have been made with ``time_limit``.
+    ``checkpoint(content)`` receives the content so far after every finished episode (an
+    interrupted run keeps them: :func:`partial_version`).
     """
     if keep is not None and (keep.get("split") != version or keep.get("time_limit_s") != time_limit):
         raise ReferenceError(
@@ -227,9 +230,30 @@ def compute_references(
         with progress_bar(len(tasks), f"references {part.name}", enabled=progress) as bar:
             for record in run_all(tasks, _reference_task, workers=workers, backend=backend, ray_address=ray_address):
                 records.append(record)
+                content["parts"][part.part] = sorted(records, key=lambda r: r["index"])
+                if checkpoint is not None:
+                    checkpoint(content)
                 bar.update(1)
         content["parts"][part.part] = sorted(records, key=lambda r: r["index"])
     return content
+
+
+def partial_version(version: str) -> str:
+    """The name under which an unfinished run of ``version``'s references keeps its records."""
+    return f"{version}.partial"
+
+
+def merged_records(*contents: dict[str, Any] | None) -> dict[str, Any] | None:
+    """One content holding every part's records of ``contents`` (a later one's record wins its index)."""
+    present = [c for c in contents if c is not None]
+    if not present:
+        return None
+    parts: dict[str, dict[int, dict[str, Any]]] = {}
+    for content in present:
+        for part, records in content["parts"].items():
+            parts.setdefault(part, {}).update({r["index"]: r for r in records})
+    head = {k: v for k, v in present[-1].items() if k != "parts"}
+    return {**head, "parts": {part: [by[i] for i in sorted(by)] for part, by in parts.items()}}
 
 
 def _kept(items: Sequence[EvalScenario], records: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -249,9 +273,12 @@ def _reference_task(task: tuple[float, EvalScenario]) -> dict[str, Any]:
     return reference_episode(item, time_limit)
 
 
-def write_references(content: dict[str, Any], folder: Path = FOLDER) -> Path:
-    """Write ``content`` as its split's reference file (one record per line, small diffs); its path."""
-    path = folder / f"{content['split']}.json"
+def write_references(content: dict[str, Any], folder: Path = FOLDER, name: str | None = None) -> Path:
+    """Write ``content`` as its split's reference file (one record per line, small diffs); its path.
+
+    ``name`` is the file's name without ``.json`` (default the split version's).
+    """
+    path = folder / f"{name or content['split']}.json"
     folder.mkdir(parents=True, exist_ok=True)
     head = {k: v for k, v in content.items() if k != "parts"}
     lines = ["{" + json.dumps(head)[1:-1] + ', "parts": {']
