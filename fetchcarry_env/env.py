@@ -228,7 +228,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
       and friction are then drawn from ``np_random`` at every reset, after the scenario.
     - ``render_mode``: ``"rgb_array"`` (headless, PyBullet's tiny renderer) or
       ``"human"`` (a PyBullet window). ``"human"`` needs a display: without one it
-      raises :class:`~fetchcarry_env.errors.UsageError`, and the instance's
+      raises :class:`~fetchcarry_env.errors.InputError`, and the instance's
       ``metadata["render_modes"]`` lists only ``"rgb_array"``.
     - ``camera``: ``"perspective"`` or ``"top_down"`` for ``rgb_array`` frames of
       ``width`` x ``height`` pixels.

@@ -7,10 +7,16 @@ a plan file, a run folder, a dataset, an unknown name or option value) derives f
 any other exception is a bug, exit 3 with a crash report.
 """
 
+import warnings
+
 
 class InputError(ValueError):
     """Bad input from a user (a missing file, a wrong option value, a broken file): no traceback, exit 2."""
 
 
-UsageError = InputError
-"""The name :class:`InputError` had before 0.2 (kept for code that imports it)."""
+def __getattr__(name: str) -> type[InputError]:
+    """``UsageError``, the name :class:`InputError` had before 0.2, still imports, with a DeprecationWarning."""
+    if name == "UsageError":
+        warnings.warn("UsageError is now InputError", DeprecationWarning, stacklevel=2)
+        return InputError
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

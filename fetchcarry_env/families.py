@@ -642,6 +642,8 @@ HELD_OUT_FAMILIES: tuple[str, ...] = ("turned-room", "turned-corridor")
 UNSEEN_LAYOUT_FAMILIES: tuple[str, ...] = ("unseen-layouts",)
 TRAINING_PREFIXES: tuple[str, ...] = ("basic", "push", "corridor", "multi", "turned-")
 """How the names of the training families' scenarios (and the turned ones) begin."""
+TRAINING_FAMILIES: tuple[str, ...] = ("basic", "push", "corridor", "multi-2")
+"""The families a learner trains on (the ``iid`` split's, the expert's and the mask's checks' default)."""
 """Topologies no training family draws, not even turned (for a new version of the ``layouts`` split)."""
 FAMILY_NAMES: tuple[str, ...] = tuple(FAMILIES)
 DEFAULT_FAMILY = "push"

@@ -20,7 +20,7 @@ import sys
 from collections.abc import Iterator
 from types import ModuleType
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 
 
 @contextlib.contextmanager
@@ -130,13 +130,13 @@ def display_available() -> bool:
 
 
 def check_display() -> None:
-    """Raise :class:`UsageError` unless a display exists for a PyBullet window.
+    """Raise :class:`InputError` unless a display exists for a PyBullet window.
 
     ``p.GUI`` without a display makes the whole process exit without an exception, so
     this is checked before any window is opened.
     """
     if not display_available():
-        raise UsageError(
+        raise InputError(
             "render_mode='human' needs a display (DISPLAY is not set); use render_mode='rgb_array' when headless"
         )
 

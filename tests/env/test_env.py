@@ -16,7 +16,7 @@ from sim_worlds import FAR, PUSH_PICK_PLACE_PLAN, action, make, push_pick_place,
 from fetchcarry_env import Capacity, ScenarioError
 from fetchcarry_env.actions import Mode
 from fetchcarry_env.env import FetchCarryPushEnv
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.kinematics import INVALID_ACTION_PENALTY, WAIT_COST, travel_cost
 from fetchcarry_env.observation import decode
 from fetchcarry_env.registration import MAX_EPISODE_STEPS
@@ -174,7 +174,7 @@ def test_a_scenario_that_does_not_fit_the_env_raises_scenario_error(spec_example
 def test_human_rendering_needs_a_display(monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    with pytest.raises(UsageError, match="needs a display"):
+    with pytest.raises(InputError, match="needs a display"):
         gym.make(ENV_ID, render_mode="human")
     headless = gym.make(ENV_ID)
     assert headless.unwrapped.metadata["render_modes"] == ["rgb_array"]  # what check_env will try

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.scenario import Scenario
 from training.data.datasets import dataset_exists, dataset_path, episode_metadata, info, replay
 from training.data.generate import ClockDecidedError, EpisodeSource, GenerationConfig, generate, run_indexed_episode
@@ -144,7 +144,7 @@ def test_an_interrupted_run_resumes_and_loses_no_episode() -> None:
 def test_an_existing_dataset_is_never_overwritten_silently() -> None:
     _generate(episodes=1)
     before = (dataset_path(DATASET_ID) / "data" / "main_data.hdf5").stat().st_mtime_ns
-    with pytest.raises(UsageError, match="already exists"):
+    with pytest.raises(InputError, match="already exists"):
         _generate(episodes=2)
     assert (dataset_path(DATASET_ID) / "data" / "main_data.hdf5").stat().st_mtime_ns == before
     assert minari.load_dataset(DATASET_ID).total_episodes == 1
@@ -154,16 +154,16 @@ def test_an_existing_dataset_is_never_overwritten_silently() -> None:
 
 def test_a_partial_run_with_other_options_is_not_mixed_in() -> None:
     Staging(DATASET_ID).start(GenerationConfig(DATASET_ID, 1, EpisodeSource(family="push", seed=99)).manifest())
-    with pytest.raises(UsageError, match="seed"):
+    with pytest.raises(InputError, match="seed"):
         _generate()
 
 
 def test_bad_ids_and_episodes_are_usage_errors(generated: str) -> None:
-    with pytest.raises(UsageError, match="not a Minari id"):
+    with pytest.raises(InputError, match="not a Minari id"):
         info("no slashes or version")
-    with pytest.raises(UsageError, match="no dataset"):
+    with pytest.raises(InputError, match="no dataset"):
         info("fetchcarry/missing-v0")
-    with pytest.raises(UsageError, match="out of range"):
+    with pytest.raises(InputError, match="out of range"):
         replay(generated, EPISODES)
 
 

@@ -13,7 +13,7 @@ from training.evaluation import references
 from training.evaluation.metrics import fill_expert_costs, summarise
 from training.evaluation.references import (
     FOLDER,
-    ReferenceError,
+    ReferenceFileError,
     compute_references,
     digest_mismatches,
     load_references,
@@ -51,7 +51,7 @@ def test_a_changed_sampler_is_caught_on_a_late_scenario(monkeypatch: pytest.Monk
     monkeypatch.setattr(references, "split_scenarios", changed)
     assert [line.split(":")[1].split()[0] for line in digest_mismatches("iid-v2:test")] == ["test"]
     item = split_scenarios("iid-v2:test", 251)[250]
-    with pytest.raises(references.ReferenceError, match="sampler changed"):
+    with pytest.raises(references.ReferenceFileError, match="sampler changed"):
         reference_for(
             EvalScenario(250, item.split, item.source, item.seed, split_scenarios("iid-v2:dev", 1)[0].scenario)
         )
@@ -64,7 +64,7 @@ def test_a_v1_split_loads_as_legacy_and_is_not_scored_against() -> None:
     assert legacy["format"] == references.LEGACY_FORMAT and len(legacy["parts"]["test"]) == 300
     assert "travel" not in legacy["parts"]["test"][0]
     assert load_references("iid-v2")["format"] == references.FORMAT
-    with pytest.raises(ReferenceError, match="benchmark iid-v2:test instead"):
+    with pytest.raises(ReferenceFileError, match="benchmark iid-v2:test instead"):
         reference_for(split_scenarios("iid-v1:test", 1)[0])
 
 
@@ -155,7 +155,7 @@ def test_a_reference_cost_that_is_no_finite_number_is_refused_naming_the_field(
     assert f'"cost": {token}' in records[1]
     head = '{"format": "fetchcarry-references/2", "split": "iid-v2", "time_limit_s": 600.0, "parts": '
     (tmp_path / "iid-v2.json").write_text(head + '{"test": [' + ",\n".join(records) + "]}}")
-    with pytest.raises(ReferenceError, match=rf"part 'test' record 1: cost = {shown} is not a finite number"):
+    with pytest.raises(ReferenceFileError, match=rf"part 'test' record 1: cost = {shown} is not a finite number"):
         load_references("iid-v2", tmp_path)
     assert load_references("iid-v2", FOLDER) is not None  # the package's file is read apart from the cache's copy
 

@@ -51,6 +51,19 @@ def test_bad_options_of_a_registered_learner_exit_2(first_allowed, capsys, tmp_p
     assert status == 2 and "expected a whole number" in err
 
 
+def test_a_registered_learner_refuses_evaluation_seeds_by_its_record(first_allowed, capsys, tmp_path: Path) -> None:
+    command = ("train", "first-allowed", "--family", "basic", "--seed", 10**9)
+    status, _, err = run(capsys, *command, "--out", tmp_path / "a")
+    assert status == 2 and "evaluation seeds" in err and not (tmp_path / "a").exists()
+    status, _, err = run(capsys, *command, "--allow-evaluation-seeds", "--out", tmp_path / "b")
+    assert status == 0, err
+
+
+def test_a_learner_must_say_how_it_refuses_evaluation_data() -> None:
+    with pytest.raises(TypeError, match="refuse"):
+        registry.Learner("x", throwaway_learner.FirstAllowedOptions, train="m:f", help="h")  # type: ignore[call-arg]
+
+
 def test_unregistered_kinds_are_unknown(first_allowed, tmp_path: Path) -> None:
     registry.unregister(first_allowed.kind)
     assert registry.kinds() == ("bc", "dagger", "ppo", "ensemble")

@@ -12,7 +12,7 @@ from argparse import Namespace
 import pytest
 from cli_run import run
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from training.cli import main as fetchcarry
 from training.cli.bench import run_bench_push, run_planner
 from training.data.sources import EpisodeSource
@@ -124,7 +124,7 @@ def test_planner_json_lists_every_run():
 
 
 def test_planner_unknown_group_is_a_usage_error():
-    with pytest.raises(UsageError, match="nope"):
+    with pytest.raises(InputError, match="nope"):
         run_planner(planner_args(only=["nope"]), io.StringIO())
 
 

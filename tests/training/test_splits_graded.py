@@ -147,5 +147,5 @@ def test_extending_a_reference_file_keeps_its_records_and_runs_only_the_new_epis
     assert content["parts"]["dev"][0] == first  # kept as it was, planning time and all
     assert calls == [1, 0]  # dev episode 1 (the kept record is another scenario's), then test episode 0
     assert content["parts"]["dev"][1]["seed"] == first["seed"] + 1
-    with pytest.raises(references.ReferenceError, match=r"6 s limit, not of iid-v2 with 5\.0 s"):
+    with pytest.raises(references.ReferenceFileError, match=r"6 s limit, not of iid-v2 with 5\.0 s"):
         references.compute_references("iid-v2", episodes={"dev": 1, "test": 1}, time_limit=6.0, keep=kept)

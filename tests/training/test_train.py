@@ -327,7 +327,7 @@ def test_learner_families_on_the_command_line(capsys, tmp_path: Path) -> None:
 
 
 def test_dagger_can_start_from_a_phases_dataset(phases_dataset: str, tmp_path: Path) -> None:
-    from fetchcarry_env.errors import UsageError
+    from fetchcarry_env.errors import InputError
 
     options = DaggerOptions(**{**TINY_DAGGER.__dict__, "dataset": phases_dataset, "demonstrations": 3})
     rows = train_dagger("basic", options, TINY_NET, tmp_path / "run", progress=False)
@@ -336,7 +336,7 @@ def test_dagger_can_start_from_a_phases_dataset(phases_dataset: str, tmp_path: P
     assert rows[1]["expert_labels"] > rows[0]["expert_labels"]  # then the learner's states, labelled as before
     saved = runs.load_checkpoint(tmp_path / "run")
     np.testing.assert_array_equal(saved["labels"].numpy()[: len(demonstrations)], demonstrations.labels)
-    with pytest.raises(UsageError, match="not the first 99"):
+    with pytest.raises(InputError, match="not the first 99"):
         train_dagger("basic", DaggerOptions(**{**options.__dict__, "demonstrations": 99}), TINY_NET,
                      tmp_path / "too-many", progress=False)  # fmt: skip
     assert not (tmp_path / "too-many").exists()

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from fetchcarry_env.errors import InputError
+from training.data.generate import check_training_seeds
 from training.learners.options import check_family, option, seed_option
 from training.learners.registry import Learner
 
@@ -41,6 +42,11 @@ def train(family: str, seed: int, out: str) -> None:
     config = {"kind": KIND, "interface": "phases", "options": asdict(FirstAllowedOptions(family, seed)),
               "complete": True}  # fmt: skip
     (folder / "config.json").write_text(json.dumps(config, indent=2) + "\n")
+
+
+def refuse(options: FirstAllowedOptions) -> None:
+    """Its refusal of evaluation data: ``--seed`` (the seed its run would draw episodes from) below 10^9."""
+    check_training_seeds(options.seed, 1)
 
 
 class FirstAllowedPolicy:
@@ -71,5 +77,6 @@ LEARNER = Learner(
     train=f"{__name__}:train",
     load=f"{__name__}:load",
     help="the first allowed candidate (a test's throwaway learner)",
+    refuse=f"{__name__}:refuse",
     resumable=False,
 )

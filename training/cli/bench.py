@@ -17,7 +17,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, TextIO
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from training.cli.arguments import positive_float, positive_int
 from training.cli.episodes import families
 from training.cli.files import check_readable, check_writable
@@ -212,13 +212,13 @@ def _register_planner(bench: argparse._SubParsersAction) -> None:
 
 
 def _planner_rows(args: argparse.Namespace) -> list[planner_speed.Case]:
-    """The cases ``--scale`` and ``--only`` choose; :class:`UsageError` for an unknown group."""
+    """The cases ``--scale`` and ``--only`` choose; :class:`InputError` for an unknown group."""
     rows = planner_speed.cases(args.scale)
     if args.only:
         known = {c.group for c in rows}
         unknown = [g for g in args.only if g not in known]
         if unknown:
-            raise UsageError(f"unknown benchmark group(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
+            raise InputError(f"unknown benchmark group(s) {', '.join(unknown)}; known: {', '.join(sorted(known))}")
         rows = [c for c in rows if c.group in args.only]
     return rows
 
@@ -344,14 +344,14 @@ def _print_time_shares(rows: list[planner_speed.Case], runs: list[planner_speed.
 
 # ---------------------------------------------------------------------------- records of bench anytime and push
 def _records(path: Path, command: str, keys: tuple[str, ...]) -> list[dict[str, Any]]:
-    """The records of an earlier ``bench COMMAND --out``; :class:`UsageError` names what is wrong."""
+    """The records of an earlier ``bench COMMAND --out``; :class:`InputError` names what is wrong."""
     check_readable(path, "records file")
     try:
         records = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise UsageError(f"{path}: not JSON written by bench {command} --out ({error})") from None
+        raise InputError(f"{path}: not JSON written by bench {command} --out ({error})") from None
     if not isinstance(records, list) or not all(isinstance(r, dict) and set(keys) <= r.keys() for r in records):
-        raise UsageError(f"{path}: not a list of bench {command} records (each with {', '.join(keys)})")
+        raise InputError(f"{path}: not a list of bench {command} records (each with {', '.join(keys)})")
     return records
 
 
@@ -600,13 +600,13 @@ def _register_ppo(bench: argparse._SubParsersAction) -> None:
 
 
 def _env_counts(text: str) -> list[int]:
-    """``1,2`` -> ``[1, 2]``; :class:`UsageError` unless each is a whole number from 1 to ``MAX_ENVS``."""
+    """``1,2`` -> ``[1, 2]``; :class:`InputError` unless each is a whole number from 1 to ``MAX_ENVS``."""
     try:
         counts = [int(part) for part in text.split(",") if part.strip()]
     except ValueError:
         counts = []
     if not counts or not all(1 <= n <= MAX_ENVS for n in counts):
-        raise UsageError(f"--envs: expected numbers from 1 to {MAX_ENVS} separated by commas, got {text!r}")
+        raise InputError(f"--envs: expected numbers from 1 to {MAX_ENVS} separated by commas, got {text!r}")
     return counts
 
 
@@ -617,7 +617,7 @@ def run_bench_ppo(args: argparse.Namespace, out: TextIO | None = None) -> int:
     counts = _env_counts(args.envs)
     started = _load()
     if max(counts) > args.n_steps:
-        raise UsageError(f"--envs: at most --n-steps ({args.n_steps}) envs")
+        raise InputError(f"--envs: at most --n-steps ({args.n_steps}) envs")
     options = PPOOptions(n_steps=args.n_steps, batch_size=min(PPOOptions.batch_size, args.n_steps))
     results = [ppo_speed.ppo_speed(args.family, n, args.steps, options) for n in counts]
     if args.json:

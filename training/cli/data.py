@@ -1,7 +1,7 @@
 """The dataset commands: ``fetchcarry generate`` and ``fetchcarry dataset info|replay|render``.
 
 Exit statuses: 0 success; 1 a replay that did not reproduce; 2 bad input (raised as
-``UsageError`` and friends, turned into one short message by :func:`training.cli.main`);
+``InputError`` and friends, turned into one short message by :func:`training.cli.main`);
 130 interrupted (``generate`` resumes when run again).
 """
 
@@ -13,7 +13,7 @@ import sys
 from dataclasses import asdict
 from pathlib import Path
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from training.cli.arguments import add_worker_options, positive_int, whole_number
 from training.cli.commands import summary
 from training.cli.episodes import add_obs_mode_argument, add_source_arguments, episode_source
@@ -100,9 +100,9 @@ def run_generate(args: argparse.Namespace) -> int:
     if args.models:
         return run_generate_models(args)
     if args.dataset_id is None:
-        raise UsageError("give --dataset-id ID (or --models --out DIR for a collection of MILPs)")
+        raise InputError("give --dataset-id ID (or --models --out DIR for a collection of MILPs)")
     if args.out is not None:
-        raise UsageError("--out is for --models; a dataset goes to --dataset-id")
+        raise InputError("--out is for --models; a dataset goes to --dataset-id")
     config = GenerationConfig(dataset_id=args.dataset_id, episodes=args.episodes, source=episode_source(args))
     if config.source.scenario is not None:
         refuse_split_scenario(config.source.scenario, args.allow_evaluation_seeds)
@@ -122,13 +122,13 @@ def run_generate(args: argparse.Namespace) -> int:
         say(f"interrupted: {staged} of {config.episodes} episodes are staged; run the same command again to resume")
         return INTERRUPTED
     except DatasetExistsError as error:
-        raise UsageError(f"{error}: choose another id, or pass --overwrite to replace it") from None
+        raise InputError(f"{error}: choose another id, or pass --overwrite to replace it") from None
     except StagingMismatchError as error:
-        raise UsageError(
+        raise InputError(
             f"{error}: run the same command as before to resume it, or pass --overwrite to start again"
         ) from None
     except StagingError as error:
-        raise UsageError(f"{error}; pass --overwrite to start the dataset again") from None
+        raise InputError(f"{error}; pass --overwrite to start the dataset again") from None
     for file in report.set_aside:
         say(f"warning: the staged episode {file} could not be read: set aside in its folder's corrupt/ and made again")
     _print_generation(report, args.json)
@@ -138,11 +138,11 @@ def run_generate(args: argparse.Namespace) -> int:
 def run_generate_models(args: argparse.Namespace) -> int:
     """``fetchcarry generate --models``: 0 the collection is complete, 130 interrupted (finished seeds are kept)."""
     if args.family is None:
-        raise UsageError("--models takes --family NAME (a collection is made of a family's seeds)")
+        raise InputError("--models takes --family NAME (a collection is made of a family's seeds)")
     if args.out is None:
-        raise UsageError("--models writes into a folder: give --out DIR")
+        raise InputError("--models writes into a folder: give --out DIR")
     if args.dataset_id is not None:
-        raise UsageError("--models writes no dataset: give --out DIR, not --dataset-id")
+        raise InputError("--models writes no dataset: give --out DIR, not --dataset-id")
     config = CollectionConfig(args.family, args.seed, args.episodes, args.time_limit)
     try:
         report = generate_models(
@@ -267,7 +267,7 @@ def run_dataset_render(args: argparse.Namespace) -> int:
     wrong = [k for k in options if mode_of[k] != args.obs_mode]
     if wrong:
         flags = ", ".join("--" + k.replace("_", "-") for k in wrong)
-        raise UsageError(f"{flags} do(es) not apply to --obs-mode {args.obs_mode}")
+        raise InputError(f"{flags} do(es) not apply to --obs-mode {args.obs_mode}")
     report = render_dataset(
         args.dataset_id, args.obs_mode, args.out, image_options=options, overwrite=args.overwrite,
         progress=not args.no_progress,

@@ -1,7 +1,7 @@
 """The episode commands: ``fetchcarry rollout``, ``fetchcarry demo`` and ``fetchcarry evaluate-expert``.
 
 Exit statuses: 0 success; 1 a negative answer (an episode that did not deliver
-everything, an expert below its success goal); 2 bad input (raised as ``UsageError``
+everything, an expert below its success goal); 2 bad input (raised as ``InputError``
 and friends, turned into one short message by :func:`training.cli.main`).
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from expert.plans import plan_length
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import WAIT_COST
 from fetchcarry_env.observations import OBS_MODES
@@ -115,7 +115,7 @@ def episode_source(args: argparse.Namespace, policy: str | None = None) -> Episo
     scenario = None if args.scenario is None else load_scenario(Path(args.scenario)).to_dict()
     policy = policy or args.policy
     if policy not in ("expert", "random"):
-        raise UsageError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
+        raise InputError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
     return EpisodeSource(
         family=args.family,
         scenario=scenario,
@@ -257,7 +257,7 @@ def _run_folder(policy: str) -> Path | None:
         return None
     path = Path(policy)
     if not path.is_dir():
-        raise UsageError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
+        raise InputError(f"unknown policy {policy!r}: give expert, random or a run folder of fetchcarry train")
     return path
 
 
@@ -302,7 +302,7 @@ def _run_saved_plan(args: argparse.Namespace, picture: Path | None) -> int:
     from training.policies.saved_plan import SavedPlanPolicy
 
     if args.scenario is None or args.policy != "expert" or args.obs_mode not in (None, "state"):
-        raise UsageError("--plan executes a saved plan on --scenario FILE (not a --family), without --policy")
+        raise InputError("--plan executes a saved plan on --scenario FILE (not a --family), without --policy")
     plan = load_plan(Path(args.plan))
     source = episode_source(args, policy="expert")
     scenario = load_scenario(Path(args.scenario))
@@ -404,11 +404,11 @@ def _register_evaluate(commands: argparse._SubParsersAction) -> None:
 
 
 def families(text: str) -> tuple[str, ...]:
-    """The family names of ``--families`` (comma-separated); an unknown one is a ``UsageError``."""
+    """The family names of ``--families`` (comma-separated); an unknown one is a ``InputError``."""
     names = tuple(name.strip() for name in text.split(",") if name.strip())
     unknown = [name for name in names if name not in FAMILY_NAMES]
     if not names or unknown:
-        raise UsageError(f"unknown family {', '.join(unknown) or '(none)'}: choose from {', '.join(FAMILY_NAMES)}")
+        raise InputError(f"unknown family {', '.join(unknown) or '(none)'}: choose from {', '.join(FAMILY_NAMES)}")
     return names
 
 

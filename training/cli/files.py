@@ -1,11 +1,11 @@
-"""Reading and writing the files a command names: a missing, unreadable or misplaced file is a ``UsageError``."""
+"""Reading and writing the files a command names: a missing, unreadable or misplaced file is a ``InputError``."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from expert.plans import Plan, PlanFormatError
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import read_json
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.pictures.files import check_picture_path
@@ -14,7 +14,7 @@ MAX_PEEK_BYTES = 50_000_000  # files larger than this are not opened just to gue
 
 
 def load_scenario(path: Path) -> Scenario:
-    """Read a scenario file; a missing or unreadable file is a ``UsageError``, a bad one a ``ScenarioError``."""
+    """Read a scenario file; a missing or unreadable file is a ``InputError``, a bad one a ``ScenarioError``."""
     check_readable(path, "scenario file")
     try:
         return Scenario.load(path)
@@ -23,7 +23,7 @@ def load_scenario(path: Path) -> Scenario:
 
 
 def load_plan(path: Path) -> Plan:
-    """Read a plan file; a missing file is a ``UsageError``, a malformed one a ``PlanFormatError``."""
+    """Read a plan file; a missing file is a ``InputError``, a malformed one a ``PlanFormatError``."""
     check_readable(path, "plan file")
     try:
         return Plan.load(path)
@@ -42,28 +42,28 @@ def file_format(path: Path) -> str | None:
 
 
 def check_readable(path: Path, what: str) -> None:
-    """Raise ``UsageError`` unless ``path`` is an existing file."""
+    """Raise ``InputError`` unless ``path`` is an existing file."""
     if not path.exists():
-        raise UsageError(f"{what} not found: {path}")
+        raise InputError(f"{what} not found: {path}")
     if path.is_dir():
-        raise UsageError(f"{what} is a directory, not a file: {path}")
+        raise InputError(f"{what} is a directory, not a file: {path}")
 
 
 def check_writable(path: Path, what: str) -> None:
-    """Raise ``UsageError`` unless ``path`` names a file in an existing folder."""
+    """Raise ``InputError`` unless ``path`` names a file in an existing folder."""
     if path.is_dir():
-        raise UsageError(f"{what} {path} is a directory; give a file name")
+        raise InputError(f"{what} {path} is a directory; give a file name")
     if not path.parent.is_dir():
-        raise UsageError(f"{what} {path}: the directory {path.parent} does not exist")
+        raise InputError(f"{what} {path}: the directory {path.parent} does not exist")
 
 
 def check_plot_format(path: Path) -> None:
-    """Raise ``UsageError`` unless matplotlib can write ``path``'s format."""
+    """Raise ``InputError`` unless matplotlib can write ``path``'s format."""
     from matplotlib.backend_bases import FigureCanvasBase  # matplotlib: only when a plot is asked for
 
     formats = FigureCanvasBase.get_supported_filetypes()
     if path.suffix.lower().lstrip(".") not in formats:
-        raise UsageError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
+        raise InputError(f"cannot draw into {path}: give a file ending in one of .{', .'.join(sorted(formats))}")
 
 
 def check_picture(path: str | None) -> Path | None:
@@ -75,5 +75,5 @@ def check_picture(path: str | None) -> Path | None:
         return None
     picture = check_picture_path(path)
     if not picture.parent.is_dir():
-        raise UsageError(f"cannot write {picture}: folder {picture.parent} does not exist")
+        raise InputError(f"cannot write {picture}: folder {picture.parent} does not exist")
     return picture

@@ -3,7 +3,7 @@
 Exit statuses: ``plan`` 0 when a plan was found and 1 when none (infeasible, time
 limit); ``validate`` 0 for a valid plan (or, given no plan, a valid scenario) and 1 for
 an invalid one; 2 for bad input
-(raised here as ``UsageError``, ``ScenarioError`` or ``PlanFormatError`` and turned
+(raised here as ``InputError``, ``ScenarioError`` or ``PlanFormatError`` and turned
 into one short message by :func:`training.cli.main`).
 """
 
@@ -17,7 +17,7 @@ from typing import Any
 
 from expert.plans import Phase, Plan, phase_rows, plan_length
 from expert.validate import env_refusals, validate_plan
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.scenario import Scenario, ScenarioError
 from training.cli.arguments import non_negative_int, positive_float, positive_int
 from training.cli.commands import summary
@@ -149,7 +149,7 @@ def run_plan(args: argparse.Namespace) -> int:
 
     export_dir = _export_dir(args.export_model)
     if args.guide_branching and args.guide is None:
-        raise UsageError("--guide-branching needs --guide GUIDE")
+        raise InputError("--guide-branching needs --guide GUIDE")
     guide = None if args.guide is None else load_guide(args.guide, scenario)
 
     from expert.planner import plan as run_planner  # imported here: pyscipopt costs about 0.15 s
@@ -195,7 +195,7 @@ def load_guide(text: str, scenario: Scenario) -> Plan:
     try:
         return rollout_plan(text, scenario)
     except BenchmarkError as error:
-        raise UsageError(f"--guide {text}: not a plan file, and {error}") from None
+        raise InputError(f"--guide {text}: not a plan file, and {error}") from None
 
 
 def _guide_text(plan: Plan, guide: Plan | None) -> str | None:
@@ -221,11 +221,11 @@ def _export_dir(path: str | None) -> Path | None:
         return None
     folder = Path(path)
     if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--export-model {folder}: not a folder")
+        raise InputError(f"--export-model {folder}: not a folder")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise UsageError(f"--export-model {folder}: cannot make the folder ({error.strerror})") from None
+        raise InputError(f"--export-model {folder}: cannot make the folder ({error.strerror})") from None
     return folder
 
 
@@ -390,7 +390,7 @@ def _validate_scenario(path: Path, plot_path: Path | None, as_json: bool) -> int
     check_readable(path, "scenario file")
     declared = file_format(path)
     if declared == PLAN_FORMAT:
-        raise UsageError(
+        raise InputError(
             f"{path} is a plan ({PLAN_FORMAT}), not a scenario; give its scenario first: "
             "fetchcarry validate SCENARIO PLAN"
         )
@@ -434,9 +434,9 @@ def _counts(scenario: Scenario) -> str:
 
 
 def _check_not_swapped(scenario_path: Path, plan_path: Path) -> None:
-    """Raise ``UsageError`` when the scenario argument holds a plan and the plan argument a scenario."""
+    """Raise ``InputError`` when the scenario argument holds a plan and the plan argument a scenario."""
     if file_format(scenario_path) == PLAN_FORMAT and file_format(plan_path) == SCENARIO_FORMAT:
-        raise UsageError(
+        raise InputError(
             f"the two files look swapped: {scenario_path} is a plan and {plan_path} a scenario; "
             "give the scenario first: fetchcarry validate SCENARIO PLAN"
         )

@@ -1,18 +1,7 @@
-"""``fetchcarry train bc|dagger|ppo`` refuse to train on the benchmark's evaluation seeds or split scenarios.
+"""``fetchcarry train KIND`` refuses to train on the benchmark's evaluation data unless asked on purpose.
 
-The splits' episodes use seeds from :data:`~training.data.generate.EVAL_SEED_BASE` (10^9)
-and the published split scenarios (:func:`~training.evaluation.protocol.refuse_split_scenario`
-knows their digests). A learner trains on such data only with ``--allow-evaluation-seeds``
-(research on purpose), as ``fetchcarry generate`` does:
-
-- ``ppo``: env ``i``'s first episode uses seed ``--seed + i`` (the later ones come from
-  the env's own generator): ``--seed .. --seed + envs - 1`` must stay below 10^9;
-- ``dagger``: its own episodes use fixed seeds far below 10^9 (demonstrations from 0,
-  learner episodes from 500,000), and ``--dataset`` is checked as for bc;
-- ``bc``: the episodes it reads (the first ``--episodes``, or all) must have seeds below
-  10^9, and the dataset's fixed scenario (if it was recorded on one) must not be a split's.
-
-A refusal is an :class:`~training.data.generate.EvaluationSeedError` (bad input: exit 2).
+Each learner's registry record names its refusal (:mod:`training.learners.refusals`);
+``--allow-evaluation-seeds`` skips it, as it does for ``fetchcarry generate``.
 """
 
 from __future__ import annotations
@@ -20,8 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from fetchcarry_env.errors import InputError
-from training.data.generate import EVAL_SEED_BASE, EvaluationSeedError, check_training_seeds
+from training.learners import registry
 
 FLAG_HELP = (
     "allow training on the benchmark's evaluation seeds (from 10^9) or a split's scenario: research on purpose "
@@ -34,55 +22,8 @@ def add_refusal_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--allow-evaluation-seeds", action="store_true", help=FLAG_HELP)
 
 
-def refuse_evaluation_data(kind: str, options: Any, allow: bool) -> None:
-    """Raise :class:`EvaluationSeedError` if the ``kind`` run of ``options`` would train on evaluation data."""
-    if allow or kind not in CHECKS:
+def refuse_evaluation_data(learner: registry.Learner, options: Any, allow: bool) -> None:
+    """Raise :class:`~training.data.generate.EvaluationSeedError` if ``options`` would train on evaluation data."""
+    if allow or learner.refuse is None:
         return
-    CHECKS[kind](options)
-
-
-def _ppo(run: Any) -> None:
-    check_training_seeds(run.options.seed, run.options.envs)
-
-
-def _dagger(run: Any) -> None:
-    from training.learners.dagger import LEARNER_SEED_BASE
-
-    check_training_seeds(0, run.options.demonstrations)
-    check_training_seeds(LEARNER_SEED_BASE, run.options.iterations * run.options.episodes_per_iteration)
-    if run.options.dataset is not None:
-        refuse_dataset(run.options.dataset, run.options.demonstrations)
-
-
-def _bc(run: Any) -> None:
-    refuse_dataset(run.dataset, run.episodes)
-
-
-def refuse_dataset(dataset_id: str, episodes: int | None) -> None:
-    """Refuse a dataset whose first ``episodes`` (None: all) reach the evaluation seeds or stand on a split scenario.
-
-    A dataset that does not load is left to the learner, which says what is wrong with it.
-    """
-    from training.data.datasets import episode_metadata, load
-    from training.evaluation.protocol import refuse_split_scenario
-
-    try:
-        dataset = load(dataset_id)
-    except InputError:  # no such dataset, or a broken one: the learner's own reading says so
-        return
-    count = dataset.total_episodes if episodes is None else min(episodes, dataset.total_episodes)
-    seeds = [int(episode_metadata(dataset, k)["seed"]) for k in range(count)]
-    reached = [seed for seed in seeds if seed >= EVAL_SEED_BASE]
-    if reached:
-        raise EvaluationSeedError(
-            f"dataset {dataset_id!r} holds {len(reached)} episodes of evaluation seeds (from {EVAL_SEED_BASE}, the "
-            f"benchmark's splits; the first: {reached[0]}): training on them is refused (pass "
-            "--allow-evaluation-seeds to use them on purpose)"
-        )
-    spec = dataset.spec.env_spec
-    scenario = (spec.kwargs or {}).get("scenario") if spec is not None else None
-    if isinstance(scenario, dict):
-        refuse_split_scenario(scenario)
-
-
-CHECKS = {"bc": _bc, "dagger": _dagger, "ppo": _ppo}  # the learners that train on episodes of seeds or a dataset
+    registry.resolve(learner.refuse)(options)

@@ -30,7 +30,7 @@ from fetchcarry_env.errors import InputError
 from training.cli.arguments import positive_float, positive_int, whole_number
 from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, ignore_unraisable, say
-from training.cli.refusals import CHECKS, add_refusal_option, refuse_evaluation_data
+from training.cli.refusals import add_refusal_option, refuse_evaluation_data
 from training.cli.text import echo
 from training.learners import registry
 
@@ -57,7 +57,7 @@ def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAc
         command = kinds.add_parser(learner.kind, help=learner.help, description=learner.description, epilog=epilog)
         add_options(command, learner.options)
         add_run_options(command, resumable=learner.resumable, pool=learner.pool)
-        if learner.kind in CHECKS:
+        if learner.refuse is not None:
             add_refusal_option(command)
         command.set_defaults(handler=run_train)
 
@@ -171,7 +171,7 @@ def run_train(args: argparse.Namespace) -> int:
     """Train the options of ``args`` with its learner; print what was trained (Ctrl-C keeps the checkpoint)."""
     learner = registry.get(args.kind)
     options = read_options(learner.options, vars(args))
-    refuse_evaluation_data(learner.kind, options, getattr(args, "allow_evaluation_seeds", False))
+    refuse_evaluation_data(learner, options, getattr(args, "allow_evaluation_seeds", False))
     try:
         registry.train(learner.kind, options, args.out, resume=getattr(args, "resume", False),
                        progress=not getattr(args, "no_progress", False), workers=getattr(args, "workers", 1),

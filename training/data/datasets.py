@@ -52,11 +52,12 @@ import numpy as np
 from gymnasium.envs.registration import EnvSpec
 
 import fetchcarry_env  # noqa: F401  (registers this project's env ids: recovering and rebuilding a dataset's env)
-from fetchcarry_env.errors import InputError, UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, parse_json, read_json
 from fetchcarry_env.observation import Capacity
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
+from training.envs import make_env
 from training.policies.phase_expert import PROJECTED_INFO
 from training.rollout import EpisodeRecord, is_timing
 
@@ -101,26 +102,26 @@ TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.
 }
 
 
-class NoSpaceError(UsageError):
+class NoSpaceError(InputError):
     """The disk cannot hold the dataset about to be written."""
 
 
-class UnknownEnvError(UsageError):
+class UnknownEnvError(InputError):
     """A dataset names an env that is not one of this project's (its env is never made)."""
 
 
-class DatasetError(UsageError):
+class DatasetError(InputError):
     """A dataset's files are not what this project writes (an edited or broken ``metadata.json``); names the file."""
 
 
 def validate_dataset_id(dataset_id: str) -> None:
-    """Raise :class:`UsageError` unless ``dataset_id`` is a Minari id (``namespace/name-vN``)."""
+    """Raise :class:`InputError` unless ``dataset_id`` is a Minari id (``namespace/name-vN``)."""
     from minari.dataset.minari_dataset import parse_dataset_id  # minari (h5py) only when a dataset is used
 
     try:
         parse_dataset_id(dataset_id)
     except (ValueError, TypeError):  # minari 0.5.4 raises TypeError for an id without -vN
-        raise UsageError(
+        raise InputError(
             f"dataset id {dataset_id!r} is not a Minari id: use (namespace/)name-v<version>, "
             "e.g. fetchcarry/push-expert-v0"
         ) from None
@@ -348,7 +349,7 @@ def load(dataset_id: str):
     validate_dataset_id(dataset_id)
     data = dataset_path(dataset_id) / "data"
     if not data.exists():
-        raise UsageError(f"no dataset {dataset_id!r} under {datasets_root()} (set MINARI_DATASETS_PATH?)")
+        raise InputError(f"no dataset {dataset_id!r} under {datasets_root()} (set MINARI_DATASETS_PATH?)")
     observation_space, action_space = check_metadata(dataset_id)
     storage = get_minari_storage("hdf5")(data, observation_space, action_space)
     return MinariDataset(storage)
@@ -513,7 +514,7 @@ def _check_main_data(
 def episode_metadata(dataset, episode: int) -> dict[str, Any]:
     """Episode ``episode``'s metadata: ``seed``, ``scenario`` (a dict) and its figures."""
     if not 0 <= episode < dataset.total_episodes:
-        raise UsageError(f"episode {episode} out of range: the dataset has {dataset.total_episodes} episodes")
+        raise InputError(f"episode {episode} out of range: the dataset has {dataset.total_episodes} episodes")
     metadata = next(iter(dataset.storage.get_episode_metadata([episode])))
     metadata = {k: _plain(v) for k, v in metadata.items()}
     metadata["scenario"] = json.loads(metadata["scenario"])
@@ -667,7 +668,7 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
 def _own_wrappers(env_id: str, kwargs: dict[str, Any]) -> tuple[Any, ...]:
     """The wrappers this project's entry point itself puts around the env (``FetchCarryPushPhases-v0``'s)."""
     try:
-        env = gym.make(env_id, **kwargs)
+        env = make_env(env_id=env_id, **kwargs)
     except Exception:  # kwargs the env refuses: not its own wrappers either
         return ()
     try:
@@ -683,7 +684,7 @@ def make_recorded_env(dataset: Any, dataset_id: str):
     episodes would be decoded with the wrong shapes).
     """
     env_id, kwargs = trusted_env_spec(dataset.spec.env_spec, dataset_id)
-    env = gym.make(env_id, **kwargs)
+    env = make_env(env_id=env_id, **kwargs)
     if env.observation_space != dataset.observation_space or env.action_space != dataset.action_space:
         env.close()
         file = dataset_path(dataset_id) / "data" / METADATA_FILE

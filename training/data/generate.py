@@ -27,7 +27,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from training.cluster import ray_session
 from training.data.datasets import (
     REPLACED_FOLDER,
@@ -53,7 +53,7 @@ from training.rollout import EpisodeRecord, run_episode
 EVAL_SEED_BASE = 1_000_000_000  # the first evaluation seed; training and dataset seeds stay below it
 
 
-class EvaluationSeedError(UsageError):
+class EvaluationSeedError(InputError):
     """Training data asked for on evaluation seeds (or a split's scenario) without the explicit override."""
 
 
@@ -104,15 +104,15 @@ class GenerationReport:
     already_complete: bool = False  # the dataset was already there, whole, with the same options
 
 
-class DatasetExistsError(UsageError):
+class DatasetExistsError(InputError):
     """A dataset with this id exists (and was made with other options)."""
 
 
-class StagingMismatchError(UsageError):
+class StagingMismatchError(InputError):
     """A partly generated dataset of this id was made with other options."""
 
 
-class ClockDecidedError(UsageError):
+class ClockDecidedError(InputError):
     """An expert's plan in an episode was decided by its safety stop (the wall clock), so not reproducible."""
 
 
@@ -177,7 +177,7 @@ def generate(
     check_training_seeds(config.source.seed, config.episodes, allow_evaluation_seeds)  # a fixed scenario: the CLI
     # checks its digest against the splits' (training.evaluation.protocol), which this layer cannot read
     if workers < 1:
-        raise UsageError(f"the number of workers must be at least 1, got {workers}")
+        raise InputError(f"the number of workers must be at least 1, got {workers}")
     started = time.perf_counter()
     with DatasetLock(config.dataset_id):
         staging = Staging(config.dataset_id)
@@ -282,9 +282,9 @@ def run_episodes(
     """
     episode = run_indexed_episode if episode is None else episode
     if workers < 1:
-        raise UsageError(f"the number of workers must be at least 1, got {workers}")
+        raise InputError(f"the number of workers must be at least 1, got {workers}")
     if backend not in BACKENDS:
-        raise UsageError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
+        raise InputError(f"unknown backend {backend!r}: choose one of {', '.join(BACKENDS)}")
     if not indices:
         return
     if backend == "ray":

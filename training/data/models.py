@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
 from training.data.generate import check_training_seeds
 
@@ -45,7 +45,7 @@ INDEX = "collection.json"
 PARTIAL = ".partial"
 
 
-class CollectionMismatchError(UsageError):
+class CollectionMismatchError(InputError):
     """The folder holds a collection made with other options (family, first seed, time limit)."""
 
 
@@ -87,11 +87,11 @@ def generate_models(
 
     Raises :class:`~training.data.generate.EvaluationSeedError` for evaluation seeds (unless
     allowed), :class:`CollectionMismatchError` when ``out`` holds a collection made with
-    other options, ``UsageError`` for an unknown family or a folder that cannot be made.
+    other options, ``InputError`` for an unknown family or a folder that cannot be made.
     ``on_seed(index, entry)`` is called after each seed is written (tests use it to interrupt).
     """
     if config.family not in FAMILY_NAMES:
-        raise UsageError(f"unknown family {config.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
+        raise InputError(f"unknown family {config.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
     check_training_seeds(config.seed, config.episodes, allow_evaluation_seeds)
     started = time.perf_counter()
     index = _open_index(config, out)
@@ -131,7 +131,7 @@ def _open_index(config: CollectionConfig, out: Path) -> dict[str, Any]:
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as error:
-        raise UsageError(f"{out}: cannot make the folder ({error.strerror})") from None
+        raise InputError(f"{out}: cannot make the folder ({error.strerror})") from None
     path = out / INDEX
     if not path.exists():
         if any(p for p in out.iterdir() if not p.name.endswith(PARTIAL)):

@@ -28,7 +28,7 @@ import gymnasium as gym
 import numpy as np
 from tqdm import tqdm
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.observations import OBS_MODES
 from training.data.datasets import (
     AUTHOR,
@@ -43,13 +43,14 @@ from training.data.datasets import (
     validate_dataset_id,
 )
 from training.data.staging import DatasetLock, Staging
+from training.envs import make_env
 
 STATE_KEYS = ("observation", "achieved_goal", "desired_goal")  # what every mode observes, recorded or not
 IMAGE_OPTIONS = ("topdown_size", "topdown_frame", "topdown_span", "camera_size", "renderer")
 RENDER_FOLDER = "rendering"  # in the new id's staging folder: the dataset being written
 
 
-class RenderError(UsageError):
+class RenderError(InputError):
     """A dataset's episode does not replay exactly, so it cannot be rendered into another mode."""
 
 
@@ -78,16 +79,16 @@ def render_dataset(
     """Replay dataset ``dataset_id`` into ``obs_mode`` as the new dataset ``out_id`` (see the module docstring).
 
     ``image_options``: the env's image options (``topdown_size``, ``camera_size``, ...).
-    Raises :class:`UsageError` for an unknown mode, the same id twice, an existing
+    Raises :class:`InputError` for an unknown mode, the same id twice, an existing
     ``out_id`` (unless ``overwrite``), and :class:`RenderError` for an episode that
     does not replay exactly.
     """
     if obs_mode not in OBS_MODES:
-        raise UsageError(f"unknown observation mode {obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
+        raise InputError(f"unknown observation mode {obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
     validate_dataset_id(dataset_id)
     validate_dataset_id(out_id)
     if out_id == dataset_id:
-        raise UsageError("the rendered dataset needs a new id (--out): a dataset is never rendered over itself")
+        raise InputError("the rendered dataset needs a new id (--out): a dataset is never rendered over itself")
     started = time.perf_counter()
     source = load(dataset_id)
     env_id, kwargs = trusted_env_spec(source.spec.env_spec, dataset_id)
@@ -95,12 +96,12 @@ def render_dataset(
     if obs_mode != "state":
         kwargs.update(obs_mode=obs_mode, **(image_options or {}))
     try:
-        env = gym.make(env_id, **kwargs)
+        env = make_env(env_id=env_id, **kwargs)
     except (TypeError, ValueError) as error:
-        raise UsageError(f"cannot make {env_id} in obs_mode {obs_mode!r}: {error}") from None
+        raise InputError(f"cannot make {env_id} in obs_mode {obs_mode!r}: {error}") from None
     with DatasetLock(out_id):
         if dataset_exists(out_id) and not overwrite:
-            raise UsageError(f"dataset {out_id!r} exists: choose another id, or pass --overwrite to replace it")
+            raise InputError(f"dataset {out_id!r} exists: choose another id, or pass --overwrite to replace it")
         staging = Staging(out_id)
         recover_replaced(out_id, staging.path / REPLACED_FOLDER)
         building = staging.path / RENDER_FOLDER

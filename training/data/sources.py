@@ -11,7 +11,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.observation import Capacity
 from fetchcarry_env.observations import OBS_MODES
@@ -51,19 +51,19 @@ class EpisodeSource:
 
     def __post_init__(self) -> None:
         if self.obs_mode not in OBS_MODES:
-            raise UsageError(f"unknown observation mode {self.obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
+            raise InputError(f"unknown observation mode {self.obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
         if self.interface not in INTERFACES:
-            raise UsageError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
+            raise InputError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
         if (self.family is None) == (self.scenario is None):
-            raise UsageError("give exactly one of a scenario family and a fixed scenario")
+            raise InputError("give exactly one of a scenario family and a fixed scenario")
         if self.family is not None and self.family not in FAMILY_NAMES:
-            raise UsageError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
+            raise InputError(f"unknown family {self.family!r}: choose one of {', '.join(FAMILY_NAMES)}")
         if self.policy not in POLICIES:
-            raise UsageError(f"unknown policy {self.policy!r}: choose one of {', '.join(POLICIES)}")
+            raise InputError(f"unknown policy {self.policy!r}: choose one of {', '.join(POLICIES)}")
         if self.time_limit <= 0:
-            raise UsageError(f"the time limit must be a positive number of seconds, got {self.time_limit}")
+            raise InputError(f"the time limit must be a positive number of seconds, got {self.time_limit}")
         if not 0 <= self.seed <= MAX_SEED:
-            raise UsageError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {self.seed}")
+            raise InputError(f"a seed must be between 0 and 2**32 - 1 ({MAX_SEED}), got {self.seed}")
         if self.capacity is not None:
             Capacity.parse(self.capacity)  # a CapacityError (bad input) names what is wrong
 
@@ -108,10 +108,10 @@ class GenerationConfig:
 
     def __post_init__(self) -> None:
         if self.episodes < 1:
-            raise UsageError(f"a dataset needs at least 1 episode, got {self.episodes}")
+            raise InputError(f"a dataset needs at least 1 episode, got {self.episodes}")
         last = self.source.seed + self.episodes - 1
         if last > MAX_SEED:
-            raise UsageError(
+            raise InputError(
                 f"seed {self.source.seed} with {self.episodes} episodes uses seeds up to {last}, beyond 2**32 - 1: "
                 f"give a seed of at most {MAX_SEED - self.episodes + 1}"
             )

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from fetchcarry_env.errors import UsageError
+from fetchcarry_env.errors import InputError
 from training.files import atomic_file, write_atomically
 from training.rollout import EpisodeFigures, EpisodeRecord
 
@@ -55,7 +55,7 @@ def datasets_root() -> Path:
     raw = os.environ.get(DATASETS_ENV)
     if raw is not None:
         if not raw.strip():
-            raise UsageError(f"{DATASETS_ENV} is set but empty: give it a folder, or unset it for ~/.minari/datasets")
+            raise InputError(f"{DATASETS_ENV} is set but empty: give it a folder, or unset it for ~/.minari/datasets")
         absolute = os.path.abspath(os.path.expanduser(raw))
         if absolute != raw:
             os.environ[DATASETS_ENV] = absolute
@@ -179,11 +179,11 @@ class Staging:
             shutil.rmtree(self.path)
 
 
-class StagingError(UsageError):
+class StagingError(InputError):
     """A staging file (the manifest, a staged episode) cannot be read; the message names it."""
 
 
-class DatasetBusyError(UsageError):
+class DatasetBusyError(InputError):
     """Another run holds the lock of a dataset id."""
 
 

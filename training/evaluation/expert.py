@@ -23,10 +23,11 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from fetchcarry_env.families import TRAINING_FAMILIES
 from training.data.generate import DEFAULT_TIME_LIMIT, EpisodeSource, progress_bar, run_episodes
 from training.rollout import EpisodeRecord
 
-DEFAULT_FAMILIES = ("basic", "push", "corridor", "multi-2")
+DEFAULT_FAMILIES = TRAINING_FAMILIES
 SUCCESS_GOAL = 0.99  # fraction of episodes the expert must finish (issue 4, section 2)
 
 

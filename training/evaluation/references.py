@@ -90,7 +90,7 @@ COUNTS = ("index", "seed", "phases", "pushes", "delivered", "plans")
 FLAGS = ("success", "proven", "clock_stopped")
 
 
-class ReferenceError(BenchmarkError):
+class ReferenceFileError(BenchmarkError):
     """A reference file that is missing, broken, or that disagrees with its split's scenarios."""
 
 
@@ -213,14 +213,14 @@ def compute_references(
     interrupted run keeps them: :func:`partial_version`).
     """
     if keep is not None and (keep.get("split") != version or keep.get("time_limit_s") != time_limit):
-        raise ReferenceError(
+        raise ReferenceFileError(
             f"the records kept must be of {version} with a {time_limit:g} s limit, "
             f"not of {keep.get('split')} with {keep.get('time_limit_s')} s"
         )
     parts = [s for s in SPLITS.values() if s.version == version and s.part]
     if not parts:
         known = ", ".join(sorted({s.version for s in SPLITS.values() if s.part}))
-        raise ReferenceError(f"split {version!r} has no dev and test parts; known: {known}")
+        raise ReferenceFileError(f"split {version!r} has no dev and test parts; known: {known}")
     content: dict[str, Any] = {"format": FORMAT, "split": version, "time_limit_s": time_limit, "parts": {}}
     for part in parts:
         items = split_scenarios(part, (episodes or {}).get(part.part))
@@ -295,7 +295,7 @@ def load_references(version: str, folder: Path = FOLDER) -> dict[str, Any] | Non
     """The reference file of split version ``version``, checked; ``None`` when the version has none.
 
     Every record's fields must be there with values of the right type: finite numbers,
-    whole counts, true or false, a status string or null (:class:`ReferenceError` names the
+    whole counts, true or false, a status string or null (:class:`ReferenceFileError` names the
     first that is not). A file of release 0.2's format (the v1 splits) loads, marked legacy.
     """
     path = folder / f"{version}.json"
@@ -304,19 +304,19 @@ def load_references(version: str, folder: Path = FOLDER) -> dict[str, Any] | Non
     try:
         content = read_json(path, max_bytes=MAX_BYTES)
     except (JsonInputError, OSError) as error:
-        raise ReferenceError(f"{path}: not a reference file ({error})") from None
+        raise ReferenceFileError(f"{path}: not a reference file ({error})") from None
     if not isinstance(content, dict) or not isinstance(content.get("parts"), dict):
-        raise ReferenceError(f"{path}: not a {FORMAT} file")
+        raise ReferenceFileError(f"{path}: not a {FORMAT} file")
     fields = {FORMAT: FIELDS, LEGACY_FORMAT: LEGACY_FIELDS}.get(content.get("format"))
     if fields is None:
-        raise ReferenceError(f"{path}: not a {FORMAT} file (its format is {content.get('format')!r})")
+        raise ReferenceFileError(f"{path}: not a {FORMAT} file (its format is {content.get('format')!r})")
     for part, records in content["parts"].items():
         if not isinstance(records, list) or any(not isinstance(r, dict) or set(fields) - set(r) for r in records):
-            raise ReferenceError(f"{path}: part {part!r} is not a list of reference records ({', '.join(fields)})")
+            raise ReferenceFileError(f"{path}: part {part!r} is not a list of reference records ({', '.join(fields)})")
         for k, record in enumerate(records):
             problem = _value_problem(record, fields)
             if problem is not None:
-                raise ReferenceError(f"{path}: part {part!r} record {k}: {problem}")
+                raise ReferenceFileError(f"{path}: part {part!r} record {k}: {problem}")
     return content
 
 
@@ -342,12 +342,12 @@ def _value_problem(record: dict[str, Any], fields: Sequence[str]) -> str | None:
 
 
 def refuse_legacy(split: Split | str, folder: Path = FOLDER) -> None:
-    """:class:`ReferenceError` when ``split``'s reference file is of release 0.2's format (another task)."""
+    """:class:`ReferenceFileError` when ``split``'s reference file is of release 0.2's format (another task)."""
     split = get_split(split) if isinstance(split, str) else split
     content = load_references(split.version, folder) if split.part else None
     if content is not None and content.get("format") == LEGACY_FORMAT:
         newest = get_split(f"{split.base_name}:{split.part}").name
-        raise ReferenceError(
+        raise ReferenceFileError(
             f"{split.version}'s references were made by release 0.2 under its task (a reward of +10 per delivery, "
             f"travel as the cost), not this release's task cost: benchmark {newest} instead (the published table of "
             "release 0.2 is reproduced by that release)"
@@ -370,7 +370,7 @@ def references_digest(records: Sequence[dict[str, Any]]) -> str:
 def reference_for(item: EvalScenario) -> tuple[dict[str, Any] | None, str | None]:
     """The reference record of ``item`` and its part's references digest; ``(None, None)`` without one.
 
-    :class:`ReferenceError` when the split's file has the episode with another scenario
+    :class:`ReferenceFileError` when the split's file has the episode with another scenario
     digest: the sampler changed what a published split draws.
     """
     if item.split not in SPLITS:
@@ -381,7 +381,7 @@ def reference_for(item: EvalScenario) -> tuple[dict[str, Any] | None, str | None
         return None, None
     record = records[item.index]
     if record["digest"] != scenario_digest(item.scenario) or record["seed"] != item.seed:
-        raise ReferenceError(
+        raise ReferenceFileError(
             f"{item.split} episode {item.index} (seed {item.seed}) is not the scenario its reference file pins: "
             "a sampler changed a published split (make a new split version instead)"
         )

@@ -84,6 +84,7 @@ from fetchcarry_env.families import (
     EXTENT,
     HELD_OUT_FAMILIES,
     OBJECT_COUNTS,
+    TRAINING_FAMILIES,
     UNSEEN_LAYOUT_FAMILIES,
     Family,
     draw_push,
@@ -96,7 +97,6 @@ from training.data.generate import EVAL_SEED_BASE  # first evaluation seed; trai
 from training.errors import BenchmarkError
 
 SPLIT_BLOCK = 1_000_000  # seeds reserved per split (episode k of a split uses base + offset + k)
-TRAINING_FAMILIES = ("basic", "push", "corridor", "multi-2")  # what a learner is trained on
 SCENARIO_FILES = "*.json"  # what --scenarios reads from a folder
 TEST_SHIFT = SPLIT_BLOCK // 2  # a v1 split's test part starts this far into its block
 DEV, TEST = "dev", "test"  # the parts of a v1 split: choose recipes on dev, report on test

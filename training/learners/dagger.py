@@ -39,7 +39,6 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 import torch
 from tqdm import tqdm
@@ -91,7 +90,7 @@ class LabelledEpisode:
 def label_episode(task: LabelTask, index: int) -> LabelledEpisode:
     """Run episode ``index`` of ``task`` and label every visited state with the expert (a worker's job)."""
     torch.set_num_threads(1)
-    env = make_env("phases", family=task.family_of(index), **task.env_options)
+    env = make_env(runs.INTERFACE, family=task.family_of(index), **task.env_options)
     try:
         expert = ExpertPolicy(env, time_limit=task.time_limit, interface="env")  # env actions: the labeller maps them
         obs_mode = task.env_options.get("obs_mode", "state")
@@ -214,7 +213,7 @@ def _resumed(
 
 def _probe(family: str, env_options: dict[str, Any]) -> tuple[Capacity, int, int]:
     """The capacity, candidates and network input size of ``family``'s phases env in ``env_options``."""
-    probe = gym.make(runs.ENV_ID, family=family, **env_options)
+    probe = make_env(runs.INTERFACE, family=family, **env_options)
     try:
         space = probe.observation_space
         return probe.unwrapped.capacity, int(probe.action_space.n), input_size(space, config_mode(env_options))

@@ -29,6 +29,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import describe
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.phases import PhaseLayout
+from training.envs import env_id_of
 from training.learners import runs
 from training.learners.bc import CHECKPOINT_FIELDS, BCConfig, BCPolicy, Demonstrations, fit
 from training.learners.encoders import Ensemble, build_network, network_input
@@ -52,9 +53,10 @@ def demonstrations_from_dataset(
         raise InputError(f"dataset {dataset_id!r} has {dataset.total_episodes} episodes, not the first {episodes}")
     env = make_recorded_env(dataset, dataset_id)
     try:
-        if env.spec is None or env.spec.id != runs.ENV_ID:
+        if env.spec is None or env.spec.id != env_id_of(runs.INTERFACE):
             raise InputError(
-                f"dataset {dataset_id!r} was recorded in {env.spec.id if env.spec else '?'}, not {runs.ENV_ID}: "
+                f"dataset {dataset_id!r} was recorded in {env.spec.id if env.spec else '?'}, "
+                f"not {env_id_of(runs.INTERFACE)}: "
                 "make one with fetchcarry generate ... --interface phases"
             )
         capacity = env.unwrapped.capacity

@@ -48,6 +48,7 @@ from tqdm import tqdm
 
 import fetchcarry_env  # noqa: F401  (registers the env ids)
 from fetchcarry_env.observation import Capacity
+from training.envs import make_env
 from training.learners import runs
 from training.learners.allowed import AllowedCategorical, TracedScores, allowed_distribution
 from training.learners.encoders import FlatMLP, ImageScorer, build_network, image_shape, input_size, network_input
@@ -110,7 +111,7 @@ def make_training_env(family: str, env_options: dict[str, Any] | None = None) ->
     the state at the family's capacity).
     """
     env_options = env_options or {}
-    env = gym.make(runs.ENV_ID, family=family, reward="learning", **env_options)
+    env = make_env(runs.INTERFACE, family=family, reward="learning", **env_options)
     return FlatObservation(env, env_options.get("obs_mode", "state"))
 
 

@@ -54,6 +54,10 @@ class Learner:
     options: type  # a frozen dataclass of options.option / options.nested fields (light to import)
     train: str  # "package.module:function", called as the module docstring says
     help: str  # one line for ``fetchcarry train --help``
+    # "package.module:function" called as refuse(options) before training, raising EvaluationSeedError when the run
+    # would train on evaluation seeds or a split's scenario (training.learners.refusals); None only for a learner that
+    # trains on no episodes (ensemble). No default: a new learner says which.
+    refuse: str | None
     description: str = ""  # ``fetchcarry train KIND --help``
     load: str = NETWORK_LOADER  # "package.module:function", called as load(path, env)
     summary: Summary | None = None  # None: "KIND trained" and the run folder
@@ -64,7 +68,7 @@ class Learner:
     def __post_init__(self) -> None:
         if not (isinstance(self.options, type) and is_dataclass(self.options)):
             raise TypeError(f"{self.kind}: options must be a dataclass, got {self.options!r}")
-        for reference in (self.train, self.load):
+        for reference in (self.train, self.load, *([self.refuse] if self.refuse else [])):
             if reference.count(":") != 1:
                 raise ValueError(f"{self.kind}: expected 'package.module:function', got {reference!r}")
 
@@ -165,6 +169,7 @@ def _ensemble_summary(options: EnsembleRun, rows: list[dict[str, float]], out: s
 register(Learner(
     "bc", BCRun, "training.learners.imitation:train_bc_run",
     help="behaviour cloning on a Minari dataset recorded with --interface phases",
+    refuse="training.learners.refusals:refuse_bc",
     description="Behaviour cloning: a network scores every candidate phase from the observation, trained with "
     "cross-entropy on the expert's choices among the allowed candidates of a dataset made by "
     "'fetchcarry generate ... --interface phases'.",
@@ -173,6 +178,7 @@ register(Learner(
 register(Learner(
     "dagger", DaggerRun, "training.learners.dagger:train_dagger",
     help="DAgger: the learner acts, the MILP expert labels the states it visits",
+    refuse="training.learners.refusals:refuse_dagger",
     description="DAgger: BC on expert demonstrations, then iterations in which the learner acts on new seeds of "
     "the family, the MILP expert labels every state it visits (mapped to candidates; an action no candidate "
     "expresses gives no label) and the network is retrained on the aggregate. Labelling runs on the same worker "
@@ -183,6 +189,7 @@ register(Learner(
 register(Learner(
     "ppo", PPORun, "training.learners.ppo:train_ppo",
     help="MaskablePPO (sb3-contrib) on the candidate phases with the learning reward",
+    refuse="training.learners.refusals:refuse_ppo",
     description="sb3-contrib's MaskablePPO on FetchCarryPushPhases-v0 with the learning reward (potential-shaped "
     "progress, refusals cost more than moving). The actor is the BC network of --encoder, so --init RUN_DIR (a bc "
     "or dagger run of the same encoder) starts it from those weights. metrics.csv: one row per rollout with env "
@@ -194,6 +201,7 @@ register(Learner(
 register(Learner(
     "ensemble", EnsembleRun, "training.learners.ensemble:make_ensemble",
     help="combine trained run folders into one policy (no further training)",
+    refuse=None,
     description="Combine two or more finished run folders (bc, dagger or ppo, the same observation capacity) into "
     "one run folder whose policy acts on the mean of their log-probabilities: a candidate ranks first when the "
     "members agree on it. The members' weights are copied, so the folder stands alone. For example the three "

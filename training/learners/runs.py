@@ -65,14 +65,14 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.observation import Capacity, observation_size
 from fetchcarry_env.scenario import MAX_COUNTS
+from training.envs import env_id_of
 from training.files import atomic_file, write_atomically
 from training.learners import registry
 from training.learners.encoders import image_shape
 from training.learners.options import BCConfig
 
 CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metrics.csv", "model.pt", "checkpoint.pt"
-INTERFACE = "phases"
-ENV_ID = "FetchCarryPushPhases-v0"
+INTERFACE = "phases"  # every learner acts in the candidate phases (FetchCarryPushPhases-v0)
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
 OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete", "observation")
 OBSERVATION_OPTIONS = {"state": (), "topdown": ("topdown_size", "topdown_frame", "topdown_span"),
@@ -609,7 +609,7 @@ def run_config(kind: str, options: dict[str, Any], config: Any, capacity: Capaci
         **extra,
         "kind": kind,
         "interface": INTERFACE,
-        "env_id": ENV_ID,
+        "env_id": env_id_of(INTERFACE),
         "options": options,
         "config": asdict(config),
         "capacity": asdict(capacity),

@@ -11,12 +11,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
-import fetchcarry_env  # noqa: F401  (registers the env ids)
 from expert.policy import ExpertPolicy
 from fetchcarry_env.observations.topdown import CHANNELS
+from training.envs import make_env
 
 FAMILY, SEED = "push", 7  # a scenario whose goal is covered by a block (the demo's)
 COLOURS = {  # RGB of each topdown channel in the composite
@@ -32,7 +31,7 @@ COLOURS = {  # RGB of each topdown channel in the composite
 
 def observed_state(family: str = FAMILY, seed: int = SEED) -> tuple[np.ndarray, dict[str, np.ndarray], int]:
     """The world's picture, its rgbd and topdown images once the expert holds the object, and the state's size."""
-    env = gym.make("FetchCarryPush-v0", family=family, obs_mode="rgbd", render_mode="rgb_array", width=480, height=360)
+    env = make_env(family=family, obs_mode="rgbd", render_mode="rgb_array", width=480, height=360)
     observation, _ = env.reset(seed=seed)
     expert = ExpertPolicy(env)
     actions = []
@@ -44,7 +43,7 @@ def observed_state(family: str = FAMILY, seed: int = SEED) -> tuple[np.ndarray, 
         actions.append(action)
     world = env.render()
     env.close()
-    topdown = gym.make("FetchCarryPush-v0", family=family, obs_mode="topdown")  # the same episode, replayed
+    topdown = make_env(family=family, obs_mode="topdown")  # the same episode, replayed
     mapped, _ = topdown.reset(seed=seed)
     for action in actions:
         mapped, *_ = topdown.step(action)

@@ -18,11 +18,11 @@ import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the ids)
 from expert import ExpertPolicy
-from fetchcarry_env.families import get_family
+from fetchcarry_env.families import TRAINING_FAMILIES, get_family
 from training.data.expert_labels import NOT_EXPRESSIBLE, expert_episode, mode_name
 from training.policies.random import RandomMaskedPolicy
 
-FAMILIES = ("basic", "push", "corridor", "multi-2")
+FAMILIES = TRAINING_FAMILIES
 
 
 def expressibility(family: str, episodes: int, first_seed: int = 0) -> dict[str, Any]:
