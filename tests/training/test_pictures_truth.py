@@ -238,7 +238,7 @@ def test_the_plan_and_scenario_plots_close_up_only_where_the_goal_tables_are_clo
 
 # ---------------------------------------------------------------------------- the gallery
 def test_the_gallery_pictures_have_a_legend_of_what_they_draw() -> None:
-    from fetchcarry_env.worlds.gallery import PICTURES, gallery_figure
+    from training.pictures.worlds import PICTURES, gallery_figure
 
     figure = gallery_figure(PICTURES["unseen-layouts"]())
     (legend,) = figure.legends
@@ -248,7 +248,7 @@ def test_the_gallery_pictures_have_a_legend_of_what_they_draw() -> None:
 
 
 def test_the_perturbed_picture_shows_what_was_perturbed() -> None:
-    from fetchcarry_env.worlds.gallery import gallery_figure, perturbed_panel
+    from training.pictures.worlds import gallery_figure, perturbed_panel
 
     seed = 2
     panel = perturbed_panel(seed)
@@ -275,14 +275,14 @@ def test_the_committed_gallery_pictures_are_what_the_code_draws_now() -> None:
 
     Each PNG carries its panels' titles, counts and scenario digests; the doc shows every picture.
     """
-    from fetchcarry_env.worlds.gallery import DESCRIPTION, PICTURES, describe
+    from training.pictures.worlds import DESCRIPTION, PICTURES, describe
 
     page = (ROOT / "docs" / "families.md").read_text()
     for name, panels in PICTURES.items():
         path = ROOT / "docs" / "families" / f"{name}.png"
         with Image.open(path) as image:
             written = image.info.get(DESCRIPTION)
-        assert written == describe(panels()), f"{path} is stale: python -m fetchcarry_env.worlds.gallery docs/families"
+        assert written == describe(panels()), f"{path} is stale: python -m training.pictures.worlds docs/families"
         assert f"(families/{name}.png)" in page
 
 

@@ -1,6 +1,6 @@
 """Pictures of the graded worlds for ``docs/families.md``: a few seeds of a family, side by side, from above.
 
-``python -m fetchcarry_env.worlds.gallery OUT_DIR`` writes one PNG per picture of
+``python -m training.pictures.worlds OUT_DIR`` writes one PNG per picture of
 :data:`PICTURES` (matplotlib, headless, :mod:`fetchcarry_env.drawing`), each with a
 legend of what is drawn. The ``perturbed`` picture shows what was perturbed: the tables
 and the start before the perturbation (dashed), the distractors ringed, and under each
