@@ -31,7 +31,7 @@ from fetchcarry_env.kinematics import (
     travel_cost,
 )
 from fetchcarry_env.observation import DELIVERY_TOLERANCE, Capacity, WorldState, encode, observation_space
-from fetchcarry_env.observations import OBS_MODES, ImageObservations
+from fetchcarry_env.observations import ImageObservations, get_mode
 from fetchcarry_env.rules import ResolvedPhase, action_mask, check_action
 from fetchcarry_env.scenario import Scenario, ScenarioError, check_rules
 from fetchcarry_env.sim import CAMERAS, Simulation, Snapshot
@@ -273,10 +273,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         **image_options: Any,
     ) -> None:
         self._check_arguments(scenario, family, render_mode, camera, width, height)
-        if obs_mode not in OBS_MODES:
-            raise ValueError(f"obs_mode must be one of {', '.join(OBS_MODES)}, got {obs_mode!r}")
-        if obs_mode == "state" and image_options:
-            raise TypeError(f"image options {sorted(image_options)} need obs_mode 'topdown' or 'rgbd'")
+        if not get_mode(obs_mode).keys and image_options:  # get_mode: ValueError for an unknown mode
+            raise TypeError(f"image options {sorted(image_options)} need an obs_mode with images, not {obs_mode!r}")
         # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
         modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
         self.metadata = {**type(self).metadata, "render_modes": modes}
@@ -304,7 +302,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.observation_space = observation_space(self.capacity)
         self.obs_mode = obs_mode
         self._images: ImageObservations | None = None  # None: the state observation alone
-        if obs_mode != "state":
+        if get_mode(obs_mode).keys:
             self._images = ImageObservations(obs_mode, extent, self.capacity, image_options)
             self.observation_space = self._images.space(self.observation_space)
         self._sim = Simulation(gui=render_mode == "human")  # connects to PyBullet on first use

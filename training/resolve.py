@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fetchcarry_env.observations import OBS_MODES, image_options
+from fetchcarry_env.observations import get_mode, image_options, mode_names
 from training.envs import INTERFACES
 from training.errors import BenchmarkError
 from training.policies.protocol import Policy
@@ -202,7 +202,7 @@ def run_image_options(config: dict[str, Any]) -> dict[str, Any]:
     """
     network = config.get("config")
     obs_mode = network.get("obs_mode", "state") if isinstance(network, dict) else "state"
-    if obs_mode == "state" or obs_mode not in OBS_MODES or not isinstance(config.get("features"), int):
+    if obs_mode not in mode_names() or not get_mode(obs_mode).keys or not isinstance(config.get("features"), int):
         return {}  # an unknown mode is refused when the run folder loads
     recorded = config.get("observation")
     if isinstance(recorded, dict) and recorded.get("obs_mode") == obs_mode:

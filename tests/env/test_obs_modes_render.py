@@ -96,4 +96,4 @@ def test_render_command_exit_statuses(state_dataset, capsys):
         "fetchcarry/b-v1",
     ]
     assert main(bad_size) == 2
-    assert "topdown size" in capsys.readouterr().err
+    assert "topdown_size must be at least 8" in capsys.readouterr().err

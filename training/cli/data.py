@@ -14,6 +14,7 @@ from dataclasses import asdict
 from pathlib import Path
 
 from fetchcarry_env.errors import InputError
+from fetchcarry_env.observations import get_mode, image_option_names, modes
 from training.cli.arguments import add_worker_options, positive_int, whole_number
 from training.cli.commands import summary
 from training.cli.episodes import add_obs_mode_argument, add_source_arguments, episode_source
@@ -250,9 +251,16 @@ def _register_render(actions: argparse._SubParsersAction) -> None:
     render.add_argument("dataset_id", metavar="ID")
     add_obs_mode_argument(render, "the observation of the new dataset")
     render.add_argument("--out", required=True, metavar="NEW_ID", help="the new dataset's Minari id")
-    render.add_argument("--topdown-size", type=positive_int, metavar="PX", help="topdown map pixels a side (64)")
-    render.add_argument("--topdown-frame", choices=("world", "robot"), help="topdown map centred on (world)")
-    render.add_argument("--camera-size", type=positive_int, metavar="PX", help="rgbd images' pixels a side (128)")
+    for mode in modes():
+        for option in mode.options:
+            render.add_argument(
+                "--" + option.name.replace("_", "-"),
+                type=option.kind,
+                choices=option.choices or None,
+                metavar=None if option.choices else "X",
+                help=f"--obs-mode {mode.name}: {option.help}"
+                + ("" if option.default is None else f" (default {option.default})"),
+            )
     render.add_argument("--overwrite", action="store_true", help="replace an existing NEW_ID")
     render.add_argument("--no-progress", action="store_true", help="no progress bar")
     render.add_argument("--json", action="store_true", help="print the report as one JSON object")
@@ -261,10 +269,8 @@ def _register_render(actions: argparse._SubParsersAction) -> None:
 
 def run_dataset_render(args: argparse.Namespace) -> int:
     """``fetchcarry dataset render``: 0 rendered (bad input raises)."""
-    names = ("topdown_size", "topdown_frame", "camera_size")
-    options = {k: getattr(args, k) for k in names if getattr(args, k) is not None}
-    mode_of = {"topdown_size": "topdown", "topdown_frame": "topdown", "camera_size": "rgbd"}
-    wrong = [k for k in options if mode_of[k] != args.obs_mode]
+    options = {k: getattr(args, k) for k in image_option_names() if getattr(args, k) is not None}
+    wrong = [k for k in options if k not in get_mode(args.obs_mode).option_names]
     if wrong:
         flags = ", ".join("--" + k.replace("_", "-") for k in wrong)
         raise InputError(f"{flags} do(es) not apply to --obs-mode {args.obs_mode}")

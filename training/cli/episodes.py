@@ -17,7 +17,7 @@ from expert.plans import plan_length
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.kinematics import WAIT_COST
-from fetchcarry_env.observations import OBS_MODES
+from fetchcarry_env.observations import mode_names, modes
 from training.cli.arguments import capacity_text, non_negative_int, positive_float, positive_int
 from training.cli.commands import summary
 from training.cli.exits import INTERRUPTED, say
@@ -97,16 +97,15 @@ def add_source_arguments(
 def add_obs_mode_argument(
     parser: argparse.ArgumentParser, meaning: str = "the env's observation", default: str | None = "state"
 ) -> None:
-    """``--obs-mode``: ``state`` (default), ``topdown`` or ``rgbd`` (docs/observations.md).
+    """``--obs-mode``: ``state`` (default), ``topdown``, ``rgbd`` or a registered mode (docs/observations.md).
 
     ``default`` None tells a command that the option was left out (a run folder's own mode applies).
     """
     parser.add_argument(
         "--obs-mode",
-        choices=OBS_MODES,
+        choices=mode_names(),
         default=default,
-        help=f"{meaning}: state (the geometry vector, default), topdown (plus a semantic map drawn from the "
-        "geometry) or rgbd (plus head and overhead RGB-D camera images)",
+        help=f"{meaning}: " + ", ".join(f"{mode.name} ({mode.description})" for mode in modes()),
     )
 
 

@@ -55,6 +55,7 @@ import fetchcarry_env  # noqa: F401  (registers this project's env ids: recoveri
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, parse_json, read_json
 from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observations import modes
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.envs import make_env
@@ -92,14 +93,16 @@ TRUSTED_ENV_KWARGS: dict[str, tuple[type, ...]] = {  # keyword arguments of gym.
     "render_mode": (type(None),),  # gym.make records it; replay renders nothing
     "reward": (str,),  # FetchCarryPushPhases-v0: "paper" or "learning" (the env checks the name)
     "gamma": (int, float),  # FetchCarryPushPhases-v0: the learning reward's discount
-    "obs_mode": (str,),  # "state", "topdown" or "rgbd" (the env checks the name)
-    "topdown_size": (int,),  # the image options of obs_mode (the env checks their ranges)
-    "topdown_frame": (str,),
-    "topdown_span": (int, float),
-    "camera_size": (int,),
-    "renderer": (str,),
+    "obs_mode": (str,),  # a registered observation mode (the env checks the name)
     "capacity": (str,),  # fetchcarry generate --capacity: "objects=8,..." (only a text Capacity.parse takes)
 }
+
+
+def trusted_env_kwargs() -> dict[str, tuple[type, ...]]:
+    """:data:`TRUSTED_ENV_KWARGS` and every observation mode's image options (the env checks their ranges)."""
+    images = {o.name: (int,) if o.kind is int else (int, float) if o.kind is float else (str,)
+              for mode in modes() for o in mode.options}  # fmt: skip
+    return {**TRUSTED_ENV_KWARGS, **images}
 
 
 class NoSpaceError(InputError):
@@ -635,7 +638,7 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
 
     Raises :class:`UnknownEnvError` unless the id is registered with an entry point in
     this project's packages, the spec names that same entry point, it adds no wrappers,
-    and every keyword argument is one of :data:`TRUSTED_ENV_KWARGS` with a plain value.
+    and every keyword argument is one of :func:`trusted_env_kwargs` with a plain value.
     """
     ours = sorted(k for k, v in gym.envs.registry.items() if _is_ours(v.entry_point))
     if spec is None:
@@ -646,9 +649,9 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
             f"dataset {dataset_id!r} names an unknown env {spec.id!r} (entry point {spec.entry_point!r}); "
             f"only this project's envs are rebuilt: {', '.join(ours)}"
         )
-    kwargs = dict(spec.kwargs or {})
+    kwargs, trusted = dict(spec.kwargs or {}), trusted_env_kwargs()
     for key, value in kwargs.items():
-        allowed = TRUSTED_ENV_KWARGS.get(key)
+        allowed = trusted.get(key)
         if (
             allowed is None
             or isinstance(value, bool)
@@ -657,7 +660,7 @@ def trusted_env_spec(spec: Any, dataset_id: str) -> tuple[str, dict[str, Any]]:
         ):
             raise UnknownEnvError(
                 f"dataset {dataset_id!r} names an unknown env: {spec.id} does not take {key}={value!r:.60} "
-                f"from a dataset (allowed: {', '.join(TRUSTED_ENV_KWARGS)})"
+                f"from a dataset (allowed: {', '.join(trusted)})"
             )
     if spec.additional_wrappers and tuple(spec.additional_wrappers) != _own_wrappers(spec.id, kwargs):
         names = ", ".join(str(w.name) for w in spec.additional_wrappers)

@@ -29,7 +29,7 @@ import numpy as np
 from tqdm import tqdm
 
 from fetchcarry_env.errors import InputError
-from fetchcarry_env.observations import OBS_MODES
+from fetchcarry_env.observations import image_option_names, mode_names
 from training.data.datasets import (
     AUTHOR,
     REPLACED_FOLDER,
@@ -46,7 +46,6 @@ from training.data.staging import DatasetLock, Staging
 from training.envs import make_env
 
 STATE_KEYS = ("observation", "achieved_goal", "desired_goal")  # what every mode observes, recorded or not
-IMAGE_OPTIONS = ("topdown_size", "topdown_frame", "topdown_span", "camera_size", "renderer")
 RENDER_FOLDER = "rendering"  # in the new id's staging folder: the dataset being written
 
 
@@ -83,8 +82,8 @@ def render_dataset(
     ``out_id`` (unless ``overwrite``), and :class:`RenderError` for an episode that
     does not replay exactly.
     """
-    if obs_mode not in OBS_MODES:
-        raise InputError(f"unknown observation mode {obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
+    if obs_mode not in mode_names():
+        raise InputError(f"unknown observation mode {obs_mode!r}: choose one of {', '.join(mode_names())}")
     validate_dataset_id(dataset_id)
     validate_dataset_id(out_id)
     if out_id == dataset_id:
@@ -92,7 +91,7 @@ def render_dataset(
     started = time.perf_counter()
     source = load(dataset_id)
     env_id, kwargs = trusted_env_spec(source.spec.env_spec, dataset_id)
-    kwargs = {k: v for k, v in kwargs.items() if k != "obs_mode" and k not in IMAGE_OPTIONS}
+    kwargs = {k: v for k, v in kwargs.items() if k != "obs_mode" and k not in image_option_names()}
     if obs_mode != "state":
         kwargs.update(obs_mode=obs_mode, **(image_options or {}))
     try:

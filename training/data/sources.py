@@ -14,7 +14,7 @@ import gymnasium as gym
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES
 from fetchcarry_env.observation import Capacity
-from fetchcarry_env.observations import OBS_MODES
+from fetchcarry_env.observations import mode_names
 from fetchcarry_env.registration import ENV_ID, PHASES_ENV_ID
 from training.envs import INTERFACES as ENV_IDS
 from training.envs import MAX_SEED, make_env
@@ -50,8 +50,8 @@ class EpisodeSource:
     obs_mode: str = "state"
 
     def __post_init__(self) -> None:
-        if self.obs_mode not in OBS_MODES:
-            raise InputError(f"unknown observation mode {self.obs_mode!r}: choose one of {', '.join(OBS_MODES)}")
+        if self.obs_mode not in mode_names():
+            raise InputError(f"unknown observation mode {self.obs_mode!r}: choose one of {', '.join(mode_names())}")
         if self.interface not in INTERFACES:
             raise InputError(f"unknown interface {self.interface!r}: choose one of {', '.join(INTERFACES)}")
         if (self.family is None) == (self.scenario is None):

@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 from fetchcarry_env.observation import Capacity
-from fetchcarry_env.observations import OBS_MODES
+from fetchcarry_env.observations import mode_names
 from training.data.generate import BACKENDS, progress_bar
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
@@ -206,8 +206,8 @@ def with_observations(specs: list[PolicySpec], obs_mode: str | None) -> list[Pol
     """
     if obs_mode is None:
         return specs
-    if obs_mode not in OBS_MODES:
-        raise BenchmarkError(f"unknown observation mode {obs_mode!r}; known: {', '.join(OBS_MODES)}")
+    if obs_mode not in mode_names():
+        raise BenchmarkError(f"unknown observation mode {obs_mode!r}; known: {', '.join(mode_names())}")
     for spec in specs:
         check_obs_mode(spec, obs_mode)
     if obs_mode == "state":

@@ -27,7 +27,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -37,8 +36,7 @@ from torch import nn
 
 from fetchcarry_env.geometry import HEADINGS, heading_vector
 from fetchcarry_env.observation import FIELDS, Capacity, observation_layout
-from fetchcarry_env.observations import IMAGE_KEYS
-from fetchcarry_env.observations.topdown import CHANNELS
+from fetchcarry_env.observations import get_mode
 from fetchcarry_env.phases import PhaseLayout
 
 COORD_SCALE = 5.0  # metres: coordinates are divided by this in the set encoder (the families' floor is 7 m)
@@ -54,7 +52,6 @@ RELATIVE_COLUMNS: dict[str, tuple[int, ...]] = {
 """Columns of each slot (:data:`FIELDS`) that are x, y pairs: the set encoder's relative features subtract the base."""
 
 
-IMAGE_CHANNELS = {"topdown": len(CHANNELS), "rgbd": 2 * 4}  # channels of the cnn's input per obs_mode
 CNN_WIDTHS = (32, 64, 64)  # channels of the cnn's stride-2 convolutions (the last also of its 3 x 3 one)
 CNN_CELLS = 16  # the stride-2 convolutions go on until the feature map is at most this many cells a side
 
@@ -69,7 +66,7 @@ def network_input(observation: dict[str, np.ndarray], obs_mode: str) -> np.ndarr
     """
     if obs_mode == "state":
         return np.asarray(observation["observation"], dtype=np.float32)
-    keys = IMAGE_KEYS[obs_mode]
+    keys = get_mode(obs_mode).keys
     missing = [key for key in keys if key not in observation]
     if missing:
         raise KeyError(f"this network sees obs_mode {obs_mode!r}: the observation lacks {', '.join(missing)}")
@@ -83,7 +80,7 @@ def input_size(space: Any, obs_mode: str) -> int:
     """The length of :func:`network_input`'s row for an env's ``Dict`` observation ``space`` in ``obs_mode``."""
     if obs_mode == "state":
         return int(space["observation"].shape[0])
-    return sum(int(np.prod(space[key].shape)) for key in IMAGE_KEYS[obs_mode])
+    return sum(int(np.prod(space[key].shape)) for key in get_mode(obs_mode).keys)
 
 
 def image_shape(obs_mode: str, features: int) -> tuple[int, int, int]:
@@ -91,13 +88,10 @@ def image_shape(obs_mode: str, features: int) -> tuple[int, int, int]:
 
     ``ValueError`` unless they make square images of 8 to 1024 pixels a side.
     """
-    channels = IMAGE_CHANNELS.get(obs_mode)
-    if channels is None:
-        raise ValueError(f"the cnn encoder reads obs_mode topdown or rgbd, not {obs_mode!r}")
-    side = math.isqrt(features // channels)
-    if channels * side * side != features or not 8 <= side <= 1024:
-        raise ValueError(f"{features} input values are not {channels} square images of 8 to 1024 pixels a side")
-    return channels, side, side
+    mode = get_mode(obs_mode)
+    if not mode.keys:
+        raise ValueError(f"the cnn encoder reads the images of an obs_mode, and {obs_mode!r} has none")
+    return mode.input_channels, mode.side(features), mode.side(features)
 
 
 def build_network(config: Any, capacity: Capacity, candidates: int, observations: torch.Tensor) -> nn.Module:

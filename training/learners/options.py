@@ -11,12 +11,13 @@ twice. Bad values raise :class:`~fetchcarry_env.errors.InputError` (the user's b
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import MISSING, dataclass, field
+from dataclasses import MISSING, dataclass, field, make_dataclass
 from typing import Any
 
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.families import FAMILY_NAMES, get_family
 from fetchcarry_env.observation import Capacity
+from fetchcarry_env.observations.modes import ModeOption, get_mode, modes, shown
 from training.envs import MAX_SEED
 
 MAX_ENVS = 64  # vector envs of a PPO run (one process each beyond the first)
@@ -126,38 +127,64 @@ def family_names(text: str) -> tuple[str, ...]:
     return names
 
 
-OBS_MODE_CHOICES = ("state", "topdown", "rgbd")
-TOPDOWN_FRAMES = ("world", "robot")
+def _images_of(obs_mode: str) -> tuple[str, ...]:
+    """The image keys of ``obs_mode`` (:class:`InputError` for an unknown mode)."""
+    return get_mode(read_obs_mode(obs_mode)).keys
 
 
-@dataclass(frozen=True)
-class ImageOptions:
-    """The env's image options of a run that learns from pixels (``dagger``, ``ppo``; ``bc`` reads its dataset's).
+def read_obs_mode(text: str) -> str:
+    """An observation mode's name (:class:`InputError` unless a mode of that name is registered)."""
+    try:
+        return get_mode(text).name
+    except ValueError as error:
+        raise InputError(str(error)) from None
 
-    Only the options of the run's ``obs_mode`` reach the env (:meth:`env_options`) and the
-    run folder's ``config.json`` (its ``observation``).
-    """
 
-    topdown_size: int = option(64, "topdown map pixels a side, 8 to 1024 (default {default})", metavar="PX",
-                               positive=True)  # fmt: skip
-    topdown_frame: str = option("world", "topdown map centred on the world or on the robot (default {default})",
-                                choices=TOPDOWN_FRAMES)  # fmt: skip
-    camera_size: int = option(128, "rgbd camera pixels a side, 8 to 1024 (default {default})", metavar="PX",
-                              positive=True)  # fmt: skip
+def obs_mode_option(help: str) -> Any:
+    """The ``obs_mode`` field of a learner's settings: any registered observation mode."""
+    return option("state", f"{help} (default {{default}})", metavar="MODE", parse=read_obs_mode)
 
-    def __post_init__(self) -> None:
-        if not (8 <= self.topdown_size <= 1024 and 8 <= self.camera_size <= 1024):
-            raise InputError(f"image sizes must be 8 to 1024 pixels, got {self.topdown_size} and {self.camera_size}")
-        if self.topdown_frame not in TOPDOWN_FRAMES:
-            raise InputError(f"topdown_frame must be one of {', '.join(TOPDOWN_FRAMES)}, got {self.topdown_frame!r}")
 
-    def env_options(self, obs_mode: str) -> dict[str, Any]:
-        """``gym.make``'s observation keywords for ``obs_mode``: ``{}`` for ``state``, else the mode and its options."""
-        if obs_mode == "topdown":
-            return {"obs_mode": obs_mode, "topdown_size": self.topdown_size, "topdown_frame": self.topdown_frame}
-        if obs_mode == "rgbd":
-            return {"obs_mode": obs_mode, "camera_size": self.camera_size}
+def _image_option(mode_option: ModeOption) -> Any:
+    """The dataclass field of one image option of a mode, its range checked by :class:`ImageOptions`."""
+    help = f"{mode_option.help} (default {{default}})"
+    if mode_option.kind is str:
+        return option(mode_option.default, help, choices=mode_option.choices)
+    return option(mode_option.default, help, metavar="N")
+
+
+def _check_image_options(self: Any) -> None:
+    for mode in modes():
+        for mode_option in mode.options:
+            value = getattr(self, mode_option.name, None)
+            problem = None if value is None else mode_option.problem(value)
+            if problem is not None:
+                raise InputError(f"{problem}, got {shown(value)}")
+
+
+def _env_options(self: Any, obs_mode: str) -> dict[str, Any]:
+    """``gym.make``'s observation keywords for ``obs_mode``: ``{}`` for ``state``, else the mode and its options."""
+    mode = get_mode(obs_mode)
+    if not mode.keys:
         return {}
+    return {"obs_mode": obs_mode, **{name: getattr(self, name) for name in mode.option_names if hasattr(self, name)}}
+
+
+ImageOptions = make_dataclass(
+    "ImageOptions",
+    [(o.name, o.kind, _image_option(o)) for mode in modes() for o in mode.options if o.default is not None],
+    namespace={"__post_init__": _check_image_options, "env_options": _env_options},
+    frozen=True,
+)
+ImageOptions.__module__ = __name__  # picklable as this module's (make_dataclass takes no module= before 3.12)
+ImageOptions.__doc__ = """The env's image options of a run that learns from pixels (``dagger``, ``ppo``).
+
+``bc`` reads its dataset's.
+
+Made from the observation modes' records (:mod:`fetchcarry_env.observations.modes`): one
+field per option that has a default. Only the options of the run's ``obs_mode`` reach the
+env (``env_options(obs_mode)``) and the run folder's ``config.json`` (its ``observation``).
+"""
 
 
 @dataclass(frozen=True)
@@ -181,17 +208,15 @@ class BCConfig:
     avoid_returns: bool = False  # acting: no approach or waypoint move seen this episode to end in a state met before
     push_after_approach: bool = False  # acting: no approach right after an approach (the expert's data never has one)
     skip_delivered: bool = False  # acting: no pick of an object that stands delivered on its goal
-    obs_mode: str = option(
-        "state",
-        "what the network sees: state (the observation vector: mlp, set) or the images of topdown or rgbd "
-        "(cnn; the dataset must hold them: fetchcarry dataset render) (default {default})",
-        choices=OBS_MODE_CHOICES,
+    obs_mode: str = obs_mode_option(
+        "what the network sees: state (the observation vector: mlp, set) or the images of topdown, rgbd or another "
+        "registered mode (cnn; the dataset must hold them: fetchcarry dataset render)"
     )
 
     def __post_init__(self) -> None:
         if self.encoder not in ("mlp", "set", "cnn"):
             raise InputError(f"encoder must be 'mlp', 'set' or 'cnn', got {str(self.encoder)[:40]!r}")
-        if (self.encoder == "cnn") != (self.obs_mode != "state"):
+        if (self.encoder == "cnn") != bool(_images_of(self.obs_mode)):
             raise InputError(
                 f"encoder {self.encoder!r} with obs_mode {str(self.obs_mode)[:40]!r}: the cnn encoder reads the "
                 "images of obs_mode topdown or rgbd, the mlp and set encoders the state"
@@ -233,11 +258,9 @@ class PPOOptions:
     eval_episodes: int = option(
         50, f"held-out episodes per evaluation, seeds from {HELDOUT_SEED_BASE}; 0: none (default {{default}})"
     )
-    obs_mode: str = option(
-        "state",
-        "what the actor and the value see: state (the observation vector) or the images of topdown or rgbd "
-        "(with --encoder cnn) (default {default})",
-        choices=OBS_MODE_CHOICES,
+    obs_mode: str = obs_mode_option(
+        "what the actor and the value see: state (the observation vector) or the images of topdown, rgbd or another "
+        "registered mode (with --encoder cnn)"
     )
     capacity: str | None = capacity_option()
 

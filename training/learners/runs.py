@@ -64,6 +64,7 @@ import torch
 from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, read_json
 from fetchcarry_env.observation import Capacity, observation_size
+from fetchcarry_env.observations.modes import get_mode
 from fetchcarry_env.scenario import MAX_COUNTS
 from training.envs import env_id_of
 from training.files import atomic_file, write_atomically
@@ -75,9 +76,6 @@ CONFIG_FILE, METRICS_FILE, WEIGHTS_FILE, CHECKPOINT_FILE = "config.json", "metri
 INTERFACE = "phases"  # every learner acts in the candidate phases (FetchCarryPushPhases-v0)
 REQUIRED_KEYS = ("kind", "config", "capacity", "candidates", "features")
 OPTIONAL_KEYS = ("interface", "env_id", "options", "data", "complete", "observation")
-OBSERVATION_OPTIONS = {"state": (), "topdown": ("topdown_size", "topdown_frame", "topdown_span"),
-                       "rgbd": ("camera_size", "renderer")}  # fmt: skip
-"""The env options ``config.json``'s ``observation`` may hold beside ``obs_mode``, per mode."""
 
 MAX_CONFIG_BYTES = 4 * 2**20  # a config.json is a few kB (an ensemble's some 10 kB)
 MAX_POSTURES = 64  # a capacity's posture slots (the env's default has 4)
@@ -171,28 +169,17 @@ def read_config(path: str | Path) -> dict[str, Any]:
 def _check_observation(file: Path, saved: dict[str, Any]) -> None:
     """``observation``: a JSON object of the network's ``obs_mode`` and that mode's image options (in range)."""
     observation = saved["observation"]
-    mode = saved["config"].get("obs_mode", "state")
-    if not isinstance(observation, dict) or observation.get("obs_mode") != mode:
-        raise RunFolderError(f"{file}: observation must be a JSON object whose obs_mode is the network's ({mode!r})")
-    unknown = sorted(set(observation) - {"obs_mode", *OBSERVATION_OPTIONS[mode]})
-    if unknown:
-        raise RunFolderError(f"{file}: observation: unknown keys for obs_mode {mode!r}: {', '.join(unknown)}")
-    for key in ("topdown_size", "camera_size"):
-        value = observation.get(key, 64)
-        if not isinstance(value, int) or isinstance(value, bool) or not 8 <= value <= 1024:
-            raise RunFolderError(f"{file}: observation.{key} must be 8 to 1024 pixels, got {describe(value)}")
-    side = observation.get("topdown_size" if mode == "topdown" else "camera_size")
-    if mode != "state" and side is not None and image_shape(mode, saved["features"])[1] != side:
+    name = saved["config"].get("obs_mode", "state")
+    if not isinstance(observation, dict) or observation.get("obs_mode") != name:
+        raise RunFolderError(f"{file}: observation must be a JSON object whose obs_mode is the network's ({name!r})")
+    mode = get_mode(name)  # the config's check has refused an unknown mode
+    try:
+        mode.resolved({key: value for key, value in observation.items() if key != "obs_mode"})
+    except ValueError as error:
+        raise RunFolderError(f"{file}: observation: {error}") from None
+    side = observation.get(mode.side_option) if mode.side_option else None
+    if side is not None and image_shape(name, saved["features"])[1] != side:
         raise RunFolderError(f"{file}: observation: images of {side} pixels a side are not the network's input")
-    frame, span = observation.get("topdown_frame", "world"), observation.get("topdown_span")
-    if frame not in ("world", "robot") or (span is not None and not _positive_number(span)):
-        raise RunFolderError(f"{file}: observation: topdown_frame world or robot, topdown_span metres > 0")
-    if observation.get("renderer", "tiny") not in ("tiny", "egl"):
-        raise RunFolderError(f"{file}: observation.renderer must be tiny or egl")
-
-
-def _positive_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value) and value > 0
 
 
 def _check_network_config(file: Path, key: str, config: dict[str, Any]) -> None:
@@ -625,8 +612,9 @@ def observation_of(obs_mode: str, env_options: dict[str, Any]) -> dict[str, Any]
     The mode and that mode's image options among ``env_options`` (a dataset's env
     keywords, say); the options not given are the env's defaults, written out.
     """
-    defaults = {"topdown_size": 64, "topdown_frame": "world", "camera_size": 128}
-    kept = {key: env_options.get(key, defaults.get(key)) for key in OBSERVATION_OPTIONS[obs_mode]}
+    mode = get_mode(obs_mode)
+    given = {key: value for key, value in env_options.items() if key in mode.option_names}
+    kept = mode.resolved(given)
     return {"obs_mode": obs_mode, **{key: value for key, value in kept.items() if value is not None}}
 
 

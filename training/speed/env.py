@@ -37,6 +37,7 @@ from tqdm import tqdm
 import fetchcarry_env  # noqa: F401  (registers the env)
 from fetchcarry_env.actions import Action, Mode
 from fetchcarry_env.families import DEFAULT_FAMILY
+from fetchcarry_env.observations import get_mode, mode_names
 from fetchcarry_env.scenario import Scenario
 
 ENV_ID = "FetchCarryPush-v0"
@@ -280,11 +281,6 @@ def _push_figure(times: StepTimes) -> Figure:
 
 
 # ---------------------------------------------------------------------- observation modes
-OBS_MODE_OPTIONS: dict[str, dict[str, Any]] = {
-    "state": {},
-    "topdown": {"topdown_size": 64},
-    "rgbd": {"camera_size": 128, "renderer": "tiny"},
-}
 OBS_MODE_GOALS_MS = {"topdown": 0.3, "rgbd": 10.0}  # the most each mode may add to the state step
 DEFAULT_OBS_EPISODES = 20  # episodes of the plan per observation mode
 
@@ -316,7 +312,7 @@ def time_obs_modes(episodes: int, progress: bool) -> tuple[dict[str, dict[str, l
 
     The modes take turns episode by episode, so that they share the machine's load.
     """
-    envs = {mode: gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode, **o) for mode, o in OBS_MODE_OPTIONS.items()}
+    envs = {mode: gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode) for mode in mode_names()}  # default options
     times: dict[str, dict[str, list[float]]] = {mode: defaultdict(list) for mode in envs}
     drawing: dict[str, list[float]] = {mode: [] for mode in envs}
     for env in envs.values():
@@ -341,7 +337,7 @@ def time_obs_modes(episodes: int, progress: bool) -> tuple[dict[str, dict[str, l
 
 def observation_bytes(mode: str) -> int:
     """Bytes of one observation of ``mode`` (every key's array)."""
-    env = gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode, **OBS_MODE_OPTIONS[mode])
+    env = gym.make(ENV_ID, scenario=SCENARIO, obs_mode=mode)
     observation, _ = env.reset(seed=0)
     env.close()
     return sum(array.nbytes for array in observation.values())
@@ -366,7 +362,7 @@ def bench_obs_modes(episodes: int, progress: bool) -> list[Figure]:
     ]
     for mode, goal in OBS_MODE_GOALS_MS.items():
         added = statistics.median(drawing[mode]) * 1e3
-        options = ", ".join(f"{v}" for v in OBS_MODE_OPTIONS[mode].values())
+        options = ", ".join(f"{v}" for v in get_mode(mode).resolved({}).values() if v is not None)
         figures.append(
             Figure(
                 f"obs_mode {mode} ({options}): added to a step",
@@ -377,7 +373,7 @@ def bench_obs_modes(episodes: int, progress: bool) -> list[Figure]:
                 f"step {step_s[mode] * 1e3:.2f} ms, {step_s[mode] / state:.2f}x the state step",
             )
         )
-    for mode in OBS_MODE_OPTIONS:
+    for mode in mode_names():
         figures.append(Figure(f"one observation, obs_mode {mode}", observation_bytes(mode) / 1024, "KiB"))
     return figures
 
