@@ -1,4 +1,4 @@
-"""The README's Python examples run as written (from a copy of the repository's examples)."""
+"""The Python examples of the README and of the docs pages with code run as written (from a copy of the examples)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,12 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 BLOCKS = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.DOTALL)
+DOCS_WITH_CODE = ("environment.md", "benchmarking.md")  # pages whose Python examples run here too
+DOC_BLOCKS = [
+    (page, block)
+    for page in DOCS_WITH_CODE
+    for block in re.findall(r"```python\n(.*?)```", (ROOT / "docs" / page).read_text(), flags=re.DOTALL)
+]
 
 
 def test_readme_has_python_examples():
@@ -21,6 +27,14 @@ def test_readme_example_runs(index, tmp_path, monkeypatch):
     shutil.copytree(ROOT / "examples", tmp_path / "examples")
     monkeypatch.chdir(tmp_path)
     exec(compile(BLOCKS[index], f"README.md block {index}", "exec"), {})
+
+
+@pytest.mark.parametrize("index", range(len(DOC_BLOCKS)))
+def test_docs_example_runs(index, tmp_path, monkeypatch):
+    page, block = DOC_BLOCKS[index]
+    shutil.copytree(ROOT / "examples", tmp_path / "examples")
+    monkeypatch.chdir(tmp_path)
+    exec(compile(block, f"docs/{page} block {index}", "exec"), {})
 
 
 def _repository_files() -> set[Path]:

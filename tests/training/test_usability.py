@@ -96,13 +96,13 @@ def test_no_help_text_shows_an_escaped_percent(capsys) -> None:
         assert status == 0 and "%%" not in out, command
 
 
-def test_the_readme_says_which_mask_env_unwrapped_gives() -> None:
-    """``env.unwrapped.action_masks()`` of the phases env has 294 entries, not 4,080: the README says so, truly."""
+def test_the_docs_say_which_mask_env_unwrapped_gives() -> None:
+    """``env.unwrapped.action_masks()`` of the phases env has 294 entries, not 4,080: docs/environment.md says so."""
     import gymnasium as gym
 
     import fetchcarry_env  # noqa: F401  (registers the envs)
 
-    readme = " ".join((ROOT / "README.md").read_text().split())
+    readme = " ".join((ROOT / "docs" / "environment.md").read_text().split())
     env = gym.make("FetchCarryPushPhases-v0", family="basic")
     try:
         env.reset(seed=0)

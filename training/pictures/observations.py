@@ -1,4 +1,4 @@
-"""The README's picture of the observation modes: one state seen as ``state``, ``topdown`` and ``rgbd``.
+"""The picture of the observation modes (docs/environment.md): one state seen as ``state``, ``topdown`` and ``rgbd``.
 
 ``python -m training.pictures.observations OUT.png`` runs the MILP expert on a ``push``
 scenario until it holds the object, then draws, side by side: the world (the env's own
