@@ -34,11 +34,8 @@ from fetchcarry_env.observations.topdown import CHANNELS, FRAMES
 from fetchcarry_env.scenario import Scenario
 from fetchcarry_env.sim import Simulation
 
-OBS_MODES: tuple[str, ...] = ("state", "topdown", "rgbd")
-"""The built-in modes (:func:`mode_names` holds a registered one too)."""
-
 __all__ = [
-    "CHANNELS", "FRAMES", "OBS_MODES", "ImageObservations", "ImageSource", "ModeOption", "ObservationMode", "get_mode",
+    "CHANNELS", "FRAMES", "ImageObservations", "ImageSource", "ModeOption", "ObservationMode", "get_mode",
     "image_option_names", "image_options", "image_space", "mode_names", "modes", "register_mode", "unregister_mode",
 ]  # fmt: skip
 
