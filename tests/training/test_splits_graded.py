@@ -76,8 +76,7 @@ def test_test_parts_hold_300_episodes_but_where_the_reference_did_not_fit() -> N
         assert test.episodes == SHORT_TESTS.get(test.name, TEST_EPISODES)
     # as many episodes of every object count, in each part
     assert all(n % len(V1_OBJECT_COUNTS) == 0 for n in OBJECTS_EPISODES.values())
-    assert all(n % len(OBJECT_COUNTS) == 0 for n in OBJECTS_V2_EPISODES.values())
-    assert get_split("objects:dev").episodes == OBJECTS_V2_EPISODES["dev"] == 24
+    assert get_split("objects:dev").episodes == OBJECTS_V2_EPISODES["dev"] == DEV_EPISODES
     assert get_split("apartment:dev").episodes == APARTMENT_V2_EPISODES["dev"] == DEV_EPISODES
 
 

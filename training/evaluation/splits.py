@@ -280,7 +280,7 @@ _GRADED = (
 # Version 2 of every split (layouts: 3): the task cost (docs/formulation.md, "The task cost") and the env's
 # octagon rule, on fresh seeds (blocks 8 to 14), 100 dev and 300 test episodes each; objects-v2 holds 24 and 24,
 # the episodes whose references were computed so far, 7 of them stopped by the clock (docs/protocol.md).
-OBJECTS_V2_EPISODES = {DEV: 24, TEST: 24}
+OBJECTS_V2_EPISODES = {DEV: DEV_EPISODES, TEST: TEST_EPISODES}
 APARTMENT_V2_EPISODES = {DEV: DEV_EPISODES, TEST: TEST_EPISODES}
 _V2 = (
     *_graded("iid-v2", _V0[0].description, _families(*TRAINING_FAMILIES), 8, DEV_EPISODES, TEST_EPISODES),
