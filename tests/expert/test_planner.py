@@ -19,7 +19,6 @@ from expert.milp.problem import prepare
 from expert.planner import plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.families import (
-    PAPER_CORRIDOR_WIDTH,
     draw_paper_basic,
     draw_paper_corridor,
     draw_paper_multi,
@@ -27,6 +26,7 @@ from fetchcarry_env.families import (
 )
 from fetchcarry_env.geometry import Rect
 from fetchcarry_env.scenario import DeliveryObject
+from fetchcarry_env.worlds.paper import PAPER_CORRIDOR_WIDTH
 from training.evaluation.splits import split_scenarios
 
 

@@ -24,9 +24,7 @@ from training.evaluation.references import (
 from training.evaluation.splits import EvalScenario, get_split, published_splits, split_scenarios
 from training.resolve import EXPERT
 
-SHORT_PARTS = {
-    f"{version}:{part}" for version in ("objects-v1", "apartment-v1") for part in ("dev", "test")
-}
+SHORT_PARTS = {f"{version}:{part}" for version in ("objects-v1", "apartment-v1") for part in ("dev", "test")}
 """Parts with fewer episodes than the protocol's 300 (test) and 100 (dev): their references were slow to compute."""
 
 

@@ -37,7 +37,7 @@ def test_env_benchmark_prints_every_figure_as_json_on_a_clean_stdout(capfd):
         "push step (0.15 m stroke), time / its physics steps' time",
         "random masked policy",
         "plan step, obs_mode state",
-        "obs_mode topdown (64): added to a step",
+        "obs_mode topdown (64, world): added to a step",
         "obs_mode rgbd (128, tiny): added to a step",
         "one observation, obs_mode state",
         "one observation, obs_mode topdown",
@@ -57,7 +57,7 @@ def test_env_benchmark_prints_every_figure_as_json_on_a_clean_stdout(capfd):
         assert figures[name]["goal"] == goal and isinstance(figures[name]["met"], bool)
     assert report["random_policy"]["episodes"] >= 1
     assert figures["one observation, obs_mode topdown"]["value"] == pytest.approx(0.95 + 7 * 64 * 64 / 1024, abs=0.01)
-    assert figures["obs_mode topdown (64): added to a step"]["goal"] == "0.3 ms or less"
+    assert figures["obs_mode topdown (64, world): added to a step"]["goal"] == "0.3 ms or less"
 
 
 def test_env_table_names_goals_and_floors(capsys):
