@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+from collections.abc import Iterator
 
 import pytest
 from cli_run import SAFETY_TIMEOUT_S
@@ -21,6 +22,7 @@ CTRL_C_WHILE_WAITING = textwrap.dedent(
     import os, signal, threading, time
     from training.pool import first_finished, local_pool
 
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # a background job starts with Ctrl-C ignored
     finished = 0
 
     def press():
@@ -51,6 +53,14 @@ def test_ctrl_c_while_a_pool_waits_lets_the_program_end(attempt: int) -> None:
         timeout=SAFETY_TIMEOUT_S,  # a hang, not a speed bound: the program ends in about a second
     )
     assert (process.returncode, process.stdout) == (0, "stopped\n"), process.stderr
+
+
+@pytest.fixture(autouse=True)
+def ctrl_c_raises() -> Iterator[None]:
+    """Ctrl-C as an interactive Python has it (a background job, as CI may run, starts with it ignored)."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
 
 
 def test_a_signal_within_the_block_is_acted_on_at_its_end() -> None:
