@@ -273,7 +273,8 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         **image_options: Any,
     ) -> None:
         self._check_arguments(scenario, family, render_mode, camera, width, height)
-        if not get_mode(obs_mode).keys and image_options:  # get_mode: ValueError for an unknown mode
+        images = bool(get_mode(obs_mode).keys)  # get_mode: ValueError for an unknown mode
+        if not images and image_options:
             raise TypeError(f"image options {sorted(image_options)} need an obs_mode with images, not {obs_mode!r}")
         # "human" is offered only where a window can open (Gymnasium's checker tries every mode listed).
         modes = ["rgb_array", "human"] if display_available() else ["rgb_array"]
@@ -302,7 +303,7 @@ class FetchCarryPushEnv(gym.Env[dict[str, np.ndarray], np.ndarray]):
         self.observation_space = observation_space(self.capacity)
         self.obs_mode = obs_mode
         self._images: ImageObservations | None = None  # None: the state observation alone
-        if get_mode(obs_mode).keys:
+        if images:
             self._images = ImageObservations(obs_mode, extent, self.capacity, image_options)
             self.observation_space = self._images.space(self.observation_space)
         self._sim = Simulation(gui=render_mode == "human")  # connects to PyBullet on first use
