@@ -106,7 +106,7 @@ PLANNER = [
     new_markdown_cell(
         "## How fast, on every family\n\n"
         "Times are the whole call, model building included, in this process (importing pyscipopt "
-        "alone costs 0.15 s per process). `fetchcarry bench planner` reproduces the paper's Section V."
+        "alone costs 0.15 s per process). `python -m benchmarks planner` reproduces the paper's Section V."
     ),
     new_code_cell(
         "import numpy as np\n"

@@ -1,4 +1,5 @@
-"""The ``fetchcarry`` command line run in-process, as every CLI test runs it, or in a subprocess for signal tests.
+"""The ``fetchcarry`` command line (and ``python -m benchmarks``) run in-process, as every CLI test runs it, or in a
+subprocess for signal tests.
 
 A subprocess test waits for a state (a file written, a line printed), never for a number of
 seconds: :data:`SAFETY_TIMEOUT_S` only stops a test that would otherwise hang, so that a
@@ -19,6 +20,7 @@ from typing import TypeVar
 import psutil
 import pytest
 
+from benchmarks.cli import main as benchmarks_main
 from training.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,8 +35,17 @@ def run(capsys: pytest.CaptureFixture, *argv: object) -> tuple[int, str, str]:
 
     Fails the test on any traceback in stderr: a command never prints one.
     """
+    return _in_process(main, capsys, argv)
+
+
+def bench(capsys: pytest.CaptureFixture, *argv: object) -> tuple[int, str, str]:
+    """``python -m benchmarks argv...`` in this process, as :func:`run` runs ``fetchcarry``."""
+    return _in_process(benchmarks_main, capsys, argv)
+
+
+def _in_process(command: Callable[[list[str]], int], capsys: pytest.CaptureFixture, argv: tuple[object, ...]):
     try:
-        status = main([str(a) for a in argv])
+        status = command([str(a) for a in argv])
     except SystemExit as exit_:
         status = exit_.code
     out, err = capsys.readouterr()

@@ -1,4 +1,4 @@
-"""Shared fixtures: the spec's example scenario."""
+"""Shared fixtures: the spec's example scenario, a private Minari folder."""
 
 from __future__ import annotations
 
@@ -22,3 +22,12 @@ def spec_example_dict() -> dict:
 @pytest.fixture
 def spec_example(spec_example_dict: dict) -> Scenario:
     return Scenario.from_dict(spec_example_dict)
+
+
+@pytest.fixture
+def minari_root(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A private MINARI_DATASETS_PATH under the test's temporary folder (the training and benchmark tests use it)."""
+    root = tmp_path / "minari"
+    root.mkdir()
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(root))
+    return root

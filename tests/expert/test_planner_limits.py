@@ -107,7 +107,7 @@ class _ClockRunningOut:
 
     It makes the safety stop come at a chosen point of the call (a count of clock readings,
     the same at any load), so the test checks what happens there; how long the call takes
-    after its deadline is measured by ``fetchcarry bench planner``, not asserted here.
+    after its deadline is measured by ``python -m benchmarks planner``, not asserted here.
     """
 
     def __init__(self, reads: int) -> None:

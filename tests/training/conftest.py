@@ -8,9 +8,6 @@ import pytest
 
 
 @pytest.fixture(autouse=True)
-def minari_root(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """Every test writes its datasets under its own temporary MINARI_DATASETS_PATH."""
-    root = tmp_path / "minari"
-    root.mkdir()
-    monkeypatch.setenv("MINARI_DATASETS_PATH", str(root))
-    return root
+def private_minari(minari_root: Path) -> Path:
+    """Every test writes its datasets under its own temporary MINARI_DATASETS_PATH (``minari_root``)."""
+    return minari_root

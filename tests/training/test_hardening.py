@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_run import ROOT, SAFETY_TIMEOUT_S, cli_process, finish, run, signal_while_frozen, wait_for
+from cli_run import ROOT, SAFETY_TIMEOUT_S, bench, cli_process, finish, run, signal_while_frozen, wait_for
 from gymnasium.envs.registration import EnvSpec
 
 import expert.planner
@@ -571,19 +571,20 @@ def test_a_seed_outside_0_to_2_32_is_exit_2(capsys, tmp_path: Path, command: str
 
 
 BENCH_AND_TRAIN_SEEDS = {
-    "bench env": ("bench", "env", "--episodes", "1"),
-    "bench generate": ("bench", "generate", "--episodes", "1"),
-    "bench learning-checks ppo": ("bench", "learning-checks", "ppo"),
-    "bench planner": ("bench", "planner"),
-    "train bc": ("train", "bc", "--dataset", DATASET_ID, "--out", "unused"),
-    "train ppo": ("train", "ppo", "--family", "basic", "--out", "unused"),
+    "benchmarks env": (bench, "env", "--episodes", "1"),
+    "benchmarks generate": (bench, "generate", "--episodes", "1"),
+    "benchmarks learning-checks ppo": (bench, "learning-checks", "ppo"),
+    "benchmarks planner": (bench, "planner"),
+    "train bc": (run, "train", "bc", "--dataset", DATASET_ID, "--out", "unused"),
+    "train ppo": (run, "train", "ppo", "--family", "basic", "--out", "unused"),
 }
 
 
 @pytest.mark.parametrize("value", ["-1", str(2**64)])
 @pytest.mark.parametrize("command", sorted(BENCH_AND_TRAIN_SEEDS))
-def test_bench_and_train_refuse_a_seed_outside_0_to_2_32(capsys, command: str, value: str) -> None:
-    status, _, err = run(capsys, *BENCH_AND_TRAIN_SEEDS[command], "--seed", value)
+def test_benchmarks_and_train_refuse_a_seed_outside_0_to_2_32(capsys, command: str, value: str) -> None:
+    runner, *argv = BENCH_AND_TRAIN_SEEDS[command]
+    status, _, err = runner(capsys, *argv, "--seed", value)
     assert status == 2 and "2**32 - 1" in err, err
     assert "internal error" not in err
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from fetchcarry_env.errors import InputError
-from tests.cli_run import run
+from tests.cli_run import bench, run
 from training.envs import make_env
 from training.errors import BenchmarkError
 
@@ -158,6 +158,6 @@ def test_an_other_obs_mode_given_for_an_image_run_is_refused(dagger_run: Path, c
     assert status == 2 and "trained on obs_mode 'topdown'" in err
 
 
-def test_bench_learned_evaluates_an_image_run_in_its_own_mode(dagger_run: Path, capsys: pytest.CaptureFixture):
-    status, out, _ = run(capsys, "bench", "learned", "--family", "basic", "--episodes", "1", dagger_run)
+def test_the_learned_study_evaluates_an_image_run_in_its_own_mode(dagger_run: Path, capsys: pytest.CaptureFixture):
+    status, out, _ = bench(capsys, "learned", "--family", "basic", "--episodes", "1", dagger_run)
     assert status == 0 and "success" in out and "1 held-out seeds" in out

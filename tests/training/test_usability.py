@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
-from cli_run import run
+from cli_run import bench, run
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "push_basic.json"
@@ -41,9 +41,9 @@ def test_demo_help_shows_the_defaults(capsys) -> None:
     assert status == 0 and "default episode.png" in out and "default 7" in out
 
 
-@pytest.mark.parametrize("command", [["plan"], ["validate"], ["rollout"], ["generate"], ["demo"], ["bench", "env"]])
+@pytest.mark.parametrize("command", [["plan"], ["validate"], ["rollout"], ["generate"], ["demo"], ["env"]])
 def test_help_texts_point_to_no_private_documents(capsys, command: list[str]) -> None:
-    status, out, _ = run(capsys, *command, "--help")
+    status, out, _ = (bench if command == ["env"] else run)(capsys, *command, "--help")
     assert status == 0 and "spec/" not in out and "``" not in out and ":mod:" not in out
 
 
@@ -87,13 +87,20 @@ def _commands(parser, prefix: tuple[str, ...] = ()) -> list[tuple[str, ...]]:
 
 def test_no_help_text_shows_an_escaped_percent(capsys) -> None:
     """``bench anytime --help`` printed "within 5 %% of": a %-escape in a text argparse never formats."""
+    from benchmarks.cli import build_parser as benchmarks_parser
     from training.cli import build_parser
 
-    commands = _commands(build_parser())
-    assert ("bench", "anytime") in commands
-    for command in commands:
-        status, out, _ = run(capsys, *command, "--help")
-        assert status == 0 and "%%" not in out, command
+    benchmarks = _commands(benchmarks_parser())
+    assert ("anytime",) in benchmarks
+    for runner, commands in ((run, _commands(build_parser())), (bench, benchmarks)):
+        for command in commands:
+            status, out, _ = runner(capsys, *command, "--help")
+            assert status == 0 and "%%" not in out, command
+
+
+def test_fetchcarry_bench_says_where_the_benchmarks_went(capsys) -> None:
+    status, out, err = run(capsys, "bench", "env")
+    assert status == 2 and out == "" and "python -m benchmarks --help" in err
 
 
 def test_the_docs_say_which_mask_env_unwrapped_gives() -> None:

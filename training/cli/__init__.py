@@ -5,12 +5,12 @@
 module per group of commands (:mod:`~training.cli.planning`: ``plan``,
 ``validate``; :mod:`~training.cli.episodes`: ``rollout``, ``demo``,
 ``evaluate-expert``; :mod:`~training.cli.data`: ``generate``, ``dataset``;
-:mod:`~training.cli.bench`: ``bench env|planner|generate|phases|projection``; :mod:`~training.cli.benchmark`:
-``benchmark``; :mod:`~training.cli.train`: ``train KIND``, one per registered learner; :mod:`~training.cli.checks`:
-``bench learned|learning-checks``;
+:mod:`~training.cli.benchmark`: ``benchmark``; :mod:`~training.cli.train`: ``train KIND``, one per
+registered learner;
 :mod:`~training.cli.reproduce`: ``reproduce``; :mod:`~training.cli.leaderboard`: ``leaderboard``;
 :mod:`~training.cli.compare`: ``compare``; ``references`` with ``benchmark``), each with a
-``register(commands, bench)`` function. Library code never speaks of flags or exit
+``register(commands)`` function. The benchmarks that print figures (speed, studies) are
+not part of the package: ``python -m benchmarks`` runs them from a checkout. Library code never speaks of flags or exit
 statuses: this package turns its exceptions into them (:mod:`~training.cli.exits`).
 
 Exit statuses: 0 success, 1 a negative answer (no plan, an invalid plan, a failed
@@ -26,7 +26,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from training.cli.commands import COMMANDS, missing_extra, needing_extras, selected
+from training.cli.commands import COMMANDS, MOVED_COMMANDS, missing_extra, needing_extras, selected
 from training.cli.exits import BAD_INPUT, INTERRUPTED, run_command, say
 
 DESCRIPTION = (
@@ -53,25 +53,21 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     loaded: set[str] = set()
     for name, entry in COMMANDS.items():
         if argv is None or name == chosen:
-            bench = _add_bench(commands, entry.help) if name == "bench" else None
             for module in (m for m in entry.modules if m not in loaded):
                 loaded.add(module)
-                importlib.import_module(module).register(commands, bench)
+                importlib.import_module(module).register(commands)
     for name, entry in COMMANDS.items():  # the other commands, listed by name: their modules stay unloaded
         if name not in commands.choices:
             commands.add_parser(name, help=entry.help, add_help=False)
     return parser
 
 
-def _add_bench(commands: argparse._SubParsersAction, help_line: str) -> argparse._SubParsersAction:
-    """The ``bench`` command, whose subcommands several modules add."""
-    parser = commands.add_parser("bench", help=help_line, description="Benchmarks that print figures.")
-    return parser.add_subparsers(dest="bench", metavar="WHAT", required=True)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``fetchcarry argv...`` and return its exit status (argparse's own errors exit 2 by ``SystemExit``)."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] in MOVED_COMMANDS:
+        say(MOVED_COMMANDS[argv[0]])
+        return BAD_INPUT
     try:
         args = build_parser(argv).parse_args(argv)
     except KeyboardInterrupt:

@@ -32,7 +32,7 @@ from training.evaluation.runner import RESULTS, SUMMARY, run_benchmark
 from training.evaluation.splits import SPLITS, get_split
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``benchmark`` to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "benchmark",

@@ -59,12 +59,14 @@ COMMANDS: dict[str, Entry] = {
         "the published table: expert data, every learned baseline per training seed, every split",
         ("training.cli.reproduce",),
     ),
-    "bench": Entry(
-        "measure speed: env steps, planner times, dataset generation",
-        ("training.cli.bench", "training.cli.checks"),
-    ),
 }
 """The commands in the order ``fetchcarry --help`` lists them."""
+
+MOVED_COMMANDS = {
+    "bench": "fetchcarry bench moved out of the package in 0.2.0: from a checkout of the repository, "
+    "run `python -m benchmarks --help` (speed benchmarks and studies)",
+}
+"""Commands that left ``fetchcarry``, and the message that says where they went (exit status 2)."""
 
 
 def summary(name: str) -> str:

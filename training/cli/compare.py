@@ -31,7 +31,7 @@ COMPARE_COMMAND = Command(
 )
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``compare`` to the ``fetchcarry`` parser."""
     parser = COMPARE_COMMAND.add(commands, run_compare)
     parser.add_argument("a", metavar="A", help="a method (policy label, seeds pooled), e.g. dagger")

@@ -54,7 +54,7 @@ GENERATE_COMMAND = Command(
 )
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``generate`` and ``dataset`` to the ``fetchcarry`` parser."""
     _add_generate_options(GENERATE_COMMAND.add(commands, run_generate))
     _register_dataset(commands)

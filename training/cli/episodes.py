@@ -40,7 +40,7 @@ DEFAULT_DEMO_PICTURE = "episode.png"
 DEFAULT_DEMO_SEED = 7  # a push-family scenario whose goal is covered by a block (push-aside needed)
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``rollout``, ``demo`` and ``evaluate-expert`` to the ``fetchcarry`` parser."""
     _register_rollout(commands)
     _register_demo(commands)

@@ -30,7 +30,7 @@ LEADERBOARD_COMMAND = Command(
 )
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``leaderboard`` to the ``fetchcarry`` parser."""
     parser = LEADERBOARD_COMMAND.add(commands, run_leaderboard)
     parser.add_argument("folders", nargs="+", metavar="DIR", help="benchmark output folders (each with results.json)")

@@ -70,7 +70,7 @@ VALIDATE_COMMAND = Command(
 )
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``plan`` and ``validate`` to the ``fetchcarry`` parser."""
     _add_plan_options(PLAN_COMMAND.add(commands, run_plan))
     _add_validate_options(VALIDATE_COMMAND.add(commands, run_validate))

@@ -23,7 +23,7 @@ FULL_ESTIMATE = "2 h 42 min measured for three seeds on 2 shared cores, 3.5 CPU 
 # episodes; about 1 h 45 min on two idle cores by its CPU seconds.
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``reproduce`` to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "reproduce",

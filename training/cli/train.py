@@ -43,7 +43,7 @@ WRITE_EPILOG = "Exit status: 0 written, 2 bad input (an OUT that holds a run alr
 DEST = "options."  # the prefix of the parsed options' names (a field "out" cannot clash with --out)
 
 
-def register(commands: argparse._SubParsersAction, bench: argparse._SubParsersAction) -> None:
+def register(commands: argparse._SubParsersAction) -> None:
     """Add ``train KIND`` for every registered learner to the ``fetchcarry`` parser."""
     parser = commands.add_parser(
         "train",

@@ -11,7 +11,7 @@ every state it visits, :class:`expert.ExpertPolicy` says what it would do, mappe
 the allowed candidate that stands for it (an expert action no candidate expresses, or
 the expert's idle fallback, gives no label, unless ``nearest_moves``: then an expert move
 no candidate expresses is labelled with the allowed move nearest it,
-:func:`training.evaluation.projection.nearest_move`; a state visited again in the same episode,
+:func:`benchmarks.studies.projection.nearest_move`; a state visited again in the same episode,
 as by a learner going round in circles, is labelled once). ``learner_families`` aims the
 learner episodes at chosen families (episode ``k`` of an iteration draws from the
 ``k``-th, cycled; for example ``push`` and ``multi-2``, the ``training`` family's sources

@@ -1,0 +1,64 @@
+"""Phase recording projects an expert move no candidate expresses onto the nearest allowed move candidate."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import fetchcarry_env  # noqa: F401  (registers the env ids)
+from benchmarks.studies.projection import check_projection, summarise_projection
+from fetchcarry_env.actions import Mode
+from fetchcarry_env.phase_env import PhaseActions
+from training.policies.phase_expert import PROJECTED_INFO, UNEXPRESSIBLE, PhaseExpert, nearest_move
+from training.rollout import run_episode
+
+UNEXPRESSIBLE_SEED = 0  # basic seed 0: its expert made a move no candidate expresses (the episode used to end there)
+MOVE_FIRST_SEED = 1  # basic seed 1: the expert's first action is a move
+
+
+def _env() -> gym.Env:
+    return gym.make("FetchCarryPushPhases-v0", family="basic")
+
+
+def test_projected_episode_succeeds_with_allowed_actions_and_costs_about_the_experts() -> None:
+    env = _env()
+    record = run_episode(env, PhaseExpert(env, time_limit=10.0), UNEXPRESSIBLE_SEED, record_masks=True)
+    env.close()
+    assert record.figures.outcome == "delivered"
+    assert record.infos[PROJECTED_INFO].sum() >= 1
+    masks = record.infos["action_mask"]
+    assert masks[np.arange(len(record.actions)), record.actions].all()
+    assert record.figures.replans >= 1  # the expert planned again from where the projected move left the base
+    (row,) = check_projection("basic", [UNEXPRESSIBLE_SEED])
+    assert row.success and row.expert_success and row.projected >= 1
+    assert abs(row.cost / row.expert_cost - 1.0) < 0.05
+    summary = summarise_projection([row])
+    assert summary["success"] == 1.0 and summary["projected_per_episode"] == row.projected
+
+
+@pytest.mark.parametrize("rule", ["end", "detour"])
+def test_nearest_move_rules_give_an_allowed_move(rule: str) -> None:
+    env = _env()
+    env.reset(seed=UNEXPRESSIBLE_SEED)
+    table = env.get_wrapper_attr("table")
+    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    off = table.actions[moves[-1]].copy()
+    off[1] += 1
+    index = nearest_move(env, off, rule)
+    assert index is not None and table.mask[index] and table.actions[index, 4] == int(Mode.MOVE)
+    with pytest.raises(ValueError):
+        nearest_move(env, off, "farthest")
+    env.close()
+
+
+def test_an_inexpressible_action_other_than_a_move_still_ends_the_episode(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(PhaseActions, "index_of", lambda self, action: None)  # nothing is expressible
+    env = _env()
+    record = run_episode(env, PhaseExpert(env, time_limit=10.0), MOVE_FIRST_SEED, record_masks=True)
+    env.close()
+    assert record.figures.outcome == UNEXPRESSIBLE and record.truncations[-1]
+    masks = record.infos["action_mask"]
+    allowed = masks[np.arange(len(record.actions)), record.actions]
+    assert len(allowed) >= 2 and allowed[:-1].all() and not allowed[-1]  # projected moves, then the pick
+    assert record.infos[PROJECTED_INFO][1:-1].all() and not record.infos[PROJECTED_INFO][-1]

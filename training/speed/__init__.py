@@ -1,1 +1,0 @@
-"""Speed benchmarks (``fetchcarry bench``): commands that print figures, never tests."""
