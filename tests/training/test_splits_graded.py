@@ -14,10 +14,8 @@ from training.evaluation import episodes, references, runner
 from training.evaluation.references import part_references
 from training.evaluation.splits import (
     APARTMENT_EPISODES,
-    APARTMENT_V2_EPISODES,
     DEV_EPISODES,
     OBJECTS_EPISODES,
-    OBJECTS_V2_EPISODES,
     TEST_EPISODES,
     folder_scenarios,
     get_split,
@@ -39,8 +37,8 @@ GRADED = {  # split version -> (its families, the capacity's objects and clutter
 SHORT_TESTS = {  # test parts of fewer than 300 episodes: their references were slow to compute (docs/protocol.md)
     "objects-v1:test": OBJECTS_EPISODES["test"],
     "apartment-v1:test": APARTMENT_EPISODES["test"],
-    "objects-v2:test": OBJECTS_V2_EPISODES["test"],
-    "apartment-v2:test": APARTMENT_V2_EPISODES["test"],
+    "objects-v2:test": TEST_EPISODES,
+    "apartment-v2:test": TEST_EPISODES,
 }
 
 
@@ -76,8 +74,8 @@ def test_test_parts_hold_300_episodes_but_where_the_reference_did_not_fit() -> N
         assert test.episodes == SHORT_TESTS.get(test.name, TEST_EPISODES)
     # as many episodes of every object count, in each part
     assert all(n % len(V1_OBJECT_COUNTS) == 0 for n in OBJECTS_EPISODES.values())
-    assert get_split("objects:dev").episodes == OBJECTS_V2_EPISODES["dev"] == DEV_EPISODES
-    assert get_split("apartment:dev").episodes == APARTMENT_V2_EPISODES["dev"] == DEV_EPISODES
+    assert get_split("objects:dev").episodes == DEV_EPISODES
+    assert get_split("apartment:dev").episodes == DEV_EPISODES
 
 
 def test_the_split_capacity_is_the_largest_of_its_families() -> None:
