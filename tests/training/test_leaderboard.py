@@ -61,7 +61,7 @@ def test_a_users_factory_is_merged_with_two_other_folders(folders: dict, capsys:
     assert [e["success"] for e in entries] == sorted((e["success"] for e in entries), reverse=True)
     made = next(e for e in entries if e["policy"] == "made")
     assert made["seeds"] == 2 and made["episodes"] == 8 and made["scenarios"] == 4
-    assert made["against_first"]["scenarios"] == 4 and made["against_first"]["seeds"] == 2
+    assert made["left_out"] == 0 and made["against_first"]["scenarios"] == 4
     assert entries[0]["against_first"] is None
     assert main(argv[:-1]) == 0
     text = capsys.readouterr().out
@@ -78,7 +78,7 @@ def test_compare_is_paired_on_the_same_scenarios(folders: dict, capsys: pytest.C
     assert result["scenarios"] == 4 and result["success_diff"] == pytest.approx(expected)
     assert result["success_low"] <= result["success_diff"] <= result["success_high"] <= 0
     assert result["cost_diff"] == pytest.approx(0.0)  # the same costs where both solved
-    assert result["seeds"] == 2 and result["seed_wins"] == 0
+    assert result["seeds"] == 1 and result["seed_wins"] == 0  # greedy's single run is one observation, not two
     assert main(["compare", "nobody", "greedy", "--results", str(folders["theirs"])]) == 2
 
 
@@ -104,6 +104,24 @@ def test_different_versions_references_or_a_method_twice_are_refused(folders: di
     assert main(["leaderboard", str(folders["mine"]), str(folders["mine"])]) == 2
     assert "in both" in capsys.readouterr().err
     assert main(["leaderboard", str(folders["root"] / "nothing-here")]) == 2
+
+
+def test_methods_are_ranked_on_the_scenarios_they_all_ran_and_the_table_says_so(folders: dict, capsys) -> None:
+    fewer = folders["root"] / "fewer"
+    fewer.mkdir(exist_ok=True)
+    greedy = [r for r in read_results(folders["theirs"] / "results.json") if r["policy"] == "greedy"]
+    write_results(fewer / "results.json", [{**r, "policy": "half"} for r in greedy[:2]])  # 2 of the 4 scenarios
+    assert main(["leaderboard", str(folders["theirs"]), str(fewer), "--json"]) == 0
+    entries = json.loads(capsys.readouterr().out)["iid-v2:test"]
+    assert {e["scenarios"] for e in entries} == {2}  # every row on the same two scenarios
+    assert {e["policy"]: e["left_out"] for e in entries} == {"expert": 2, "random-phases": 2, "greedy": 2, "half": 0}
+    assert main(["leaderboard", str(folders["theirs"]), str(fewer)]) == 0
+    assert "Ranked on the 2 scenarios every method ran; episodes on other scenarios left out: " in capsys.readouterr().out
+    elsewhere = folders["root"] / "elsewhere"
+    elsewhere.mkdir(exist_ok=True)
+    write_results(elsewhere / "results.json", [{**r, "policy": "moved", "seed": r["seed"] + 10**6} for r in greedy])
+    assert main(["leaderboard", str(folders["theirs"]), str(elsewhere)]) == 2
+    assert "no scenario was run by every method" in capsys.readouterr().err
 
 
 def test_a_folder_of_scenarios_is_tabled_by_family_not_by_file() -> None:

@@ -1,12 +1,21 @@
-"""The intervals: clustered over scenarios when seeds are pooled, paired for comparisons, never negative ratios."""
+"""The intervals: over seeds then scenarios when seeds are pooled, never narrower than Wilson's, paired for
+comparisons, never negative ratios."""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
-from training.stats import cluster_bootstrap, paired_bootstrap, sign_test, success_interval, wilson
+from training.stats import (
+    cluster_bootstrap,
+    paired_bootstrap,
+    seeded_success_interval,
+    sign_test,
+    success_interval,
+    wilson,
+)
 
 
 def test_clustered_failures_widen_the_interval_to_the_scenarios_n() -> None:
@@ -39,3 +48,28 @@ def test_paired_differences_and_the_sign_test() -> None:
     assert mean == pytest.approx(0.1) and 0 < low < 0.1 < high
     assert sign_test(3, 0) == pytest.approx(0.25)  # 3 of 3 seeds: two-sided p = 0.25, never "significant"
     assert sign_test(0, 0) == 1.0
+
+
+def test_seeds_that_disagree_widen_the_interval_over_seeds_then_scenarios() -> None:
+    # the audit's case: three seeds on 300 scenarios at 0.3 %, 24 % and 0 %, published as 8.1 % [6.4, 9.8]
+    outcomes = np.zeros((3, 300))
+    outcomes[0, :1] = 1.0
+    outcomes[1, ::4] = 1.0  # 75 of 300
+    low, high = seeded_success_interval(outcomes)
+    assert low == 0.0 and high > 0.2  # the seeds' spread, not only the scenarios'
+    *_, pooled_high = cluster_bootstrap(list(outcomes.sum(axis=0)), [3.0] * 300)
+    assert pooled_high < 0.15  # what holding the networks fixed gave
+    assert seeded_success_interval(outcomes) == (low, high)  # deterministic
+
+
+def test_a_pooled_interval_is_never_narrower_than_wilsons_of_the_same_counts() -> None:
+    outcomes = np.zeros((3, 20))
+    outcomes[0, 0] = 1.0  # 1 success in 60 episodes
+    low, high = seeded_success_interval(outcomes)
+    w_low, w_high = wilson(1, 60)
+    assert low <= w_low and high >= w_high
+    missing = outcomes.copy()
+    missing[2, 10:] = np.nan  # a seed that did not run half the scenarios: 50 episodes
+    low, high = seeded_success_interval(missing)
+    assert low <= wilson(1, 50)[0] and high >= wilson(1, 50)[1]
+    assert seeded_success_interval(outcomes[:1]) == wilson(1, 20)  # one seed: Wilson over its scenarios

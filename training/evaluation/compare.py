@@ -12,8 +12,8 @@ digest): per scenario, each method's success rate over its seeds and its mean co
 the seeds that succeeded; the paired bootstrap (:func:`training.stats.paired_bootstrap`)
 of the success difference over the common scenarios, and of the cost difference over
 the scenarios both solved; and the sign of the success difference over training seeds
-(seed ``i`` of A against seed ``i`` of B, or against B's one run) with its two-sided
-sign-test p-value.
+(seed ``i`` of A against seed ``i`` of B; against a single run, one pair: A's seeds
+averaged, so that one run is counted once) with its two-sided sign-test p-value.
 """
 
 from __future__ import annotations
@@ -168,9 +168,7 @@ def _seed_signs(a: list[dict[str, Any]], b: list[dict[str, Any]], common: set) -
         return [_rate(by_seed[s]) for s in sorted(by_seed, key=lambda s: (s is None, s or 0))]
 
     ra, rb = rates(a), rates(b)
-    if len(rb) == 1:
-        rb = rb * len(ra)
-    elif len(ra) == 1:
-        ra = ra * len(rb)
+    if min(len(ra), len(rb)) == 1:  # a single run is one observation: one pair, the other side's seeds averaged
+        ra, rb = [sum(ra) / len(ra)], [sum(rb) / len(rb)]
     pairs = list(zip(ra, rb, strict=False))
     return sum(x > y for x, y in pairs), sum(x < y for x, y in pairs), len(pairs)

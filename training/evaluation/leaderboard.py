@@ -11,8 +11,11 @@ against its schema). Folders are merged only when they are comparable:
   ``greedy``) are taken from the first folder that has them.
 
 Per split, methods (training seeds pooled, :func:`training.evaluation.compare.method_of`)
-are ranked by success, then SPL; each row gives the paired comparison with the row
-ranked first (:func:`training.evaluation.compare.compare`) on the scenarios both ran.
+are ranked by success, then SPL, on the scenarios every method ran (same seed and
+digest): a method's episodes on other scenarios are left out of its row and counted in
+``left_out`` (the table says so), and a split where no scenario is shared is refused.
+Each row gives the paired comparison with the row ranked first
+(:func:`training.evaluation.compare.compare`) on those scenarios.
 """
 
 from __future__ import annotations
@@ -46,9 +49,11 @@ class Entry:
     seeds: int
     folder: str
     against_first: Comparison | None
+    left_out: int = 0  # episodes of this method on scenarios not every method ran (not in its row)
 
     def to_dict(self) -> dict[str, Any]:
-        data = {"rank": self.rank, "seeds": self.seeds, "folder": self.folder, **asdict(self.row)}
+        data = {"rank": self.rank, "seeds": self.seeds, "folder": self.folder, "left_out": self.left_out}
+        data.update(asdict(self.row))
         data["against_first"] = asdict(self.against_first) if self.against_first else None
         return {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in data.items()}
 
@@ -102,32 +107,62 @@ def _check_comparable(records: list[dict[str, Any]]) -> None:
 
 
 def leaderboard(records: Sequence[dict[str, Any]]) -> dict[str, list[Entry]]:
-    """Per split, the methods ranked by success then SPL, each compared with the first.
+    """Per split, the methods ranked by success then SPL on the scenarios they all ran, each compared with the first.
 
-    The records are pooled and grouped by split and method once: the time is linear in
-    the records (and the rows' bootstraps), however many splits and methods they name.
+    :class:`LeaderboardError` when the methods of a split share no scenario. The records
+    are pooled and grouped by split and method once: the time is linear in the records
+    (and the rows' bootstraps), however many splits and methods they name.
     """
-    records = pooled(records)
-    table = grouped(records)
-    rows_by_split: dict[str, list[Row]] = {}
-    for row in summarise(records):
-        rows_by_split.setdefault(row.split, []).append(row)
+    table = grouped(pooled(records))
     out: dict[str, list[Entry]] = {}
-    for split, rows in rows_by_split.items():
-        methods = table[split]
-        ranked = sorted(rows, key=lambda row: (-row.success, -_or0(row.spl)))
+    for split, methods in table.items():
+        shared, left_out = _shared_scenarios(split, methods)
+        methods = {m: [r for r in group if _scenario(r) in shared] for m, group in methods.items()}
+        ranked = sorted(
+            summarise([r for group in methods.values() for r in group]), key=lambda row: (-row.success, -_or0(row.spl))
+        )
         entries = []
         for rank, row in enumerate(ranked, 1):
             against = None if rank == 1 else compare_methods(methods, row.policy, ranked[0].policy, split)
             group = methods[row.policy]
             seeds = len({r["training_seed"] for r in group} - {None}) or 1
-            entries.append(Entry(rank, row, seeds, group[0].get("folder", ""), against))
+            folder = group[0].get("folder", "")
+            entries.append(Entry(rank, row, seeds, folder, against, left_out[row.policy]))
         out[split] = entries
     return out
 
 
+def _scenario(record: dict[str, Any]) -> tuple[int, Any]:
+    return (record["seed"], record.get("digest"))
+
+
+def _shared_scenarios(split: str, methods: dict[str, list[dict[str, Any]]]) -> tuple[set, dict[str, int]]:
+    """The scenarios every method of ``split`` ran, and per method its episodes on the others."""
+    ran = {method: {_scenario(r) for r in group} for method, group in methods.items()}
+    shared = set.intersection(*ran.values())
+    if not shared:
+        counts = ", ".join(f"{method} {len(scenarios)}" for method, scenarios in ran.items())
+        raise LeaderboardError(
+            f"on {split} no scenario was run by every method (scenarios per method: {counts}); "
+            "benchmark them on the same split part and episodes"
+        )
+    return shared, {method: sum(_scenario(r) not in shared for r in group) for method, group in methods.items()}
+
+
 def _or0(value: float) -> float:
     return 0.0 if math.isnan(value) else value
+
+
+def _shared_note(entries: list[Entry]) -> list[str]:
+    """A line saying which episodes were left out because not every method ran their scenarios (none if none)."""
+    left = [f"{e.row.policy} {e.left_out}" for e in entries if e.left_out]
+    if not left:
+        return []
+    return [
+        f"Ranked on the {entries[0].row.scenarios} scenarios every method ran; episodes on other scenarios left "
+        f"out: {', '.join(left)}.",
+        "",
+    ]
 
 
 def leaderboard_markdown(board: dict[str, list[Entry]]) -> str:
@@ -135,9 +170,8 @@ def leaderboard_markdown(board: dict[str, list[Entry]]) -> str:
     lines = ["# Leaderboard", ""]
     for split, entries in board.items():
         first = entries[0].row.policy  # the column's header names it
+        lines += [f"## {split}", "", *_shared_note(entries)]
         lines += [
-            f"## {split}",
-            "",
             f"| rank | method | seeds | n | success [95 % CI] | cost ratio [95 % CI] | SPL | score | "
             f"success - {first} [95 % CI] | seeds up/down (p) | folder |",
             "| --- " * 11 + "|",

@@ -12,8 +12,9 @@ did not reproduce its reference (success, or cost to 1 mm).
 Episodes of one scenario (several training seeds of a method, pooled under one label)
 are one cluster: intervals resample scenarios (:mod:`training.stats`).
 
-- success rate, with a 95 % interval (Wilson with one episode per scenario, the
-  clustered bootstrap over scenarios with several);
+- success rate, with a 95 % interval: Wilson with one episode per scenario; with several
+  training seeds, the two-stage bootstrap (seeds, then scenarios), never narrower than
+  Wilson's interval of the same counts;
 - objects delivered per episode;
 - cost ratio: the policy's task cost over the reference's on the same scenario,
   averaged over the episodes both solved where the reference travelled at least
@@ -45,7 +46,13 @@ import numpy as np
 from training.evaluation.references import part_references, references_digest
 from training.evaluation.splits import SPLITS
 from training.resolve import EXPERT, RANDOM
-from training.stats import Z_95, cluster_bootstrap, success_interval, wilson  # noqa: F401 (re-exported: training.benchmark)
+from training.stats import (  # noqa: F401 (Z_95, wilson re-exported: training.benchmark)
+    Z_95,
+    cluster_bootstrap,
+    seeded_success_interval,
+    success_interval,
+    wilson,
+)
 
 SCORE_ZERO = "random-phases"  # the normalised score's zero: the random policy of the candidate-phase interface
 COST_AGREES_M = 1e-3  # task cost (its metres of travel and W1 per waiting phase): the expert row agrees within this
@@ -79,7 +86,7 @@ class Row:
     split: str
     episodes: int
     success: float
-    success_low: float  # 95 % interval (Wilson, or the clustered bootstrap over scenarios)
+    success_low: float  # 95 % interval (Wilson, or the two-stage bootstrap over seeds and scenarios)
     success_high: float
     delivered: float  # objects delivered per episode
     objects: float  # objects per episode
@@ -176,6 +183,31 @@ def clusters(group: list[dict[str, Any]], value: Any) -> tuple[list[float], list
     return list(sums.values()), list(counts.values())
 
 
+def outcome_table(group: list[dict[str, Any]]) -> np.ndarray:
+    """Successes as a (training seeds x scenarios) table, 1.0 or 0.0 (nan where a seed did not run a scenario).
+
+    A seed that ran a scenario more than once holds its mean there.
+    """
+    seeds = {s: i for i, s in enumerate(dict.fromkeys(r.get("training_seed") for r in group))}
+    scenarios = {s: j for j, s in enumerate(dict.fromkeys(r["seed"] for r in group))}
+    totals = np.zeros((len(seeds), len(scenarios)))
+    counts = np.zeros_like(totals)
+    for r in group:
+        cell = (seeds[r.get("training_seed")], scenarios[r["seed"]])
+        totals[cell] += float(r["success"])
+        counts[cell] += 1.0
+    with np.errstate(invalid="ignore"):
+        return np.where(counts > 0, totals / np.maximum(counts, 1.0), np.nan)
+
+
+def _success_interval(group: list[dict[str, Any]]) -> tuple[float, float]:
+    """A method's success interval: over training seeds then scenarios when it has several seeds
+    (:func:`training.stats.seeded_success_interval`), else over scenarios; never narrower than Wilson's."""
+    if any(r.get("training_seed") is not None for r in group):
+        return seeded_success_interval(outcome_table(group))
+    return success_interval(*clusters(group, lambda r: float(r["success"])))
+
+
 def _ratio(r: dict[str, Any], ref: dict[str, Any] | None) -> float | None:
     if ref is None or not (r["success"] and ref["success"] and ref["cost"] >= MIN_RATIO_COST_M):
         return None
@@ -194,7 +226,7 @@ def _row(
     zero_name = SCORE_ZERO if (SCORE_ZERO, split) in groups else RANDOM
     zero = groups.get((zero_name, split), [])
     wins = sum(r["success"] for r in group)
-    low, high = success_interval(*clusters(group, lambda r: float(r["success"])))
+    low, high = _success_interval(group)
     ratio, ratio_low, ratio_high = cluster_bootstrap(*clusters(group, lambda r: _ratio(r, reference_of(r, table))))
     weighted = [
         spl(r["success"], r["cost"], ref["cost"])

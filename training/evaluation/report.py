@@ -87,8 +87,9 @@ def legend(rows: Sequence[Row]) -> list[str]:
     )
     lines = [
         "- success: episodes that delivered every object, with a 95 % interval (Wilson with one episode per "
-        "scenario; with training seeds pooled, a bootstrap over scenarios that keeps each scenario's seeds "
-        "together). n: episodes (and distinct scenarios when seeds are pooled).",
+        "scenario; with training seeds pooled, a two-stage bootstrap: training seeds, then scenarios, keeping each "
+        "scenario's seeds together; never narrower than Wilson's interval of the same counts). n: episodes (and "
+        "distinct scenarios when seeds are pooled).",
         f"- cost ratio: the episode's task cost (travel, 10 per object and phase before its delivery, penalties: "
         f"minus the return) over {reference} on the same scenario, mean over episodes both "
         "solved, with a 95 % bootstrap interval over scenarios. SPL (cost): success x reference cost / "
@@ -137,7 +138,7 @@ def source_table(
 
     Markdown lines: ``caption``, then one row per policy (``policies``, or every one in the
     records' order; ``first`` heads the column) and one column per source, each cell the
-    success with its 95 % Wilson interval and the cost ratio in brackets; no lines when
+    success with its 95 % interval (as the table's) and the cost ratio in brackets; no lines when
     ``split`` has one source.
     """
     files = split.startswith("scenarios:")
