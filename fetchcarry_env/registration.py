@@ -2,9 +2,21 @@
 
 from gymnasium.envs.registration import register, registry
 
+from fetchcarry_env.kinematics import WAIT_COST
+
 ENV_ID = "FetchCarryPush-v0"  # the env's own MultiDiscrete phase actions
 PHASES_ENV_ID = "FetchCarryPushPhases-v0"  # the same env with Discrete(K) candidate phases and exact masks
 MAX_EPISODE_STEPS = 50  # phases; the expert needs at most about 4 per object plus detours
+
+
+def do_nothing_return(objects: int, phases: int = MAX_EPISODE_STEPS) -> float:
+    """The return of an episode that delivers nothing, travels nowhere and breaks no rule, over ``phases`` phases.
+
+    Each phase costs ``W1`` (:data:`~fetchcarry_env.kinematics.WAIT_COST`) for each of the
+    ``objects`` not at its goal: ``-W1 * objects * phases``, -500 per object over the
+    env's 50 phases. The benchmark's score is 0 there.
+    """
+    return -WAIT_COST * objects * phases
 
 
 def register_envs() -> None:

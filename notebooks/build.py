@@ -14,7 +14,6 @@ import nbformat
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
-from training.evaluation.metrics import SCORE_ZERO
 from training.evaluation.splits import get_split
 
 HERE = Path(__file__).resolve().parent
@@ -192,12 +191,10 @@ BENCHMARK = [
         "`summary.md` holds the table: success with a 95 % Wilson interval, cost ratio to the reference on the "
         "same scenarios (episodes both solved), an SPL-style cost-weighted success, phases and pushes next to "
         "the reference's, invalid actions and contacts, the time per decision next to the planner's, and the "
-        "normalised score 100 (R - R_zero) / (R_reference - R_zero): R is the policy's mean episode return (minus "
-        "its task cost) on the split, R_reference the mean return of the reference on the same scenarios (the "
-        "expert's proven optimum shipped with a published split, else this run's expert), and R_zero the mean "
-        "return of "
-        f"`{SCORE_ZERO}` (uniform over the allowed candidate phases; `random`, the masked random policy, where "
-        f"`{SCORE_ZERO}` did not run). So `{SCORE_ZERO}` scores 0 and the reference 100."
+        "score: 0 for doing nothing (every object waiting all 50 phases, a return of -500 per object), 100 for "
+        "the reference (the expert's proven optimum shipped with a published split, else this run's expert), "
+        "linear in the episode returns (minus the task cost) in between, and a failed episode never above a "
+        "successful one on the same scenario: 100 x sum(R - F) / sum(R_reference - F)."
     ),
     new_code_cell(
         "from IPython.display import Image, Markdown, display\n\n"

@@ -14,6 +14,7 @@ import pytest
 
 import fetchcarry_env  # noqa: F401  (registers FetchCarryPush-v0)
 from fetchcarry_env.errors import InputError
+from fetchcarry_env.registration import do_nothing_return
 from fetchcarry_env.scenario import Scenario
 from training.data.datasets import dataset_exists, dataset_path, episode_metadata, info, replay
 from training.data.generate import ClockDecidedError, EpisodeSource, GenerationConfig, generate, run_indexed_episode
@@ -70,6 +71,16 @@ def test_round_trip_through_minari(generated: str) -> None:
             assert reward == pytest.approx(episode.rewards[t])
         assert terminated and env.unwrapped.state.holding is None
     env.close()
+
+
+def test_an_expert_dataset_carries_the_scores_0_and_100_for_minaris_normalised_score(generated: str) -> None:
+    dataset = minari.load_dataset(generated)
+    returns = np.array([episode.rewards.sum() for episode in dataset.iterate_episodes()])
+    floors = [do_nothing_return(len(episode_metadata(dataset, k)["scenario"]["objects"])) for k in range(EPISODES)]
+    assert dataset.storage.metadata["ref_max_score"] == pytest.approx(returns.mean())  # the expert: 100
+    assert dataset.storage.metadata["ref_min_score"] == pytest.approx(np.mean(floors))  # doing nothing: 0
+    assert minari.get_normalized_score(dataset, returns).mean() == pytest.approx(1.0)
+    assert minari.get_normalized_score(dataset, np.array(floors)).mean() == pytest.approx(0.0)
 
 
 def test_replay_reports_an_exact_reproduction(generated: str) -> None:

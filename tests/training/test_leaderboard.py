@@ -116,7 +116,9 @@ def test_methods_are_ranked_on_the_scenarios_they_all_ran_and_the_table_says_so(
     assert {e["scenarios"] for e in entries} == {2}  # every row on the same two scenarios
     assert {e["policy"]: e["left_out"] for e in entries} == {"expert": 2, "random-phases": 2, "greedy": 2, "half": 0}
     assert main(["leaderboard", str(folders["theirs"]), str(fewer)]) == 0
-    assert "Ranked on the 2 scenarios every method ran; episodes on other scenarios left out: " in capsys.readouterr().out
+    assert (
+        "Ranked on the 2 scenarios every method ran; episodes on other scenarios left out: " in capsys.readouterr().out
+    )
     elsewhere = folders["root"] / "elsewhere"
     elsewhere.mkdir(exist_ok=True)
     write_results(elsewhere / "results.json", [{**r, "policy": "moved", "seed": r["seed"] + 10**6} for r in greedy])

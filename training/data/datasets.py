@@ -56,6 +56,7 @@ from fetchcarry_env.errors import InputError
 from fetchcarry_env.jsontext import JsonInputError, describe, parse_json, read_json
 from fetchcarry_env.observation import Capacity
 from fetchcarry_env.observations import modes
+from fetchcarry_env.registration import do_nothing_return
 from training.data.sources import GenerationConfig
 from training.data.staging import Staging, datasets_root
 from training.envs import make_env
@@ -200,8 +201,21 @@ def _write_dataset(config: GenerationConfig, staging: Staging, building: Path) -
     )
     episodes = range(config.episodes)
     metadata: list[dict[str, Any]] = []  # filled while the episodes are written: each staged file is read once
-    storage.update_episodes(_buffers(staging, episodes, metadata))
+    returns: list[tuple[float, float]] = []  # (the episode's return, its do-nothing return), likewise
+    storage.update_episodes(_buffers(staging, episodes, metadata, returns))
     storage.update_episode_metadata(metadata, episodes)
+    if config.source.policy == "expert" and returns:
+        storage.update_metadata(reference_scores(returns))
+
+
+def reference_scores(returns: list[tuple[float, float]]) -> dict[str, float]:
+    """Minari's ``ref_min_score`` and ``ref_max_score`` of an expert dataset: the mean do-nothing return of its
+    scenarios and the expert's mean return on them, the benchmark score's 0 and 100, so that
+    ``minari.get_normalized_score(dataset, returns)`` is that score over 100 on scenarios of the same family."""
+    return {
+        "ref_min_score": float(np.mean([floor for _, floor in returns])),
+        "ref_max_score": float(np.mean([ret for ret, _ in returns])),
+    }
 
 
 def check_free_space(staging: Staging) -> None:
@@ -300,13 +314,17 @@ def _description(config: GenerationConfig) -> str:
     )
 
 
-def _buffers(staging: Staging, episodes: range, metadata: list[dict[str, Any]]) -> Iterator[Any]:
-    """Minari's buffer of each staged episode; appends each episode's metadata to ``metadata``."""
+def _buffers(
+    staging: Staging, episodes: range, metadata: list[dict[str, Any]], returns: list[tuple[float, float]]
+) -> Iterator[Any]:
+    """Minari's buffer of each staged episode; appends each episode's metadata to ``metadata`` and its return and
+    do-nothing return to ``returns``."""
     from minari.data_collector import EpisodeBuffer
 
     for k in episodes:
         record = staging.read(k)
         metadata.append(_episode_metadata(record))
+        returns.append((float(np.sum(record.rewards)), do_nothing_return(len(record.scenario["objects"]))))
         yield EpisodeBuffer(
             id=k,
             seed=record.seed,

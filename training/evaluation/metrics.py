@@ -27,11 +27,9 @@ are one cluster: intervals resample scenarios (:mod:`training.stats`).
 - invalid actions and contacts per episode;
 - time per decision: the policy's ``predict``, the env's action masks handed to it, and
   the whole step (policy, mask and the env's step), next to the planner's;
-- the normalised score ``100 * (R - R_zero) / (R_reference - R_zero)``, ``R`` the mean
-  episode return (the env's reward summed: minus the task cost) over the split, ``R_zero`` that of
-  ``random-phases`` (uniform over the allowed candidate phases, the interface learners
-  act in; ``random``, the MultiDiscrete masked policy, only where random-phases did not
-  run, as :attr:`Row.score_zero` says).
+- the score (:func:`score`): 0 for doing nothing, 100 for the reference, linear in the
+  episode return in between (the env's reward summed: minus the task cost), and a failed
+  episode never above a successful one on the same scenario.
 """
 
 from __future__ import annotations
@@ -43,9 +41,10 @@ from typing import Any
 
 import numpy as np
 
+from fetchcarry_env.registration import do_nothing_return
 from training.evaluation.references import part_references, references_digest
 from training.evaluation.splits import SPLITS
-from training.resolve import EXPERT, RANDOM
+from training.resolve import EXPERT
 from training.stats import (  # noqa: F401 (Z_95, wilson re-exported: training.benchmark)
     Z_95,
     cluster_bootstrap,
@@ -54,9 +53,39 @@ from training.stats import (  # noqa: F401 (Z_95, wilson re-exported: training.b
     wilson,
 )
 
-SCORE_ZERO = "random-phases"  # the normalised score's zero: the random policy of the candidate-phase interface
+RANDOM_PHASES = "random-phases"  # runs beside the expert in every benchmark: uniform over the allowed candidates
 COST_AGREES_M = 1e-3  # task cost (its metres of travel and W1 per waiting phase): the expert row agrees within this
 MIN_RATIO_COST_M = 1e-3  # metres: a reference that travelled less has no cost ratio (it would be huge, or infinite)
+
+
+def scored_return(record: dict[str, Any]) -> float:
+    """``record``'s return as the score counts it: at least the do-nothing floor for a success, at most it for a
+    failure (:func:`fetchcarry_env.registration.do_nothing_return` of its objects)."""
+    floor = do_nothing_return(int(record["objects"]))
+    return max(record["return"], floor) if record["success"] else min(record["return"], floor)
+
+
+def score(pairs: Iterable[tuple[dict[str, Any], dict[str, Any]]]) -> float:
+    """The score of episodes and their scenarios' references: ``100 * sum(R - F) / sum(R_ref - F)``.
+
+    ``pairs`` holds each episode with its scenario's reference; only references that
+    succeeded count. ``F`` is the scenario's do-nothing return (every object waiting all
+    the env's phases), ``R`` the episode's :func:`scored_return` and ``R_ref`` the
+    reference's return: a policy that does nothing scores 0 and the reference 100; a
+    failed episode counts at most ``F`` and a successful one at least ``F``, so that on a
+    scenario no failure scores above a success. Linear in the returns otherwise: with
+    ``ref_min_score`` the mean ``F`` and ``ref_max_score`` the mean ``R_ref`` of the same
+    scenarios, ``minari.get_normalized_score`` gives the same number (divided by 100).
+    nan without a successful reference.
+    """
+    gained = span = 0.0
+    for record, reference in pairs:
+        if reference is None or not reference["success"]:
+            continue
+        floor = do_nothing_return(int(record["objects"]))
+        gained += scored_return(record) - floor
+        span += reference["return"] - floor
+    return 100.0 * gained / span if span > 0 else math.nan
 
 
 def spl(success: bool, cost: float, expert_cost: float) -> float:
@@ -103,10 +132,9 @@ class Row:
     decision_ms: float  # mean time of the policy's predict per decision
     mask_ms: float  # mean time of the env's action masks per decision
     planner_ms: float  # the expert's time per decision on the same scenarios
-    score: float  # 100 (R - R_zero) / (R_reference - R_zero); nan if they tie
+    score: float  # 0 doing nothing, 100 the reference (:func:`score`); nan without a successful reference
     scenarios: int = 0  # distinct scenarios (episodes / scenarios = episodes per scenario, the seeds pooled)
     step_ms: float = math.nan  # mean wall time of a whole step (policy, mask, env step) per decision
-    score_zero: str = SCORE_ZERO  # the policy whose mean return is the score's 0
     reference: str = "fixed"  # "fixed" (the split's reference file), "expert run" (this run's expert), or "mixed"
     disagreements: int = 0  # the expert row: scenarios where it did not reproduce the fixed reference
 
@@ -223,8 +251,6 @@ def _row(
 ) -> Row:
     expert = {r["seed"]: r for r in groups.get((EXPERT, split), [])}
     refs = [reference_of(r, table) for r in group]
-    zero_name = SCORE_ZERO if (SCORE_ZERO, split) in groups else RANDOM
-    zero = groups.get((zero_name, split), [])
     wins = sum(r["success"] for r in group)
     low, high = _success_interval(group)
     ratio, ratio_low, ratio_high = cluster_bootstrap(*clusters(group, lambda r: _ratio(r, reference_of(r, table))))
@@ -234,9 +260,6 @@ def _row(
         if ref is not None and ref["success"]
     ]
     known = [ref for ref in refs if ref is not None]
-    r_policy, r_reference = _mean(r["return"] for r in group), _mean(x["return"] for x in known)
-    r_zero = _mean(r["return"] for r in zero)
-    span = r_reference - r_zero
     kinds = {ref["fixed"] for ref in known}
     return Row(
         policy=policy,
@@ -260,10 +283,9 @@ def _row(
         decision_ms=_mean(r["decision_ms"] for r in group),
         mask_ms=_mean(r.get("mask_ms", 0.0) for r in group),
         planner_ms=_mean(expert[r["seed"]]["decision_ms"] for r in group if r["seed"] in expert),
-        score=100.0 * (r_policy - r_zero) / span if abs(span) > 1e-12 else math.nan,
+        score=score(zip(group, refs, strict=True)),
         scenarios=len({r["seed"] for r in group}),
         step_ms=_mean(r["step_ms"] for r in group if "step_ms" in r),
-        score_zero=zero_name,
         reference="mixed" if len(kinds) > 1 else "fixed" if kinds == {True} else "expert run",
         disagreements=_disagreements(group, refs) if policy == EXPERT else 0,
     )

@@ -73,7 +73,6 @@ def summary_markdown(rows: Sequence[Row], title: str = "Benchmark") -> str:
 def legend(rows: Sequence[Row]) -> list[str]:
     """The lines under a table of ``rows`` that say what each column means and where its reference comes from."""
     kinds = sorted({row.reference for row in rows})
-    zeros = sorted({row.score_zero for row in rows})
     disagreements = [
         f"{row.split}: {row.disagreements} of {row.episodes}"
         for row in rows
@@ -99,9 +98,10 @@ def legend(rows: Sequence[Row]) -> list[str]:
         "- policy ms: wall time of the policy's decision, the expert's (the planner's) in brackets; "
         "mask ms: the env's action masks handed to the policy; step ms: the whole step (policy, mask and the "
         "env), per decision. Timings depend on the machine's load.",
-        f"- score: 100 x (R - R_zero) / (R_reference - R_zero), R the mean episode return (the env's reward: "
-        f"minus the task cost); the zero is {' / '.join(zeros)} (uniform over the "
-        "allowed candidate phases, the interface learners act in).",
+        "- score: 100 x sum(R - F) / sum(R_reference - F) over the scenarios whose reference succeeded, R the "
+        "episode's return (the env's reward: minus the task cost), F the scenario's do-nothing return (every "
+        "object waiting all 50 phases: -500 per object): 0 for doing nothing, 100 for the reference; a failed "
+        "episode counts at most F and a successful one at least F, so no failure scores above a success.",
     ]
     if disagreements:
         lines.append(

@@ -3,7 +3,7 @@
 :func:`run_benchmark` always runs the two reference policies, ``expert`` (the MILP
 planner: on a published split's part, checked against the split's fixed reference,
 which every cost ratio is to; elsewhere every cost ratio is to its cost on the same
-scenario) and ``random-phases`` (the normalised score's zero), next to the policies
+scenario) and ``random-phases`` (the random policy of the candidate phases), next to the policies
 asked for. Every policy acts in an env of the split's capacity and physics
 (:func:`acting_spec`: ``objects`` has room for eight objects, ``perturbed`` varies the
 clutter's mass and friction), as the split's reference was computed. Episodes run in this process
@@ -45,7 +45,7 @@ from fetchcarry_env.observations import mode_names
 from training.data.generate import BACKENDS, progress_bar
 from training.errors import BenchmarkError
 from training.evaluation.episodes import close_all, run_task
-from training.evaluation.metrics import SCORE_ZERO, Row, by_objects, fill_expert_costs, summarise
+from training.evaluation.metrics import RANDOM_PHASES, Row, by_objects, fill_expert_costs, summarise
 from training.evaluation.references import reference_for
 from training.evaluation.report import source_table, summary_markdown
 from training.evaluation.results import RESULTS, ResultsLock, read_results, scenario_digest
@@ -182,20 +182,22 @@ def finished_records(out: Path, tasks: list[Task]) -> tuple[list[dict[str, Any]]
 
 
 def with_references(policies: list[str]) -> list[PolicySpec]:
-    """The specs of ``policies`` with ``expert`` and ``random-phases`` (the score's zero) first (added if missing)."""
+    """The specs of ``policies`` with ``expert`` and ``random-phases`` first (added if missing)."""
     if not policies:
         raise BenchmarkError("give at least one policy")
     specs = resolve_all(policies)
-    fixed = (EXPERT, SCORE_ZERO, RANDOM)
+    fixed = (EXPERT, RANDOM_PHASES, RANDOM)
     clashes = [s.run or s.user for s in specs if (s.run or s.user) is not None and s.name in fixed]
     if clashes:
         raise BenchmarkError(
             f"a run folder may not be named {' or '.join(map(repr, fixed))} (the references): {clashes[0]}"
         )
     names = [s.name for s in specs]
-    references = [resolve(name) for name in (EXPERT, SCORE_ZERO) if name not in names]
+    references = [resolve(name) for name in (EXPERT, RANDOM_PHASES) if name not in names]
     ordered = references + specs
-    return sorted(ordered, key=lambda s: (s.name != EXPERT, s.name != SCORE_ZERO))  # stable: the rest keep their order
+    return sorted(
+        ordered, key=lambda s: (s.name != EXPERT, s.name != RANDOM_PHASES)
+    )  # stable: the rest keep their order
 
 
 def with_observations(specs: list[PolicySpec], obs_mode: str | None) -> list[PolicySpec]:

@@ -73,12 +73,11 @@ def _caption(rows: Sequence[Row], bars: bool = True, missing_interval: bool = Fa
     if any(r.scenarios and r.scenarios != r.episodes for r in rows):
         pooled = _per_group([r for r in rows if r.scenarios and r.scenarios != r.episodes], lambda r: r.scenarios)
         text += f" (seeds pooled over {pooled} scenarios; intervals resample scenarios)"
-    zero = sorted({r.score_zero for r in rows})
     kinds = sorted({r.reference for r in rows})
     reference = "the split's fixed reference" if kinds == ["fixed"] else f"the reference ({', '.join(kinds)})"
     stub = "; hatched stub marked 0: no success" if bars else ""
     no_interval = f"; {NO_INTERVAL}: fewer than two scenarios, no interval" if missing_interval else ""
-    return text + f"{stub}{no_interval}; cost ratio to {reference}; score zero {'/'.join(zero)}"
+    return text + f"{stub}{no_interval}; cost ratio to {reference}; score 0: doing nothing"
 
 
 def _per_group(rows: Sequence[Row], count: Callable[[Row], int]) -> str:
