@@ -84,7 +84,7 @@ def test_expert_and_random_end_to_end(tiny: Path):
     assert all(r["cost"] >= r["travel"] + WAIT_COST * (r["objects"] - r["delivered"]) > r["travel"] for r in random)
     summary = (tiny / "summary.md").read_text()
     assert "| expert | iid-v2:test | 2 | 100.0% [" in summary and "| random | iid-v2:test | 2 |" in summary
-    assert "the zero is random-phases" in summary and "fixed reference" in summary
+    assert "0 for doing nothing, 100 for the reference" in summary and "fixed reference" in summary
     assert "Per scenario source (iid-v2:test)" in summary and "| policy | basic | push |" in summary
     assert "| expert | 100% [21%, 100%] (1.00) | 100% [21%, 100%] (1.00) |" in summary  # one episode each
     assert "| random | 0% [0%, 79%] (-) | 0% [0%, 79%] (-) |" in summary
@@ -109,7 +109,8 @@ def test_workers_give_the_same_results_and_json_rows(tiny: Path, tmp_path: Path,
     assert [r["policy"] for r in rows] == ["expert", "random-phases", "random"]
     assert (rows[0]["success"], rows[2]["success"]) == (1.0, 0.0)
     assert rows[0]["cost_ratio"] == pytest.approx(1.0, rel=1e-9) and rows[2]["cost_ratio"] is None
-    assert rows[1]["score"] == 0.0 and rows[0]["score"] == pytest.approx(100.0, rel=1e-9)
+    assert rows[0]["score"] == pytest.approx(100.0, rel=1e-9)
+    assert rows[2]["score"] <= 0.0  # every episode failed: none above doing nothing
 
 
 def test_scenario_folder(tmp_path: Path):
@@ -302,8 +303,8 @@ def test_summary_by_hand():
     assert learned.success == 0.5
     assert learned.cost_ratio == pytest.approx(1.2)  # only the solved seed: 12 / 10
     assert learned.spl == pytest.approx((10 / 12 + 0) / 2)
-    # R: learned -6, expert 2.5, random -30: 100 * (-6 + 30) / (2.5 + 30)
-    assert learned.score == pytest.approx(100 * 24 / 32.5)
+    # doing nothing: -500 (one object, 50 phases); the failure counts -500, the success its -2; expert 0 and 5
+    assert learned.score == pytest.approx(100 * ((-2 + 500) + 0) / ((0 + 500) + (5 + 500)))
     assert rows["expert"].score == pytest.approx(100.0) and rows["random"].score == pytest.approx(0.0)
     assert learned.contacts == 1.0 and rows["random"].invalid_actions == 2.0
     assert learned.expert_phases == 4.0
