@@ -224,8 +224,7 @@ def outcome_table(group: list[dict[str, Any]]) -> np.ndarray:
         cell = (seeds[r.get("training_seed")], scenarios[r["seed"]])
         totals[cell] += float(r["success"])
         counts[cell] += 1.0
-    with np.errstate(invalid="ignore"):
-        return np.where(counts > 0, totals / np.maximum(counts, 1.0), np.nan)
+    return np.where(counts > 0, totals / np.maximum(counts, 1.0), np.nan)
 
 
 def _success_interval(group: list[dict[str, Any]]) -> tuple[float, float]:
