@@ -43,7 +43,9 @@ def bench(capsys: pytest.CaptureFixture, *argv: object) -> tuple[int, str, str]:
     return _in_process(benchmarks_main, capsys, argv)
 
 
-def _in_process(command: Callable[[list[str]], int], capsys: pytest.CaptureFixture, argv: tuple[object, ...]):
+def _in_process(
+    command: Callable[[list[str]], int], capsys: pytest.CaptureFixture, argv: tuple[object, ...]
+) -> tuple[int, str, str]:
     try:
         status = command([str(a) for a in argv])
     except SystemExit as exit_:

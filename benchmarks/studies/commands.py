@@ -23,6 +23,15 @@ from training.cli.text import echo
 from training.learners.options import HELDOUT_SEED_BASE, BCConfig, check_family
 from training.resolve import run_image_options
 
+PROJECTION_COMMAND = Command(
+    name="projection",
+    help="the expert recorded in candidate phases (inexpressible moves projected) against its own episodes",
+    description="Run the MILP expert through FetchCarryPushPhases-v0 as `generate --interface phases` records "
+    "it (a move no candidate expresses replaced by the nearest allowed move, then the expert plans again) and "
+    "on its own, on the same seeds, and print both success rates, the projected moves per episode and the "
+    "extra travel cost of the projection (JSON).",
+)
+
 
 def register(bench: argparse._SubParsersAction) -> None:
     """Add ``learned``, ``learning-checks`` and ``projection`` to the parser of ``python -m benchmarks``."""
@@ -47,16 +56,6 @@ def register(bench: argparse._SubParsersAction) -> None:
     learned.set_defaults(handler=run_learned)
     _register_learning_checks(bench)
     _register_projection(bench)
-
-
-PROJECTION_COMMAND = Command(
-    name="projection",
-    help="the expert recorded in candidate phases (inexpressible moves projected) against its own episodes",
-    description="Run the MILP expert through FetchCarryPushPhases-v0 as `generate --interface phases` records "
-    "it (a move no candidate expresses replaced by the nearest allowed move, then the expert plans again) and "
-    "on its own, on the same seeds, and print both success rates, the projected moves per episode and the "
-    "extra travel cost of the projection (JSON).",
-)
 
 
 def _register_learning_checks(bench: argparse._SubParsersAction) -> None:

@@ -12,6 +12,7 @@ import re
 from collections.abc import Sequence
 from typing import Any
 
+from fetchcarry_env.registration import MAX_EPISODE_STEPS, do_nothing_return
 from training.evaluation.metrics import Row, grouped
 
 __all__ = ["COLUMNS", "source_table", "summary_markdown"]
@@ -100,7 +101,8 @@ def legend(rows: Sequence[Row]) -> list[str]:
         "env), per decision. Timings depend on the machine's load.",
         "- score: 100 x sum(R - F) / sum(R_reference - F) over the scenarios whose reference succeeded, R the "
         "episode's return (the env's reward: minus the task cost), F the scenario's do-nothing return (every "
-        "object waiting all 50 phases: -500 per object): 0 for doing nothing, 100 for the reference; a failed "
+        f"object waiting all {MAX_EPISODE_STEPS} phases: {do_nothing_return(1):.0f} per object): 0 for doing "
+        "nothing, 100 for the reference; a failed "
         "episode counts at most F and a successful one at least F, so no failure scores above a success.",
     ]
     if disagreements:
