@@ -13,7 +13,6 @@ when every goal is covered: no phase is added for that.)
 from __future__ import annotations
 
 import heapq
-import itertools
 import math
 from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
@@ -24,7 +23,7 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.moves import LeastMoves, problem_moves
 from expert.milp.problem import Problem
-from expert.milp.skeleton_graph import ActionGraph, Classes, SkeletonGraph, all_done, skeleton_moves
+from expert.milp.skeleton_graph import ActionGraph, SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import WAIT_COST, travel_cost
 
 
@@ -199,39 +198,25 @@ def cheapest_schedule(
     return -math.inf, []
 
 
-MAX_SETS = 4_096  # sets of delivered objects and pushed pieces the skeleton graph tells apart (10 objects, 2 pieces)
-
-
 class PairCosts:
     """The cost of a skeleton step, least phases and least travel through one pose (cached), and the graph of them.
 
     Every bound of this module and of :mod:`expert.milp.conditional` searches the one
-    :class:`~expert.milp.skeleton_graph.SkeletonGraph` that :meth:`graph` builds. Its states
-    tell apart at most ``max_sets`` sets of delivered objects and pushed pieces: beyond, the
-    most alike are merged into classes (:func:`alike_classes`).
+    :class:`~expert.milp.skeleton_graph.SkeletonGraph` that :meth:`graph` builds.
     """
 
-    def __init__(self, problem: Problem, deadline: Deadline = NEVER, max_sets: int = MAX_SETS) -> None:
+    def __init__(self, problem: Problem, deadline: Deadline = NEVER) -> None:
         self.problem = problem
         self.actions = _actions_by_key(problem)
         self.moves = problem_moves(problem)
         self.steps: dict = {}
-        self.classes = Classes.of(problem, alike_classes(problem, self.actions, max_sets))
         self._graph: SkeletonGraph | None = None
 
     def graph(self, deadline: Deadline = NEVER) -> SkeletonGraph:
-        """The skeleton graph of the problem with these steps' costs (built on the first call, then kept).
-
-        A merged object's or piece's actions take the poses of every member of its class.
-        """
+        """The skeleton graph of the problem with these steps' costs (built on the first call, then kept)."""
         if self._graph is None:
             poses = {key: action.poses for key, action in self.actions.items()}
-            for key in poses:
-                group = self.classes.members.get(key[1])
-                if group is not None:
-                    union = (pose for member in group for pose in self.actions[key[0], member].poses)
-                    poses[key] = tuple(dict.fromkeys(union))
-            self._graph = SkeletonGraph.build(self.problem, poses, self.step, deadline, self.classes)
+            self._graph = SkeletonGraph.build(self.problem, poses, self.step, deadline)
         return self._graph
 
     def step(self, where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:
@@ -248,46 +233,6 @@ class PairCosts:
                 travel += _gap_cost(grid, start, entry, exit_box, touching=True)
             found = self.steps[key] = (_step_cost(self.moves, self.problem, where, kind, entry), travel)
         return found
-
-
-def alike_classes(problem: Problem, actions: dict[tuple[str, str], _Action], max_sets: int) -> list[tuple[str, ...]]:
-    """Classes of alike objects and of alike pieces, so the skeleton graph tells apart at most ``max_sets`` sets.
-
-    The sets number the product of ``members + 1`` over the classes (a class is known by how
-    many of it are done). While they are more than ``max_sets``, the two classes of one kind
-    whose poses' centres lie closest are merged (ties by name): objects by their picks' and
-    places' centres, only objects whose goals the same pieces cover, and never the one in
-    the hand at the start; pieces by their pushes' centres. Returns the classes of two or
-    more, each sorted by name; none when the sets are few enough.
-    """
-    groups: dict[tuple, list[tuple[str, ...]]] = {}  # what may merge -> its classes
-    for object_id in problem.deliver:
-        if object_id != problem.holding:
-            groups.setdefault(("object", tuple(sorted(problem.covers.get(object_id, ())))), []).append((object_id,))
-    for piece in problem.pushes.pushable:
-        groups.setdefault(("piece",), []).append((piece,))
-    fixed_sets = 2 if problem.holding is not None else 1
-
-    def sets() -> int:
-        return fixed_sets * math.prod(len(c) + 1 for classes in groups.values() for c in classes)
-
-    def centre(group: tuple[str, ...], kinds: tuple[str, ...]) -> np.ndarray:
-        boxes = [box for m in group for kind in kinds for box, _ in actions[kind, m].poses]
-        return np.mean([[b.i_lo + b.i_hi, b.j_lo + b.j_hi] for b in boxes], axis=0) / 2.0
-
-    while sets() > max_sets:
-        best = None
-        for what, classes in sorted(groups.items()):
-            kinds = ("push",) if what[0] == "piece" else ("pick", "place")
-            for a, b in itertools.combinations(classes, 2):
-                gap = float(np.linalg.norm(centre(a, kinds) - centre(b, kinds)))
-                candidate = (gap, min(a), min(b), what, a, b)
-                best = candidate if best is None or candidate[:3] < best[:3] else best
-        if best is None:
-            break
-        *_, what, a, b = best
-        groups[what] = [c for c in groups[what] if c not in (a, b)] + [tuple(sorted(a + b))]
-    return sorted(c for classes in groups.values() for c in classes if len(c) > 1)
 
 
 def action_windows(
@@ -314,35 +259,11 @@ def action_windows(
     (its state is finished) is then at ``N - 1`` exactly, so an action that is always
     the last (the place of a single object) can only be at ``N - 1``.
     """
-    skeleton_graph = (pair or PairCosts(problem, deadline=deadline)).graph(deadline)
-    graph = skeleton_graph.actions
+    graph = (pair or PairCosts(problem, deadline=deadline)).graph(deadline).actions
     q = graph.q.astype(float)
     arrival = graph.least_from_start(q, deadline)
     remaining = graph.least_to_end(q, graph.finished, float(n_phases), deadline)
-    windows = _union_of_windows(problem, n_phases, graph, arrival, remaining, last_at_end)
-    return _over_classes(windows, skeleton_graph.classes)
-
-
-def _over_classes(windows: Windows, classes: Classes) -> Windows:
-    """``windows`` of a graph with merged classes, made to hold for each member.
-
-    The graph does a class's k-th action as its k-th member, whichever object it is: a
-    member's phases are the union over its class, and what was done before a member's
-    action is not known, so every window given another action involving a merged id is
-    the whole window.
-    """
-    if not classes.merged:
-        return windows
-    phases = dict(windows.phases)
-    for kind, target in windows.phases:
-        group = classes.members.get(target, ())
-        union = frozenset().union(*(windows.phases.get((kind, m), frozenset()) for m in group))
-        phases.update({(kind, m): union for m in group})
-    given = dict(windows.given)
-    for a, b in itertools.permutations(phases, 2):
-        if a[1] in classes.members or b[1] in classes.members:
-            given[a, b, True] = given[a, b, False] = phases[a]
-    return Windows(phases, given)
+    return _union_of_windows(problem, n_phases, graph, arrival, remaining, last_at_end)
 
 
 def _union_of_windows(

@@ -104,27 +104,7 @@ def conditional_bounds(
     by_slot = np.argsort(slots, kind="stable")
     firsts = run_starts(slots[by_slot])
     least = np.minimum.reduceat(total[:, 1:][:, by_slot], firsts, axis=1).T.copy()
-    bound = {graph.slots[slot]: row for slot, row in zip(slots[by_slot][firsts], least, strict=True)}
-    return Conditional(n, _over_classes(bound, graph.classes.members))
-
-
-def _over_classes(bound: dict[tuple[Key, IndexBox], np.ndarray], members) -> dict[tuple[Key, IndexBox], np.ndarray]:
-    """``bound`` made to hold for each member of a merged class: per kind and exit box, the least over its members.
-
-    The graph does a class's k-th action as its k-th member, from any member's pose, so a
-    plan doing a member's action from a box maps onto some member's action from that box.
-    """
-    if not members:
-        return bound
-    merged: dict[tuple, np.ndarray] = {}
-    for ((kind, target), box), row in bound.items():
-        if target in members:
-            at = (kind, members[target], box)
-            merged[at] = row if at not in merged else np.minimum(merged[at], row)
-    out = dict(bound)
-    for (kind, group, box), row in merged.items():
-        out.update({((kind, member), box): row for member in group})
-    return out
+    return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[by_slot][firsts], least, strict=True)})
 
 
 def least_by_last_phase(problem: Problem, n_phases: int, pair: PairCosts, deadline: Deadline = NEVER) -> np.ndarray:

@@ -11,21 +11,13 @@ every edge goes from one level to the next: a least cost is one pass over the le
 
 Every plan maps onto a path of this graph, each of its phases' moves between poses at
 least as long as the edge says, so the least cost of a path bounds every plan from below.
-
-The sets of delivered objects and pushed clutter number ``2^(objects + pieces)``; beyond a
-few thousand (10 objects with 3 covering pieces: 8,192 sets, two million states) the graph
-merges alike objects, or alike pieces, into :class:`Classes`: the members of a class share
-their poses (the union of theirs) and are done in a fixed order, so a state counts how many
-of a class are done instead of which. Every plan still maps onto a path (its k-th object
-of a class done as the class's k-th member, from the same pose), so the bounds stay valid;
-they are only weaker, and the bounds per action are the least over a class's members.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Callable, Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -39,61 +31,18 @@ Key = tuple[str, str]  # (kind, target) of an arm action
 Step = Callable[[IndexBox | None, str, IndexBox, IndexBox], tuple[int, float]]  # where, kind, entry, exit -> (q, t)
 
 
-@dataclass(frozen=True)
-class Classes:
-    """Objects, or clutter pieces, the relaxation takes as interchangeable (see the module docstring).
-
-    ``members``: each merged id's class, its members in the order they are done; an id not
-    in it stands alone. ``covers``: per object, the pieces its place needs pushed, each
-    replaced by the member of its class pushed that many pieces in (the pushed set always
-    holds a class's first members, so "the first k of the class" stands for "k of them").
-    """
-
-    members: Mapping[str, tuple[str, ...]]
-    covers: Mapping[str, tuple[str, ...]]
-
-    @classmethod
-    def of(cls, problem: Problem, classes: Collection[tuple[str, ...]] = ()) -> Classes:
-        """The classes ``classes`` (each in order) of ``problem``'s objects and pieces; none: every one alone."""
-        members = {member: tuple(group) for group in classes if len(group) > 1 for member in group}
-        covers = {}
-        for object_id, needed in problem.covers.items():
-            canonical = []
-            for piece in needed:
-                group = members.get(piece, (piece,))
-                canonical.append(group[sum(1 for c in canonical if c in group)])
-            covers[object_id] = tuple(canonical)
-        return cls(members, covers)
-
-    def next_of(self, target: str, done: Collection[str]) -> bool:
-        """Whether ``target`` is the next of its class to be done (its first member not in ``done``)."""
-        group = self.members.get(target)
-        return group is None or next(m for m in group if m not in done) == target
-
-    @property
-    def merged(self) -> bool:
-        """Whether any class has more than one member."""
-        return bool(self.members)
-
-
-def skeleton_moves(
-    problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset, classes: Classes | None = None
-) -> list:
-    """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``.
-
-    ``classes``: only the next member of a class is picked or pushed (None: every object alone).
-    """
-    covers = problem.covers if classes is None else classes.covers
+def skeleton_moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
+    """The actions possible from a skeleton state: ``((kind, target), (delivered, held, pushed) after)``."""
     moves = []
     if held is not None:
-        if all(c in pushed for c in covers.get(held, ())):
+        if all(c in pushed for c in problem.covers.get(held, ())):
             moves.append((("place", held), (delivered | {held}, None, pushed)))
     else:
         for object_id in problem.deliver:
-            if object_id not in delivered and (classes is None or classes.next_of(object_id, delivered)):
+            if object_id not in delivered:
                 moves.append((("pick", object_id), (delivered, object_id, pushed)))
     for clutter_id in problem.pushes.pushable:  # with an empty hand or holding an object
-        if clutter_id not in pushed and (classes is None or classes.next_of(clutter_id, pushed)):
+        if clutter_id not in pushed:
             moves.append((("push", clutter_id), (delivered, held, pushed | {clutter_id})))
     return moves
 
@@ -197,21 +146,17 @@ class SkeletonGraph(Layers):
     slots: list[tuple[Key, IndexBox]]
     group: np.ndarray
     groups: list[tuple]  # (delivered, held, pushed, last action), numbered level by level
-    classes: Classes
 
     @classmethod
     def build(
         cls, problem: Problem, poses: dict[Key, tuple[tuple[IndexBox, IndexBox], ...]], step: Step,
-        deadline: Deadline = NEVER, classes: Classes | None = None,
+        deadline: Deadline = NEVER,
     ) -> SkeletonGraph:  # fmt: skip
         """Every state reachable from the start; ``poses[action]`` lists its (entry, exit) boxes.
-
-        ``classes``: the merged objects and pieces (their members' ``poses`` the same); none by default.
 
         A state is found by its exit box's number (hashed in C; a box's hash runs Python),
         and the steps of an action from a box, which depend on nothing else, are listed once.
         """
-        classes = classes or Classes.of(problem)
         start = (frozenset(), problem.holding, frozenset(), None, None)
         states = [start]
         boxes: list[IndexBox | None] = [None]
@@ -239,7 +184,7 @@ class SkeletonGraph(Layers):
             for sid in range(level_starts[-2], level_starts[-1]):
                 deadline.check()
                 delivered, held, pushed, _, where = states[sid]
-                for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed, classes):
+                for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
                     found = steps.get((exits[sid], key))
                     if found is None:
                         found = steps[exits[sid], key] = [
@@ -274,7 +219,6 @@ class SkeletonGraph(Layers):
             [(key, boxes[x]) for key, x in slot_ids],
             np.asarray(group_of, dtype=np.intp),
             list(group_ids),
-            classes,
         )
 
     def within(self, n_phases: int) -> SkeletonGraph:
@@ -291,10 +235,8 @@ class SkeletonGraph(Layers):
         Of ``order``'s objects the model delivers (``deliver``), each one after the first is
         picked only once the one before it is delivered; any other object at any time. The
         plans of the restricted model map onto this graph's paths, so its bounds hold for them.
-        A merged object's identity is not in the states, so the chain skips it (the order of
-        the others still holds in every such plan).
         """
-        chain = [target for target in order if target in deliver and target not in self.classes.members]
+        chain = [target for target in order if target in deliver]
         bit = {target: 1 << i for i, target in enumerate(chain)}  # a set of delivered objects is a sum of bits
         before = {after: bit[first] for first, after in pairwise(chain)}
 
