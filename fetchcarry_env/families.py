@@ -77,6 +77,7 @@ from fetchcarry_env.worlds.paper import (
     draw_paper_multi,
     draw_paper_push,
 )
+from fetchcarry_env.worlds.perturbed import DISTRACTORS_FACTOR, LAYOUT
 from fetchcarry_env.worlds.physics import HOME, PhysicsVariation
 from fetchcarry_env.worlds.pushable import pushes_possible
 from fetchcarry_env.worlds.rooms import (
@@ -180,6 +181,25 @@ GRADED: tuple[Family, ...] = (
         "iid scenarios with tables and start moved, distractors, clutter mass and friction varied",
         EXTENT,
         draw_perturbed,
+        physics=HOME,
+    ),
+    Family(
+        "perturbed-layout",
+        "perturbed's first factor alone: iid scenarios with tables and start moved",
+        EXTENT,
+        lambda rng: draw_perturbed(rng, frozenset({LAYOUT})),
+    ),
+    Family(
+        "perturbed-distractors",
+        "perturbed's second factor alone: iid scenarios with one to three distractors",
+        EXTENT,
+        lambda rng: draw_perturbed(rng, frozenset({DISTRACTORS_FACTOR})),
+    ),
+    Family(
+        "perturbed-physics",
+        "perturbed's third factor alone: iid scenarios with clutter mass and friction varied",
+        EXTENT,
+        lambda rng: draw_perturbed(rng, frozenset()),
         physics=HOME,
     ),
 )

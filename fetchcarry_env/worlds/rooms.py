@@ -11,7 +11,7 @@ import numpy as np
 from fetchcarry_env.geometry import Point, Rect
 from fetchcarry_env.scenario import Clutter, DeliveryObject, Obstacle, Scenario, Table
 from fetchcarry_env.worlds.base import EXTENT, TABLE_HEIGHT, free_spot, name, point_near, robot, square, uniform
-from fetchcarry_env.worlds.perturbed import perturb
+from fetchcarry_env.worlds.perturbed import DISTRACTORS_FACTOR, GEOMETRIC_FACTORS, LAYOUT, perturb
 
 
 def draw_basic(rng: np.random.Generator, obstacle: bool = True) -> Scenario:
@@ -177,6 +177,18 @@ def draw_training(rng: np.random.Generator) -> Scenario:
     return (draw_basic, draw_push, draw_corridor)[choice](rng)
 
 
-def draw_perturbed(rng: np.random.Generator) -> Scenario:
-    """A ``training`` scenario (the ``iid`` kind) with its tables and start moved and distractors added."""
-    return perturb(rng, draw_training(rng))
+def draw_perturbed(rng: np.random.Generator, factors: frozenset[str] = GEOMETRIC_FACTORS) -> Scenario:
+    """A ``training`` scenario (the ``iid`` kind) with its tables and start moved and distractors added.
+
+    ``factors``: only these of the two (:mod:`fetchcarry_env.worlds.perturbed`); the scenario is named after
+    the family of the factors (``perturbed``, ``perturbed-layout``, ``perturbed-distractors``, ``perturbed-physics``).
+    """
+    return perturb(rng, draw_training(rng), factors, PERTURBED_FAMILIES[frozenset(factors)])
+
+
+PERTURBED_FAMILIES = {  # the geometric factors of each perturbed family
+    GEOMETRIC_FACTORS: "perturbed",
+    frozenset({LAYOUT}): "perturbed-layout",
+    frozenset({DISTRACTORS_FACTOR}): "perturbed-distractors",
+    frozenset(): "perturbed-physics",
+}

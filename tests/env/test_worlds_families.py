@@ -16,7 +16,7 @@ from fetchcarry_env.scenario import check_rules
 from fetchcarry_env.worlds import unseen
 from fetchcarry_env.worlds.base import EXTENT, walls_around
 from fetchcarry_env.worlds.objects import room_side, table_count
-from fetchcarry_env.worlds.perturbed import START_SHIFT, TABLE_SHIFT, perturb
+from fetchcarry_env.worlds.perturbed import DISTRACTORS_FACTOR, LAYOUT, START_SHIFT, TABLE_SHIFT, perturb
 
 SEEDS = range(12)
 GRADED_NAMES = [family.name for family in GRADED]
@@ -102,6 +102,39 @@ def test_perturbed_moves_tables_and_start_a_little_and_adds_distractors_on_no_go
     assert get_family("perturbed").physics is not None
 
 
+def _without_names(scenario) -> dict:
+    return {key: value for key, value in scenario.to_dict().items() if key != "name"}
+
+
+def test_each_perturbed_factor_alone_is_the_mix_without_the_other_two():
+    training = get_family("training")
+    for seed in range(20):
+        base = training.draw(np.random.default_rng(seed))
+        mix = perturb(np.random.default_rng(seed), base)
+        layout = perturb(np.random.default_rng(seed), base, frozenset({LAYOUT}), "perturbed-layout")
+        blocks = perturb(np.random.default_rng(seed), base, frozenset({DISTRACTORS_FACTOR}), "perturbed-distractors")
+        neither = perturb(np.random.default_rng(seed), base, frozenset(), "perturbed-physics")
+        assert _without_names(neither) == _without_names(base)
+        assert layout.name.split("-")[-1] == mix.name.split("-")[-1] and layout.name.startswith("perturbed-layout-")
+        # the layout factor: the mix's tables, objects and start, and no distractor
+        assert (layout.tables, layout.objects, layout.robot) == (mix.tables, mix.objects, mix.robot)
+        assert layout.clutter == mix.clutter[: len(base.clutter)]
+        # the distractors: the mix's, each where it stands on its table, the tables and start unmoved
+        assert (blocks.tables, blocks.objects, blocks.robot, blocks.clutter[: len(base.clutter)]) == (
+            base.tables, base.objects, base.robot, base.clutter,
+        )  # fmt: skip
+        added, mixed = blocks.clutter[len(base.clutter) :], mix.clutter[len(base.clutter) :]
+        assert [c.id for c in added] == [c.id for c in mixed]
+        for alone, moved in zip(added, mixed, strict=True):
+            table = next(i for i, t in enumerate(mix.tables) if t.rect.contains_point(moved.rect.center))
+            shift = np.subtract(mix.tables[table].rect.center, base.tables[table].rect.center)
+            assert np.allclose(np.add(alone.rect.center, shift), moved.rect.center, atol=1e-12)
+    assert get_family("perturbed-physics").physics == get_family("perturbed").physics
+    assert get_family("perturbed-layout").physics is None and get_family("perturbed-distractors").physics is None
+    with pytest.raises(ValueError, match="unknown perturbation factor"):
+        perturb(np.random.default_rng(0), base, frozenset({"lighting"}))
+
+
 def test_walls_around_cover_exactly_what_the_free_rectangles_leave():
     free = [Rect(0.0, 0.0, 2.0, 1.0), Rect(1.0, 1.0, 1.5, 3.0), Rect(0.0, 3.0, 4.0, 4.0)]
     area = Rect(0.0, 0.0, 4.0, 4.0)
@@ -131,6 +164,9 @@ PINNED = {  # sha256 (first 16 hex digits) of each seed's sorted JSON, seeds 0-2
     "apartment": ("a2ed3f84979ca48c", "e9c016fc1c9d0b1d", "374d58db72c9d984"),
     "unseen-layouts": ("8577d120f55ac6e1", "35463db726130560", "14733cd538f4a450"),
     "perturbed": ("202f4af3438169eb", "591e7bdfcee077a9", "096c89cc123dde8c"),
+    "perturbed-layout": ("8b33f741618c4816", "70d866fd31cb04d0", "898b435727c12fa8"),
+    "perturbed-distractors": ("14b247e3ff7a4841", "8ce4cf7cc8f07b2e", "fbc4941468208628"),
+    "perturbed-physics": ("d8408acf83ed5990", "024107500e4dd991", "3ded7f8ff94230c0"),
 }
 
 

@@ -13,6 +13,18 @@ from training.evaluation.splits import SPLIT_BLOCK, SPLITS, get_split, split_sce
 
 V2 = ("iid-v2", "more-objects-v2", "push-required-v2", "layouts-v3", "perturbed-v2", "objects-v2", "apartment-v2")
 """Version 2 of every split (layouts: 3), under the task cost."""
+PERTURBED_FACTORS = ("perturbed-layout-v2", "perturbed-distractors-v2", "perturbed-physics-v2")
+
+
+def test_perturbed_v2s_factors_alone_draw_its_scenarios_without_the_other_two() -> None:
+    mix = split_scenarios("perturbed-v2:test", 40)
+    for version in PERTURBED_FACTORS:
+        alone = split_scenarios(f"{version}:test", 40)
+        assert [i.seed for i in alone] == [i.seed for i in mix]
+        same = [
+            a.scenario.name.split("-")[-1] == m.scenario.name.split("-")[-1] for a, m in zip(alone, mix, strict=True)
+        ]
+        assert sum(same) >= 36  # a draw either family's checks refuse is drawn again, and the two part ways
 
 
 def test_dev_and_test_parts_have_disjoint_seeds_and_test_is_the_default() -> None:
@@ -36,7 +48,9 @@ def test_a_v2_split_has_a_block_of_fresh_seeds_no_earlier_split_draws_from(versi
     block = dev.offset // SPLIT_BLOCK
     assert dev.offset == block * SPLIT_BLOCK and test.offset == dev.offset + SPLIT_BLOCK // 2
     assert 8 <= block <= 14  # blocks 0 to 7 hold every split of versions 0 and 1
-    assert [split.version for split in SPLITS.values() if split.offset // SPLIT_BLOCK == block] == [version] * 2
+    sharing = [split.version for split in SPLITS.values() if split.offset // SPLIT_BLOCK == block]
+    factors = PERTURBED_FACTORS if version == "perturbed-v2" else ()  # its one-factor splits, paired on purpose
+    assert sharing == [name for name in (version, *factors) for _ in ("dev", "test")]
     dev_seeds = {dev.seed(k) for k in range(dev.episodes)}
     test_seeds = {test.seed(k) for k in range(test.episodes)}
     assert not dev_seeds & test_seeds

@@ -33,6 +33,9 @@ GRADED = {  # split version -> (its families, the capacity's objects and clutter
     "layouts-v3": (("unseen-layouts",), (4, 8), None),
     "apartment-v2": (("apartment",), (5, 8), None),
     "perturbed-v2": (("perturbed",), (4, 8), "home"),
+    "perturbed-layout-v2": (("perturbed-layout",), (4, 8), None),
+    "perturbed-distractors-v2": (("perturbed-distractors",), (4, 8), None),
+    "perturbed-physics-v2": (("perturbed-physics",), (4, 8), "home"),
 }
 SHORT_TESTS = {  # test parts of fewer than 300 episodes: their references were slow to compute (docs/protocol.md)
     "objects-v1:test": OBJECTS_EPISODES["test"],

@@ -43,7 +43,11 @@ Version 2 (``layouts-v3``) of every split: ``iid-v2``, ``more-objects-v2``,
 ``push-required-v2``, ``layouts-v3``, ``perturbed-v2``, ``objects-v2`` (``objects-1`` ..
 ``objects-12`` in turn) and ``apartment-v2``, on fresh seeds (blocks 8 to 14), each with a
 ``dev`` part of 100 and a ``test`` part of 300 episodes,
-referenced under this release's task cost and the env's octagon rule. Earlier versions
+referenced under this release's task cost and the env's octagon rule. ``perturbed-v2``'s
+three factors also stand alone, on its seeds: ``perturbed-layout-v2`` (tables and start
+moved), ``perturbed-distractors-v2`` (distractors added) and ``perturbed-physics-v2`` (the
+physics variation ``home``); episode ``k`` of each is ``perturbed-v2``'s episode ``k``
+without the other two factors. Earlier versions
 were referenced under release 0.2's task (a reward of +10 per delivery, the expert's
 Eq. 1 over its own phases): their files stay as published, and the benchmark reports
 them apart (:mod:`training.evaluation.references`).
@@ -277,6 +281,8 @@ _GRADED = (
     ),
 )
 
+PERTURBED_BLOCK = 12  # perturbed-v2's seeds, shared by its one-factor splits (paired on purpose)
+
 # Version 2 of every split (layouts: 3): the task cost (docs/formulation.md, "The task cost") and the env's
 # octagon rule, on fresh seeds (blocks 8 to 14), 100 dev and 300 test episodes each (docs/protocol.md).
 _V2 = (
@@ -295,7 +301,7 @@ _V2 = (
         "perturbed-v2",
         "iid scenarios moved a little, with distractors and clutter mass and friction varied (physics home)",
         _families("perturbed"),
-        12,
+        PERTURBED_BLOCK,
         DEV_EPISODES,
         TEST_EPISODES,
     ),
@@ -312,6 +318,32 @@ _V2 = (
         "2-4 rooms joined by doors and corridors, 3-6 tables, 2-5 objects",
         _families("apartment"),
         14,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    # perturbed-v2's three factors one at a time, on perturbed-v2's own seeds (block 12): episode k of each is
+    # perturbed-v2's episode k without the other two factors, so the factors compare paired.
+    *_graded(
+        "perturbed-layout-v2",
+        "iid scenarios with the tables and start moved a little (perturbed's layout alone)",
+        _families("perturbed-layout"),
+        PERTURBED_BLOCK,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    *_graded(
+        "perturbed-distractors-v2",
+        "iid scenarios with one to three distractors (perturbed's distractors alone)",
+        _families("perturbed-distractors"),
+        PERTURBED_BLOCK,
+        DEV_EPISODES,
+        TEST_EPISODES,
+    ),
+    *_graded(
+        "perturbed-physics-v2",
+        "iid scenarios with clutter mass and friction varied (perturbed's physics alone: home)",
+        _families("perturbed-physics"),
+        PERTURBED_BLOCK,
         DEV_EPISODES,
         TEST_EPISODES,
     ),
