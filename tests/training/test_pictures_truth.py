@@ -324,6 +324,16 @@ def test_a_bar_without_an_interval_gets_no_error_bar_but_says_so() -> None:
         assert marks.count(NO_INTERVAL) == 6 and NO_INTERVAL in caption  # each cost ratio says it has none
 
 
+def test_long_split_names_under_the_bars_are_wrapped_and_read_back_whole() -> None:
+    """Five splits of 24-29 characters overlapped under their bars (the perturbed factors' run)."""
+    from training.pictures.benchmark import tick_label
+
+    for name in ("perturbed-distractors-v2:test", "perturbed-physics-v2:test", "iid-v2:test", "scenarios:a-b:c"):
+        lines = tick_label(name).split("\n")
+        assert "".join(lines) == name and all(len(line) <= 16 for line in lines[1:] or lines)
+    assert tick_label("iid-v2:test") == "iid-v2:test"
+
+
 # ---------------------------------------------------------------------------- the benchmark notebook
 def notebook_build():
     spec = importlib.util.spec_from_file_location("notebook_build", ROOT / "notebooks" / "build.py")

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -167,6 +168,17 @@ def plot_splits(rows: Sequence[Row], path: str | Path, groups_label: str | None 
     return _save(splits_figure(rows, groups_label), path)
 
 
+def tick_label(name: str, width: int = 16) -> str:
+    """A split's name on lines of about ``width`` characters at most, broken after a ``-`` or before a ``:``."""
+    lines, line = [], ""
+    for piece in re.findall(r"[^-:]+-?|:[^-:]+-?|-", name):
+        if line and len(line) + len(piece) > width:
+            lines.append(line)
+            line = ""
+        line += piece
+    return "\n".join([*lines, line])
+
+
 def splits_figure(rows: Sequence[Row], groups_label: str | None = None) -> Any:
     """The figure of :func:`plot_splits` (a pyplot figure: close it with ``pyplot().close``)."""
     plt = pyplot()
@@ -177,7 +189,7 @@ def splits_figure(rows: Sequence[Row], groups_label: str | None = None) -> Any:
     _bars(axes, rows, groups, colours)
     left, right = axes
     for axis, label in ((left, "success rate (95 % CI)"), (right, "cost ratio to the reference (95 % CI)")):
-        axis.set_xticks(range(len(groups)), groups, fontsize="small")
+        axis.set_xticks(range(len(groups)), [tick_label(g) for g in groups], fontsize="small")
         axis.set_ylabel(label)
         if groups_label:
             axis.set_xlabel(groups_label)
