@@ -6,6 +6,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from training.cli import main
@@ -141,3 +142,52 @@ def test_a_folder_of_scenarios_is_tabled_by_family_not_by_file() -> None:
     assert lines[2] == "| policy | objects-1 | objects-2 | push_basic |"
     assert lines[5].startswith("| me | 50% [")
     assert family_of({"source": "x.json", "family": "given"}) == "given"
+
+
+def _records(policy: str, split: str, successes: list[bool]) -> list[dict]:
+    return [
+        {"policy": policy, "split": split, "seed": s, "digest": f"d{s}", "success": ok}
+        for s, ok in enumerate(successes)
+    ]
+
+
+def test_the_view_across_splits_is_rliables_on_the_seeds_success_rates() -> None:
+    from scipy.stats import trim_mean
+
+    from training.evaluation.across import across_markdown, across_splits, success_matrices
+
+    rates = {  # per method, per split: its seeds' successes over four scenarios
+        "greedy": {"iid-v2:test": [[1, 1, 1, 1]], "layouts-v3:test": [[1, 1, 1, 0]]},
+        "bc": {"iid-v2:test": [[1, 1, 0, 0], [1, 1, 1, 0], [1, 1, 1, 1]], "layouts-v3:test": [[1, 0, 0, 0]] * 3},
+    }
+    records = [
+        r
+        for method, by_split in rates.items()
+        for split, seeds in by_split.items()
+        for k, outcomes in enumerate(seeds)
+        for r in _records(method if method == "greedy" else f"{method}-s{k}", split, [bool(x) for x in outcomes])
+    ]
+    records += _records("only-iid", "iid-v2:test", [True] * 4) + _records("greedy", "iid-v2:test", [True])[4:]
+    splits, matrices, left_out = success_matrices(records)
+    assert splits == ("iid-v2:test", "layouts-v3:test") and left_out == ["only-iid"]
+    np.testing.assert_allclose(matrices["bc"], [[0.5, 0.25], [0.75, 0.25], [1.0, 0.25]])
+    np.testing.assert_allclose(matrices["greedy"], [[1.0, 0.75]])
+    across = across_splits(records)
+    assert across.reference == "greedy" and [row.method for row in across.rows] == ["greedy", "bc"]
+    bc = across.rows[1]
+    assert bc.iqm == pytest.approx(trim_mean([0.5, 0.25, 0.75, 0.25, 1.0, 0.25], 0.25)) and bc.runs == 3
+    assert bc.improvement == pytest.approx((0.5 * (1 / 3) + 0) / 2)  # iid: one seed ties greedy's 1.0; layouts: none
+    assert bc.iqm_low <= bc.iqm <= bc.iqm_high and bc.iqm_low < bc.iqm_high  # three seeds: a spread
+    assert bc.profile == pytest.approx((2 / 6, 1 / 6, 1 / 6))  # above 50 %: 0.75 and 1.0; above 75 and 90 %: 1.0
+    text = "\n".join(across_markdown(across))
+    assert (
+        "## Across splits (2: iid-v2:test, layouts-v3:test)" in text
+        and "Left out (not run on every split): only-iid" in text
+    )
+    assert across_splits([r for r in records if r["split"] == "iid-v2:test"]) is None  # one split: no view
+
+
+def test_the_leaderboard_of_one_split_has_no_view_across(folders: dict, capsys: pytest.CaptureFixture) -> None:
+    assert main(["leaderboard", str(folders["theirs"])]) == 0
+    out = capsys.readouterr().out
+    assert "## iid-v2:test" in out and "Across splits" not in out

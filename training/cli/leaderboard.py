@@ -13,6 +13,7 @@ import json
 from training.cli.commands import summary
 from training.cli.options import Command
 from training.cli.text import echo
+from training.evaluation.across import across_markdown, across_splits
 from training.evaluation.leaderboard import leaderboard, leaderboard_markdown, merge_folders
 
 LEADERBOARD_COMMAND = Command(
@@ -23,7 +24,9 @@ LEADERBOARD_COMMAND = Command(
     "expert, random, random-phases and greedy come from the first folder that has them) and print, per split, "
     "the methods (training seeds NAME-sK pooled) ranked by success then SPL, with intervals clustered by "
     "scenario and each method's paired difference in success with the first (bootstrap over the scenarios "
-    "both ran, and the sign over training seeds).",
+    "both ran, and the sign over training seeds); with two splits or more, the view across them: IQM of success "
+    "with a stratified-bootstrap interval, probability of improvement over greedy and the performance profile "
+    "(Agarwal et al. 2021).",
     epilog="Exit status: 0 printed, 2 bad input (no results.json, a file that breaks its schema or caps or holds an "
     "episode twice: docs/results-format.md, different split "
     "versions or references, a method in two folders).",
@@ -46,6 +49,9 @@ def run_leaderboard(args: argparse.Namespace) -> int:
     board = leaderboard(records)
     if args.json:
         print(json.dumps({split: [e.to_dict() for e in entries] for split, entries in board.items()}, indent=1))
-    else:
-        echo(leaderboard_markdown(board))
+        return 0
+    echo(leaderboard_markdown(board))
+    across = across_splits(records)
+    if across is not None:
+        echo("\n".join(across_markdown(across)))
     return 0
