@@ -8,6 +8,7 @@ A policy is named by
   ``config.json`` says its interface (``"interface": "env"`` or ``"phases"``; a run
   without the key that stores ``candidates``, as BC runs do, acts in ``phases``) and its
   ``capacity`` (observation slots), if stored, is the env's;
+- ``NAME@published``, a run folder that ships with the repository (:mod:`training.published`);
 - ``package.module:factory``, a user's function (or class) called with the env that
   returns a :class:`~training.policies.protocol.Policy`; it acts in ``phases`` unless
   the factory has an attribute ``interface = "env"``. The module is imported as
@@ -42,6 +43,7 @@ from training.envs import INTERFACES
 from training.errors import BenchmarkError
 from training.policies.protocol import Policy
 from training.policies.user import describe_raised, user_policy
+from training.published import SUFFIX, published_names, published_run
 
 EXPERT, RANDOM = "expert", "random"  # the reference policies every benchmark runs
 EXPERT_TIME_LIMIT = 10.0  # seconds per planning call of the expert
@@ -110,6 +112,11 @@ def resolve(name: str) -> PolicySpec:
         except ModuleNotFoundError:
             raise BenchmarkError(f"policy {name!r} is not available here ({factory.module} is not installed)") from None
         return PolicySpec(name, factory.interface, factory=name)
+    if name.endswith(SUFFIX):
+        try:
+            return _run_spec(published_run(name))
+        except KeyError as error:
+            raise BenchmarkError(error.args[0]) from None
     path = Path(name)
     if not path.exists():
         if _is_factory_name(name):
@@ -118,7 +125,10 @@ def resolve(name: str) -> PolicySpec:
         if "/" in name or "\\" in name:
             raise BenchmarkError(f"no run folder at {name}")
         known = ", ".join(available())
-        raise BenchmarkError(f"unknown policy {name!r}: give one of {known}, a run folder or package.module:factory")
+        raise BenchmarkError(
+            f"unknown policy {name!r}: give one of {known}, a run folder, NAME{SUFFIX} "
+            f"({', '.join(published_names())}) or package.module:factory"
+        )
     return _run_spec(path)
 
 
