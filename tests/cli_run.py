@@ -60,7 +60,10 @@ def cli_process(*argv: object, minari_root: Path, **options) -> subprocess.Popen
 
     The process leads its own process group (``start_new_session``), so that a test can signal
     it and its workers together (:func:`signal_group`) as a service manager does, and a
-    terminal's Ctrl-C does not reach it. ``options`` go to :class:`subprocess.Popen`.
+    terminal's Ctrl-C does not reach it. It starts with SIGINT's default action, as from a
+    terminal, even when the tests run as a background job (which ignores SIGINT, and its
+    children with it: Python then never raises KeyboardInterrupt, and a Ctrl-C test hangs).
+    ``options`` go to :class:`subprocess.Popen`.
     """
     env = {**os.environ, "PYTHONPATH": str(ROOT), "MINARI_DATASETS_PATH": str(minari_root)}
     return subprocess.Popen(
@@ -69,8 +72,14 @@ def cli_process(*argv: object, minari_root: Path, **options) -> subprocess.Popen
         cwd=options.pop("cwd", ROOT),
         text=True,
         start_new_session=True,
+        preexec_fn=_default_sigint,
         **options,
     )
+
+
+def _default_sigint() -> None:
+    """In the child, before it runs Python: SIGINT's default action (a background job's children ignore it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def signal_group(process: subprocess.Popen, signum: int) -> None:

@@ -324,6 +324,13 @@ def test_plots_of_learning_curves_and_demonstrations(tmp_path: Path):
 
 
 # ------------------------------------------------------------------ splits
+PAIRED_ON_PURPOSE = {  # splits that draw another split's seeds, so that their episodes pair with its
+    f"perturbed-{factor}-v2:{part}": f"perturbed-v2:{part}"
+    for factor in ("layout", "distractors", "physics")
+    for part in ("dev", "test")
+}
+
+
 def test_split_seeds_are_disjoint_from_training_seeds_and_from_each_other():
     seen: dict[int, set[int]] = {}  # version number -> its seeds
     for split in benchmark.SPLITS.values():
@@ -331,6 +338,9 @@ def test_split_seeds_are_disjoint_from_training_seeds_and_from_each_other():
         block = split.offset - split.offset % SPLIT_BLOCK
         assert min(seeds) >= benchmark.EVAL_SEED_BASE + split.offset
         assert max(seeds) < benchmark.EVAL_SEED_BASE + block + SPLIT_BLOCK  # its own block
+        if split.name in PAIRED_ON_PURPOSE:  # the same seeds as the split it pairs with, and only those
+            assert split.offset == benchmark.SPLITS[PAIRED_ON_PURPOSE[split.name]].offset
+            continue
         assert not seeds & seen.get(split.version_number, set())  # within a version: disjoint
         seen.setdefault(split.version_number, set()).update(seeds)
     # v1's dev parts are v0's scenarios (recipes were tuned on them); its test parts met nothing before
