@@ -81,10 +81,11 @@ def perturb(
             shifted = replace(shifted, clutter=tuple(clutter))
     named = name(family, rng)
     base = replace(scenario, tables=tables, objects=objects, clutter=tuple(clutter[: len(scenario.clutter)]))
+    blocks = [block for block, _ in added]
     if LAYOUT not in factors:  # the blocks keep their places on their tables, which stay where they were
         base, start = scenario, scenario.robot.start
-        added = [(replace(block, rect=block.rect.translate(-dx, -dy)), (dx, dy)) for block, (dx, dy) in added]
-    distractors = tuple(block for block, _ in added) if DISTRACTORS_FACTOR in factors else ()
+        blocks = [replace(block, rect=block.rect.translate(-dx, -dy)) for block, (dx, dy) in added]
+    distractors = tuple(blocks) if DISTRACTORS_FACTOR in factors else ()
     return replace(base, name=named, robot=replace(scenario.robot, start=start), clutter=base.clutter + distractors)
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from training.evaluation.aggregate import iqm, performance_profile, probability_of_improvement, stratified_bootstrap
 from training.evaluation.compare import grouped, pooled
+from training.evaluation.leaderboard import scenario_key, shared_scenarios
 
 PROFILE_TAUS = (0.5, 0.75, 0.9)  # success rates the profile is shown at
 REFERENCE = "greedy"  # the method others are compared with, when it ran
@@ -59,7 +60,8 @@ class Across:
 def success_matrices(records: Sequence[dict[str, Any]]) -> tuple[tuple[str, ...], dict[str, np.ndarray], list[str]]:
     """The splits every kept method ran, each kept method's (seeds, splits) success rates, and the methods left out.
 
-    A rate is over the scenarios (seed and digest) every method ran on the split.
+    A rate is over the scenarios every method of the split ran, as its table ranks them
+    (:func:`training.evaluation.leaderboard.shared_scenarios`).
     """
     table = grouped(pooled(records))
     splits = tuple(table)
@@ -67,12 +69,11 @@ def success_matrices(records: Sequence[dict[str, Any]]) -> tuple[tuple[str, ...]
     kept = [m for m in methods if all(m in table[s] for s in splits)]
     rates: dict[str, dict[Any, list[float]]] = {m: {} for m in kept}
     for column, split in enumerate(splits):
-        by_method = {m: table[split][m] for m in kept}
-        shared = set.intersection(*({(r["seed"], r.get("digest")) for r in group} for group in by_method.values()))
-        for method, group in by_method.items():
+        shared, _ = shared_scenarios(split, table[split])
+        for method in kept:
             by_seed: dict[Any, list[bool]] = {}
-            for r in group:
-                if (r["seed"], r.get("digest")) in shared:
+            for r in table[split][method]:
+                if scenario_key(r) in shared:
                     by_seed.setdefault(r["training_seed"], []).append(bool(r["success"]))
             for seed, outcomes in by_seed.items():
                 rates[method].setdefault(seed, [np.nan] * len(splits))[column] = float(np.mean(outcomes))
@@ -86,9 +87,9 @@ def across_splits(records: Sequence[dict[str, Any]]) -> Across | None:
     if len(splits) < 2 or not matrices:
         return None
     reference = REFERENCE if REFERENCE in matrices else max(matrices, key=lambda m: iqm(matrices[m]))
+    base = matrices[reference]
     rows = []
     for method, scores in matrices.items():
-        base = matrices[reference]
         improvement = probability_of_improvement(scores, base)
         low, high = stratified_bootstrap(probability_of_improvement, (scores, base))
         iqm_interval = stratified_bootstrap(iqm, (scores,))

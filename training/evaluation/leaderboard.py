@@ -116,8 +116,8 @@ def leaderboard(records: Sequence[dict[str, Any]]) -> dict[str, list[Entry]]:
     table = grouped(pooled(records))
     out: dict[str, list[Entry]] = {}
     for split, methods in table.items():
-        shared, left_out = _shared_scenarios(split, methods)
-        methods = {m: [r for r in group if _scenario(r) in shared] for m, group in methods.items()}
+        shared, left_out = shared_scenarios(split, methods)
+        methods = {m: [r for r in group if scenario_key(r) in shared] for m, group in methods.items()}
         ranked = sorted(
             summarise([r for group in methods.values() for r in group]), key=lambda row: (-row.success, -_or0(row.spl))
         )
@@ -132,13 +132,13 @@ def leaderboard(records: Sequence[dict[str, Any]]) -> dict[str, list[Entry]]:
     return out
 
 
-def _scenario(record: dict[str, Any]) -> tuple[int, Any]:
+def scenario_key(record: dict[str, Any]) -> tuple[int, Any]:
     return (record["seed"], record.get("digest"))
 
 
-def _shared_scenarios(split: str, methods: dict[str, list[dict[str, Any]]]) -> tuple[set, dict[str, int]]:
+def shared_scenarios(split: str, methods: dict[str, list[dict[str, Any]]]) -> tuple[set, dict[str, int]]:
     """The scenarios every method of ``split`` ran, and per method its episodes on the others."""
-    ran = {method: {_scenario(r) for r in group} for method, group in methods.items()}
+    ran = {method: {scenario_key(r) for r in group} for method, group in methods.items()}
     shared = set.intersection(*ran.values())
     if not shared:
         counts = ", ".join(f"{method} {len(scenarios)}" for method, scenarios in ran.items())
@@ -146,7 +146,7 @@ def _shared_scenarios(split: str, methods: dict[str, list[dict[str, Any]]]) -> t
             f"on {split} no scenario was run by every method (scenarios per method: {counts}); "
             "benchmark them on the same split part and episodes"
         )
-    return shared, {method: sum(_scenario(r) not in shared for r in group) for method, group in methods.items()}
+    return shared, {method: sum(scenario_key(r) not in shared for r in group) for method, group in methods.items()}
 
 
 def _or0(value: float) -> float:
