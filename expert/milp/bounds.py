@@ -23,7 +23,7 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.moves import LeastMoves, problem_moves
 from expert.milp.problem import Problem
-from expert.milp.skeleton_graph import ActionGraph, SkeletonGraph, all_done, skeleton_moves
+from expert.milp.skeleton_graph import ActionGraph, Alphabet, SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import WAIT_COST, travel_cost
 
 
@@ -271,15 +271,16 @@ def _union_of_windows(
 ) -> Windows:
     """:func:`action_windows`' union over the states reached within ``n_phases``: ``[arrival, N - 1 - remaining]``."""
     n, keys = n_phases, list(_actions_by_key(problem))
-    index = {key: i for i, key in enumerate(keys)}
     reached = np.flatnonzero(arrival[1:] <= n) + 1  # the start (node 0) did no action
-    key_of = np.array([index[graph.nodes[g][3]] for g in reached], dtype=np.intp)
+    nodes = {column: values[reached] for column, values in graph.columns.items()}
+    index = {key: i for i, key in enumerate(keys)}
+    key_of = np.array([index.get(key, -1) for key in graph.names.keys], dtype=np.intp)[nodes["last"]]
     first, last = arrival[reached], n - 1 - remaining[reached]
     if last_at_end:  # the last action of a finished state is at N - 1
         first = np.where(graph.finished[reached] & (first <= n - 1), n - 1, first)
     phases = np.arange(n)
     at = ((phases >= np.maximum(first, 1)[:, None]) & (phases <= last[:, None])).astype(np.intp)
-    done = _done_before(keys, index, [graph.nodes[g] for g in reached])
+    done = _done_before(keys, graph.names, nodes)
     windows: dict[tuple[str, str], frozenset[int]] = {}
     given: dict[tuple[tuple[str, str], tuple[str, str], bool], frozenset[int]] = {}
     for i, key in enumerate(keys):
@@ -317,18 +318,23 @@ class Windows:
         return k in self.phases.get(key, ())
 
 
-def _done_before(keys: list[tuple[str, str]], index: dict, nodes: list[tuple]) -> np.ndarray:
+def _done_before(keys: list[tuple[str, str]], names: Alphabet, nodes: dict[str, np.ndarray]) -> np.ndarray:
     """``[s, j]``: whether action ``keys[j]`` was done before the action that led to skeleton node ``s``.
 
-    A node is ``(delivered, held, pushed, last action)``: an object delivered was picked and
-    placed, the one held was picked, a piece pushed was pushed; the last action itself is not before.
+    ``nodes`` holds the nodes' integer columns (:class:`~expert.milp.skeleton_graph.ActionGraph`'s):
+    an object delivered was picked and placed, the one held was picked, a piece pushed was
+    pushed; the last action itself is not before.
     """
-    done = np.zeros((len(nodes), len(keys)), dtype=bool)
-    for row, (delivered, held, pushed, key) in enumerate(nodes):
-        before = [("pick", o) for o in delivered] + [("place", o) for o in delivered] + [("push", c) for c in pushed]
-        if held is not None:
-            before.append(("pick", held))
-        done[row, [index[k] for k in before if k != key and k in index]] = True  # a held object has no pick
+    done = np.zeros((len(nodes["last"]), len(keys)), dtype=bool)
+    for j, (kind, target) in enumerate(keys):
+        if kind == "push":
+            done[:, j] = nodes["pushed_set"] >> names.pieces.index(target) & 1 == 1
+        else:
+            i = names.objects.index(target)
+            done[:, j] = nodes["delivered_set"] >> i & 1 == 1
+            if kind == "pick":
+                done[:, j] |= nodes["held"] == i
+        done[:, j] &= nodes["last"] != names.keys.index((kind, target))
     return done
 
 

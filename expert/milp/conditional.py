@@ -27,6 +27,7 @@ The MILP uses it twice (:func:`add_conditional_cuts`, :func:`fix_above`), both e
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -98,13 +99,14 @@ def conditional_bounds(
     graph = pair.graph(deadline).within(n)
     if order is not None:
         graph = graph.in_order(order, problem.deliver)
-    bonus = _arrival_bonus(graph, n, last_at_end)
-    total = _forward(graph, n, bonus, deadline) + _leave(graph, n, bonus, deadline) + constant
-    slots = graph.slot[1:]  # the start (state 0) did no action
-    by_slot = np.argsort(slots, kind="stable")
-    firsts = run_starts(slots[by_slot])
-    least = np.minimum.reduceat(total[:, 1:][:, by_slot], firsts, axis=1).T.copy()
-    return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots[by_slot][firsts], least, strict=True)})
+    slots, rows = np.unique(graph.slot[1:], return_inverse=True)  # the start (state 0) did no action
+    band = Band.of(graph, n)
+    least = np.full((len(slots), n), math.inf)
+    if band is not None:
+        bonus = band.bonus(last_at_end)
+        total = _forward(band.graph, band.width, bonus, deadline) + _leave(band.graph, band.width, bonus, deadline)
+        least = band.least_by_phase(total[:, 1:] + constant, band.arrival[1:], rows, len(slots))
+    return Conditional(n, {graph.slots[slot]: row for slot, row in zip(slots, least, strict=True)})
 
 
 def least_by_last_phase(problem: Problem, n_phases: int, pair: PairCosts, deadline: Deadline = NEVER) -> np.ndarray:
@@ -116,12 +118,70 @@ def least_by_last_phase(problem: Problem, n_phases: int, pair: PairCosts, deadli
     at every place: every such plan maps onto one of them at no more cost (the module docstring).
     """
     graph = pair.graph(deadline).within(n_phases)
-    bonus = _arrival_bonus(graph, n_phases, last_at_end=False)
-    forward = _forward(graph, n_phases, bonus, deadline)
-    finished = forward[:, graph.finished & graph.placed] if (graph.finished & graph.placed).any() else None
-    if finished is None:
+    band = Band.of(graph, n_phases)
+    last = graph.finished & graph.placed
+    if band is None or not last.any():
         return np.full(n_phases, math.inf)
-    return finished.min(axis=1) - WAIT_COST * len(problem.deliver)
+    forward = _forward(band.graph, band.width, band.bonus(last_at_end=False), deadline)
+    least = band.least_by_phase(forward[:, last], band.arrival[last], np.zeros(int(last.sum()), dtype=np.intp), 1)
+    return least[0] - WAIT_COST * len(problem.deliver)
+
+
+@dataclass(frozen=True)
+class Band:
+    """A graph's searches for ``n_phases`` on the phases where a state can lie on a plan, its band.
+
+    A state ``s`` is reached at phase ``arrival[s]`` at the earliest (the least phases from
+    the start) and left, on a plan, by ``N - 1 - remaining[s]``; since ``arrival + remaining``
+    is at least ``A``, the least phases of a finished state, every such phase is
+    ``arrival[s] + j`` with ``0 <= j < width = N - A``. Both tables keep those ``width``
+    columns only (``inf`` beyond ``N - 1``), and an edge ``s -> d`` of ``q`` phases links
+    column ``j`` of ``s`` to column ``j + k`` of ``d``, its shift ``k = arrival[s] + q -
+    arrival[d] >= 0``: the searches of the dense tables run unchanged with ``k`` for ``q`` and
+    ``width`` for ``N``, and an edge with ``k >= width`` is left out (it reaches no column).
+    The values are the dense tables' on the band, bit for bit (the same sums in the same
+    order), and ``inf`` off it in both.
+    """
+
+    graph: SkeletonGraph  # the edges of a shift below ``width``, ``q`` their shift
+    arrival: np.ndarray  # per state, the least phases from the start (inf: unreachable within N)
+    width: int
+    n_phases: int
+
+    @classmethod
+    def of(cls, graph: SkeletonGraph, n_phases: int) -> Band | None:
+        """The band of ``graph`` (its edges all within ``n_phases``); None when no finished state is reached."""
+        arrival = graph.least_from_start(graph.q.astype(float))
+        finished = arrival[graph.finished]
+        if not finished.size or not finished.min() <= n_phases - 1:
+            return None
+        width = n_phases - int(finished.min())
+        with np.errstate(invalid="ignore"):  # inf - inf from an unreachable state: nan, and left out
+            shift = arrival[graph.src] + graph.q - arrival[graph.dst]
+            keep = shift < width
+        banded = dataclasses.replace(graph._keeping(keep), q=shift[keep].astype(np.intp))
+        return cls(banded, arrival, width, n_phases)
+
+    def bonus(self, last_at_end: bool) -> np.ndarray:
+        """``[j, s]``: the W1 t of arriving at state s at phase ``t = arrival[s] + j`` (:func:`_arrival_bonus`)."""
+        n, graph = self.n_phases, self.graph
+        phase = self.arrival[None, :] + np.arange(self.width)[:, None]
+        bonus = np.where(graph.placed, WAIT_COST * phase, 0.0)
+        if last_at_end:
+            last = graph.placed & graph.finished
+            bonus = np.where(last & (phase < n - 1), math.inf, bonus)
+        return np.where(phase <= n - 1, bonus, math.inf)
+
+    def least_by_phase(self, values: np.ndarray, arrival: np.ndarray, rows: np.ndarray, count: int) -> np.ndarray:
+        """``[r, t]``: the least of ``values[j, s]`` over the states ``s`` of row ``r`` (``rows[s]``) at phase
+        ``t = arrival[s] + j``, of ``count`` rows and ``n_phases`` phases; inf where none."""
+        n = self.n_phases
+        least = np.full(count * n, math.inf)
+        for j in range(self.width):
+            phase = arrival + j
+            on = phase <= n - 1
+            np.minimum.at(least, rows[on] * n + phase[on].astype(np.intp), values[j, on])
+        return least.reshape(count, n)
 
 
 # The searches below keep their tables phase by phase, one row per phase and one column per
@@ -132,7 +192,7 @@ def least_by_last_phase(problem: Problem, n_phases: int, pair: PairCosts, deadli
 def _forward(graph: SkeletonGraph, n: int, bonus: np.ndarray, deadline: Deadline) -> np.ndarray:
     """``[t, s]``: the cheapest path to s at phase t, with slack (a prefix minimum over t), bonus included."""
     phases = np.arange(n)[:, None]
-    forward = np.full((2 * n, len(graph.states)), math.inf)  # upper half: inf, so that a shift by q reads inf
+    forward = np.full((2 * n, graph.state_count), math.inf)  # upper half: inf, so that a shift by q reads inf
     forward[n, 0] = 0.0
     for e0, e1 in pairwise(graph.edge_starts):
         if e0 == e1:
@@ -151,9 +211,9 @@ def _leave(graph: SkeletonGraph, n: int, bonus: np.ndarray, deadline: Deadline) 
     phases = np.arange(n)[:, None]
     src_a, dst_a, q_a, t_a = graph.src, graph.dst, graph.q, graph.t
     level_starts, edge_starts = graph.level_starts, graph.edge_starts
-    leave = np.full((n, len(graph.states)), math.inf)
+    leave = np.full((n, graph.state_count), math.inf)
     leave[:, graph.finished] = 0.0
-    suffix = np.full((2 * n, len(graph.states)), math.inf)  # lower half: inf (no phase beyond N - 1)
+    suffix = np.full((2 * n, graph.state_count), math.inf)  # lower half: inf (no phase beyond N - 1)
     for level in range(len(level_starts) - 2, -1, -1):
         deadline.check()
         e0, e1 = edge_starts[level], edge_starts[level + 1] if level + 1 < len(edge_starts) else len(src_a)
@@ -165,17 +225,6 @@ def _leave(graph: SkeletonGraph, n: int, bonus: np.ndarray, deadline: Deadline) 
         states = slice(level_starts[level], level_starts[level + 1])
         suffix[:n, states] = np.minimum.accumulate((bonus[:, states] + leave[:, states])[::-1], axis=0)[::-1]
     return leave
-
-
-def _arrival_bonus(graph: SkeletonGraph, n: int, last_at_end: bool) -> np.ndarray:
-    """``[t, s]``: the W1 t of arriving at state s at phase t (inf where a last place cannot be)."""
-    bonus = np.zeros((n, len(graph.states)))
-    bonus[:, graph.placed] = WAIT_COST * np.arange(n)[:, None]
-    if last_at_end:
-        last = graph.placed & graph.finished
-        bonus[: n - 1, last] = math.inf
-        bonus[n - 1, last] = WAIT_COST * (n - 1)
-    return bonus
 
 
 def exit_box_of(option) -> IndexBox:

@@ -118,11 +118,50 @@ class ActionGraph(Layers):
     """The skeleton graph with its poses merged: a node per (delivered, held, pushed, last action).
 
     An edge costs at least ``q`` phases: the least over the pose pairs of the two actions.
+    A node is four integer columns named by ``names`` (:class:`SkeletonGraph`'s first four).
     """
 
     q: np.ndarray
-    nodes: list[tuple]  # (delivered, held, pushed, last action)
+    names: Alphabet
+    columns: dict[str, np.ndarray]  # delivered_set, held, pushed_set, last
     finished: np.ndarray
+
+    @functools.cached_property
+    def nodes(self) -> list[tuple]:
+        """Per node ``(delivered, held, pushed, last action)``: frozensets of ids, an id, a key."""
+        return [self.names.node(*row) for row in zip(*self.columns.values(), strict=True)]
+
+
+@dataclass(frozen=True)
+class Alphabet:
+    """A problem's skeleton in integers: object ``i`` is bit ``1 << i`` of a set of delivered objects, piece ``c``
+    bit ``1 << c`` of a set of pushed pieces, and the actions are numbered places, picks, pushes (the order
+    :func:`skeleton_moves` lists them in, so one state's moves come in the order of their numbers)."""
+
+    objects: tuple[str, ...]  # problem.deliver
+    pieces: tuple[str, ...]  # problem.pushes.pushable
+    keys: tuple[Key, ...]
+
+    @classmethod
+    def of(cls, problem: Problem) -> Alphabet:
+        objects, pieces = tuple(problem.deliver), tuple(problem.pushes.pushable)
+        keys = [("place", o) for o in objects] + [("pick", o) for o in objects] + [("push", c) for c in pieces]
+        return cls(objects, pieces, tuple(keys))
+
+    @property
+    def dtype(self) -> type:
+        """Of a set's bit mask: int64, or Python integers past 62 objects or pieces (a graph that large is never
+        finished: the caller's deadline stops its search)."""
+        return np.int64 if max(len(self.objects), len(self.pieces)) <= 62 else object
+
+    def node(self, delivered: int, held: int, pushed: int, last: int) -> tuple:
+        """``(delivered, held, pushed, last action)`` by name from the integers: frozensets of ids, an id, a key."""
+        return (
+            frozenset(o for i, o in enumerate(self.objects) if delivered >> i & 1),
+            None if held < 0 else self.objects[held],
+            frozenset(c for i, c in enumerate(self.pieces) if pushed >> i & 1),
+            None if last < 0 else self.keys[last],
+        )
 
 
 @dataclass(frozen=True)
@@ -130,13 +169,22 @@ class SkeletonGraph(Layers):
     """The states (the nodes, in order of discovery) and the edges between them.
 
     ``src[e] -> dst[e]`` costs at least ``q[e]`` phases and ``t[e]`` metres of travel.
-    Per state: ``finished`` (every object delivered, every covering piece pushed),
+    A state is five integer columns named by :attr:`names`: ``delivered_set`` and
+    ``pushed_set`` (bit masks), ``held`` (an object's number, -1: none), ``last`` (the number
+    of the action that led there, -1 at the start) and ``exit`` (its exit box, ``boxes[exit]``).
+    Per state also: ``finished`` (every object delivered, every covering piece pushed),
     ``delivered`` (how many objects), ``placed`` (its last action is a place),
     ``slot`` (the number of its last action and exit box in ``slots``; the start's is -1)
     and ``group`` (its node in :attr:`actions`, the graph without poses).
     """
 
-    states: list[tuple]  # (delivered, held, pushed, last action, its exit box)
+    names: Alphabet
+    delivered_set: np.ndarray
+    held: np.ndarray
+    pushed_set: np.ndarray
+    last: np.ndarray
+    exit: np.ndarray
+    boxes: list[IndexBox | None]
     q: np.ndarray
     t: np.ndarray
     finished: np.ndarray
@@ -145,7 +193,7 @@ class SkeletonGraph(Layers):
     slot: np.ndarray
     slots: list[tuple[Key, IndexBox]]
     group: np.ndarray
-    groups: list[tuple]  # (delivered, held, pushed, last action), numbered level by level
+    group_columns: dict[str, np.ndarray]  # the first four STATE_COLUMNS of each group, numbered level by level
 
     @classmethod
     def build(
@@ -154,72 +202,22 @@ class SkeletonGraph(Layers):
     ) -> SkeletonGraph:  # fmt: skip
         """Every state reachable from the start; ``poses[action]`` lists its (entry, exit) boxes.
 
-        A state is found by its exit box's number (hashed in C; a box's hash runs Python),
-        and the steps of an action from a box, which depend on nothing else, are listed once.
+        One level at a time, in arrays: every move of every state of the level, then its new
+        states numbered in order of discovery (by source, action and pose), as a search state
+        by state would number them. The steps of an action from a box, which depend on
+        nothing else, are listed once.
         """
-        start = (frozenset(), problem.holding, frozenset(), None, None)
-        states = [start]
-        boxes: list[IndexBox | None] = [None]
-        numbers: dict[IndexBox | None, int] = {None: 0}
-        exits = [0]  # per state, its exit box's number
-        ids = {(start[0], start[1], start[2], None, 0): 0}
-        steps: dict = {}  # (exit number, action) -> [(phases, travel, next exit number)]
-        slot_ids: dict[tuple[Key, int], int] = {}
-        slot_of = [-1]
-        group_ids: dict[tuple, int] = {start[:4]: 0}
-        group_of = [0]
+        return _Builder(problem, poses, step, deadline).graph()
 
-        def number(box: IndexBox) -> int:
-            if box not in numbers:
-                numbers[box] = len(boxes)
-                boxes.append(box)
-            return numbers[box]
+    @property
+    def state_count(self) -> int:
+        return self.level_starts[-1]
 
-        level_starts, edge_starts = [0, 1], [0]
-        src: list[int] = []
-        dst: list[int] = []
-        qs: list[int] = []
-        ts: list[float] = []
-        while level_starts[-1] > level_starts[-2]:
-            for sid in range(level_starts[-2], level_starts[-1]):
-                deadline.check()
-                delivered, held, pushed, _, where = states[sid]
-                for key, (d, h, p) in skeleton_moves(problem, delivered, held, pushed):
-                    found = steps.get((exits[sid], key))
-                    if found is None:
-                        found = steps[exits[sid], key] = [
-                            (*step(where, key[0], entry, exit_box), number(exit_box)) for entry, exit_box in poses[key]
-                        ]
-                    for q, t, x in found:
-                        j = ids.get((d, h, p, key, x))
-                        if j is None:
-                            j = ids[d, h, p, key, x] = len(states)
-                            states.append((d, h, p, key, boxes[x]))
-                            exits.append(x)
-                            slot_of.append(slot_ids.setdefault((key, x), len(slot_ids)))
-                            group_of.append(group_ids.setdefault((d, h, p, key), len(group_ids)))
-                        src.append(sid)
-                        dst.append(j)
-                        qs.append(q)
-                        ts.append(t)
-            edge_starts.append(len(src))
-            level_starts.append(len(states))
-        return cls(
-            level_starts,
-            edge_starts,
-            np.asarray(src, dtype=np.intp),
-            np.asarray(dst, dtype=np.intp),
-            states,
-            np.asarray(qs, dtype=np.intp),
-            np.asarray(ts, dtype=float),
-            np.array([all_done(problem, s[0], s[2]) for s in states], dtype=bool),
-            np.array([len(s[0]) for s in states], dtype=np.intp),
-            np.array([s[3] is not None and s[3][0] == "place" for s in states], dtype=bool),
-            np.asarray(slot_of, dtype=np.intp),
-            [(key, boxes[x]) for key, x in slot_ids],
-            np.asarray(group_of, dtype=np.intp),
-            list(group_ids),
-        )
+    @functools.cached_property
+    def states(self) -> list[tuple]:
+        """Per state ``(delivered, held, pushed, last action, exit box)``: frozensets of ids, an id, a key, a box."""
+        columns = (self.delivered_set, self.held, self.pushed_set, self.last)
+        return [(*self.names.node(*row), self.boxes[x]) for *row, x in zip(*columns, self.exit, strict=True)]
 
     def within(self, n_phases: int) -> SkeletonGraph:
         """The graph without the edges of more than ``n_phases - 1`` phases (no plan of ``n_phases`` takes one).
@@ -237,15 +235,14 @@ class SkeletonGraph(Layers):
         plans of the restricted model map onto this graph's paths, so its bounds hold for them.
         """
         chain = [target for target in order if target in deliver]
-        bit = {target: 1 << i for i, target in enumerate(chain)}  # a set of delivered objects is a sum of bits
-        before = {after: bit[first] for first, after in pairwise(chain)}
-
-        def needed(state: tuple) -> int:  # what must be delivered before the action that led to ``state``
-            key = state[3]
-            return before.get(key[1], 0) if key is not None and key[0] == "pick" else 0
-
-        delivered = np.array([sum(bit.get(o, 0) for o in state[0]) for state in self.states], dtype=np.int64)
-        need = np.array([needed(state) for state in self.states], dtype=np.int64)[self.dst]
+        delivered = np.zeros(self.state_count, dtype=self.names.dtype)  # per state, its delivered objects of the chain
+        for position, target in enumerate(chain):
+            if target in self.names.objects:
+                delivered |= (self.delivered_set >> self.names.objects.index(target) & 1) << position
+        needed = np.zeros(len(self.names.keys) + 1, dtype=self.names.dtype)  # per action (none: the last), chain before
+        for position, after in enumerate(chain[1:]):  # the pick of ``after`` needs chain[position] delivered
+            needed[self.names.keys.index(("pick", after))] = 1 << position
+        need = needed[self.last][self.dst]  # what must be delivered before the action that led to an edge's end
         return self._keeping((need & delivered[self.src]) == need)
 
     def _keeping(self, keep: np.ndarray) -> SkeletonGraph:
@@ -270,7 +267,7 @@ class SkeletonGraph(Layers):
         exit box of the last action is among a group's states (each action's poses all
         lead on from any state), so an edge's ``q`` is the least over both actions' poses.
         """
-        count = len(self.groups)
+        count = len(self.group_columns["last"])
         pair = self.group[self.src] * count + self.group[self.dst]
         order = np.argsort(pair, kind="stable")
         firsts = run_starts(pair[order])
@@ -283,5 +280,237 @@ class SkeletonGraph(Layers):
         finished = np.zeros(count, dtype=bool)
         finished[self.group] = self.finished
         return ActionGraph(
-            level_starts, edge_starts, src, dst, np.minimum.reduceat(self.q[order], firsts), self.groups, finished
+            level_starts, edge_starts, src, dst, np.minimum.reduceat(self.q[order], firsts), self.names,
+            self.group_columns, finished,
+        )  # fmt: skip
+
+
+def _codes(columns: Sequence[tuple[np.ndarray, int]]) -> np.ndarray:
+    """One integer per row that tells rows apart as their ``(values, radix)`` columns do (``0 <= values < radix``).
+
+    The columns are combined in mixed radix; where the next product could pass 2^62, the
+    code so far is first renumbered densely (``np.unique``), which keeps rows apart, and
+    past that in Python integers (a column of more than 62 bits).
+    """
+    code = np.zeros(len(columns[0][0]), dtype=np.int64)
+    size = 1
+    for values, radix in columns:
+        if code.dtype != object and size * radix >= 1 << 62:
+            _, code = np.unique(code, return_inverse=True)
+            size = int(code.max(initial=0)) + 1
+            if size * radix >= 1 << 62:
+                code = code.astype(object)
+        code = code * radix + values
+        size *= radix
+    return code
+
+
+def _bit_counts(masks: np.ndarray) -> np.ndarray:
+    """The number of bits set in each mask."""
+    if masks.dtype == object:
+        return np.array([int(mask).bit_count() for mask in masks], dtype=np.intp)
+    return np.bitwise_count(masks).astype(np.intp)
+
+
+def _first_seen(codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Of ``codes``: the index of each distinct value's first row, in order of those rows, and per row the number
+    of its value in that order."""
+    _, firsts, inverse = np.unique(codes, return_index=True, return_inverse=True)
+    by_first = np.argsort(firsts)
+    number = np.empty(len(firsts), dtype=np.intp)
+    number[by_first] = np.arange(len(firsts))
+    return firsts[by_first], number[inverse]
+
+
+STATE_COLUMNS = ("delivered_set", "held", "pushed_set", "last", "exit")  # SkeletonGraph's, of one state
+CHUNK_EDGES = 1 << 20  # edges listed at a time when building the skeleton graph
+
+
+@dataclass
+class _Moves:
+    """The edges out of one level, one row per edge: its source, least phases and travel, and its end's columns."""
+
+    source: np.ndarray  # a state's number
+    q: np.ndarray
+    t: np.ndarray
+    end: dict[str, np.ndarray]  # STATE_COLUMNS; ``last`` is the edge's action
+
+    @classmethod
+    def concatenated(cls, chunks: list[_Moves]) -> _Moves:
+        """The chunks' rows one chunk after another."""
+        if not chunks:
+            empty = np.zeros(0, dtype=np.int64)
+            return cls(empty, empty, np.zeros(0), {c: empty for c in STATE_COLUMNS})
+        return cls(
+            *(np.concatenate([getattr(chunk, name) for chunk in chunks]) for name in ("source", "q", "t")),
+            {c: np.concatenate([chunk.end[c] for chunk in chunks]) for c in STATE_COLUMNS},
         )
+
+    @classmethod
+    def joined(cls, parts: list[_Moves]) -> _Moves:
+        """The parts' rows in order of source, then action, then pose (each part: one action, sources in order)."""
+        source = np.concatenate([p.source for p in parts])
+        end = {c: np.concatenate([p.end[c] for p in parts]) for c in STATE_COLUMNS}
+        order = np.lexsort((end["last"], source))  # stable: the poses stay in their order
+        q, t = (np.concatenate([getattr(p, name) for p in parts])[order] for name in ("q", "t"))
+        return cls(source[order], q, t, {c: values[order] for c, values in end.items()})
+
+
+class _Builder:
+    """:meth:`SkeletonGraph.build`'s search, one level of states at a time in integer arrays (:class:`Alphabet`).
+
+    A level is a dict of :data:`STATE_COLUMNS`; its states are numbered from ``start``.
+    """
+
+    def __init__(self, problem: Problem, poses: dict, step: Step, deadline: Deadline) -> None:
+        self.problem = problem
+        self.names = names = Alphabet.of(problem)
+        self.poses, self.step, self.deadline = poses, step, deadline
+        self.covers = [sum(1 << names.pieces.index(c) for c in problem.covers.get(o, ())) for o in names.objects]
+        self.boxes: list[IndexBox | None] = [None]
+        self.numbers: dict[IndexBox | None, int] = {None: 0}
+        self.steps: dict[tuple[int, int], tuple] = {}  # (exit box, action) -> its q, t and exit box per pose
+
+    def radices(self) -> dict[str, int]:
+        """Per state column, one more than its largest value (``held`` and ``last`` counted from -1)."""
+        n, m = len(self.names.objects), len(self.names.pieces)
+        return {"delivered_set": 1 << n, "held": n + 1, "pushed_set": 1 << m, "last": len(self.names.keys) + 1,
+                "exit": len(self.boxes)}  # fmt: skip
+
+    def codes(self, level: dict[str, np.ndarray], columns: Sequence[str]) -> np.ndarray:
+        """Per state of ``level``, an integer that tells the states apart as ``columns`` do."""
+        radices = self.radices()
+        offset = {"held": 1, "last": 1}
+        return _codes([(level[c] + offset.get(c, 0), radices[c]) for c in columns])
+
+    def graph(self) -> SkeletonGraph:
+        names, problem = self.names, self.problem
+        holding = -1 if problem.holding is None else names.objects.index(problem.holding)
+        start = {c: np.zeros(1, dtype=names.dtype if c.endswith("_set") else np.int64) for c in STATE_COLUMNS}
+        start["held"] += holding
+        start["last"] -= 1
+        levels, slots, groups = [start], [np.full(1, -1)], [np.zeros(1, dtype=np.intp)]
+        group_rows = [start]  # per level, a state of each of its groups
+        slot_ids: dict[tuple[int, int], int] = {}
+        level_starts, edge_starts = [0, 1], [0]
+        src, dst, qs, ts = [], [], [], []
+        while level_starts[-1] > level_starts[-2]:
+            self.deadline.check()
+            moves = self._moves(levels[-1], level_starts[-2])
+            ends = self.codes(moves.end, STATE_COLUMNS)
+            firsts, number = _first_seen(ends)
+            level = {c: values[firsts] for c, values in moves.end.items()}
+            src.append(moves.source)
+            dst.append(number + level_starts[-1])
+            qs.append(moves.q)
+            ts.append(moves.t)
+            edge_starts.append(edge_starts[-1] + len(ends))
+            level_starts.append(level_starts[-1] + len(firsts))
+            levels.append(level)
+            slot_firsts, slot_number = _first_seen(self.codes(level, ("last", "exit")))
+            new_slots = zip(level["last"][slot_firsts].tolist(), level["exit"][slot_firsts].tolist(), strict=True)
+            slot_of = [slot_ids.setdefault(slot, len(slot_ids)) for slot in new_slots]
+            slots.append(np.asarray(slot_of, dtype=np.intp)[slot_number])
+            group_firsts, group_number = _first_seen(self.codes(level, STATE_COLUMNS[:4]))
+            groups.append(group_number + sum(len(rows["last"]) for rows in group_rows))
+            group_rows.append({c: values[group_firsts] for c, values in level.items()})
+        column = {c: np.concatenate([level[c] for level in levels]) for c in STATE_COLUMNS}
+        full_objects, full_pieces = (1 << len(names.objects)) - 1, (1 << len(names.pieces)) - 1
+        return SkeletonGraph(
+            level_starts,
+            edge_starts,
+            np.concatenate(src),
+            np.concatenate(dst),
+            names,
+            *(column[c] for c in STATE_COLUMNS),
+            self.boxes,
+            np.concatenate(qs),
+            np.concatenate(ts),
+            ((column["delivered_set"] == full_objects) & (column["pushed_set"] == full_pieces)).astype(bool),
+            _bit_counts(column["delivered_set"]),
+            (column["last"] >= 0) & (column["last"] < len(names.objects)),  # a place
+            np.concatenate(slots),
+            [(names.keys[a], self.boxes[x]) for a, x in slot_ids],
+            np.concatenate(groups),
+            {c: np.concatenate([rows[c] for rows in group_rows]) for c in STATE_COLUMNS[:4]},
+        )
+
+    def _moves(self, level: dict[str, np.ndarray], first: int) -> _Moves:
+        """Every edge out of ``level`` (its states numbered from ``first``), in order of source, action and pose.
+
+        Listed a chunk of sources at a time, about :data:`CHUNK_EDGES` edges each, with the
+        deadline checked between chunks (a level can hold more edges than memory).
+        """
+        possible = self._possible(level)
+        poses = np.array([len(self.poses.get(key, ())) for key in self.names.keys], dtype=np.intp)
+        ends = np.cumsum(poses @ possible) if len(possible) else np.zeros(len(level["last"]), dtype=np.intp)
+        chunks, lo = [], 0
+        while lo < len(ends):
+            self.deadline.check()
+            before = ends[lo - 1] if lo else 0
+            hi = max(lo + 1, int(np.searchsorted(ends, before + CHUNK_EDGES, side="right")))
+            parts = [
+                self._steps_from(level, lo + np.flatnonzero(possible[action, lo:hi]), action, first)
+                for action in range(len(self.names.keys))
+                if possible[action, lo:hi].any()
+            ]
+            if parts:
+                chunks.append(_Moves.joined(parts))
+            lo = hi
+        return _Moves.concatenated(chunks)
+
+    def _possible(self, level: dict[str, np.ndarray]) -> np.ndarray:
+        """``[action, state]``: whether the action can be done next from the state (:func:`skeleton_moves`' rule)."""
+        names, n = self.names, len(self.names.objects)
+        delivered, held, pushed = level["delivered_set"], level["held"], level["pushed_set"]
+        possible = np.zeros((len(names.keys), len(held)), dtype=bool)
+        for i in range(n):
+            cover = self.covers[i]
+            possible[i] = (held == i) & (pushed & cover == cover)  # a place
+            possible[n + i] = (held == -1) & (delivered >> i & 1 == 0)  # a pick
+        for c in range(len(names.pieces)):
+            possible[2 * n + c] = pushed >> c & 1 == 0
+        return possible
+
+    def _steps_from(self, level: dict[str, np.ndarray], rows: np.ndarray, action: int, first: int) -> _Moves:
+        """The edges of ``action`` from the level's ``rows``: one per pose of the action, in its order."""
+        boxes, which = np.unique(level["exit"][rows], return_inverse=True)
+        tables = [self._table(int(box), action) for box in boxes]
+        lengths = np.array([len(q) for q, _, _ in tables], dtype=np.intp)
+        count = lengths[which]
+        edge_row = np.repeat(rows, count)
+        starts = np.cumsum(lengths) - lengths
+        within = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        entry = np.repeat(starts[which], count) + within
+        q, t, exit_number = (np.concatenate([table[k] for table in tables]) for k in range(3))
+        end = {c: level[c][edge_row] for c in ("delivered_set", "held", "pushed_set")}
+        n = len(self.names.objects)
+        if action < n:  # a place
+            end["delivered_set"] |= 1 << action
+            end["held"][:] = -1
+        elif action < 2 * n:  # a pick
+            end["held"][:] = action - n
+        else:  # a push
+            end["pushed_set"] |= 1 << (action - 2 * n)
+        end["last"] = np.full(len(edge_row), action, dtype=np.int64)
+        end["exit"] = exit_number[entry]
+        return _Moves(edge_row + first, q[entry], t[entry], end)
+
+    def _table(self, box: int, action: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The steps of ``action`` from exit box number ``box``, one per pose: least phases, travel, exit box number."""
+        found = self.steps.get((box, action))
+        if found is None:
+            self.deadline.check()
+            key, where = self.names.keys[action], self.boxes[box]
+            rows = [(*self.step(where, key[0], entry, out), self._number(out)) for entry, out in self.poses[key]]
+            q, t, exit_number = zip(*rows, strict=True) if rows else ((), (), ())
+            found = self.steps[box, action] = (
+                np.asarray(q, dtype=np.int64), np.asarray(t, dtype=float), np.asarray(exit_number, dtype=np.int64),
+            )  # fmt: skip
+        return found
+
+    def _number(self, box: IndexBox) -> int:
+        if box not in self.numbers:
+            self.numbers[box] = len(self.boxes)
+            self.boxes.append(box)
+        return self.numbers[box]

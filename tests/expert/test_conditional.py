@@ -14,12 +14,14 @@ import pytest
 
 from expert.decoupled import steps_of
 from expert.milp.bounds import PairCosts, cheapest_schedule, min_objective, skeleton
-from expert.milp.conditional import conditional_bounds, exit_box_of
+from expert.milp.conditional import _forward, _leave, conditional_bounds, exit_box_of, least_by_last_phase
+from expert.milp.deadline import NEVER
 from expert.milp.problem import prepare
 from expert.planner import plan
 from expert.validate import validate_plan
 from fetchcarry_env import families
 from fetchcarry_env.actions import Lattice
+from fetchcarry_env.kinematics import WAIT_COST
 
 
 def _cases():
@@ -111,3 +113,45 @@ def test_the_order_of_picks_is_the_cheapest_schedules(seed):
     _, schedule = cheapest_schedule(problem, n_phases, pairs)
     picks = [key[1] for key, _ in schedule if key[0] == "pick"]
     assert conditional_bounds(problem, n_phases, pairs).order("pick") == picks
+
+
+def _dense_bounds(problem, n: int, pairs: PairCosts, last_at_end: bool, order=None) -> dict:
+    """The conditional bounds as the searches compute them over every phase ``0 .. N - 1`` of every state."""
+    graph = pairs.graph().within(n)
+    if order is not None:
+        graph = graph.in_order(order, problem.deliver)
+    bonus = np.zeros((n, graph.state_count))
+    bonus[:, graph.placed] = WAIT_COST * np.arange(n)[:, None]
+    if last_at_end:
+        last = graph.placed & graph.finished
+        bonus[: n - 1, last] = math.inf
+        bonus[n - 1, last] = WAIT_COST * (n - 1)
+    total = _forward(graph, n, bonus, NEVER) + _leave(graph, n, bonus, NEVER) - WAIT_COST * len(problem.deliver)
+    bounds: dict = {}
+    for state in range(1, graph.state_count):
+        slot = graph.slots[graph.slot[state]]
+        bounds[slot] = np.minimum(bounds.get(slot, np.full(n, math.inf)), total[:, state])
+    return bounds
+
+
+BANDS = [(scenario, extra) for scenario in CASES[3:] for extra in (0, 2)]
+
+
+@pytest.mark.parametrize(("scenario", "extra"), BANDS, ids=[f"{s.name}+{extra}" for s, extra in BANDS])
+def test_the_band_has_the_dense_tables_values_bit_for_bit(scenario, extra):
+    """The searches keep only the phases where a state can lie on a plan (``Band``): nothing else changes."""
+    problem = prepare(scenario, Lattice.over(scenario.area, 0.05))
+    pairs = PairCosts(problem)
+    n = skeleton(problem, pairs).phases + extra
+    for last_at_end, order in ((False, None), (True, None), (False, list(problem.deliver)[::-1])):
+        banded = conditional_bounds(problem, n, pairs, last_at_end=last_at_end, order=order).bound
+        dense = _dense_bounds(problem, n, pairs, last_at_end, order)
+        assert banded.keys() == dense.keys()
+        for slot, row in dense.items():
+            assert np.array_equal(banded[slot], row), slot
+    graph = pairs.graph().within(n + 4)
+    bonus = np.zeros((n + 4, graph.state_count))
+    bonus[:, graph.placed] = WAIT_COST * np.arange(n + 4)[:, None]
+    forward = _forward(graph, n + 4, bonus, NEVER)[:, graph.finished & graph.placed]
+    dense_by_last = forward.min(axis=1) - WAIT_COST * len(problem.deliver)
+    assert np.array_equal(least_by_last_phase(problem, n + 4, pairs), dense_by_last)

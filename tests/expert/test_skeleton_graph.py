@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 
+from expert.milp import skeleton_graph
 from expert.milp.bounds import PairCosts, min_travel, settle, skeleton
 from expert.milp.problem import prepare
 from expert.milp.skeleton_graph import all_done, skeleton_moves
@@ -139,3 +140,30 @@ def test_a_graph_in_order_has_the_paths_that_pick_in_that_order(scenario, orders
         assert layered[sid] == searched.get((delivered, held, pushed, box), math.inf)
     assert len(in_order.states) == len(graph.states) and len(in_order.src) < len(graph.src)
     assert np.isinf(layered).any() and not np.isinf(graph.least_from_start(graph.q.astype(float))).any()
+
+
+def _same_graph(a, b) -> None:
+    assert a.level_starts == b.level_starts and a.edge_starts == b.edge_starts
+    for name in ("src", "dst", "q", "t", "finished", "delivered", "placed", "slot", "group"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert a.states == b.states and a.slots == b.slots and a.actions.nodes == b.actions.nodes
+
+
+@pytest.mark.parametrize("scenario", CASES, ids=[s.name for s in CASES])
+def test_a_level_listed_in_chunks_is_the_same_graph(monkeypatch, scenario):
+    """A level's edges are listed a chunk of sources at a time (memory, the deadline): the chunks change nothing."""
+    whole = _pairs(scenario).graph()
+    monkeypatch.setattr(skeleton_graph, "CHUNK_EDGES", 7)
+    _same_graph(_pairs(scenario).graph(), whole)
+
+
+def test_sets_wider_than_62_bits_are_python_integers(monkeypatch):
+    """More than 62 objects or pieces (the format allows 64 and 256): the same graph in Python integers."""
+    scenario = CASES[3]  # two objects covered: pushes too
+    whole = _pairs(scenario).graph()
+    monkeypatch.setattr(skeleton_graph.Alphabet, "dtype", property(lambda self: object))
+    wide = _pairs(scenario).graph()
+    assert wide.delivered_set.dtype == object
+    _same_graph(wide, whole)
+    codes = skeleton_graph._codes([(np.array([1, 1, 2]), 1 << 70), (np.array([3, 4, 3]), 1 << 70)])
+    assert len(set(codes.tolist())) == 3
