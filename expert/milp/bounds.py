@@ -23,7 +23,7 @@ from expert.milp.deadline import NEVER, Deadline
 from expert.milp.grid import IndexBox
 from expert.milp.moves import LeastMoves, problem_moves
 from expert.milp.problem import Problem
-from expert.milp.skeleton_graph import ActionGraph, Alphabet, SkeletonGraph, all_done, skeleton_moves
+from expert.milp.skeleton_graph import MAX_EDGES, ActionGraph, Alphabet, SkeletonGraph, all_done, skeleton_moves
 from fetchcarry_env.kinematics import WAIT_COST, travel_cost
 
 
@@ -205,18 +205,21 @@ class PairCosts:
     :class:`~expert.milp.skeleton_graph.SkeletonGraph` that :meth:`graph` builds.
     """
 
-    def __init__(self, problem: Problem, deadline: Deadline = NEVER) -> None:
-        self.problem = problem
+    def __init__(self, problem: Problem, deadline: Deadline = NEVER, max_edges: int = MAX_EDGES) -> None:
+        self.problem, self.max_edges = problem, max_edges
         self.actions = _actions_by_key(problem)
         self.moves = problem_moves(problem)
         self.steps: dict = {}
         self._graph: SkeletonGraph | None = None
 
     def graph(self, deadline: Deadline = NEVER) -> SkeletonGraph:
-        """The skeleton graph of the problem with these steps' costs (built on the first call, then kept)."""
+        """The skeleton graph of the problem with these steps' costs (built on the first call, then kept).
+
+        Raises :class:`~expert.milp.skeleton_graph.GraphTooLarge` past ``max_edges`` edges.
+        """
         if self._graph is None:
             poses = {key: action.poses for key, action in self.actions.items()}
-            self._graph = SkeletonGraph.build(self.problem, poses, self.step, deadline)
+            self._graph = SkeletonGraph.build(self.problem, poses, self.step, deadline, self.max_edges)
         return self._graph
 
     def step(self, where: IndexBox | None, kind: str, entry: IndexBox, exit_box: IndexBox) -> tuple[int, float]:

@@ -29,6 +29,11 @@ from expert.milp.problem import Problem
 
 Key = tuple[str, str]  # (kind, target) of an arm action
 Step = Callable[[IndexBox | None, str, IndexBox, IndexBox], tuple[int, float]]  # where, kind, entry, exit -> (q, t)
+MAX_EDGES = 1 << 26  # the default budget of a skeleton graph: about 2 GB of edges, several times that while built
+
+
+class GraphTooLarge(Exception):
+    """Raised by :meth:`SkeletonGraph.build` before a level would take the graph past its budget of edges."""
 
 
 def skeleton_moves(problem: Problem, delivered: frozenset, held: str | None, pushed: frozenset) -> list:
@@ -198,16 +203,19 @@ class SkeletonGraph(Layers):
     @classmethod
     def build(
         cls, problem: Problem, poses: dict[Key, tuple[tuple[IndexBox, IndexBox], ...]], step: Step,
-        deadline: Deadline = NEVER,
+        deadline: Deadline = NEVER, max_edges: int = MAX_EDGES,
     ) -> SkeletonGraph:  # fmt: skip
         """Every state reachable from the start; ``poses[action]`` lists its (entry, exit) boxes.
+
+        Raises :class:`GraphTooLarge` rather than list more than ``max_edges`` edges (the
+        states number up to ``2^objects`` times the poses: memory, not time, runs out first).
 
         One level at a time, in arrays: every move of every state of the level, then its new
         states numbered in order of discovery (by source, action and pose), as a search state
         by state would number them. The steps of an action from a box, which depend on
         nothing else, are listed once.
         """
-        return _Builder(problem, poses, step, deadline).graph()
+        return _Builder(problem, poses, step, deadline, max_edges).graph()
 
     @property
     def state_count(self) -> int:
@@ -246,11 +254,15 @@ class SkeletonGraph(Layers):
         return self._keeping((need & delivered[self.src]) == need)
 
     def _keeping(self, keep: np.ndarray) -> SkeletonGraph:
-        """The graph with the edges where ``keep`` is True (its states all kept)."""
+        """The graph with the edges where ``keep`` is True (its states all kept).
+
+        Where this graph's :attr:`by_destination` is known, the new graph's is that order
+        without the edges left out (the same stable order, no sort).
+        """
         if keep.all():
             return self
         kept_before = np.concatenate(([0], np.cumsum(keep)))
-        return dataclasses.replace(
+        graph = dataclasses.replace(
             self,
             edge_starts=[int(kept_before[e]) for e in self.edge_starts],
             src=self.src[keep],
@@ -258,6 +270,10 @@ class SkeletonGraph(Layers):
             q=self.q[keep],
             t=self.t[keep],
         )
+        if "by_destination" in self.__dict__:  # cached_property's store
+            order = self.by_destination
+            graph.__dict__["by_destination"] = kept_before[order[keep[order]]]
+        return graph
 
     @functools.cached_property
     def actions(self) -> ActionGraph:
@@ -327,49 +343,71 @@ CHUNK_EDGES = 1 << 20  # edges listed at a time when building the skeleton graph
 
 
 @dataclass
-class _Moves:
-    """The edges out of one level, one row per edge: its source, least phases and travel, and its end's columns."""
+class _Level:
+    """The edges out of one level (in order of source, action and pose) and the states they lead to."""
 
-    source: np.ndarray  # a state's number
+    source: np.ndarray  # per edge, its source's number
     q: np.ndarray
     t: np.ndarray
-    end: dict[str, np.ndarray]  # STATE_COLUMNS; ``last`` is the edge's action
+    number: np.ndarray  # per edge, its end's number among the new states (in order of discovery)
+    states: dict[str, np.ndarray]  # STATE_COLUMNS of the new states
 
-    @classmethod
-    def concatenated(cls, chunks: list[_Moves]) -> _Moves:
-        """The chunks' rows one chunk after another."""
-        if not chunks:
-            empty = np.zeros(0, dtype=np.int64)
-            return cls(empty, empty, np.zeros(0), {c: empty for c in STATE_COLUMNS})
-        return cls(
-            *(np.concatenate([getattr(chunk, name) for chunk in chunks]) for name in ("source", "q", "t")),
-            {c: np.concatenate([chunk.end[c] for chunk in chunks]) for c in STATE_COLUMNS},
-        )
 
-    @classmethod
-    def joined(cls, parts: list[_Moves]) -> _Moves:
-        """The parts' rows in order of source, then action, then pose (each part: one action, sources in order)."""
-        source = np.concatenate([p.source for p in parts])
-        end = {c: np.concatenate([p.end[c] for p in parts]) for c in STATE_COLUMNS}
-        order = np.lexsort((end["last"], source))  # stable: the poses stay in their order
-        q, t = (np.concatenate([getattr(p, name) for p in parts])[order] for name in ("q", "t"))
-        return cls(source[order], q, t, {c: values[order] for c, values in end.items()})
+class _Steps:
+    """The steps of each action from each exit box, one per pose of the action, in one growing store."""
+
+    def __init__(self, builder: _Builder) -> None:
+        self.builder = builder
+        self.tables: dict[tuple[int, int], tuple[int, int]] = {}  # (exit box, action) -> (first row, rows)
+        self.q = np.zeros(0, dtype=np.intp)
+        self.t = np.zeros(0)
+        self.exit = np.zeros(0, dtype=np.int64)
+        self.size = 0
+
+    def rows(self, boxes: np.ndarray, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per (exit box, action) pair: where its steps start in the store and how many there are."""
+        count = len(self.builder.names.keys)
+        pairs, which = np.unique(boxes * count + actions, return_inverse=True)
+        found = [self._table(int(pair // count), int(pair % count)) for pair in pairs]
+        first = np.array([row for row, _ in found], dtype=np.intp).reshape(-1)
+        length = np.array([n for _, n in found], dtype=np.intp).reshape(-1)
+        return first[which], length[which]
+
+    def _table(self, box: int, action: int) -> tuple[int, int]:
+        found = self.tables.get((box, action))
+        if found is None:
+            builder = self.builder
+            builder.deadline.check()
+            key, where = builder.names.keys[action], builder.boxes[box]
+            poses = builder.poses[key]
+            steps = [(*builder.step(where, key[0], entry, out), builder.number(out)) for entry, out in poses]
+            found = self.tables[box, action] = (self.size, len(steps))
+            self._store(steps)
+        return found
+
+    def _store(self, steps: list[tuple[int, float, int]]) -> None:
+        if self.size + len(steps) > len(self.q):
+            capacity = max(2 * len(self.q), self.size + len(steps), 1024)
+            self.q, self.t, self.exit = (np.resize(a, capacity) for a in (self.q, self.t, self.exit))
+        for store, values in zip((self.q, self.t, self.exit), zip(*steps, strict=True), strict=False):
+            store[self.size : self.size + len(steps)] = values
+        self.size += len(steps)
 
 
 class _Builder:
     """:meth:`SkeletonGraph.build`'s search, one level of states at a time in integer arrays (:class:`Alphabet`).
 
-    A level is a dict of :data:`STATE_COLUMNS`; its states are numbered from ``start``.
+    A level is a dict of :data:`STATE_COLUMNS`.
     """
 
-    def __init__(self, problem: Problem, poses: dict, step: Step, deadline: Deadline) -> None:
-        self.problem = problem
+    def __init__(self, problem: Problem, poses: dict, step: Step, deadline: Deadline, max_edges: int) -> None:
+        self.problem, self.max_edges, self.edges = problem, max_edges, 0
         self.names = names = Alphabet.of(problem)
         self.poses, self.step, self.deadline = poses, step, deadline
         self.covers = [sum(1 << names.pieces.index(c) for c in problem.covers.get(o, ())) for o in names.objects]
         self.boxes: list[IndexBox | None] = [None]
         self.numbers: dict[IndexBox | None, int] = {None: 0}
-        self.steps: dict[tuple[int, int], tuple] = {}  # (exit box, action) -> its q, t and exit box per pose
+        self.steps = _Steps(self)
 
     def radices(self) -> dict[str, int]:
         """Per state column, one more than its largest value (``held`` and ``last`` counted from -1)."""
@@ -396,16 +434,14 @@ class _Builder:
         src, dst, qs, ts = [], [], [], []
         while level_starts[-1] > level_starts[-2]:
             self.deadline.check()
-            moves = self._moves(levels[-1], level_starts[-2])
-            ends = self.codes(moves.end, STATE_COLUMNS)
-            firsts, number = _first_seen(ends)
-            level = {c: values[firsts] for c, values in moves.end.items()}
-            src.append(moves.source)
-            dst.append(number + level_starts[-1])
-            qs.append(moves.q)
-            ts.append(moves.t)
-            edge_starts.append(edge_starts[-1] + len(ends))
-            level_starts.append(level_starts[-1] + len(firsts))
+            edges = self._next(levels[-1], level_starts[-2])
+            level = edges.states
+            src.append(edges.source)
+            dst.append(edges.number + level_starts[-1])
+            qs.append(edges.q)
+            ts.append(edges.t)
+            edge_starts.append(edge_starts[-1] + len(edges.source))
+            level_starts.append(level_starts[-1] + len(level["last"]))
             levels.append(level)
             slot_firsts, slot_number = _first_seen(self.codes(level, ("last", "exit")))
             new_slots = zip(level["last"][slot_firsts].tolist(), level["exit"][slot_firsts].tolist(), strict=True)
@@ -435,29 +471,57 @@ class _Builder:
             {c: np.concatenate([rows[c] for rows in group_rows]) for c in STATE_COLUMNS[:4]},
         )
 
-    def _moves(self, level: dict[str, np.ndarray], first: int) -> _Moves:
-        """Every edge out of ``level`` (its states numbered from ``first``), in order of source, action and pose.
+    def _next(self, level: dict[str, np.ndarray], first: int) -> _Level:
+        """Every edge out of ``level`` (its states numbered from ``first``) and the new states, in order of discovery.
 
-        Listed a chunk of sources at a time, about :data:`CHUNK_EDGES` edges each, with the
-        deadline checked between chunks (a level can hold more edges than memory).
+        A move is a state and an action possible from it (in order of state, then action);
+        its edges are the action's poses from the state's exit box, listed a chunk of
+        about :data:`CHUNK_EDGES` at a time with the deadline checked between chunks. An
+        edge's end is its move's (delivered, held, pushed, action), numbered densely, and its
+        pose's exit box.
         """
-        possible = self._possible(level)
-        poses = np.array([len(self.poses.get(key, ())) for key in self.names.keys], dtype=np.intp)
-        ends = np.cumsum(poses @ possible) if len(possible) else np.zeros(len(level["last"]), dtype=np.intp)
-        chunks, lo = [], 0
-        while lo < len(ends):
+        state, action = np.nonzero(self._possible(level).T)
+        after = self._after(level, state, action)
+        _, kind = np.unique(self.codes(after, STATE_COLUMNS[:4]), return_inverse=True)
+        row, count = self.steps.rows(level["exit"][state], action)
+        total = int(count.sum())
+        self.edges += total
+        if self.edges > self.max_edges:
+            raise GraphTooLarge(f"the skeleton graph passes its budget of {self.max_edges:,} edges")
+        source, q, exit_box = (np.empty(total, dtype=np.intp) for _ in range(3))
+        t, code = np.empty(total), np.empty(total, dtype=np.int64)
+        ends = np.cumsum(count)
+        lo = 0
+        while lo < len(count):  # moves lo .. hi - 1: edges ends[lo - 1] .. ends[hi - 1] - 1
             self.deadline.check()
-            before = ends[lo - 1] if lo else 0
-            hi = max(lo + 1, int(np.searchsorted(ends, before + CHUNK_EDGES, side="right")))
-            parts = [
-                self._steps_from(level, lo + np.flatnonzero(possible[action, lo:hi]), action, first)
-                for action in range(len(self.names.keys))
-                if possible[action, lo:hi].any()
-            ]
-            if parts:
-                chunks.append(_Moves.joined(parts))
+            start = int(ends[lo - 1]) if lo else 0
+            hi = max(lo + 1, int(np.searchsorted(ends, start + CHUNK_EDGES, side="right")))
+            moves = slice(lo, hi)
+            edges = slice(start, int(ends[hi - 1]))
+            within = np.arange(edges.stop - edges.start) - np.repeat(ends[moves] - count[moves] - start, count[moves])
+            entry = np.repeat(row[moves], count[moves]) + within
+            source[edges] = np.repeat(state[moves], count[moves]) + first
+            q[edges], t[edges], exit_box[edges] = self.steps.q[entry], self.steps.t[entry], self.steps.exit[entry]
+            code[edges] = np.repeat(kind[moves], count[moves]) * len(self.boxes) + exit_box[edges]
             lo = hi
-        return _Moves.concatenated(chunks)
+        firsts, number = _first_seen(code)
+        move = np.searchsorted(ends, firsts, side="right")  # the move of each new state's first edge
+        states = {c: values[move] for c, values in after.items()} | {"exit": exit_box[firsts]}
+        return _Level(source, q, t, number, states)
+
+    def _after(self, level: dict[str, np.ndarray], state: np.ndarray, action: np.ndarray) -> dict[str, np.ndarray]:
+        """The (delivered, held, pushed, last action) after each move: ``action`` done from ``state``."""
+        n, dtype = len(self.names.objects), self.names.dtype
+        keys = len(self.names.keys)
+        places = np.array([1 << a if a < n else 0 for a in range(keys)], dtype=dtype)
+        pushes = np.array([1 << (a - 2 * n) if a >= 2 * n else 0 for a in range(keys)], dtype=dtype)
+        held = np.where(action < n, -1, np.where(action < 2 * n, action - n, level["held"][state]))
+        return {
+            "delivered_set": level["delivered_set"][state] | places[action],
+            "held": held.astype(np.int64),
+            "pushed_set": level["pushed_set"][state] | pushes[action],
+            "last": action.astype(np.int64),
+        }
 
     def _possible(self, level: dict[str, np.ndarray]) -> np.ndarray:
         """``[action, state]``: whether the action can be done next from the state (:func:`skeleton_moves`' rule)."""
@@ -472,44 +536,8 @@ class _Builder:
             possible[2 * n + c] = pushed >> c & 1 == 0
         return possible
 
-    def _steps_from(self, level: dict[str, np.ndarray], rows: np.ndarray, action: int, first: int) -> _Moves:
-        """The edges of ``action`` from the level's ``rows``: one per pose of the action, in its order."""
-        boxes, which = np.unique(level["exit"][rows], return_inverse=True)
-        tables = [self._table(int(box), action) for box in boxes]
-        lengths = np.array([len(q) for q, _, _ in tables], dtype=np.intp)
-        count = lengths[which]
-        edge_row = np.repeat(rows, count)
-        starts = np.cumsum(lengths) - lengths
-        within = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
-        entry = np.repeat(starts[which], count) + within
-        q, t, exit_number = (np.concatenate([table[k] for table in tables]) for k in range(3))
-        end = {c: level[c][edge_row] for c in ("delivered_set", "held", "pushed_set")}
-        n = len(self.names.objects)
-        if action < n:  # a place
-            end["delivered_set"] |= 1 << action
-            end["held"][:] = -1
-        elif action < 2 * n:  # a pick
-            end["held"][:] = action - n
-        else:  # a push
-            end["pushed_set"] |= 1 << (action - 2 * n)
-        end["last"] = np.full(len(edge_row), action, dtype=np.int64)
-        end["exit"] = exit_number[entry]
-        return _Moves(edge_row + first, q[entry], t[entry], end)
-
-    def _table(self, box: int, action: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The steps of ``action`` from exit box number ``box``, one per pose: least phases, travel, exit box number."""
-        found = self.steps.get((box, action))
-        if found is None:
-            self.deadline.check()
-            key, where = self.names.keys[action], self.boxes[box]
-            rows = [(*self.step(where, key[0], entry, out), self._number(out)) for entry, out in self.poses[key]]
-            q, t, exit_number = zip(*rows, strict=True) if rows else ((), (), ())
-            found = self.steps[box, action] = (
-                np.asarray(q, dtype=np.int64), np.asarray(t, dtype=float), np.asarray(exit_number, dtype=np.int64),
-            )  # fmt: skip
-        return found
-
-    def _number(self, box: IndexBox) -> int:
+    def number(self, box: IndexBox) -> int:
+        """The number of an exit box (a new one: the next)."""
         if box not in self.numbers:
             self.numbers[box] = len(self.boxes)
             self.boxes.append(box)

@@ -28,6 +28,7 @@ from expert.milp.deadline import TimeUp
 from expert.milp.decode import phases_of
 from expert.milp.problem import Problem, prepare
 from expert.milp.reach import unreachable_reason
+from expert.milp.skeleton_graph import GraphTooLarge
 from expert.planning.first_plans import FirstPlans, SubPlanner
 from expert.planning.run import Run
 from expert.planning.solving import Solver
@@ -117,12 +118,17 @@ class Deepening:
         pairs = None
         proven = counting_bound(problem)
         if run.options.lower_bound:
-            pairs = PairCosts(problem, run.deadline)
-            relaxation = skeleton(problem, pairs, run.deadline)
-            problem = dataclasses.replace(
-                problem, earliest=relaxation.earliest, min_travel=min_travel(problem, pairs, run.deadline)
-            )
-            proven = max(proven, relaxation.phases)
+            pairs = PairCosts(problem, run.deadline, run.options.skeleton_edges)
+            try:
+                relaxation = skeleton(problem, pairs, run.deadline)
+            except GraphTooLarge as error:  # the counting bound only, as with lower_bound=False
+                run.stats["skeleton"] = f"not built: {error}"
+                pairs = None
+            else:
+                problem = dataclasses.replace(
+                    problem, earliest=relaxation.earliest, min_travel=min_travel(problem, pairs, run.deadline)
+                )
+                proven = max(proven, relaxation.phases)
         first = max(3, proven)
         run.stats["lower_bound"] = first
         run.stats["lower_bound_s"] += time.perf_counter() - t_bound

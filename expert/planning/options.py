@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from expert.milp.build import SolverSettings
+from expert.milp.skeleton_graph import MAX_EDGES
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,10 @@ class PlannerOptions:
 
     - ``lower_bound``: start the phase counts at the relaxation's proven bound, not 3;
     - ``fewest_cuts``: the valid inequalities of a model whose one phase fewer admits no plan;
-    - ``conditional``: the task cost's lower bound per action, pose box and phase, as cuts and fixings.
+    - ``conditional``: the task cost's lower bound per action, pose box and phase, as cuts and fixings;
+    - ``skeleton_edges``: the budget of the relaxation's graph, in edges (about 32 bytes each,
+      several times that while it is built); past it the graph is not built, the planner
+      goes on as with ``lower_bound=False`` and ``stats["skeleton"]`` says so.
 
     First plans (SCIP's warm starts), from ``decoupled_from`` objects to deliver (one fewer with pushes):
 
@@ -54,6 +58,7 @@ class PlannerOptions:
     lower_bound: bool = True
     fewest_cuts: bool = True
     conditional: bool = True
+    skeleton_edges: int = MAX_EDGES
     ordered_first_plan: bool = True
     order_fixings: bool = True
     nearest_first_plan: bool = False
@@ -70,7 +75,7 @@ class PlannerOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("ordered_nodes", "sub_plan_nodes", "decoupled_from"):
+        for name in ("ordered_nodes", "sub_plan_nodes", "decoupled_from", "skeleton_edges"):
             _check_count(name, getattr(self, name))
         if self.node_limit is not None:
             _check_count("node_limit", self.node_limit)

@@ -258,6 +258,16 @@ def test_max_phases_below_need_is_infeasible():
     assert result.stats["reason"] == "no plan with 3 to 4 phases (every model was infeasible)"
 
 
+def test_a_skeleton_graph_past_its_budget_leaves_the_counting_bound_and_the_same_optimum():
+    """Past ``skeleton_edges`` the relaxation's graph is not built (memory): the planner goes on without it."""
+    scenario = draw_paper_multi(np.random.default_rng(3), 2)
+    full, small = plan(scenario), plan(scenario, skeleton_edges=10)
+    assert full.status == small.status == "optimal" and "skeleton" not in full.stats
+    assert small.stats["skeleton"] == "not built: the skeleton graph passes its budget of 10 edges"
+    assert small.objective == pytest.approx(full.objective, abs=1e-6)
+    assert small.stats["lower_bound"] <= full.stats["lower_bound"]
+
+
 def test_time_limit_without_a_plan():
     scenario = draw_paper_multi(np.random.default_rng(1), 3)
     result = plan(scenario, time_limit=1e-4)

@@ -9,6 +9,7 @@ from the start and to the end.
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -110,11 +111,13 @@ def test_the_graph_without_poses_has_the_least_phases_between_actions(scenario):
 def test_a_graph_within_n_phases_has_no_longer_step():
     pairs = _pairs(CASES[1])  # the corridor: steps of two and three phases
     graph = pairs.graph()
-    assert graph.q.max() >= 3
+    assert graph.q.max() >= 3 and graph.by_destination.size  # known before: the shorter graph filters it
     short = graph.within(3)
     assert short.q.max() <= 2 and len(short.states) == len(graph.states)
     assert len(short.src) == int((graph.q <= 2).sum())
     assert short.edge_starts[-1] == len(short.src) and short.edge_starts == sorted(short.edge_starts)
+    anew = [e0 + np.argsort(short.dst[e0:e1], kind="stable") for e0, e1 in pairwise(short.edge_starts)]
+    assert np.array_equal(short.by_destination, np.concatenate(anew))  # the full graph's order, filtered
     assert graph.within(int(graph.q.max()) + 1) is graph
 
 
@@ -167,3 +170,12 @@ def test_sets_wider_than_62_bits_are_python_integers(monkeypatch):
     _same_graph(wide, whole)
     codes = skeleton_graph._codes([(np.array([1, 1, 2]), 1 << 70), (np.array([3, 4, 3]), 1 << 70)])
     assert len(set(codes.tolist())) == 3
+
+
+def test_a_graph_past_its_budget_of_edges_is_refused_before_it_is_listed():
+    pairs = _pairs(CASES[2])  # three objects
+    edges = len(pairs.graph().src)
+    small = PairCosts(pairs.problem, max_edges=edges - 1)
+    with pytest.raises(skeleton_graph.GraphTooLarge, match=f"{edges - 1:,} edges"):
+        small.graph()
+    assert len(PairCosts(pairs.problem, max_edges=edges).graph().src) == edges
