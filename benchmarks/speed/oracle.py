@@ -3,8 +3,8 @@
     python -m benchmarks.speed.oracle --seeds 10 --compare 4 --filed FILED_CHECKOUT \\
         --out docs/benchmarks/raw/oracle-home-scale.jsonl
 
-**Cases** (scenario ``n`` of a case is drawn from seed ``SEED_BASE + n``, which no other
-measurement uses): the graded worlds ``objects-8``, ``objects-10``, ``objects-12`` and
+**Cases** (scenario ``n`` of a case is drawn from seed ``SEED_BASE + n``, or ``--first-seed`` + n
+for a fresh set, which no other measurement uses): the graded worlds ``objects-8``, ``objects-10``, ``objects-12`` and
 ``apartment`` as the env draws them (its lattice, its seed); every goal covered with 3
 and 4 objects (``draw_paper_covered``); and ``dagger-8``: the state an ``objects-8``
 episode reaches after ``2 + n % 5`` random candidate phases (the masked random policy
@@ -247,13 +247,15 @@ def _optimum(mps: Path) -> float | None:
     return json.loads(mps.with_suffix(".json").read_text())["optimum"]
 
 
-def rows(cases: Sequence[str], seeds: int, compare: int, filed: Path | None, safety: float) -> Iterator[dict]:
+def rows(
+    cases: Sequence[str], seeds: int, compare: int, filed: Path | None, safety: float, first_seed: int = SEED_BASE
+) -> Iterator[dict]:
     """Every row of the table, scenario after scenario (every solver on one before the next)."""
     worker = FiledPlanner(filed) if filed is not None and compare else None
     try:
         for n in range(seeds):
             for case in cases:
-                query = CASES[case](SEED_BASE + n)
+                query = CASES[case](first_seed + n)
                 with tempfile.TemporaryDirectory() as folder:
                     export = Path(folder) if n < compare else None
                     result, wall, cpu = timed_plan(query, safety, export)
@@ -322,6 +324,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--compare", type=int, default=4, help="of those, how many the other solvers plan too")
     parser.add_argument("--filed", type=Path, help="a checkout of the planner as filed, for the 'filed' rows")
     parser.add_argument("--safety", type=float, default=SAFETY_S, help="safety stop of every call, seconds")
+    parser.add_argument(
+        "--first-seed", type=int, default=SEED_BASE, help=f"scenario n of a case: this seed + n (default {SEED_BASE})"
+    )
     parser.add_argument("--out", type=Path, help="append the rows here as JSON lines (the rows so far are kept)")
     parser.add_argument("--summarize", type=Path, help="only print the summary of a rows file")
     args = parser.parse_args(argv)
@@ -330,7 +335,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         return
     done: list[dict] = []
     with open(args.out, "a") if args.out else contextlib.nullcontext() as out:
-        for row in rows(args.cases, args.seeds, args.compare, args.filed, args.safety):
+        for row in rows(args.cases, args.seeds, args.compare, args.filed, args.safety, args.first_seed):
             done.append(row)
             line = json.dumps(row)
             print(line, flush=True)
