@@ -26,8 +26,8 @@ HERE = Path(__file__).resolve().parent  # conditional_digest.scenario_of reads t
 
 ONE_CASE = r"""
 import hashlib, json, sys, time
-from conditional_digest import _SEARCHED_PER_CALL, scenario_of  # this folder's, on the path after the checkout
-from expert.milp.bounds import Connectivity, PairCosts, action_windows, min_travel, skeleton
+from conditional_digest import _SEARCHED_PER_CALL, costs_of, scenario_of  # this folder's, after the checkout
+from expert.milp.bounds import PairCosts, action_windows, min_travel, skeleton
 from expert.milp.problem import prepare
 from expert.planner import plan
 
@@ -35,13 +35,13 @@ case, limit = sys.argv[1], float(sys.argv[2])
 scenario, lattice = scenario_of(case)
 problem = prepare(scenario, lattice)
 clock = time.perf_counter()
-costs = Connectivity(problem) if _SEARCHED_PER_CALL else PairCosts(problem)  # the shared graph's costs, later
+pairs, free = costs_of(problem)
+costs = free if _SEARCHED_PER_CALL else pairs  # the shared graph's costs, later
 bound = skeleton(problem, costs)
 skeleton_s = time.perf_counter() - clock
 clock = time.perf_counter()
 travel = min_travel(problem) if _SEARCHED_PER_CALL else min_travel(problem, costs)
 travel_s = time.perf_counter() - clock
-pairs = PairCosts(problem, costs) if _SEARCHED_PER_CALL else costs
 sha = hashlib.sha256()
 for phases in (bound.phases, bound.phases + 1):
     for last_at_end in (False, True):

@@ -24,8 +24,8 @@ import gymnasium as gym
 import numpy as np
 
 import fetchcarry_env  # noqa: F401  (registers the env ids)
-from expert.milp import conditional
-from expert.milp.bounds import Connectivity, PairCosts, skeleton
+from expert.milp import bounds, conditional
+from expert.milp.bounds import PairCosts, skeleton
 from expert.milp.conditional import conditional_bounds
 from expert.milp.deadline import NEVER
 from expert.milp.problem import prepare
@@ -54,11 +54,20 @@ def scenario_of(case: str):
     return env.unwrapped.scenario, env.unwrapped.lattice
 
 
+def costs_of(problem):
+    """The checkout's pair costs and, in checkouts that had it (before the exact least moves), its one-move
+    connectivity (None after)."""
+    connectivity = getattr(bounds, "Connectivity", None)
+    if connectivity is None:
+        return PairCosts(problem), None
+    free = connectivity(problem)
+    return PairCosts(problem, free), free
+
+
 def digest(case: str) -> tuple[str, float, float]:
     """The case's digest, and the seconds of its first graph search and of its first conditional bounds."""
     problem = prepare(*scenario_of(case))
-    free = Connectivity(problem)
-    pairs = PairCosts(problem, free)
+    pairs, free = costs_of(problem)
     n = skeleton(problem, free if _SEARCHED_PER_CALL else pairs).phases
     sha = hashlib.sha256()
     clock = time.perf_counter()

@@ -17,7 +17,7 @@ import json
 import os
 import sys
 
-from bounds_ab import run  # this folder's: a case in a fresh process of a checkout
+from benchmarks.studies.bounds_ab import run  # a case in a fresh process of a checkout
 
 ONE_CASE = r"""
 import hashlib, json, sys
