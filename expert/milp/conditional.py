@@ -159,11 +159,12 @@ class Band:
         with np.errstate(invalid="ignore"):  # inf - inf from an unreachable state: nan, and left out
             shift = arrival[graph.src] + graph.q - arrival[graph.dst]
             keep = shift < width
-        banded = dataclasses.replace(graph._keeping(keep), q=shift[keep].astype(np.intp))
+        banded = dataclasses.replace(graph.keeping(keep), q=shift[keep].astype(np.intp))
         return cls(banded, arrival, width, n_phases)
 
     def bonus(self, last_at_end: bool) -> np.ndarray:
-        """``[j, s]``: the W1 t of arriving at state s at phase ``t = arrival[s] + j`` (:func:`_arrival_bonus`)."""
+        """``[j, s]``: the W1 t of arriving at state s at phase ``t = arrival[s] + j``; inf past ``N - 1`` and, with
+        ``last_at_end``, for a last place before it."""
         n, graph = self.n_phases, self.graph
         phase = self.arrival[None, :] + np.arange(self.width)[:, None]
         bonus = np.where(graph.placed, WAIT_COST * phase, 0.0)

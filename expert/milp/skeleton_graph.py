@@ -233,7 +233,7 @@ class SkeletonGraph(Layers):
         Its states are all kept: one reached only by such edges is reached by no plan, and
         every bound through it is ``inf``.
         """
-        return self._keeping(self.q <= n_phases - 1)
+        return self.keeping(self.q <= n_phases - 1)
 
     def in_order(self, order: Sequence[str], deliver: Collection[str]) -> SkeletonGraph:
         """The graph without the picks out of ``order``, as :func:`expert.milp.order.add_pick_order` restricts a model.
@@ -251,9 +251,9 @@ class SkeletonGraph(Layers):
         for position, after in enumerate(chain[1:]):  # the pick of ``after`` needs chain[position] delivered
             needed[self.names.keys.index(("pick", after))] = 1 << position
         need = needed[self.last][self.dst]  # what must be delivered before the action that led to an edge's end
-        return self._keeping((need & delivered[self.src]) == need)
+        return self.keeping((need & delivered[self.src]) == need)
 
-    def _keeping(self, keep: np.ndarray) -> SkeletonGraph:
+    def keeping(self, keep: np.ndarray) -> SkeletonGraph:
         """The graph with the edges where ``keep`` is True (its states all kept).
 
         Where this graph's :attr:`by_destination` is known, the new graph's is that order
@@ -369,8 +369,8 @@ class _Steps:
         count = len(self.builder.names.keys)
         pairs, which = np.unique(boxes * count + actions, return_inverse=True)
         found = [self._table(int(pair // count), int(pair % count)) for pair in pairs]
-        first = np.array([row for row, _ in found], dtype=np.intp).reshape(-1)
-        length = np.array([n for _, n in found], dtype=np.intp).reshape(-1)
+        first = np.array([row for row, _ in found], dtype=np.intp)
+        length = np.array([n for _, n in found], dtype=np.intp)
         return first[which], length[which]
 
     def _table(self, box: int, action: int) -> tuple[int, int]:
