@@ -8,7 +8,11 @@ anywhere along a line, the candidates at fixed points). Such a move is *projecte
 allowed move candidate whose end lies nearest the expert's is executed instead
 (:func:`nearest_move`), the base ends off the expert's plan, and the expert plans again
 from there (it replans when the state departs from its plan). Every answer is then an
-allowed candidate and the episode runs to its end.
+allowed candidate and the episode runs to its end. A projected move never ends in a cell
+that projected moves left since the expert's last other answer (``avoid``): with nothing
+else changed, the same state would give the same answer again, and the base went back
+and forth between two candidates until the episode was cut off (2 of 600 `training`
+episodes did); when every allowed move is such a cell, the move is unexpressible.
 
 Any other action that no allowed candidate expresses (none is known to occur; the
 expert's idle fallback may be one) is *unexpressible*: the answer is a masked candidate
@@ -20,6 +24,7 @@ dataset, and replay would no longer be exact.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,19 +53,26 @@ def acts_in_candidates(env: Any) -> bool:
 
 
 def candidate_answer(
-    env: Any, action: np.ndarray, *, project: bool, rule: str = "end", mask: np.ndarray | None = None
+    env: Any,
+    action: np.ndarray,
+    *,
+    project: bool,
+    rule: str = "end",
+    mask: np.ndarray | None = None,
+    avoid: Collection[tuple[int, int]] = (),
 ) -> CandidateAnswer:
     """The candidate of phases env ``env`` (in its current state) that answers for the expert's env ``action``.
 
     ``project``: a move no candidate stands for becomes the nearest allowed move (``rule``,
-    :func:`nearest_move`); else, or when no move is allowed, the answer is unexpressible.
-    ``mask`` is the state's candidate mask if the caller has it (else the env's).
+    :func:`nearest_move`) that does not end in a lattice cell of ``avoid``; else, or when
+    no such move is allowed, the answer is unexpressible. ``mask`` is the state's candidate
+    mask if the caller has it (else the env's).
     """
     index = env.get_wrapper_attr("index_of")(action)
     if index is not None:
         return CandidateAnswer(int(index))
     if project:
-        nearest = nearest_move(env, action, rule)
+        nearest = nearest_move(env, action, rule, avoid)
         if nearest is not None:
             return CandidateAnswer(nearest, projected=True)
     allowed = np.asarray(env.get_wrapper_attr("action_masks")() if mask is None else mask, dtype=bool)
@@ -71,9 +83,12 @@ def candidate_answer(
     return CandidateAnswer(int(masked[0]), unexpressible=reason)
 
 
-def nearest_move(env: Any, action: np.ndarray, rule: str = "end") -> int | None:
+def nearest_move(
+    env: Any, action: np.ndarray, rule: str = "end", avoid: Collection[tuple[int, int]] = ()
+) -> int | None:
     """The allowed move candidate nearest the env move ``action``, or None (not a move, or no move allowed).
 
+    Moves that end in a lattice cell ``(i, j)`` of ``avoid`` are left out.
     A stand-in for an expert move that no candidate expresses (the expert's waypoints
     lie anywhere along a line, the candidates at fixed points). ``rule`` ``end``: the
     candidate whose end lies nearest the expert's end (lattice cells, Manhattan; ties to
@@ -86,6 +101,9 @@ def nearest_move(env: Any, action: np.ndarray, rule: str = "end") -> int | None:
         return None
     table = env.get_wrapper_attr("table")
     moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    if avoid:
+        ends = table.actions[moves, :2]
+        moves = moves[[(int(i), int(j)) not in avoid for i, j in ends]]
     if moves.size == 0:
         return None
     gaps = np.abs(table.actions[moves, :2] - np.asarray(action[:2])).sum(axis=1)

@@ -60,6 +60,7 @@ caller that labels or executes them itself (the phases env's ``index_of`` and
 from __future__ import annotations
 
 import time
+from collections.abc import Hashable
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -207,6 +208,7 @@ class ExpertPolicy:
         self.last_projected = False  # the last answer is a projected move (interface "phases")
         self.projected = 0  # moves projected onto their nearest candidate since the last reset
         self.unexpressible = 0  # other actions no allowed candidate expressed since the last reset
+        self._left: tuple[Hashable, frozenset[tuple[int, int]]] | None = None  # (world, cells projected moves left)
 
     @property
     def stats(self) -> ExpertStats:
@@ -226,6 +228,7 @@ class ExpertPolicy:
         self.last_plan = None
         self.last_projected = False
         self.projected = self.unexpressible = 0
+        self._left = None
 
     def predict(
         self,
@@ -258,10 +261,11 @@ class ExpertPolicy:
         for k, row in enumerate(rows):
             if starts[k]:
                 self._tracks[k] = Track()
+                self._left = None
             action, decision = self._act(self._tracks[k], row)
             answer = action.to_array()
             if self._phases_env is not None:
-                answer, decision = self._candidate(answer, decision, action_masks)
+                answer, decision = self._candidate(answer, decision, action_masks, row)
             actions.append(answer)
             decisions.append(decision)
         self.last_decisions = decisions
@@ -269,12 +273,22 @@ class ExpertPolicy:
         return (stacked if batched else stacked[0]), state
 
     def _candidate(
-        self, action: np.ndarray, decision: Decision, action_masks: np.ndarray | None
+        self, action: np.ndarray, decision: Decision, action_masks: np.ndarray | None, row: np.ndarray
     ) -> tuple[np.int64, Decision]:
-        """The phases env's candidate for the env ``action`` (:func:`expert.candidates.candidate_answer`)."""
+        """The phases env's candidate for the env ``action`` (:func:`expert.candidates.candidate_answer`).
+
+        A projected move avoids the cells that projected moves left since the last other
+        answer in the same world (objects, clutter and the hand as they are; the base apart).
+        """
+        scenario, world = on_lattice(*decode(row, self.capacity), self.lattice)
+        same = (scenario.name, world.holding, _rounded(world.objects, world.holding), _rounded(world.clutter, None))
+        here = self.lattice.index(world.base)
+        left = self._left[1] if self._left is not None and self._left[0] == same else frozenset()
         answer = candidate_answer(
-            self._phases_env, action, project=decision.failure is None, rule=self.projection, mask=action_masks
-        )
+            self._phases_env, action, project=decision.failure is None, rule=self.projection, mask=action_masks,
+            avoid=left | {here},
+        )  # fmt: skip
+        self._left = (same, left | {here}) if answer.projected else None
         self.last_projected = answer.projected
         if answer.projected:
             self.projected += 1
@@ -409,6 +423,11 @@ def _summary(planned: list[_Planned], reason: str) -> dict[str, Any]:
         "status": planned[-1].plan.status if planned else None,
         "objective": planned[-1].plan.objective if planned else None,
     }
+
+
+def _rounded(places: dict[str, tuple[float, ...]], held: str | None) -> tuple:
+    """``places`` to the millimetre, the held object's left out (it moves with the base), in a fixed order."""
+    return tuple(sorted((key, tuple(round(v, 3) for v in p)) for key, p in places.items() if key != held))
 
 
 def _interface(env: Any, asked: str | None) -> str:

@@ -62,3 +62,32 @@ def test_an_inexpressible_action_other_than_a_move_still_ends_the_episode(monkey
     allowed = masks[np.arange(len(record.actions)), record.actions]
     assert len(allowed) >= 2 and allowed[:-1].all() and not allowed[-1]  # projected moves, then the pick
     assert record.infos[PROJECTED_INFO][1:-1].all() and not record.infos[PROJECTED_INFO][-1]
+
+
+LIVELOCK_SEED = 57  # training seed 57 (basic-684166): projected moves went back and forth for 50 steps
+
+
+def test_projected_moves_never_go_back_to_a_cell_they_left() -> None:
+    """The expert's move to (64, 51) had allowed ends at (60, 51) and (61, 51) only nearby: with nothing else
+    changed, each projection undid the last, and the episode was cut off without a delivery. It delivers now."""
+    env = gym.make("FetchCarryPushPhases-v0", family="training")
+    record = run_episode(env, PhaseExpert(env, time_limit=10.0), LIVELOCK_SEED, record_masks=True)
+    env.close()
+    assert record.figures.outcome == "delivered" and len(record.actions) <= 6
+    assert record.infos[PROJECTED_INFO].sum() >= 2
+
+
+def test_a_move_that_would_only_go_back_is_left_out() -> None:
+    env = _env()
+    env.reset(seed=UNEXPRESSIBLE_SEED)
+    table = env.get_wrapper_attr("table")
+    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
+    off = table.actions[moves[-1]].copy()
+    off[1] += 1
+    first = nearest_move(env, off)
+    cell = tuple(int(v) for v in table.actions[first, :2])
+    second = nearest_move(env, off, avoid={cell})
+    assert second is not None and tuple(int(v) for v in table.actions[second, :2]) != cell
+    every = {tuple(int(v) for v in table.actions[m, :2]) for m in moves}
+    assert nearest_move(env, off, avoid=every) is None
+    env.close()
