@@ -88,12 +88,12 @@ def nearest_move(
 ) -> int | None:
     """The allowed move candidate nearest the env move ``action``, or None (not a move, or no move allowed).
 
-    Moves that end in a lattice cell ``(i, j)`` of ``avoid`` are left out.
     A stand-in for an expert move that no candidate expresses (the expert's waypoints
     lie anywhere along a line, the candidates at fixed points). ``rule`` ``end``: the
     candidate whose end lies nearest the expert's end (lattice cells, Manhattan; ties to
     the lower index). ``detour``: the candidate that adds the least travel cost on the
     way from the base to the expert's end (the paper's cost, metres; ties to the nearer end).
+    Moves that end in a lattice cell ``(i, j)`` of ``avoid`` are left out.
     """
     if rule not in NEAREST_RULES:
         raise ValueError(f"unknown rule {rule!r}: choose one of {', '.join(NEAREST_RULES)}")
