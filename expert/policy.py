@@ -262,10 +262,11 @@ class ExpertPolicy:
             if starts[k]:
                 self._tracks[k] = Track()
                 self._left = None
-            action, decision = self._act(self._tracks[k], row)
+            scenario, world = on_lattice(*decode(row, self.capacity), self.lattice)
+            action, decision = self._act(self._tracks[k], scenario, world)
             answer = action.to_array()
             if self._phases_env is not None:
-                answer, decision = self._candidate(answer, decision, action_masks, row)
+                answer, decision = self._candidate(answer, decision, action_masks, scenario, world)
             actions.append(answer)
             decisions.append(decision)
         self.last_decisions = decisions
@@ -273,14 +274,14 @@ class ExpertPolicy:
         return (stacked if batched else stacked[0]), state
 
     def _candidate(
-        self, action: np.ndarray, decision: Decision, action_masks: np.ndarray | None, row: np.ndarray
-    ) -> tuple[np.int64, Decision]:
+        self, action: np.ndarray, decision: Decision, action_masks: np.ndarray | None, scenario: Scenario,
+        world: WorldState,
+    ) -> tuple[np.int64, Decision]:  # fmt: skip
         """The phases env's candidate for the env ``action`` (:func:`expert.candidates.candidate_answer`).
 
         A projected move avoids the cells that projected moves left since the last other
         answer in the same world (objects, clutter and the hand as they are; the base apart).
         """
-        scenario, world = on_lattice(*decode(row, self.capacity), self.lattice)
         same = (scenario.name, world.holding, _rounded(world.objects, world.holding), _rounded(world.clutter, None))
         here = self.lattice.index(world.base)
         left = self._left[1] if self._left is not None and self._left[0] == same else frozenset()
@@ -301,8 +302,7 @@ class ExpertPolicy:
 
     # -- one env -----------------------------------------------------------------------------
 
-    def _act(self, track: Track, row: np.ndarray) -> tuple[Action, Decision]:
-        scenario, world = on_lattice(*decode(row, self.capacity), self.lattice)
+    def _act(self, track: Track, scenario: Scenario, world: WorldState) -> tuple[Action, Decision]:
         if track.failed_in is not None:
             if departure(track.failed_in, world, self.lattice.resolution, self.item_tolerance) is None:
                 self._stats = self._stats.plus(fallbacks=1)

@@ -16,17 +16,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
+
+from benchmarks.studies.bounds_ab import run
 
 ONE_CALL = r"""
 import hashlib, json, sys, time
 from benchmarks.speed.oracle import CASES
 from expert import plan
 
-case, seed, limit = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+case, seed = sys.argv[1].rsplit(":", 1)
+seed, limit = int(seed), float(sys.argv[2])
 query = CASES[case](seed)
 cpu, wall = time.process_time(), time.perf_counter()
 result = plan(query.scenario, time_limit=limit, lattice=query.lattice, holding=query.holding)
@@ -40,16 +40,6 @@ print(json.dumps({
     "plan_digest": hashlib.sha256(json.dumps(answer, sort_keys=True).encode()).hexdigest()[:16],
 }))
 """
-
-
-def call(checkout: Path, case: str, seed: int, limit: float) -> dict:
-    """One ``plan()`` call with ``checkout``'s code, in a process of its own."""
-    env = {**os.environ, "PYTHONPATH": str(checkout)}
-    done = subprocess.run(
-        [sys.executable, "-c", ONE_CALL, case, str(seed), str(limit)],
-        cwd=checkout, env=env, capture_output=True, text=True, check=True,
-    )  # fmt: skip
-    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -68,7 +58,8 @@ def main(argv: list[str] | None = None) -> None:
     scenarios = [(c, int(s)) for c in args.cases.split(",") for s in args.seeds.split(",")]
     for index, (case, seed) in enumerate(scenarios):
         for name in ("old", "new") if index % 2 == 0 else ("new", "old"):
-            print(json.dumps({"checkout": name, **call(checkouts[name], case, seed, args.limit)}), flush=True)
+            row = run(str(checkouts[name]), f"{case}:{seed}", args.limit, ONE_CALL)  # a fresh process of the checkout
+            print(json.dumps({"checkout": name, **row}), flush=True)
 
 
 if __name__ == "__main__":

@@ -37,14 +37,20 @@ def test_projected_episode_succeeds_with_allowed_actions_and_costs_about_the_exp
     assert summary["success"] == 1.0 and summary["projected_per_episode"] == row.projected
 
 
-@pytest.mark.parametrize("rule", ["end", "detour"])
-def test_nearest_move_rules_give_an_allowed_move(rule: str) -> None:
+def _off_the_candidates() -> tuple[gym.Env, object, np.ndarray, np.ndarray]:
+    """A reset env, its candidate table, its allowed moves, and a move one cell past the last of them."""
     env = _env()
     env.reset(seed=UNEXPRESSIBLE_SEED)
     table = env.get_wrapper_attr("table")
     moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
     off = table.actions[moves[-1]].copy()
     off[1] += 1
+    return env, table, moves, off
+
+
+@pytest.mark.parametrize("rule", ["end", "detour"])
+def test_nearest_move_rules_give_an_allowed_move(rule: str) -> None:
+    env, table, _, off = _off_the_candidates()
     index = nearest_move(env, off, rule)
     assert index is not None and table.mask[index] and table.actions[index, 4] == int(Mode.MOVE)
     with pytest.raises(ValueError):
@@ -78,12 +84,7 @@ def test_projected_moves_never_go_back_to_a_cell_they_left() -> None:
 
 
 def test_a_move_that_would_only_go_back_is_left_out() -> None:
-    env = _env()
-    env.reset(seed=UNEXPRESSIBLE_SEED)
-    table = env.get_wrapper_attr("table")
-    moves = np.flatnonzero(table.mask & (table.actions[:, 4] == int(Mode.MOVE)))
-    off = table.actions[moves[-1]].copy()
-    off[1] += 1
+    env, table, moves, off = _off_the_candidates()
     first = nearest_move(env, off)
     cell = tuple(int(v) for v in table.actions[first, :2])
     second = nearest_move(env, off, avoid={cell})
