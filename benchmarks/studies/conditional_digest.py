@@ -1,17 +1,17 @@
 """A digest of the planner's conditional bounds per case, to compare two checkouts.
 
-Run it in each checkout with the same ``PYTHONHASHSEED`` (a state's frozensets print in
-the order of their strings' hashes, which Python draws per process):
+Run this file with each checkout's code on the path (a state's sets are sorted before
+they are printed, so any ``PYTHONHASHSEED`` gives the same line):
 
-    PYTHONHASHSEED=0 PYTHONPATH=CHECKOUT python -m benchmarks.studies.conditional_digest CASE ...
+    PYTHONPATH=CHECKOUT python benchmarks/studies/conditional_digest.py CASE ...
 
 A case is ``covered:K:SEED``, ``multi:K:SEED`` or ``FAMILY:SEED``, as in ``bounds_ab.py``.
 Per case one line: a SHA-256 prefix over the skeleton graph (its states, edges, phases
 and travel per edge) and the conditional bounds of every action, pose box and phase, for
 the skeleton's N and N + 1 phases, each with and without the last place at N - 1. Equal
-lines: the two checkouts compute the same graph and the same bounds. Also the seconds, at N, of
-the first graph search (which fills the pair costs, as the planner's first model does)
-and then of the whole conditional bound.
+lines: the two checkouts compute the same graph and the same bounds. Also the CPU
+seconds of the skeleton's search with the graph at N (which fill the pair costs and build
+the graph, as the planner's first model does), and then of one conditional bound at N.
 """
 
 from __future__ import annotations
@@ -68,18 +68,19 @@ def digest(case: str) -> tuple[str, float, float]:
     """The case's digest, and the seconds of its first graph search and of its first conditional bounds."""
     problem = prepare(*scenario_of(case))
     pairs, free = costs_of(problem)
+    clock = time.process_time()
     n = skeleton(problem, free if _SEARCHED_PER_CALL else pairs).phases
+    graph_of(problem, n, pairs)  # the shared graph is built by the skeleton's search; before it, here
+    search_s = time.process_time() - clock
     sha = hashlib.sha256()
-    clock = time.perf_counter()
-    graph_of(problem, n, pairs)
-    search_s = time.perf_counter() - clock
-    clock = time.perf_counter()
+    clock = time.process_time()
     conditional_bounds(problem, n, pairs, NEVER)
-    conditional_s = time.perf_counter() - clock
+    conditional_s = time.process_time() - clock
     for phases in (n, n + 1):
         for last_at_end in (False, True):
             graph = graph_of(problem, phases, pairs)
-            sha.update(repr(graph.states).encode())
+            states = [(sorted(d), h, sorted(p), key, box) for d, h, p, key, box in graph.states]  # sets in one order
+            sha.update(repr(states).encode())
             for array in (graph.src, graph.dst, graph.q, graph.t):
                 sha.update(array.tobytes())
             bounds = conditional_bounds(problem, phases, pairs, NEVER, last_at_end).bound
