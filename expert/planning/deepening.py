@@ -197,13 +197,16 @@ class Deepening:
         while counts:
             count = counts[0]
             stats["phases_tried"].append(count)
-            outcome = self.solver.solve(problem, count, pairs, fewest=True, cutoff=run.cost(best))
+            hook = self.first_plans.longer_hook(problem, pairs, count)
+            outcome = self.solver.solve(problem, count, pairs, fewest=True, first_model=hook, cutoff=run.cost(best))
             if isinstance(outcome, tuple):
                 status, steps = outcome
                 found = phases_of(problem, steps)
                 if run.better(found, best):
                     best = found
                 settled = settled and status == "optimal"
+            if run.better(run.best[1], best):  # the count's ordered plan, when its solve was stopped before SCIP's
+                best = run.best[1]
             elif outcome == "no_plan":  # a stop before this count was settled
                 settled = False
             counts = [n for n in self.cheaper_counts(problem, pairs, n_phases, run.cost(best), cap) if n > count]

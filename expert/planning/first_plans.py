@@ -28,7 +28,7 @@ from expert.milp.order import add_pick_order
 from expert.milp.problem import Problem
 from expert.milp.variables import Milp
 from expert.planning.run import Run
-from expert.planning.solving import INFEASIBLE, Solver, optimize
+from expert.planning.solving import INFEASIBLE, FirstModelHook, Solver, optimize
 from expert.plans import Plan
 from fetchcarry_env.actions import Lattice
 from fetchcarry_env.scenario import Scenario
@@ -123,21 +123,9 @@ class FirstPlans:
         too (:meth:`root_proof`) before any decoupled plan; where that proves it infeasible, the
         decoupled plans aim at one phase more and True is returned: the model needs no further solve.
         """
-        run, model, t0 = self.run, milp.model, time.perf_counter()
-        restriction = add_pick_order(milp, order)
-        outside = self.fix_outside_order(milp, problem, order, pairs, fewest)
-        status = optimize(model, run.deadline, run.options.ordered_nodes)
-        if status == "timelimit":
-            run.stopped("clock")
-        steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
-        at_root = status in INFEASIBLE and model.getNNodes() <= 1
-        nodes = model.getNNodes()
-        run.stats["ordered"] = {"status": status, "nodes": nodes, "order": list(order), "fixed": len(outside)}
-        model.freeTransform()
-        for constraint in restriction:
-            model.delCons(constraint)
-        for z in outside:
-            model.chgVarUb(z, 1.0)
+        run, t0 = self.run, time.perf_counter()
+        steps, record, at_root = self.solve_in_order(milp, problem, order, pairs, fewest)
+        run.stats["ordered"] = record
         run.stats["ordered_s"] = time.perf_counter() - t0
         proven_infeasible = False
         if at_root:
@@ -154,6 +142,64 @@ class FirstPlans:
         if not fits:
             self.decoupled_plans(problem, milp.n_phases + 1 if proven_infeasible else milp.n_phases, order)
         return proven_infeasible
+
+    def solve_in_order(
+        self, milp: Milp, problem: Problem, order: list[str], pairs: PairCosts | None, fewest: bool
+    ) -> tuple[list[SolvedPhase] | None, dict, bool]:
+        """``milp`` restricted to delivering in ``order``, solved within ``options.ordered_nodes`` nodes.
+
+        The options no plan in that order does are fixed to 0 (:meth:`fix_outside_order`)
+        while it is solved; then the restriction and those fixings are removed (SCIP back to
+        its problem stage). Returns the best plan's steps (None: none found), a record of
+        SCIP's status, nodes, the order and the fixings, and whether the restricted model
+        was proven infeasible at its root.
+        """
+        run, model = self.run, milp.model
+        restriction = add_pick_order(milp, order)
+        outside = self.fix_outside_order(milp, problem, order, pairs, fewest)
+        status = optimize(model, run.deadline, run.options.ordered_nodes)
+        if status == "timelimit":
+            run.stopped("clock")
+        steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
+        nodes = model.getNNodes()
+        at_root = status in INFEASIBLE and nodes <= 1
+        record = {"status": status, "nodes": nodes, "order": list(order), "fixed": len(outside)}
+        model.freeTransform()
+        for constraint in restriction:
+            model.delCons(constraint)
+        for z in outside:
+            model.chgVarUb(z, 1.0)
+        return steps, record, at_root
+
+    def longer_hook(self, problem: Problem, pairs: PairCosts | None, n_phases: int) -> FirstModelHook | None:
+        """For a model of a longer phase count (cut off at the best plan's cost): its ordered plan first.
+
+        The relaxation's cheapest order of deliveries at ``n_phases`` (the conditional bounds
+        the model itself uses) restricts the model, solved within ``options.ordered_nodes``
+        nodes (:meth:`solve_in_order`). A plan found costs less than the best (the model's
+        cutoff holds): it becomes the best plan and SCIP's warm start, so the whole model
+        starts from it and fixes every option whose conditional bound it beats. None when
+        the planner makes no ordered plans. Recorded in ``stats["longer_ordered"]``.
+        """
+        run = self.run
+        if pairs is None or not (self.wanted(problem) and run.options.ordered_first_plan and run.options.conditional):
+            return None
+
+        def hook(milp: Milp, problem: Problem) -> bool:
+            t0 = time.perf_counter()
+            picks = self.solver.conditional_bounds(problem, n_phases, pairs, True).order("pick")  # the model's own
+            order = picks + [i for i in problem.deliver if i not in picks]
+            steps, record, _ = self.solve_in_order(milp, problem, order, pairs, True)
+            if steps is not None:
+                phases = phases_of(problem, steps)
+                record["cost"] = run.cost(phases)
+                if run.best is None or run.better(phases, run.best[1]):
+                    run.best, run.warm = ("feasible", phases), steps
+            run.stats.setdefault("longer_ordered", []).append({"phases": n_phases, **record})
+            run.stats["ordered_s"] = run.stats.get("ordered_s", 0.0) + time.perf_counter() - t0
+            return False
+
+        return hook
 
     def fix_outside_order(
         self, milp: Milp, problem: Problem, order: list[str], pairs: PairCosts | None, fewest: bool
