@@ -138,24 +138,34 @@ class Deepening:
         """Solve with ``first``, ``first + 1``, ... ``last`` phases until one admits a plan; then the phase bound."""
         run, stats = self.run, self.run.stats
         fewest_cuts = run.options.fewest_cuts
+        capped = run.extra_phases is None  # the task cost over every phase count: nothing dearer than the best
         for n_phases in range(first, last + 1):
             stats["phases_tried"].append(n_phases)
             hook = self.first_plans.hook(pairs, fewer_infeasible and fewest_cuts)
             fewest = fewer_infeasible and fewest_cuts
-            outcome = self.solver.solve(problem, n_phases, pairs, fewest=fewest, first_model=hook)
+            outcome = self.solver.solve(problem, n_phases, pairs, fewest=fewest, first_model=hook, cap_at_best=capped)
             if outcome == "infeasible":
-                fewer_infeasible = True
+                fewer_infeasible = True  # no plan, or (capped) none costing no more than the best: the same cuts hold
+                if capped and run.best is not None and not self.may_match(problem, pairs, n_phases, last):
+                    return run.finish("optimal", run.best[1])
                 continue
             if outcome == "no_plan":
                 return run.out_of_budget()
             status, steps = outcome
             self.found(problem, pairs, n_phases, status, phases_of(problem, steps))
             return run.finish(*run.best)
+        if run.best is not None:  # a first plan, and counts left open up to ``last``
+            return run.finish("feasible", run.best[1])
         if not stats["phases_tried"]:
             stats["reason"] = f"max_phases={self.max_phases} is below the lower bound {first}"
         else:
             stats["reason"] = f"no plan with {first} to {last} phases (every model was infeasible)"
         return run.finish("infeasible")
+
+    def may_match(self, problem: Problem, pairs: PairCosts | None, n_phases: int, last: int) -> bool:
+        """Whether a count above ``n_phases`` (up to ``last``) may hold a plan costing no more than the best so far."""
+        cost = self.run.cost(self.run.best[1])
+        return bool(self.cheaper_counts(problem, pairs, n_phases, cost + 2e-9, last))
 
     def found(self, problem: Problem, pairs: PairCosts | None, n_phases: int, status: str, found) -> None:
         """Keep the plan the model of ``n_phases`` (the fewest) gave, or a cheaper first plan; then the phase bound.

@@ -45,14 +45,21 @@ class FirstPlans:
         self.order: list[str] | None = None  # the relaxation's order of deliveries, for the first model built
 
     def wanted(self, problem: Problem) -> bool:
-        """Whether this problem gets first plans: enough objects to deliver, none in the hand."""
+        """Whether this problem gets first plans: enough objects to deliver (the one in the hand counted)."""
         pushes = 1 if problem.pushes.pushable else 0
-        return problem.holding is None and len(problem.deliver) >= self.run.options.decoupled_from - pushes
+        return len(problem.deliver) >= self.run.options.decoupled_from - pushes
+
+    @staticmethod
+    def with_held_first(problem: Problem, picks: list[str]) -> list[str]:
+        """An order of deliveries: the object in the hand (placed before any pick), ``picks``, then the rest."""
+        head = [problem.holding] if problem.holding is not None else []
+        return head + picks + [i for i in problem.deliver if i not in picks and i not in head]
 
     def nearest(self, problem: Problem) -> None:
         """The decoupled plan, nearest object first, before any bound (``options.nearest_first_plan``)."""
         t0 = time.perf_counter()
-        found = decoupled_plan(self.run.scenario, list(problem.deliver), self.lattice, self.sub_planner, nearest=True)
+        deliver, held = list(problem.deliver), problem.holding
+        found = decoupled_plan(self.run.scenario, deliver, self.lattice, self.sub_planner, nearest=True, holding=held)
         self.run.stats["decoupled_s"] = time.perf_counter() - t0
         if found is not None:
             self.run.keep_first_plan(found, "nearest")
@@ -74,7 +81,7 @@ class FirstPlans:
             else:
                 _, schedule = cheapest_schedule(problem, n_phases, pairs, run.deadline)
                 picks = [key[1] for key, _ in schedule if key[0] == "pick"]
-            order = picks + [i for i in order if i not in picks]
+            order = self.with_held_first(problem, picks)
             if run.options.ordered_first_plan:
                 self.order = order
                 return
@@ -100,7 +107,9 @@ class FirstPlans:
             good = phases is not None and len(phases) <= n_phases and run.stats.get("decoupled") != "nearest"
             if lookahead > 1 and good:
                 break
-            found = decoupled_plan(run.scenario, order, self.lattice, optimal_sub_plans, lookahead)
+            found = decoupled_plan(
+                run.scenario, order, self.lattice, optimal_sub_plans, lookahead, holding=problem.holding
+            )
             if found is not None:
                 run.keep_first_plan(found, f"schedule, lookahead {lookahead}")
         run.stats["decoupled_s"] = run.stats.get("decoupled_s", 0.0) + time.perf_counter() - t0
@@ -124,7 +133,7 @@ class FirstPlans:
         decoupled plans aim at one phase more and True is returned: the model needs no further solve.
         """
         run, t0 = self.run, time.perf_counter()
-        steps, record, at_root = self.solve_in_order(milp, problem, order, pairs, fewest)
+        steps, record, at_root = self.solve_in_order(milp, problem, order, pairs, fewest, run.options.ordered_nodes)
         run.stats["ordered"] = record
         run.stats["ordered_s"] = time.perf_counter() - t0
         proven_infeasible = False
@@ -144,9 +153,9 @@ class FirstPlans:
         return proven_infeasible
 
     def solve_in_order(
-        self, milp: Milp, problem: Problem, order: list[str], pairs: PairCosts | None, fewest: bool
+        self, milp: Milp, problem: Problem, order: list[str], pairs: PairCosts | None, fewest: bool, nodes: int
     ) -> tuple[list[SolvedPhase] | None, dict, bool]:
-        """``milp`` restricted to delivering in ``order``, solved within ``options.ordered_nodes`` nodes.
+        """``milp`` restricted to delivering in ``order``, solved within ``nodes`` SCIP nodes.
 
         The options no plan in that order does are fixed to 0 (:meth:`fix_outside_order`)
         while it is solved; then the restriction and those fixings are removed (SCIP back to
@@ -157,7 +166,7 @@ class FirstPlans:
         run, model = self.run, milp.model
         restriction = add_pick_order(milp, order)
         outside = self.fix_outside_order(milp, problem, order, pairs, fewest)
-        status = optimize(model, run.deadline, run.options.ordered_nodes)
+        status = optimize(model, run.deadline, nodes)
         if status == "timelimit":
             run.stopped("clock")
         steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
@@ -188,8 +197,8 @@ class FirstPlans:
         def hook(milp: Milp, problem: Problem) -> bool:
             t0 = time.perf_counter()
             picks = self.solver.conditional_bounds(problem, n_phases, pairs, True).order("pick")  # the model's own
-            order = picks + [i for i in problem.deliver if i not in picks]
-            steps, record, _ = self.solve_in_order(milp, problem, order, pairs, True)
+            order = self.with_held_first(problem, picks)
+            steps, record, _ = self.solve_in_order(milp, problem, order, pairs, True, run.options.longer_ordered_nodes)
             if steps is not None:
                 phases = phases_of(problem, steps)
                 record["cost"] = run.cost(phases)

@@ -43,6 +43,8 @@ class PlannerOptions:
       (``order_fixings``);
     - the decoupled plans (:mod:`expert.decoupled`), one pass per entry of ``lookaheads``
       (objects planned together per step), each sub-plan within ``sub_plan_nodes`` nodes;
+    - ``longer_ordered_nodes``: each longer phase count's model restricted likewise to the
+      relaxation's order at that count, within this many nodes, before the whole model;
     - ``nearest_first_plan``: also the decoupled plan nearest object first before any bound
       (a plan to answer with should the safety stop come during the bounds).
 
@@ -67,6 +69,7 @@ class PlannerOptions:
     guide_branching: bool = False
     node_limit: int | None = None
     ordered_nodes: int = 5_000
+    longer_ordered_nodes: int = 200
     sub_plan_nodes: int = 2_000
     separating: str = "off"
     presolving: str = "default"
@@ -75,7 +78,7 @@ class PlannerOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        for name in ("ordered_nodes", "sub_plan_nodes", "decoupled_from", "skeleton_edges"):
+        for name in ("ordered_nodes", "longer_ordered_nodes", "sub_plan_nodes", "decoupled_from", "skeleton_edges"):
             _check_count(name, getattr(self, name))
         if self.node_limit is not None:
             _check_count("node_limit", self.node_limit)

@@ -82,6 +82,7 @@ class Solver:
         fewest: bool = False,
         first_model: FirstModelHook | None = None,
         cutoff: float | None = None,
+        cap_at_best: bool = False,
     ) -> str | tuple[str, list[SolvedPhase]]:
         """Build and solve with ``n_phases``: ``"infeasible"``, ``"no_plan"`` or ``(status, steps)``.
 
@@ -89,7 +90,9 @@ class Solver:
         last a place (:mod:`expert.milp.fewest`'s cuts): every other plan of the model is a
         plan of fewer phases that costs no more. ``cutoff``: only plans of a task cost below it
         (SCIP's objective limit, and the options whose conditional bound reaches it fixed to
-        0); ``"infeasible"`` then means none. ``first_model``: run on the model before its warm
+        0); ``"infeasible"`` then means none. ``cap_at_best`` (without ``cutoff``): once the warm
+        starts are in, only plans costing no more than the best plan so far, whatever its
+        phases (``"infeasible"`` then means none). ``first_model``: run on the model before its warm
         starts (the first plan in the relaxation's order, on the model built once). Recorded
         in ``stats["solves"]``.
         """
@@ -117,6 +120,11 @@ class Solver:
             record.update(status="infeasible", nodes=stats["ordered"]["root_nodes"], root_proof=True)
             return "infeasible"
         self.add_warm_starts(milp, problem, n_phases, cond, [warm] if warm is not None else None, record)
+        if cap_at_best and cutoff is None and run.best is not None:
+            record["cap"] = cap = run.cost(run.best[1])
+            milp.model.setObjlimit(cap + CUTOFF_TOL)
+            if cond is not None:
+                record["conditional_fixed"] += fix_above(milp, cond, cap)
         if run.guides and run.options.guide_branching:
             fitting = [steps for steps in run.guides if len(steps) <= n_phases - 1]
             record["guide_priorities"] = add_branching_hint(milp, (fitting or run.guides)[-1])
