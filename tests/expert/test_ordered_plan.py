@@ -144,3 +144,49 @@ def test_a_model_infeasible_at_its_root_is_solved_no_further():
     assert len(result.phases) == len(plain.phases)
     assert result.objective == pytest.approx(plain.objective, abs=1e-6)
     assert validate_plan(scenario, result) == []
+
+
+def test_a_longer_phase_count_starts_from_its_own_ordered_plan():
+    """Three covered goals (seed 7000): the optimum has one phase more than the fewest. The longer count's
+    model restricted to the relaxation's order at that count finds it first; the answer is the planner's
+    without ordered plans."""
+    scenario = draw_paper_covered(np.random.default_rng(7000), 3)
+    result = plan(scenario, time_limit=60.0)
+    longer = result.stats["longer_ordered"]
+    assert [entry["phases"] for entry in longer] == [len(result.phases)]
+    assert longer[0]["cost"] == pytest.approx(result.objective, abs=1e-9)
+    plain = plan(scenario, time_limit=60.0, ordered_first_plan=False)
+    assert result.status == plain.status == "optimal"
+    assert len(result.phases) == len(plain.phases)
+    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
+    assert validate_plan(scenario, result) == []
+
+
+def test_a_count_holding_nothing_cheaper_than_the_first_plan_ends_the_search():
+    """Three covered goals (seed 7023): the decoupled plan (13 phases) costs less than any plan of the
+    model. Each model admits only plans costing no more than the best so far, so the 13-phase model
+    is proven to hold none, no longer count can, and the decoupled plan is the answer, proven."""
+    scenario = draw_paper_covered(np.random.default_rng(7023), 3)
+    result = plan(scenario, time_limit=60.0)
+    last = result.stats["solves"][-1]
+    assert last["status"] == "infeasible" and last["cap"] == pytest.approx(result.objective, abs=1e-9)
+    assert result.status == "optimal" and result.stats["decoupled"].startswith("schedule")
+    assert result.objective == pytest.approx(result.stats["decoupled_objective"], abs=1e-9)
+    model_only = plan(scenario, time_limit=60.0, ordered_first_plan=False, decoupled_from=10**6)
+    assert result.objective <= model_only.objective + 1e-9
+    assert validate_plan(scenario, result) == []
+
+
+def test_an_object_in_the_hand_is_placed_first_in_the_ordered_plan():
+    """Four objects, one in the hand (a mid-episode state, as DAgger asks): the ordered plan places it
+    before any pick, and the answer is the planner's without first plans."""
+    scenario = draw_paper_multi(np.random.default_rng(2), 4)
+    held = scenario.objects[0].id
+    result = plan(scenario, time_limit=60.0, holding=held)
+    assert result.stats["ordered"]["order"][0] == held
+    assert result.stats["decoupled"] == "pick order of the relaxation"
+    plain = plan(scenario, time_limit=60.0, holding=held, ordered_first_plan=False, decoupled_from=10**6)
+    assert result.status == plain.status == "optimal"
+    assert len(result.phases) == len(plain.phases)
+    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
+    assert validate_plan(scenario, result, holding=held) == []
