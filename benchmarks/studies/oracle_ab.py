@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -117,8 +118,6 @@ def paired_cpu(rows: Sequence[dict]) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     if argv is None:
-        import sys
-
         argv = sys.argv[1:]
     if argv and argv[0] == "--summarize":
         rows = [json.loads(line) for path in argv[1:] for line in Path(path).read_text().splitlines() if line.strip()]
