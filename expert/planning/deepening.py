@@ -146,7 +146,7 @@ class Deepening:
             outcome = self.solver.solve(problem, n_phases, pairs, fewest=fewest, first_model=hook, cap_at_best=capped)
             if outcome == "infeasible":
                 fewer_infeasible = True  # no plan, or (capped) none costing no more than the best: the same cuts hold
-                if capped and run.best is not None and not self.may_match(problem, pairs, n_phases, last):
+                if capped and run.best is not None and not self.may_match(problem, pairs, n_phases):
                     return run.finish("optimal", run.best[1])
                 continue
             if outcome == "no_plan":
@@ -162,10 +162,11 @@ class Deepening:
             stats["reason"] = f"no plan with {first} to {last} phases (every model was infeasible)"
         return run.finish("infeasible")
 
-    def may_match(self, problem: Problem, pairs: PairCosts | None, n_phases: int, last: int) -> bool:
-        """Whether a count above ``n_phases`` (up to ``last``) may hold a plan costing no more than the best so far."""
+    def may_match(self, problem: Problem, pairs: PairCosts | None, n_phases: int) -> bool:
+        """Whether a count above ``n_phases`` (up to ``max_phases``, when given) may hold a plan costing no more
+        than the best so far (the bounds of :meth:`cheaper_counts`)."""
         cost = self.run.cost(self.run.best[1])
-        return bool(self.cheaper_counts(problem, pairs, n_phases, cost + 2e-9, last))
+        return bool(self.cheaper_counts(problem, pairs, n_phases, cost + 2e-9, self.max_phases))
 
     def found(self, problem: Problem, pairs: PairCosts | None, n_phases: int, status: str, found) -> None:
         """Keep the plan the model of ``n_phases`` (the fewest) gave, or a cheaper first plan; then the phase bound.
@@ -215,10 +216,10 @@ class Deepening:
                 if run.better(found, best):
                     best = found
                 settled = settled and status == "optimal"
-            if run.better(run.best[1], best):  # the count's ordered plan, when its solve was stopped before SCIP's
-                best = run.best[1]
             elif outcome == "no_plan":  # a stop before this count was settled
                 settled = False
+            if run.better(run.best[1], best):  # the count's ordered plan, when its solve was stopped before SCIP's
+                best = run.best[1]
             counts = [n for n in self.cheaper_counts(problem, pairs, n_phases, run.cost(best), cap) if n > count]
         run.best = ("optimal" if settled else "feasible", best)
 

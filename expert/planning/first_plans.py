@@ -184,11 +184,12 @@ class FirstPlans:
         """For a model of a longer phase count (cut off at the best plan's cost): its ordered plan first.
 
         The relaxation's cheapest order of deliveries at ``n_phases`` (the conditional bounds
-        the model itself uses) restricts the model, solved within ``options.ordered_nodes``
-        nodes (:meth:`solve_in_order`). A plan found costs less than the best (the model's
-        cutoff holds): it becomes the best plan and SCIP's warm start, so the whole model
-        starts from it and fixes every option whose conditional bound it beats. None when
-        the planner makes no ordered plans. Recorded in ``stats["longer_ordered"]``.
+        the model itself uses) restricts the model, solved within
+        ``options.longer_ordered_nodes`` nodes (:meth:`solve_in_order`). A plan found costs
+        less than the best (the model's cutoff holds): it becomes the best plan and SCIP's
+        warm start, so the whole model starts from it and fixes every option whose
+        conditional bound it beats. None when the planner makes no ordered plans. Recorded
+        in ``stats["longer_ordered"]``.
         """
         run = self.run
         if pairs is None or not (self.wanted(problem) and run.options.ordered_first_plan and run.options.conditional):
