@@ -122,9 +122,8 @@ class FirstPlans:
         """The best plan of the model that delivers the objects in ``order``, as the first plan.
 
         The model restricted to that order (:func:`expert.milp.order.add_pick_order`) is
-        solved within ``options.ordered_nodes`` nodes, with the options no plan in that order
-        does fixed to 0 (:meth:`fix_outside_order`); then the restriction and those fixings are
-        removed (SCIP back to its problem stage): the model is built once. The plan is kept when
+        solved within ``options.ordered_nodes`` nodes (:meth:`solve_in_order`), then freed of
+        the restriction: the model is built once. The plan is kept when
         better than the best so far; without a plan of the model's phases the decoupled plans
         follow (:meth:`decoupled_plans`). Recorded in ``stats["ordered"]`` and ``stats["ordered_s"]``.
 
@@ -157,11 +156,11 @@ class FirstPlans:
     ) -> tuple[list[SolvedPhase] | None, dict, bool]:
         """``milp`` restricted to delivering in ``order``, solved within ``nodes`` SCIP nodes.
 
-        The options no plan in that order does are fixed to 0 (:meth:`fix_outside_order`)
-        while it is solved; then the restriction and those fixings are removed (SCIP back to
-        its problem stage). Returns the best plan's steps (None: none found), a record of
-        SCIP's status, nodes, the order and the fixings, and whether the restricted model
-        was proven infeasible at its root.
+        :func:`expert.milp.order.add_pick_order` restricts it, and the options no plan in that
+        order does are fixed to 0 (:meth:`fix_outside_order`) while it is solved; then the
+        restriction and those fixings are removed (SCIP back to its problem stage). Returns
+        the best plan's steps (None: none found), a record of SCIP's status, nodes, the order
+        and the fixings, and whether the restricted model was proven infeasible at its root.
         """
         run, model = self.run, milp.model
         restriction = add_pick_order(milp, order)
@@ -170,9 +169,9 @@ class FirstPlans:
         if status == "timelimit":
             run.stopped("clock")
         steps = read_steps(problem, milp, model.getBestSol()) if model.getNSols() else None
-        nodes = model.getNNodes()
-        at_root = status in INFEASIBLE and nodes <= 1
-        record = {"status": status, "nodes": nodes, "order": list(order), "fixed": len(outside)}
+        searched = model.getNNodes()
+        at_root = status in INFEASIBLE and searched <= 1
+        record = {"status": status, "nodes": searched, "order": list(order), "fixed": len(outside)}
         model.freeTransform()
         for constraint in restriction:
             model.delCons(constraint)

@@ -23,6 +23,14 @@ def _picks(phases) -> list[str]:
     return [p.target for p in phases if p.action == "pick"]
 
 
+def _assert_same_optimum(scenario, result, plain, holding=None) -> None:
+    """``result`` and ``plain`` both proven, with the same phases and task cost; ``result`` valid."""
+    assert result.status == plain.status == "optimal"
+    assert len(result.phases) == len(plain.phases)
+    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
+    assert validate_plan(scenario, result, holding=holding) == []
+
+
 def test_pick_order_is_obeyed():
     """Three objects with their optimal pick order reversed: the restricted model picks them in that order."""
     scenario = draw_paper_multi(np.random.default_rng(3), 3)
@@ -108,13 +116,10 @@ def test_the_answer_is_the_one_without_it(draw, count, seed):
     scenario = draw(np.random.default_rng(seed), count)
     ordered = plan(scenario, time_limit=60.0)
     decoupled = plan(scenario, time_limit=60.0, ordered_first_plan=False)
-    assert ordered.status == decoupled.status == "optimal"
     assert ordered.stats["decoupled"] == "pick order of the relaxation"
     assert ordered.stats["ordered"]["status"] == "optimal"
     assert decoupled.stats["decoupled"].startswith("schedule") and "ordered" not in decoupled.stats
-    assert len(ordered.phases) == len(decoupled.phases)
-    assert ordered.objective == pytest.approx(decoupled.objective, abs=1e-6)
-    assert validate_plan(scenario, ordered) == []
+    _assert_same_optimum(scenario, ordered, decoupled)
 
 
 def test_without_nodes_for_it_the_decoupled_plan_comes_instead():
@@ -140,10 +145,7 @@ def test_a_model_infeasible_at_its_root_is_solved_no_further():
     assert first["status"] == "infeasible" and first["root_proof"] is True
     assert last["phases"] == first["phases"] + 1 and last["warm_start"] is True
     plain = plan(scenario, time_limit=120.0, ordered_first_plan=False)
-    assert result.status == plain.status == "optimal"
-    assert len(result.phases) == len(plain.phases)
-    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
-    assert validate_plan(scenario, result) == []
+    _assert_same_optimum(scenario, result, plain)
 
 
 def test_a_longer_phase_count_starts_from_its_own_ordered_plan():
@@ -156,10 +158,7 @@ def test_a_longer_phase_count_starts_from_its_own_ordered_plan():
     assert [entry["phases"] for entry in longer] == [len(result.phases)]
     assert longer[0]["cost"] == pytest.approx(result.objective, abs=1e-9)
     plain = plan(scenario, time_limit=60.0, ordered_first_plan=False)
-    assert result.status == plain.status == "optimal"
-    assert len(result.phases) == len(plain.phases)
-    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
-    assert validate_plan(scenario, result) == []
+    _assert_same_optimum(scenario, result, plain)
 
 
 def test_a_count_holding_nothing_cheaper_than_the_first_plan_ends_the_search():
@@ -186,7 +185,4 @@ def test_an_object_in_the_hand_is_placed_first_in_the_ordered_plan():
     assert result.stats["ordered"]["order"][0] == held
     assert result.stats["decoupled"] == "pick order of the relaxation"
     plain = plan(scenario, time_limit=60.0, holding=held, ordered_first_plan=False, decoupled_from=10**6)
-    assert result.status == plain.status == "optimal"
-    assert len(result.phases) == len(plain.phases)
-    assert result.objective == pytest.approx(plain.objective, abs=1e-6)
-    assert validate_plan(scenario, result, holding=held) == []
+    _assert_same_optimum(scenario, result, plain, holding=held)
